@@ -1,0 +1,181 @@
+// GRACE / GRACE-FO Level-1 products: identification, headers, read results and the reader/writer API.
+//
+// A product file is a header (GRACE-FO YAML header ending "# End of YAML header", or the older
+// fixed 80-column header ending "END OF HEADER", which may appear twice) followed by one record per
+// line (ASCII) or packed big-endian records (GRACE binary .dat). Records are counted; the header's
+// record count is reported but never trusted (the real samples are cut excerpts).
+//
+// Errors: a malformed record line gives a ParseIssue "file:line: reason". ReadOptions::on_error
+// chooses to skip-and-count (default) or to stop at the first one. A file that cannot be read at all
+// (missing, unknown product, wrong header) gives ok == false and a one-line error. Readers never throw
+// on bad input and never crash, whatever the bytes (they are fuzzed).
+#pragma once
+
+#include <boresight/core/conventions.h>
+#include <boresight/io/text_scan.h>
+
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace boresight::io {
+
+enum class Product : std::uint8_t {
+  Unknown,
+  SCA1A, SCA1B,
+  ACC1A, ACT1A, AHK1A, AHK1B,  // prod_flag products (FlaggedRecord)
+  ACC1B, ACT1B,
+  QSA1B, QKS1B,
+  GNV1B, GNI1B,
+  IMU1A, IMU1B,
+  THR1A, THR1B,
+  IHK1A, IHK1B,
+  HRT1A, HRT1B,
+  TIM1B,
+  CLK1A, CLK1B,
+  Other,  // a recognised Level-1 name without a typed reader (KBR1B, MAG1B, ...): read generically
+};
+
+/// "SCA1A" -> Product::SCA1A; any other 5-character Level-1 style name (three letters, '1',
+/// 'A' or 'B') -> Product::Other; anything else -> Product::Unknown.
+Product productFromName(std::string_view name);
+const char* productName(Product p);
+
+/// Identify the product from a path: the file name's first five characters ("SCA1A_2023-..."),
+/// then the fixed header's FILENAME entry. Returns the five-letter name ("" when none).
+std::string productNameFromPath(std::string_view path);
+
+enum class HeaderStyle : std::uint8_t { None, Yaml, Fixed };
+
+struct Header {
+  HeaderStyle style = HeaderStyle::None;
+  std::string product_name;  ///< five letters, e.g. "SCA1A" (empty when unknown)
+  Product product = Product::Unknown;
+  char satellite = '?';      ///< 'A'..'D' from "GRACE C" (YAML platform / SATELLITE NAME)
+  std::optional<std::int64_t> declared_records;  ///< num_records / NUMBER OF DATA RECORDS, untrusted
+  std::vector<std::string> columns;  ///< YAML `variables:` names in column order (empty for fixed)
+  std::array<std::string, 32> flag_fields;  ///< prod_flag bit -> field name (YAML flag_meanings)
+  std::vector<std::string> lines;  ///< the header's raw lines, so a writer can keep them
+  std::size_t line_count = 0;      ///< lines the header occupies (data line numbers follow)
+};
+
+/// Parse a header at the start of `text`. On success returns true and sets *data_offset to the
+/// first byte after the header. A file with no recognisable header end is an error.
+bool parseHeader(std::string_view text, Header& h, std::size_t* data_offset, std::string* error);
+
+struct ParseIssue {
+  std::string file;
+  std::size_t line = 0;  ///< 1-based line number in the file (0: not line-related)
+  std::string reason;
+  std::string str() const { return file + ":" + std::to_string(line) + ": " + reason; }
+};
+
+enum class OnError : std::uint8_t { Skip, Stop };
+
+struct ReadOptions {
+  OnError on_error = OnError::Skip;
+  std::size_t max_issues_kept = 1000;  ///< issues beyond this are counted but not kept
+  /// Force the product instead of identifying it from the file name and header.
+  Product product = Product::Unknown;
+};
+
+template <typename Rec>
+struct ProductFile {
+  std::string file;  ///< the name used in messages
+  Header header;
+  std::vector<Rec> records;
+  std::vector<ParseIssue> rejected;  ///< the first ReadOptions::max_issues_kept rejected lines
+  std::size_t rejected_count = 0;    ///< all rejected lines
+  bool ok = true;                    ///< false: the file could not be read (see error)
+  std::string error;                 ///< "file:line: reason" when !ok
+};
+
+// ------------------------------------------------------------------------------------------------
+// Records. Time tags are TimeUs (microseconds past the GPS J2000 epoch; receiver time for L1A).
+// Quaternions are stored scalar-first as in the files; see core/conventions.h for their direction.
+// ------------------------------------------------------------------------------------------------
+
+/// SCA1A: one head's quaternion q_I_Si at receiver time (three heads interleaved in one file).
+struct Sca1aRecord {
+  TimeUs t = 0;           ///< rcvtime_intg * 1e6 + rcvtime_frac
+  char satellite = 'C';   ///< GRACEFO_id
+  std::uint8_t head = 1;  ///< sca_id, 1..3
+  char desig = 'P';       ///< sca_desig
+  double q[4] = {1, 0, 0, 0};  ///< quatangle, quaticoeff, quatjcoeff, quatkcoeff
+  std::int32_t nlocks = 0;
+  std::int32_t nstars = 0;
+  std::int32_t confid = 0;  ///< sca_confid
+  std::int32_t null1 = 0, null2 = 0;
+  Bits mode{0, 8};     ///< sca_mode
+  Bits qualflg{0, 8};
+  friend bool operator==(const Sca1aRecord&, const Sca1aRecord&);
+};
+
+/// ACC1A, ACT1A, AHK1A, AHK1B: receiver/GPS time, then only the fields whose prod_flag bit is set.
+struct FlaggedRecord {
+  TimeUs t = 0;
+  char time_ref = 'R';  ///< 'R' receiver time, 'G' GPS time
+  char satellite = 'C';
+  Bits qualflg{0, 8};
+  Bits prod_flag{0, 32};
+  std::array<double, 32> value{};  ///< value[bit] is meaningful only when prod_flag has the bit
+  Bits status_flag{0, 32};         ///< AHK bit 29 "Status flag", a bit string
+  bool has(int bit) const { return prod_flag.test(bit); }
+  friend bool operator==(const FlaggedRecord&, const FlaggedRecord&);
+};
+
+/// prod_flag bits of ACC1A / ACT1A.
+namespace acc_bits {
+constexpr int kLinX = 0, kLinY = 1, kLinZ = 2, kAngX = 3, kAngY = 4, kAngZ = 5, kIcuBlock = 26;
+}
+/// AHK1A/AHK1B: the bit that holds a 32-character status bit string.
+constexpr int kAhkStatusFlagBit = 29;
+
+// ------------------------------------------------------------------------------------------------
+// Reading and writing. Each record type has explicit instantiations in src/io.
+// ------------------------------------------------------------------------------------------------
+
+/// Read a whole file from disk.
+template <typename Rec>
+ProductFile<Rec> readProduct(const std::string& path, const ReadOptions& opt = {});
+
+/// Parse text already in memory; `file` is the name used in messages and for identification.
+template <typename Rec>
+ProductFile<Rec> parseProduct(std::string_view text, std::string_view file, const ReadOptions& opt = {});
+
+/// The whole product as text: the kept header lines (or a minimal synthesised header of the right
+/// style with the record count updated) followed by one line per record.
+template <typename Rec>
+std::string formatProduct(const ProductFile<Rec>& f);
+
+/// formatProduct() to a file. Returns false and sets *error on I/O failure.
+template <typename Rec>
+bool writeProduct(const std::string& path, const ProductFile<Rec>& f, std::string* error);
+
+/// A fresh, empty product of the given kind with a synthesised header (for simulators and converters).
+template <typename Rec>
+ProductFile<Rec> makeProduct(Product product, char satellite);
+
+/// Declares the specialisations a record type provides (defined in src/io by BORESIGHT_IO_INSTANTIATE).
+#define BORESIGHT_IO_DECLARE(Rec)                                                                          \
+  template <>                                                                                              \
+  ProductFile<Rec> readProduct<Rec>(const std::string& path, const ReadOptions& opt);                     \
+  template <>                                                                                              \
+  ProductFile<Rec> parseProduct<Rec>(std::string_view text, std::string_view file, const ReadOptions& opt); \
+  template <>                                                                                              \
+  std::string formatProduct<Rec>(const ProductFile<Rec>& f);                                               \
+  template <>                                                                                              \
+  bool writeProduct<Rec>(const std::string& path, const ProductFile<Rec>& f, std::string* error);         \
+  template <>                                                                                              \
+  ProductFile<Rec> makeProduct<Rec>(Product product, char satellite);
+
+BORESIGHT_IO_DECLARE(Sca1aRecord)
+BORESIGHT_IO_DECLARE(FlaggedRecord)
+
+/// Whole file into memory. Returns false and sets *error ("file: reason") on failure.
+bool readFileToString(const std::string& path, std::string& out, std::string* error);
+
+}  // namespace boresight::io

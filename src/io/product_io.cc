@@ -1,0 +1,131 @@
+#include "product_io.h"
+
+#include <cerrno>
+#include <cstring>
+
+namespace boresight::io::detail {
+namespace {
+
+const char* ordinal(std::size_t n, char* buf, std::size_t len) {
+  const char* suf = "th";
+  if (n % 100 < 11 || n % 100 > 13) {
+    if (n % 10 == 1) suf = "st";
+    if (n % 10 == 2) suf = "nd";
+    if (n % 10 == 3) suf = "rd";
+  }
+  std::snprintf(buf, len, "%zu%s column", n, suf);
+  return buf;
+}
+
+bool isGraceFo(char sat) { return sat == 'C' || sat == 'D'; }
+
+std::string pad80(std::string s) {
+  if (s.size() < 80) s.append(80 - s.size(), ' ');
+  return s;
+}
+
+std::string fixedLine(const char* key, const std::string& value) {
+  char buf[128];
+  std::snprintf(buf, sizeof buf, "%-30s: %s", key, value.c_str());
+  return pad80(buf);
+}
+
+}  // namespace
+
+std::vector<std::string> synthHeader(Product p, char satellite, const std::vector<std::string>& columns,
+                                     const std::array<std::string, 32>* flag_fields) {
+  std::vector<std::string> out;
+  const std::string name = productName(p);
+  const std::string level = name.size() == 5 ? std::string(1, name[4]) : "?";
+  std::string sat_name = std::string("GRACE ") + satellite;
+  if (isGraceFo(satellite)) {
+    out.push_back("header:");
+    out.push_back("  dimensions:");
+    out.push_back("    num_records: 0");
+    out.push_back("  global_attributes:");
+    out.push_back("    creator_name: boresight");
+    out.push_back("    platform: " + sat_name);
+    out.push_back("    processing_level: 1" + level);
+    out.push_back("    title: " + name + " written by boresight");
+    out.push_back("  non-standard_attributes:");
+    out.push_back("    epoch_time: 2000-01-01T12:00:00.00");
+    out.push_back("  variables:");
+    char buf[48];
+    for (std::size_t i = 0; i < columns.size(); ++i) {
+      out.push_back("    - " + columns[i] + ":");
+      if (columns[i] == "prod_flag" && flag_fields) {
+        out.push_back("        comment: " + std::string(ordinal(i + 1, buf, sizeof buf)));
+        out.push_back("        flag_meanings:");
+        for (int b = 0; b < 32; ++b)
+          if (!(*flag_fields)[static_cast<std::size_t>(b)].empty())
+            out.push_back("          - bit " + std::to_string(b) + " = " + (*flag_fields)[static_cast<std::size_t>(b)]);
+        out.push_back("        long_name: Product flag, if bit set to 1, value is present in record, bit 0 is rightmost");
+      } else {
+        out.push_back("        comment: " + std::string(ordinal(i + 1, buf, sizeof buf)));
+      }
+    }
+    out.push_back("# End of YAML header");
+  } else {
+    out.push_back(fixedLine("PRODUCER AGENCY", "boresight"));
+    out.push_back(fixedLine("FILE FORMAT 0=BINARY 1=ASCII", "1"));
+    out.push_back(fixedLine("SATELLITE NAME", sat_name));
+    out.push_back(fixedLine("TIME EPOCH (GPS TIME)", "2000-01-01 12:00:00"));
+    out.push_back(fixedLine("NUMBER OF DATA RECORDS", "0"));
+    out.push_back(fixedLine("FILENAME", name + "_boresight_" + satellite + ".asc"));
+    out.push_back(fixedLine("PROCESS LEVEL (1A OR 1B)", "1" + level));
+    out.push_back(pad80("END OF HEADER"));
+  }
+  return out;
+}
+
+std::vector<std::string> headerForWrite(const Header& h, std::size_t records) {
+  std::vector<std::string> lines = h.lines;
+  if (lines.empty()) {
+    lines = synthHeader(h.product, h.satellite == '?' ? 'C' : h.satellite, h.columns,
+                        h.columns.empty() ? nullptr : &h.flag_fields);
+    if (h.style == HeaderStyle::Fixed && !lines.empty() && lines.front() == "header:") {
+      // A GRACE-FO satellite with a fixed header (static products): keep the fixed style.
+      lines = synthHeader(h.product, 'A', h.columns, nullptr);
+      for (auto& l : lines)
+        if (l.rfind("SATELLITE NAME", 0) == 0) l = fixedLine("SATELLITE NAME", std::string("GRACE ") + h.satellite);
+    }
+  }
+  const std::string n = std::to_string(records);
+  for (auto& l : lines) {
+    if (l.rfind("    num_records:", 0) == 0) l = "    num_records: " + n;
+    if (l.rfind("NUMBER OF DATA RECORDS", 0) == 0) l = fixedLine("NUMBER OF DATA RECORDS", n);
+  }
+  return lines;
+}
+
+bool resolveProduct(Header& h, std::string_view file, const ReadOptions& opt, std::string* error) {
+  if (opt.product != Product::Unknown) {
+    h.product = opt.product;
+    h.product_name = productName(opt.product);
+    return true;
+  }
+  std::string from_path = productNameFromPath(file);
+  if (!from_path.empty()) h.product_name = from_path;
+  h.product = productFromName(h.product_name);
+  if (h.product == Product::Unknown) {
+    if (error)
+      *error = "unknown product: the file name does not start with a Level-1 product name (e.g. SCA1A_...)"
+               " and the header names none";
+    return false;
+  }
+  return true;
+}
+
+bool writeText(const std::string& path, const std::string& text, std::string* error) {
+  std::FILE* f = std::fopen(path.c_str(), "wb");
+  if (!f) {
+    if (error) *error = path + ": cannot create: " + std::strerror(errno);
+    return false;
+  }
+  bool ok = std::fwrite(text.data(), 1, text.size(), f) == text.size();
+  ok = (std::fclose(f) == 0) && ok;
+  if (!ok && error) *error = path + ": write failed";
+  return ok;
+}
+
+}  // namespace boresight::io::detail
