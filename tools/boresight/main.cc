@@ -1,0 +1,52 @@
+// boresight: one command-line program with subcommands.
+#include "commands.h"
+
+#include <cstdio>
+#include <cstring>
+
+namespace {
+
+struct Command {
+  const char* name;
+  const char* summary;
+  int (*run)(int argc, char** argv);
+};
+
+// One line per subcommand; a subcommand that is not built yet is simply absent.
+const Command kCommands[] = {
+    {"inspect", "summarise Level-1 files: products, records, times, rejected lines, inter-boresight angles",
+     boresight::cli::runInspect},
+    {"convert", "Level-1 files to an LCM log ordered by sensor time, and back (--to-level1 DIR)",
+     boresight::cli::runConvert},
+#ifdef BORESIGHT_HAVE_PROCESS
+    {"process", "run the real-time core over Level-1 files or an LCM log and write a CSV", boresight::cli::runProcess},
+#endif
+#ifdef BORESIGHT_HAVE_SIMULATE
+    {"simulate", "simulate real-format telemetry with known truth and injected effects", boresight::cli::runSimulate},
+#endif
+};
+
+void usage(std::FILE* out) {
+  std::fprintf(out,
+               "boresight - star sensor mounting calibration toolset\n\n"
+               "usage: boresight COMMAND [options]   (boresight COMMAND --help for details)\n\ncommands:\n");
+  for (const auto& c : kCommands) std::fprintf(out, "  %-10s %s\n", c.name, c.summary);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h") || !std::strcmp(argv[1], "help")) {
+    usage(argc < 2 ? stderr : stdout);
+    return argc < 2 ? 2 : 0;
+  }
+  if (!std::strcmp(argv[1], "--version")) {
+    std::printf("boresight %s\n", BORESIGHT_VERSION);
+    return 0;
+  }
+  for (const auto& c : kCommands)
+    if (!std::strcmp(argv[1], c.name)) return c.run(argc - 1, argv + 1);
+  std::fprintf(stderr, "boresight: unknown command '%s'\n\n", argv[1]);
+  usage(stderr);
+  return 2;
+}
