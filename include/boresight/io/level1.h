@@ -134,6 +134,55 @@ constexpr int kLinX = 0, kLinY = 1, kLinZ = 2, kAngX = 3, kAngY = 4, kAngZ = 5, 
 /// AHK1A/AHK1B: the bit that holds a 32-character status bit string.
 constexpr int kAhkStatusFlagBit = 29;
 
+/// QSA1B (star camera to SRF alignment, q_Si_B) and QKS1B (KBR to SRF): static records.
+/// time id sca_id q0 qi qj qk 0 qualflg
+struct QsaRecord {
+  TimeUs t = 0;  ///< whole seconds past the epoch (0 in the GRACE 2003 files)
+  char satellite = 'C';
+  std::int32_t sensor = 1;  ///< sca_id (1..3); 0..2 in QKS1B
+  double q[4] = {1, 0, 0, 0};
+  double zero = 0;  ///< the always-zero 8th column
+  Bits qualflg{0, 8};
+  friend bool operator==(const QsaRecord&, const QsaRecord&);
+};
+
+/// SCA1B (combined attitude q_I_B, GPS time): gps_time id sca_id q0 qi qj qk qual_rss qualflg
+struct Sca1bRecord {
+  TimeUs t = 0;
+  char satellite = 'C';
+  std::int32_t sca_id = 23;  ///< which heads were combined (23: SCA1+2+3+IMU on GRACE-FO)
+  double q[4] = {1, 0, 0, 0};
+  double qual_rss = 0;
+  Bits qualflg{0, 8};
+  friend bool operator==(const Sca1bRecord&, const Sca1bRecord&);
+};
+
+/// ACC1B (GRACE, SRF, non-zero angular acceleration) and ACT1B (GRACE-FO, angular acceleration 0):
+/// gps_time id lin_accl_x/y/z ang_accl_x/y/z acl_x/y/z_res qualflg
+struct Acc1bRecord {
+  TimeUs t = 0;
+  char satellite = 'C';
+  double lin[3] = {0, 0, 0};  ///< m/s^2
+  double ang[3] = {0, 0, 0};  ///< rad/s^2
+  double res[3] = {0, 0, 0};
+  Bits qualflg{0, 8};
+  friend bool operator==(const Acc1bRecord&, const Acc1bRecord&);
+};
+
+/// GNV1B / GNI1B (orbit, Earth-fixed 'E' or inertial 'I'): gps_time id coord_ref xpos ypos zpos
+/// xpos_err ypos_err zpos_err xvel yvel zvel xvel_err yvel_err zvel_err qualflg  (m, m/s; 1e33 = none)
+struct GnvRecord {
+  TimeUs t = 0;
+  char satellite = 'C';
+  char coord_ref = 'E';
+  double pos[3] = {0, 0, 0};
+  double pos_err[3] = {0, 0, 0};
+  double vel[3] = {0, 0, 0};
+  double vel_err[3] = {0, 0, 0};
+  Bits qualflg{0, 8};
+  friend bool operator==(const GnvRecord&, const GnvRecord&);
+};
+
 // ------------------------------------------------------------------------------------------------
 // Reading and writing. Each record type has explicit instantiations in src/io.
 // ------------------------------------------------------------------------------------------------
