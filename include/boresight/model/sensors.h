@@ -1,0 +1,100 @@
+// Forward models of the star-sensor heads and the accelerometer, with the effect catalogue applied.
+//
+// These are the models the simulator draws data from and the audit predicts data with: given the
+// true body attitude q_I_B, body angular acceleration a_B and the orbit context, they return what a
+// configured sensor is expected to deliver (no noise), and the noise it adds.
+//
+//   head i:  q_I_Si_meas = q_I_B (x) q_Si_B(t)^-1 (x) Exp(phi_aberration) (x) Exp(n)
+//            q_Si_B(t)   = Exp(phi_eff(t)) (x) Exp(phi_mount) (x) q_Si_B_nominal      (see effects.h)
+//            n ~ N(0, sigma_cross^2 (e1 e1^T + e2 e2^T) + sigma_about^2 b b^T)  (head frame, per sample)
+//   acc:     a_A = (I + diag(scale)) R(Exp(m)) C_A_B a_B + bias + white + low-frequency noise
+#pragma once
+
+#include <boresight/core/conventions.h>
+#include <boresight/model/effects.h>
+#include <boresight/model/random.h>
+
+namespace boresight::model {
+
+struct HeadConfig {
+  int id = 1;                              ///< sca_id, 1-based
+  Quat q_Si_B_nominal = Quat::Identity();  ///< nominal (ground) mounting, as in QSA1B
+  Vec3 mounting_error_rad = Vec3::Zero();  ///< truth: the in-orbit mounting differs by Exp(this)
+  Vec3 boresight_Si = Vec3::UnitZ();       ///< boresight axis in the head frame
+  double rate_hz = 2.0;
+  std::int64_t tag_offset_us = 0;          ///< fractional-second offset of the time tags
+  double tag_jitter_us = 0;                ///< uniform +- jitter of the tags (shared by heads with equal rate/offset)
+  double tag_drift_ppm = 0;                ///< linear drift of the tags relative to the truth (receiver clock)
+  double noise_cross_rad = 0;              ///< 1-sigma per axis, cross-boresight, per sample
+  double noise_about_rad = 0;              ///< 1-sigma about the boresight, per sample
+  double fov_half_angle_rad = 10 * kRadPerDeg;
+  double limiting_mag = 6.0;               ///< faintest Hp counted as a tracked star
+  double sun_exclusion_rad = 30 * kRadPerDeg;    ///< blind when the Sun is within this of the boresight
+  double earth_exclusion_rad = 20 * kRadPerDeg;  ///< blind when the bright limb is within this of the boresight
+  double moon_exclusion_rad = 10 * kRadPerDeg;   ///< blind when the Moon is within this of the boresight
+  char desig = 'P';
+};
+
+class HeadModel {
+ public:
+  HeadModel() = default;
+  HeadModel(const HeadConfig& cfg, const HeadEffects& eff);
+
+  const HeadConfig& config() const { return cfg_; }
+  const HeadEffects& effects() const { return eff_; }
+
+  /// True constant mounting q_Si_B (nominal with the mounting error, no time-varying effects).
+  Quat qSiBTrue() const { return q_Si_B_true_; }
+  /// Mounting at an epoch, with relative_misalignment, thermal_periodic, drift and step.
+  Quat qSiB(const OrbitContext& ctx) const;
+  /// Expected measurement (noise-free) for a true body attitude q_I_B at the TRUE time of ctx.
+  Quat predict(const Quat& q_I_B, const OrbitContext& ctx) const;
+  /// Boresight direction in I for an attitude q_I_Si.
+  Vec3 boresightInertial(const Quat& q_I_Si) const { return q_I_Si * b_; }
+
+  double sigmaCross() const { return cfg_.noise_cross_rad; }
+  double sigmaAbout() const { return eff_.about_sigma_rad >= 0 ? eff_.about_sigma_rad : cfg_.noise_about_rad; }
+  /// Per-sample attitude noise covariance in Si (rad^2).
+  Mat3 noiseCovariance() const;
+  /// The noise rotation vector (Si) of sample number n of this head.
+  Vec3 noiseRotVec(const CounterRng& rng, std::uint64_t n) const;
+
+ private:
+  HeadConfig cfg_;
+  HeadEffects eff_;
+  Quat q_Si_B_true_ = Quat::Identity();
+  Vec3 e1_ = Vec3::UnitX(), e2_ = Vec3::UnitY(), b_ = Vec3::UnitZ();
+};
+
+struct AccelConfig {
+  double rate_hz = 10.0;
+  std::int64_t tag_offset_us = 0;
+  double tag_jitter_us = 0;
+  double tag_drift_ppm = 0;
+  Mat3 C_A_B = accToBodyDefault().transpose();  ///< nominal body -> accelerometer frame
+  Vec3 white_rad_s2 = Vec3::Zero();     ///< white noise, 1-sigma per sample, per A axis
+  Vec3 lowfreq_rad_s2 = Vec3::Zero();   ///< first-order Gauss-Markov noise, stationary 1-sigma, per A axis
+  double lowfreq_tau_s = 1000.0;        ///< its correlation time
+  Vec3 bias_rad_s2 = Vec3::Zero();      ///< nominal (known) bias, part of the scenario
+  Vec3 lin_bias_m_s2 = Vec3::Zero();    ///< linear acceleration (drag-like constant), frame A
+  Vec3 lin_white_m_s2 = Vec3::Zero();   ///< linear acceleration white noise
+};
+
+class AccelModel {
+ public:
+  AccelModel() = default;
+  AccelModel(const AccelConfig& cfg, const AccEffects& eff);
+  const AccelConfig& config() const { return cfg_; }
+  const AccEffects& effects() const { return eff_; }
+  /// True body -> A rotation including acc_misalignment.
+  Mat3 C_A_B_true() const { return C_A_B_true_; }
+  /// Expected angular acceleration in A (noise-free), including bias, scale and misalignment.
+  Vec3 predict(const Vec3& a_B) const;
+
+ private:
+  AccelConfig cfg_;
+  AccEffects eff_;
+  Mat3 C_A_B_true_ = Mat3::Identity();
+};
+
+}  // namespace boresight::model
