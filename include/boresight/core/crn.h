@@ -1,0 +1,254 @@
+// CRN digital filter and differentiator (METHODS 1.4): design at configure, streaming FIR at step.
+//
+// Design: Nf = fs Tf rounded to an odd number of taps, M = (Nf-1)/2, NB = round(B Tf'), Tf' = Nf/fs.
+//   F_k = sum_{m=-NB..NB} D(k-m)^Nc,  D(j) = sin(pi j/Nc) / sin(pi j/Nf),  D(0) = Nf/Nc,  k = 0..M
+// (a rectangle of half-width B convolved with the Nc-fold self-convolution of a rectangular window),
+// then, with w_k = 2 pi k / Tf' and the kernel g applied as y(t_c) = sum_{n=-M..M} g[n] x(t_c + n/fs):
+//   g0[n] = (F_0 + 2 sum_k F_k cos(2 pi k n/Nf)) / Nf          (low-pass, even)
+//   g1[n] = 2/Nf sum_k w_k F_k sin(2 pi k n/Nf)                (first derivative, odd)
+//   g2[n] = -2/Nf sum_k w_k^2 F_k cos(2 pi k n/Nf)             (second derivative, even)
+// normalised to exact unit gain at zero frequency: sum g0 = 1, sum n g1 = fs, sum n^2 g2 = 2 fs^2
+// (the limit of "unit gain at a low reference frequency").
+//
+// Streaming: a ring of the last kCrnRing samples (each written twice so that any window is
+// contiguous) and, only at output epochs, one dot product per channel and derivative order: the
+// cost follows the output rate, not the input rate. The output is stamped at the centre tap, M/fs
+// after the newest input (35.3 s for GRACE), which keeps the kernel zero-phase.
+// Output epochs (grid mode): a centre sample whose time tag is within half a sampling interval of a
+// multiple of output_period_us (the first such sample per grid point). evaluateAt(tau) evaluates the
+// filter at any tag tau inside the history, from the nearest centre sample with a second-order
+// Taylor step (tau - t_c, at most half a sampling interval) using the derivative kernels.
+// Time: samples are taken as uniform at fs; tags may jitter by up to jitter_tolerance_us. A step
+// longer than one interval plus the tolerance is a gap: it restarts the filter or, when configured
+// and at most max_bridge_samples are missing, is bridged by linear interpolation.
+#pragma once
+
+#include "boresight/core/capacities.h"
+#include "boresight/core/conventions.h"
+#include "boresight/core/status.h"
+
+#include <Eigen/Core>
+
+#include <array>
+#include <cmath>
+#include <cstdint>
+
+namespace boresight::core {
+
+enum class GapPolicy : std::uint8_t { kRestart = 0, kBridge = 1 };
+
+struct CrnConfig {
+  double fs_hz = 10.0;       ///< input sampling rate, Hz
+  int nc = 7;                ///< Nc, order of the self-convolution (-)
+  double bandwidth_hz = 0.1; ///< B, half-width of the rectangle, Hz
+  double length_s = 70.7;    ///< Tf, filter length, s (Nf = fs Tf rounded to odd <= kMaxCrnTaps)
+  int max_order = 2;         ///< highest derivative order produced (0, 1 or 2)
+  TimeUs output_period_us = kUsPerSecond;  ///< grid of output epochs, us (0: no grid outputs)
+  TimeUs jitter_tolerance_us = 0;          ///< accepted |dt - 1/fs|, us (0: a quarter interval)
+  GapPolicy gap_policy = GapPolicy::kRestart;
+  int max_bridge_samples = 20;             ///< longest bridged gap, missing samples (<= kMaxBridgeSamples)
+};
+
+/// Designed CRN kernels (full length, index j = n + M).
+struct CrnKernel {
+  int nf = 0;          ///< taps (odd)
+  int half = 0;        ///< M = (nf-1)/2
+  int nb = 0;          ///< NB, bins of half-width B
+  double fs_hz = 0;
+  double tf_s = 0;     ///< Nf / fs
+  std::array<std::array<double, kMaxCrnTaps>, 3> g{};  ///< g[order][n + M]
+
+  /// Frequency response of the designed kernel of `order` at f (Hz): the real gain for order 0 and 2,
+  /// the gain of the quadrature part for order 1 (ideal: 1, 2 pi f, -(2 pi f)^2 times the low-pass).
+  double response(int order, double f_hz) const;
+};
+
+/// Designs the kernels; kInvalidConfig when the parameters are out of range.
+Status designCrn(const CrnConfig& cfg, CrnKernel& out);
+
+/// Streaming CRN filter of N channels.
+template <int N>
+class CrnStream {
+ public:
+  using VecN = Eigen::Matrix<double, N, 1>;
+  struct Output {
+    TimeUs t = 0;              ///< centre tag (grid mode) or requested tag (evaluateAt)
+    std::array<VecN, 3> y{};   ///< y[0] low-passed value, y[1] first, y[2] second derivative (per s^k)
+  };
+
+  Status configure(const CrnConfig& cfg) {
+    configured_ = false;
+    if (N < 1) return Status::kInvalidConfig;
+    if (cfg.max_order < 0 || cfg.max_order > 2) return Status::kInvalidConfig;
+    if (cfg.output_period_us < 0 || cfg.jitter_tolerance_us < 0) return Status::kInvalidConfig;
+    if (cfg.max_bridge_samples < 0 || cfg.max_bridge_samples > kMaxBridgeSamples) return Status::kInvalidConfig;
+    const Status s = designCrn(cfg, kernel_);
+    if (s != Status::kOk) return s;
+    cfg_ = cfg;
+    dt_us_ = static_cast<TimeUs>(std::llround(1e6 / cfg.fs_hz));
+    tol_us_ = cfg.jitter_tolerance_us > 0 ? cfg.jitter_tolerance_us : dt_us_ / 4;
+    if (tol_us_ >= dt_us_ / 2) return Status::kInvalidConfig;
+    configured_ = true;
+    reset();
+    return Status::kOk;
+  }
+
+  void reset() {
+    count_ = 0;
+    pos_ = 0;
+    have_last_ = false;
+    last_t_ = 0;
+    last_grid_ = INT64_MIN;
+    n_out_ = 0;
+    health_.clear();
+  }
+
+  /// Pushes one sample. Outputs completed by it are output(0..numOutputs()-1) until the next step.
+  Status step(TimeUs t, const VecN& x) {
+    n_out_ = 0;
+    if (!configured_) return record(Status::kNotConfigured);
+    if (!x.allFinite()) return record(Status::kNonFinite);
+    Status result = Status::kOk;
+    if (have_last_) {
+      const TimeUs d = t - last_t_;
+      if (d < 0) return record(Status::kTimeBackwards);
+      if (d == 0) return record(Status::kDuplicateTime);
+      if (d < dt_us_ - tol_us_) return record(Status::kIrregularTime);
+      if (d > dt_us_ + tol_us_) {
+        const TimeUs missing = (d + dt_us_ / 2) / dt_us_ - 1;
+        if (cfg_.gap_policy == GapPolicy::kBridge && missing >= 1 && missing <= cfg_.max_bridge_samples &&
+            count_ > 0) {
+          const VecN x0 = last_x_;
+          for (TimeUs k = 1; k <= missing; ++k) {
+            const double f = static_cast<double>(k) / static_cast<double>(missing + 1);
+            push(last_t_ + (d * k) / (missing + 1), x0 + f * (x - x0), false);
+          }
+          result = Status::kGapBridged;
+        } else {
+          count_ = 0;
+          result = Status::kGapRestarted;
+        }
+      }
+    }
+    push(t, x, true);
+    return record(result);
+  }
+
+  /// Evaluates the filter at tag tau from the current history (no allocation).
+  /// kNotReady: not enough samples after tau yet; kUnavailable: tau is not covered (too old, in a
+  /// restarted gap, or before the first sample).
+  Status evaluateAt(TimeUs tau, Output& out) const {
+    if (!configured_ || count_ == 0) return Status::kNotReady;
+    const TimeUs ahead = last_t_ - tau;  // newest minus tau
+    const int M = kernel_.half;
+    if (ahead < 0) return Status::kNotReady;
+    TimeUs k = (ahead + dt_us_ / 2) / dt_us_;
+    if (k > kCrnRing) return Status::kUnavailable;
+    for (int it = 0; it < 4; ++it) {  // tags jitter: move to the sample nearest to tau
+      if (k >= count_) break;
+      const TimeUs tk = times_[static_cast<std::size_t>((pos_ - static_cast<int>(k)) & (kCrnRing - 1))];
+      if (tau - tk > dt_us_ / 2 && k > 0) {
+        --k;
+      } else if (tk - tau > dt_us_ / 2) {
+        ++k;
+      } else {
+        break;
+      }
+    }
+    if (k < M) return Status::kNotReady;
+    if (k + M > count_ - 1 || k + M > kCrnRing - 1) return Status::kUnavailable;
+    const int c = centreIndex(static_cast<int>(k));
+    const TimeUs tc = times_[static_cast<std::size_t>(c & (kCrnRing - 1))];
+    const double dts = toSeconds(tau - tc);
+    if (std::abs(tau - tc) > dt_us_ / 2 + tol_us_) return Status::kUnavailable;
+    Output o;
+    const int top = cfg_.max_order;
+    evaluate(c, top, o);
+    // second-order Taylor step from the centre tag to tau (|dts| <= half an interval)
+    if (top >= 1) o.y[0] += o.y[1] * dts;
+    if (top >= 2) {
+      o.y[0] += 0.5 * dts * dts * o.y[2];
+      o.y[1] += o.y[2] * dts;
+    }
+    o.t = tau;
+    out = o;
+    return Status::kOk;
+  }
+
+  int numOutputs() const { return n_out_; }
+  const Output& output(int i) const { return outputs_[static_cast<std::size_t>(i)]; }
+  const CrnKernel& kernel() const { return kernel_; }
+  const Health& health() const { return health_; }
+  /// Delay of the centre tap behind the newest input, us.
+  TimeUs delayUs() const { return static_cast<TimeUs>(kernel_.half) * dt_us_; }
+  TimeUs samplingIntervalUs() const { return dt_us_; }
+  TimeUs newestTime() const { return last_t_; }
+  bool hasSamples() const { return count_ > 0; }
+
+ private:
+  Status record(Status s) {
+    health_.record(s);
+    return s;
+  }
+
+  // Doubled ring: sample p lives at p and p + kCrnRing of buf_[ch]; the newest is at pos_ + kCrnRing.
+  int centreIndex(int k_back) const { return pos_ + kCrnRing - k_back; }
+
+  void push(TimeUs t, const VecN& x, bool real) {
+    pos_ = (pos_ + 1) & (kCrnRing - 1);
+    for (int ch = 0; ch < N; ++ch) {
+      buf_[static_cast<std::size_t>(ch)][static_cast<std::size_t>(pos_)] = x[ch];
+      buf_[static_cast<std::size_t>(ch)][static_cast<std::size_t>(pos_ + kCrnRing)] = x[ch];
+    }
+    times_[static_cast<std::size_t>(pos_)] = t;
+    if (count_ < kCrnRing) ++count_;
+    have_last_ = true;
+    last_t_ = t;
+    if (real) last_x_ = x;
+    if (cfg_.output_period_us <= 0) return;
+    const int M = kernel_.half;
+    if (count_ < 2 * M + 1) return;
+    const int c = centreIndex(M);
+    const TimeUs tc = times_[static_cast<std::size_t>(c & (kCrnRing - 1))];
+    const TimeUs P = cfg_.output_period_us;
+    const TimeUs g = (tc >= 0 ? (tc + P / 2) / P : -((-tc + P / 2) / P));
+    const TimeUs off = tc - g * P;
+    if (off > dt_us_ / 2 || off < -dt_us_ / 2 || g <= last_grid_) return;
+    if (n_out_ >= kMaxCrnOutputsPerStep) return;
+    last_grid_ = g;
+    Output& o = outputs_[static_cast<std::size_t>(n_out_++)];
+    evaluate(c, cfg_.max_order, o);
+    o.t = tc;
+  }
+
+  void evaluate(int c, int top, Output& o) const {
+    const int M = kernel_.half;
+    const int nf = kernel_.nf;
+    for (int order = 0; order <= 2; ++order) o.y[static_cast<std::size_t>(order)].setZero();
+    for (int ch = 0; ch < N; ++ch) {
+      const Eigen::Map<const Eigen::VectorXd> win(&buf_[static_cast<std::size_t>(ch)][static_cast<std::size_t>(c - M)], nf);
+      for (int order = 0; order <= top; ++order) {
+        const Eigen::Map<const Eigen::VectorXd> g(kernel_.g[static_cast<std::size_t>(order)].data(), nf);
+        o.y[static_cast<std::size_t>(order)][ch] = g.dot(win);
+      }
+    }
+  }
+
+  CrnConfig cfg_{};
+  CrnKernel kernel_{};
+  bool configured_ = false;
+  TimeUs dt_us_ = 0, tol_us_ = 0;
+  std::array<std::array<double, 2 * kCrnRing>, static_cast<std::size_t>(N)> buf_{};
+  std::array<TimeUs, kCrnRing> times_{};
+  int pos_ = 0;
+  int count_ = 0;
+  bool have_last_ = false;
+  TimeUs last_t_ = 0;
+  VecN last_x_ = VecN::Zero();
+  TimeUs last_grid_ = INT64_MIN;
+  std::array<Output, kMaxCrnOutputsPerStep> outputs_{};
+  int n_out_ = 0;
+  Health health_{};
+};
+
+}  // namespace boresight::core

@@ -1,0 +1,44 @@
+// Head fusion (METHODS 1.3): information-weighted least squares of the heads' body attitudes.
+//
+// Head i measures C_I_Si = C_I_Si_true Exp(eps_i), eps_i ~ N(0, Sigma_i) in Si with
+// Sigma_i = s_c^2 I + (s_r^2 - s_c^2) b b^T. Through its mounting, C_I_B_i = C_I_Si C_Si_B
+// = C_I_B_true Exp(C_B_Si eps_i): the error in B has covariance C_B_Si Sigma_i C_Si_B, information W_i.
+// The fused C_I_B = C_ref Exp(dx) minimises sum_i |Log(C_ref^T C_I_B_i) - dx|^2_{W_i}; the minimum is
+// dx = (sum W_i)^-1 sum W_i Log(C_ref^T C_I_B_i), re-linearised once at the result; P_B = (sum W_i)^-1.
+// Any subset of the heads may be present; a head dropping out changes the weights, not the frame.
+#pragma once
+
+#include "boresight/core/heads.h"
+
+namespace boresight::core {
+
+struct FusedAttitude {
+  TimeUs t = 0;
+  Quat q_I_B = Quat::Identity();  ///< fused body attitude, R = C_I_B; sign continuous over time
+  Mat3 P_B = Mat3::Zero();        ///< covariance of the small-rotation error in B, rad^2
+  int heads_used = 0;
+  std::uint32_t mask = 0;         ///< slots used
+};
+
+class HeadFusion {
+ public:
+  Status configure(const HeadSetConfig& cfg);
+  void reset();
+  Status step(const ValidHeads& in);
+  const FusedAttitude& output() const { return out_; }
+  const Health& health() const { return health_; }
+  /// Information matrix (rad^-2, in B) of one head at unit sigma_scale.
+  const Mat3& information_B(int slot) const { return W_B_[static_cast<std::size_t>(slot)]; }
+
+ private:
+  HeadSetConfig cfg_{};
+  bool configured_ = false;
+  std::array<Quat, kMaxHeads> q_Si_B_{};
+  std::array<Mat3, kMaxHeads> W_B_{};
+  bool have_last_ = false;
+  TimeUs last_t_ = 0;
+  FusedAttitude out_{};
+  Health health_{};
+};
+
+}  // namespace boresight::core

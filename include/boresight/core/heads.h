@@ -1,0 +1,100 @@
+// Head configuration, per-epoch head input, and the input validator shared by the head components.
+//
+//   HeadEpoch (raw telemetry: head ids, q_I_Si)  --HeadInputValidator-->  ValidHeads (by slot)
+//
+// A "slot" is the index of a head in HeadSetConfig::head (0..n_heads-1); head ids are the
+// telemetry's (SCA1A sca_id, 1-based). Every component below consumes ValidHeads.
+#pragma once
+
+#include "boresight/core/capacities.h"
+#include "boresight/core/conventions.h"
+#include "boresight/core/status.h"
+
+#include <array>
+#include <cstdint>
+
+namespace boresight::core {
+
+/// One head's fixed configuration.
+struct HeadConfig {
+  int id = 0;                                  ///< telemetry head id (SCA1A sca_id), unique, > 0
+  Quat q_Si_B = Quat::Identity();              ///< mounting, R(q_Si_B) = C_Si_B (QSA1B reading)
+  Vec3 boresight_Si = Vec3::UnitZ();           ///< unit boresight axis in Si (GRACE-FO: +z)
+  double sigma_cross_rad = 6.0 * kRadPerArcsec;  ///< 1-sigma attitude error about cross-boresight axes, rad
+  double sigma_roll_rad = 48.0 * kRadPerArcsec;  ///< 1-sigma attitude error about the boresight, rad
+  double sigma_star_rad = 5.0 * kRadPerArcsec;   ///< 1-sigma error of one star direction, rad (Wahba)
+};
+
+/// The set of heads of one spacecraft.
+struct HeadSetConfig {
+  int n_heads = 0;                         ///< 1..kMaxHeads
+  std::array<HeadConfig, kMaxHeads> head{};  ///< slots 0..n_heads-1
+  double unit_norm_tolerance = 1e-5;       ///< reject a quaternion when | |q| - 1 | exceeds this (-)
+};
+
+/// Checks a HeadSetConfig (ids unique and positive, unit boresights and mountings, sigmas > 0).
+Status validate(const HeadSetConfig& cfg);
+
+/// Slot of a head id, or -1.
+inline int slotOf(const HeadSetConfig& cfg, int head_id) {
+  for (int s = 0; s < cfg.n_heads && s < kMaxHeads; ++s)
+    if (cfg.head[static_cast<std::size_t>(s)].id == head_id) return s;
+  return -1;
+}
+
+/// Index of the unordered pair (a < b) of slots in 0..kMaxPairs-1.
+constexpr int pairIndex(int a, int b) {
+  // rows of the strict upper triangle, row a has kMaxHeads-1-a entries
+  return a * (2 * kMaxHeads - a - 1) / 2 + (b - a - 1);
+}
+
+/// One head's raw sample.
+struct HeadSample {
+  int head_id = 0;               ///< telemetry id
+  Quat q_I_Si = Quat::Identity();  ///< head attitude, R = C_I_Si (SCA1A reading), unit
+  double sigma_scale = 1.0;      ///< multiplies the head's configured sigmas (>= 0 finite; 1 nominal)
+};
+
+/// All heads' raw samples of one epoch (one common time tag).
+struct HeadEpoch {
+  TimeUs t = 0;  ///< time tag, us past the GPS J2000 epoch
+  int n = 0;     ///< number of samples used in `sample`
+  std::array<HeadSample, kMaxHeads> sample{};
+};
+
+/// Validated heads of one epoch, by slot. q_I_Si is normalised.
+struct ValidHeads {
+  TimeUs t = 0;
+  std::uint32_t mask = 0;  ///< bit s set when slot s is valid
+  std::array<Quat, kMaxHeads> q_I_Si{};
+  std::array<double, kMaxHeads> sigma_scale{};
+
+  bool has(int slot) const { return (mask >> slot) & 1u; }
+  int count() const {
+    int c = 0;
+    for (int s = 0; s < kMaxHeads; ++s) c += has(s) ? 1 : 0;
+    return c;
+  }
+};
+
+/// Rejects bad samples (each counted by reason) and maps ids to slots.
+/// step(): kOk when at least one head is valid (bad heads are dropped and counted); otherwise the
+/// reason of the epoch's rejection. Time must strictly increase from epoch to epoch.
+class HeadInputValidator {
+ public:
+  Status configure(const HeadSetConfig& cfg);
+  void reset();
+  Status step(const HeadEpoch& in);
+  const ValidHeads& output() const { return out_; }
+  const Health& health() const { return health_; }
+
+ private:
+  HeadSetConfig cfg_{};
+  bool configured_ = false;
+  bool have_last_ = false;
+  TimeUs last_t_ = 0;
+  ValidHeads out_{};
+  Health health_{};
+};
+
+}  // namespace boresight::core

@@ -1,0 +1,103 @@
+// The whole real-time core wired together: what `boresight process` and the node call.
+//
+//   stepHeads(HeadEpoch)  -> validator -> HeadFusion -> AttitudeRates (CRN on q_I_B)
+//                                     \-> RelativeAttitudeMeans, BoresightMonitor (IBA, corrections)
+//   stepAcc(t, a_A)       -> AccAngularFilter (C_B_A, CRN low-pass), evaluated on the rows' tags
+//   stepStars(StarEpoch)  -> MultiHeadWahba with the monitor's current corrections
+//
+// Rows: one per output epoch = a head epoch whose tag is within half a head interval of a multiple of
+// crn_attitude.output_period_us (the same rule the rate filter uses for its centre taps, so the tags
+// agree exactly). A row carries the fused attitude and IBAs of that epoch at once, and waits (up to
+// kMaxPendingRows) for the centre-stamped CRN rate and the accelerometer value at the same tag, ~35 s
+// later. Values a filter cannot give (start and end of data, gaps) are NaN with has_* false.
+// Inputs must arrive in time order per stream, and the two streams should be merged by time (a
+// stream that runs far ahead of the other makes rows complete without its values).
+// flush() completes every pending row at the end of the data. popRow() takes rows in time order.
+#pragma once
+
+#include "boresight/core/head_fusion.h"
+#include "boresight/core/rates.h"
+#include "boresight/core/relative_attitude.h"
+#include "boresight/core/thermal.h"
+#include "boresight/core/wahba.h"
+
+#include <limits>
+
+namespace boresight::core {
+
+struct PipelineConfig {
+  HeadSetConfig heads{};
+  /// CRN of the fused attitude: fs_hz = head epoch rate (GRACE-FO 2 Hz); output_period_us = row period.
+  CrnConfig crn_attitude{2.0, 7, 0.1, 70.7, 2, kUsPerSecond, 0, GapPolicy::kBridge, 20};
+  /// CRN of the accelerometer angular acceleration: fs_hz = its rate (GRACE-FO 10 Hz).
+  CrnConfig crn_acc{10.0, 7, 0.1, 70.7, 2, 0, 0, GapPolicy::kBridge, 20};
+  Mat3 C_B_A = accToBodyDefault();  ///< accelerometer frame A to body B
+  bool use_accelerometer = true;    ///< false: rows do not wait for accelerometer values
+  int wahba_reference_slot = 0;     ///< frame of the star-vector solution
+};
+
+struct PipelineRow {
+  TimeUs t = 0;                   ///< output epoch (a head epoch tag), us past GPS J2000
+  Quat q_I_B = Quat::Identity();  ///< fused body attitude at t (unfiltered), R = C_I_B
+  Mat3 P_B = Mat3::Zero();        ///< its covariance, rad^2 in B
+  int heads_used = 0;
+  bool has_rates = false;
+  Vec3 w_B = Vec3::Constant(std::numeric_limits<double>::quiet_NaN());       ///< rad/s, B
+  Vec3 a_sc_B = Vec3::Constant(std::numeric_limits<double>::quiet_NaN());    ///< star-sensor angular accel., rad/s^2, B
+  bool has_acc = false;
+  Vec3 a_acc_B = Vec3::Constant(std::numeric_limits<double>::quiet_NaN());   ///< accelerometer, same CRN, rad/s^2, B
+  std::array<double, kMaxPairs> iba_rad{};      ///< per pair (pairIndex), NaN when a head is missing
+  std::array<double, kMaxPairs> iba_dev_rad{};  ///< iba - ground, rad
+};
+
+class Pipeline {
+ public:
+  Status configure(const PipelineConfig& cfg);
+  void reset();
+  Status stepHeads(const HeadEpoch& in);
+  Status stepAcc(TimeUs t, const Vec3& a_A);
+  Status stepStars(const StarEpoch& in);
+  /// End of data: every pending row is completed with what is available.
+  void flush();
+  bool popRow(PipelineRow& out);
+  int rowsReady() const { return n_ready_; }
+
+  /// All counters of all components plus the pipeline's own.
+  Health health() const;
+  const PipelineConfig& config() const { return cfg_; }
+  const HeadFusion& fusion() const { return fusion_; }
+  const RelativeAttitudeMeans& means() const { return means_; }
+  const BoresightMonitor& monitor() const { return monitor_; }
+  const AttitudeRates& rates() const { return rates_; }
+  const AccAngularFilter& accelerometer() const { return acc_; }
+  const MultiHeadWahba& wahba() const { return wahba_; }
+
+ private:
+  struct Pending {
+    PipelineRow row;
+    bool rate_done = false;
+    bool acc_done = false;
+  };
+  void resolve();
+  void emitOldest();
+
+  PipelineConfig cfg_{};
+  bool configured_ = false;
+  HeadInputValidator validator_{};
+  HeadFusion fusion_{};
+  RelativeAttitudeMeans means_{};
+  BoresightMonitor monitor_{};
+  AttitudeRates rates_{};
+  AccAngularFilter acc_{};
+  MultiHeadWahba wahba_{};
+  TimeUs head_dt_us_ = 0;
+  TimeUs last_grid_ = 0;
+  bool have_grid_ = false;
+  std::array<Pending, kMaxPendingRows> pending_{};
+  int p_head_ = 0, n_pending_ = 0;
+  std::array<PipelineRow, kMaxPendingRows> ready_{};
+  int r_head_ = 0, n_ready_ = 0;
+  Health health_{};
+};
+
+}  // namespace boresight::core

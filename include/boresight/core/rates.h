@@ -1,0 +1,75 @@
+// Angular rate and acceleration of an attitude stream (METHODS 1.5) and the CRN low-pass of the
+// accelerometer's angular acceleration (METHODS 1.6), on the same time tags and in the same frame.
+//
+// AttitudeRates takes q_I_X (X: the body B for the fused attitude, or a head Si) at its own rate,
+// makes the sign continuous, and runs the CRN on the four components (orders 0, 1, 2). At an output
+// epoch (centre tap) with q, q', q'' the filtered components (|q| slightly below 1 after low-pass):
+//   w_X     = 2 vec(q* q') / |q|^2
+//   alpha_X = (2 vec(q* q'') - 2 (q . q') w_X) / |q|^2
+// (exact for q = n u with u unit: vec(u* u') = w/2 and d/dt vec(u* u') = vec(u* u'') since u'* u' is real).
+//
+// AccAngularFilter takes a_A (rad/s^2, accelerometer frame) at its rate (GRACE-FO 10 Hz), rotates it
+// to X with the configured C_X_A and runs the same CRN low-pass (order 0; orders 1-2 only for the
+// Taylor step to a requested tag). evaluateAt(t) puts it on the attitude stream's output tags.
+#pragma once
+
+#include "boresight/core/crn.h"
+
+namespace boresight::core {
+
+struct RateOutput {
+  TimeUs t = 0;                   ///< centre tag
+  Quat q_I_X = Quat::Identity();  ///< low-passed attitude (normalised)
+  Vec3 w_X = Vec3::Zero();        ///< angular rate of X relative to I, in X, rad/s
+  Vec3 alpha_X = Vec3::Zero();    ///< angular acceleration, in X, rad/s^2
+};
+
+class AttitudeRates {
+ public:
+  /// cfg.max_order is forced to 2.
+  Status configure(const CrnConfig& cfg);
+  void reset();
+  /// One attitude sample; outputs (centre-stamped, on cfg.output_period_us) via output(i).
+  Status step(TimeUs t, const Quat& q_I_X);
+  int numOutputs() const { return n_out_; }
+  const RateOutput& output(int i) const { return out_[static_cast<std::size_t>(i)]; }
+  /// Rate and acceleration at any covered tag (second-order Taylor step from the nearest sample).
+  Status evaluateAt(TimeUs t, RateOutput& out) const;
+  const Health& health() const { return crn_.health(); }
+  const CrnStream<4>& stream() const { return crn_; }
+
+ private:
+  static RateOutput fromFiltered(const CrnStream<4>::Output& o);
+  CrnStream<4> crn_{};
+  bool configured_ = false;
+  bool have_prev_ = false;
+  Quat prev_ = Quat::Identity();
+  std::array<RateOutput, kMaxCrnOutputsPerStep> out_{};
+  int n_out_ = 0;
+};
+
+struct AccOutput {
+  TimeUs t = 0;
+  Vec3 a_X = Vec3::Zero();  ///< CRN low-passed angular acceleration in X, rad/s^2
+};
+
+class AccAngularFilter {
+ public:
+  /// C_X_A: accelerometer frame to the output frame X (e.g. accToBodyDefault() for GRACE SRF).
+  Status configure(const CrnConfig& cfg, const Mat3& C_X_A);
+  void reset();
+  /// One accelerometer sample a_A (rad/s^2 in A). Grid outputs (if cfg.output_period_us > 0).
+  Status step(TimeUs t, const Vec3& a_A);
+  int numOutputs() const { return crn_.numOutputs(); }
+  AccOutput output(int i) const;
+  Status evaluateAt(TimeUs t, AccOutput& out) const;
+  const Health& health() const { return crn_.health(); }
+  const CrnStream<3>& stream() const { return crn_; }
+
+ private:
+  CrnStream<3> crn_{};
+  Mat3 C_X_A_ = Mat3::Identity();
+  bool configured_ = false;
+};
+
+}  // namespace boresight::core

@@ -1,0 +1,69 @@
+// Running mean relative attitude of every head pair (METHODS 1.2) and the closure check.
+//
+// For slots i < j, B_ij = C_Si_I C_I_Sj = C_Si_Sj (independent of the body attitude). With the head
+// error model of head_fusion.h, a measured B_ij = B_ij_true Exp(eta), eta = eps_j - C_Sj_Si eps_i in
+// Sj, covariance S_ij = s_j^2 Sigma_j + s_i^2 C_Sj_Si Sigma_i C_Si_Sj (C_Sj_Si from the configured
+// mountings), information W_ij = S_ij^-1 - very anisotropic.
+// The running mean is the information-weighted mean in the tangent space of an anchor B_ref:
+// mean = B_ref Exp((sum W)^-1 sum W eta_k), eta_k = Log(B_ref^T B_k); the anchor moves to the mean
+// (first-order re-anchoring of the sums) when they drift apart by more than kReanchorRad.
+// Covariance of the mean: (sum W)^-1 (model). Spread: the sample covariance of eta (data).
+// Closure (three heads i<j<k): Log(B_ik^T B_ij B_jk) should vanish. At epochs where all three heads
+// are present the head noise cancels from the closure to first order, so the chi2 below (which
+// treats the three means as independent) is an upper bound of the noise: a closure error well
+// above it points at bookkeeping (time tags, frames, head ids), not at noise.
+#pragma once
+
+#include "boresight/core/heads.h"
+
+namespace boresight::core {
+
+struct PairMean {
+  bool valid = false;
+  std::uint64_t n = 0;              ///< epochs averaged
+  Quat q_Si_Sj = Quat::Identity();  ///< mean relative attitude, R = C_Si_Sj
+  Mat3 cov_mean_Sj = Mat3::Zero();  ///< model covariance of the mean (small rotation in Sj), rad^2
+  Mat3 spread_Sj = Mat3::Zero();    ///< sample covariance of single epochs about the mean, rad^2
+};
+
+struct ClosureCheck {
+  bool valid = false;
+  int i = 0, j = 0, k = 0;          ///< slots, i < j < k
+  Vec3 error_Si = Vec3::Zero();     ///< Log(B_ik^T B_ij B_jk), rotated to Si (rad)
+  double angle_rad = 0;             ///< |error|
+  double chi2 = 0;                  ///< error^T cov^-1 error with cov from the three means (3 dof)
+};
+
+class RelativeAttitudeMeans {
+ public:
+  static constexpr double kReanchorRad = 1e-3;
+
+  Status configure(const HeadSetConfig& cfg);
+  void reset();
+  Status step(const ValidHeads& in);
+  /// Mean of the pair of slots a < b.
+  PairMean mean(int a, int b) const;
+  /// Closure of slots i < j < k (all three pair means must exist).
+  ClosureCheck closure(int i, int j, int k) const;
+  const Health& health() const { return health_; }
+
+ private:
+  struct Acc {
+    std::uint64_t n = 0;
+    Quat q_ref = Quat::Identity();
+    Mat3 W_sum = Mat3::Zero();
+    Vec3 W_eta = Vec3::Zero();
+    Vec3 eta_sum = Vec3::Zero();
+    Mat3 eta_eta = Mat3::Zero();
+  };
+  HeadSetConfig cfg_{};
+  bool configured_ = false;
+  std::array<Mat3, kMaxHeads> Sigma_{};           ///< head covariance in its own frame
+  std::array<Mat3, kMaxPairs> C_Sj_Si0_{};         ///< ground relative matrices
+  std::array<Acc, kMaxPairs> acc_{};
+  bool have_last_ = false;
+  TimeUs last_t_ = 0;
+  Health health_{};
+};
+
+}  // namespace boresight::core

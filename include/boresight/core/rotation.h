@@ -1,0 +1,79 @@
+// Rotation helpers of the core (header-only, allocation-free).
+// Conventions are those of boresight/core/conventions.h: R(q_a_b) = C_a_b, Hamilton product,
+// right perturbations: a measured C_I_S = C_I_S_true Exp(eps) has its error eps in S components.
+#pragma once
+
+#include "boresight/core/conventions.h"
+
+#include <cmath>
+
+namespace boresight::core {
+
+/// Cross-product matrix: skew(a) b = a x b.
+inline Mat3 skew(const Vec3& a) {
+  Mat3 m;
+  m << 0, -a.z(), a.y(),  //
+      a.z(), 0, -a.x(),   //
+      -a.y(), a.x(), 0;
+  return m;
+}
+
+/// Exp: rotation vector (rad) -> unit quaternion.
+inline Quat quatExp(const Vec3& phi) {
+  const double th = phi.norm();
+  if (th < 1e-8) {
+    Quat q(1.0, 0.5 * phi.x(), 0.5 * phi.y(), 0.5 * phi.z());
+    q.normalize();
+    return q;
+  }
+  const double s = std::sin(0.5 * th) / th;
+  return Quat(std::cos(0.5 * th), s * phi.x(), s * phi.y(), s * phi.z());
+}
+
+/// Log: unit quaternion -> rotation vector (rad) of the shortest rotation (q and -q give the same).
+inline Vec3 quatLog(const Quat& q) {
+  double w = q.w();
+  Vec3 v = q.vec();
+  if (w < 0) {
+    w = -w;
+    v = -v;
+  }
+  const double n = v.norm();
+  if (n < 1e-10) return (2.0 / w) * v;
+  return (2.0 * std::atan2(n, w) / n) * v;
+}
+
+inline Mat3 so3Exp(const Vec3& phi) { return quatExp(phi).toRotationMatrix(); }
+inline Vec3 so3Log(const Mat3& C) { return quatLog(Quat(C)); }
+
+/// Rotation angle (rad, in [0, pi]) between two attitudes.
+inline double angleBetween(const Quat& a, const Quat& b) { return quatLog(a.conjugate() * b).norm(); }
+
+inline bool allFinite(const Quat& q) {
+  return std::isfinite(q.w()) && std::isfinite(q.x()) && std::isfinite(q.y()) && std::isfinite(q.z());
+}
+inline bool allFinite(const Vec3& v) { return std::isfinite(v.x()) && std::isfinite(v.y()) && std::isfinite(v.z()); }
+
+/// q or -q, whichever is closer to prev (sign continuity for differentiation and averaging).
+inline Quat continuous(const Quat& q, const Quat& prev) {
+  return (q.coeffs().dot(prev.coeffs()) < 0) ? Quat(-q.w(), -q.x(), -q.y(), -q.z()) : q;
+}
+
+/// Anisotropic head error covariance in the head frame (rad^2): sigma_cross^2 about every axis
+/// perpendicular to the unit boresight b, sigma_roll^2 about b.
+inline Mat3 headCovariance(double sigma_cross, double sigma_roll, const Vec3& b) {
+  const double c2 = sigma_cross * sigma_cross;
+  const double r2 = sigma_roll * sigma_roll;
+  return c2 * Mat3::Identity() + (r2 - c2) * b * b.transpose();
+}
+
+/// Inverse of a symmetric positive-definite 3x3 matrix; false when it is not (no allocation).
+inline bool invertSpd3(const Mat3& a, Mat3& inv) {
+  const double det = a.determinant();
+  if (!(det > 0) || !std::isfinite(det)) return false;
+  inv = a.inverse();
+  inv = 0.5 * (inv + inv.transpose()).eval();
+  return inv.allFinite();
+}
+
+}  // namespace boresight::core

@@ -1,0 +1,89 @@
+#include "boresight/core/head_fusion.h"
+
+#include "boresight/core/rotation.h"
+
+namespace boresight::core {
+
+Status HeadFusion::configure(const HeadSetConfig& cfg) {
+  configured_ = false;
+  const Status s = validate(cfg);
+  if (s != Status::kOk) return s;
+  cfg_ = cfg;
+  for (int k = 0; k < cfg.n_heads; ++k) {
+    const auto u = static_cast<std::size_t>(k);
+    const HeadConfig& h = cfg.head[u];
+    q_Si_B_[u] = h.q_Si_B.normalized();
+    const Mat3 C_B_Si = q_Si_B_[u].toRotationMatrix().transpose();
+    const Mat3 Sigma_B = C_B_Si * headCovariance(h.sigma_cross_rad, h.sigma_roll_rad, h.boresight_Si) * C_B_Si.transpose();
+    if (!invertSpd3(Sigma_B, W_B_[u])) return Status::kInvalidConfig;
+  }
+  configured_ = true;
+  reset();
+  return Status::kOk;
+}
+
+void HeadFusion::reset() {
+  have_last_ = false;
+  last_t_ = 0;
+  out_ = FusedAttitude{};
+  health_.clear();
+}
+
+Status HeadFusion::step(const ValidHeads& in) {
+  if (!configured_) {
+    health_.record(Status::kNotConfigured);
+    return Status::kNotConfigured;
+  }
+  if (have_last_ && in.t <= last_t_) {
+    const Status r = in.t == last_t_ ? Status::kDuplicateTime : Status::kTimeBackwards;
+    health_.record(r);
+    return r;
+  }
+  std::array<Quat, kMaxHeads> q_I_B{};
+  std::array<Mat3, kMaxHeads> W{};
+  int ref = -1;
+  int used = 0;
+  Mat3 W_sum = Mat3::Zero();
+  for (int k = 0; k < cfg_.n_heads; ++k) {
+    if (!in.has(k)) continue;
+    const auto u = static_cast<std::size_t>(k);
+    q_I_B[u] = in.q_I_Si[u] * q_Si_B_[u];
+    const double sc = in.sigma_scale[u];
+    W[u] = W_B_[u] / (sc * sc);
+    W_sum += W[u];
+    if (ref < 0) ref = k;
+    ++used;
+  }
+  if (used == 0) {
+    health_.record(Status::kNoValidInput);
+    return Status::kNoValidInput;
+  }
+  Mat3 P;
+  if (!invertSpd3(W_sum, P)) {
+    health_.record(Status::kNumericalFailure);
+    return Status::kNumericalFailure;
+  }
+  Quat q = q_I_B[static_cast<std::size_t>(ref)];
+  for (int iter = 0; iter < 2; ++iter) {  // linearise at the first head, then once at the result
+    Vec3 rhs = Vec3::Zero();
+    const Quat q_inv = q.conjugate();
+    for (int k = 0; k < cfg_.n_heads; ++k) {
+      if (!in.has(k)) continue;
+      const auto u = static_cast<std::size_t>(k);
+      rhs += W[u] * quatLog(q_inv * q_I_B[u]);
+    }
+    q = (q * quatExp(P * rhs)).normalized();
+  }
+  if (have_last_) q = continuous(q, out_.q_I_B);
+  out_.t = in.t;
+  out_.q_I_B = q;
+  out_.P_B = P;
+  out_.heads_used = used;
+  out_.mask = in.mask;
+  have_last_ = true;
+  last_t_ = in.t;
+  health_.record(Status::kOk);
+  return Status::kOk;
+}
+
+}  // namespace boresight::core

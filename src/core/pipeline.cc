@@ -1,0 +1,222 @@
+#include "boresight/core/pipeline.h"
+
+#include <cmath>
+#include <limits>
+
+namespace boresight::core {
+
+namespace {
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+}
+
+Status Pipeline::configure(const PipelineConfig& cfg) {
+  configured_ = false;
+  Status s = validator_.configure(cfg.heads);
+  if (s == Status::kOk) s = fusion_.configure(cfg.heads);
+  if (s == Status::kOk) s = means_.configure(cfg.heads);
+  if (s == Status::kOk && cfg.heads.n_heads >= 2) s = monitor_.configure(cfg.heads);
+  if (s == Status::kOk) s = rates_.configure(cfg.crn_attitude);
+  if (s == Status::kOk && cfg.use_accelerometer) {
+    CrnConfig c = cfg.crn_acc;
+    c.output_period_us = 0;  // evaluated on the rows' tags only
+    s = acc_.configure(c, cfg.C_B_A);
+  }
+  if (s == Status::kOk) {
+    WahbaConfig w;
+    w.heads = cfg.heads;
+    w.reference_slot = cfg.wahba_reference_slot;
+    s = wahba_.configure(w);
+  }
+  if (s != Status::kOk) return s;
+  if (cfg.crn_attitude.output_period_us <= 0) return Status::kInvalidConfig;
+  cfg_ = cfg;
+  head_dt_us_ = rates_.stream().samplingIntervalUs();
+  configured_ = true;
+  reset();
+  return Status::kOk;
+}
+
+void Pipeline::reset() {
+  validator_.reset();
+  fusion_.reset();
+  means_.reset();
+  monitor_.reset();
+  rates_.reset();
+  acc_.reset();
+  wahba_.reset();
+  have_grid_ = false;
+  last_grid_ = 0;
+  p_head_ = n_pending_ = 0;
+  r_head_ = n_ready_ = 0;
+  health_.clear();
+}
+
+Health Pipeline::health() const {
+  Health h = health_;
+  h.add(validator_.health());
+  h.add(fusion_.health());
+  h.add(means_.health());
+  h.add(monitor_.health());
+  h.add(rates_.health());
+  h.add(acc_.health());
+  h.add(wahba_.health());
+  return h;
+}
+
+void Pipeline::emitOldest() {
+  if (n_pending_ == 0) return;
+  Pending& p = pending_[static_cast<std::size_t>(p_head_)];
+  if (n_ready_ == kMaxPendingRows) {  // nobody pops: drop the oldest ready row
+    health_.record(Status::kCapacityExceeded);
+    r_head_ = (r_head_ + 1) % kMaxPendingRows;
+    --n_ready_;
+  }
+  ready_[static_cast<std::size_t>((r_head_ + n_ready_) % kMaxPendingRows)] = p.row;
+  ++n_ready_;
+  p_head_ = (p_head_ + 1) % kMaxPendingRows;
+  --n_pending_;
+}
+
+void Pipeline::resolve() {
+  const bool have_att = rates_.stream().hasSamples();
+  const TimeUs att_newest = rates_.stream().newestTime();
+  const TimeUs rate_deadline = rates_.stream().delayUs() + 2 * head_dt_us_;
+  bool acc_blocked = false;
+  for (int i = 0; i < n_pending_; ++i) {
+    Pending& p = pending_[static_cast<std::size_t>((p_head_ + i) % kMaxPendingRows)];
+    if (!p.rate_done && have_att && att_newest - p.row.t > rate_deadline) p.rate_done = true;
+    if (!p.acc_done && !acc_blocked) {
+      AccOutput a;
+      const Status s = acc_.evaluateAt(p.row.t, a);
+      if (s == Status::kOk) {
+        p.row.a_acc_B = a.a_X;
+        p.row.has_acc = true;
+        p.acc_done = true;
+      } else if (s == Status::kUnavailable) {
+        p.acc_done = true;
+      } else {
+        acc_blocked = true;  // later rows are not ready either
+      }
+    }
+  }
+  while (n_pending_ > 0) {
+    const Pending& p = pending_[static_cast<std::size_t>(p_head_)];
+    if (!(p.rate_done && p.acc_done)) break;
+    emitOldest();
+  }
+}
+
+Status Pipeline::stepHeads(const HeadEpoch& in) {
+  if (!configured_) {
+    health_.record(Status::kNotConfigured);
+    return Status::kNotConfigured;
+  }
+  Status s = validator_.step(in);
+  if (s != Status::kOk) return s;
+  const ValidHeads& v = validator_.output();
+  s = fusion_.step(v);
+  if (s != Status::kOk) return s;
+  means_.step(v);
+  if (cfg_.heads.n_heads >= 2) monitor_.step(v);
+  const FusedAttitude& f = fusion_.output();
+
+  // is this head epoch an output epoch? (same rule as the rate filter's centre taps)
+  const TimeUs P = cfg_.crn_attitude.output_period_us;
+  const TimeUs g = f.t >= 0 ? (f.t + P / 2) / P : -((-f.t + P / 2) / P);
+  const TimeUs off = f.t - g * P;
+  if (off <= head_dt_us_ / 2 && off >= -head_dt_us_ / 2 && (!have_grid_ || g > last_grid_)) {
+    have_grid_ = true;
+    last_grid_ = g;
+    if (n_pending_ == kMaxPendingRows) {
+      health_.record(Status::kCapacityExceeded);
+      emitOldest();
+    }
+    Pending& p = pending_[static_cast<std::size_t>((p_head_ + n_pending_) % kMaxPendingRows)];
+    ++n_pending_;
+    p = Pending{};
+    p.row.t = f.t;
+    p.row.q_I_B = f.q_I_B;
+    p.row.P_B = f.P_B;
+    p.row.heads_used = f.heads_used;
+    for (int a = 0; a < cfg_.heads.n_heads; ++a)
+      for (int b = a + 1; b < cfg_.heads.n_heads; ++b) {
+        const auto k = static_cast<std::size_t>(pairIndex(a, b));
+        const PairDeformation& d = monitor_.pair(a, b);
+        p.row.iba_rad[k] = d.valid ? d.iba_rad : kNaN;
+        p.row.iba_dev_rad[k] = d.valid ? d.iba_dev_rad : kNaN;
+      }
+    p.acc_done = !cfg_.use_accelerometer;
+  }
+
+  const Status rs = rates_.step(f.t, f.q_I_B);
+  for (int i = 0; i < rates_.numOutputs(); ++i) {
+    const RateOutput& r = rates_.output(i);
+    for (int j = 0; j < n_pending_; ++j) {
+      Pending& p = pending_[static_cast<std::size_t>((p_head_ + j) % kMaxPendingRows)];
+      if (p.row.t != r.t) continue;
+      p.row.w_B = r.w_X;
+      p.row.a_sc_B = r.alpha_X;
+      p.row.has_rates = true;
+      p.rate_done = true;
+      break;
+    }
+  }
+  resolve();
+  return accepted(rs) ? Status::kOk : rs;
+}
+
+Status Pipeline::stepAcc(TimeUs t, const Vec3& a_A) {
+  if (!configured_) {
+    health_.record(Status::kNotConfigured);
+    return Status::kNotConfigured;
+  }
+  if (!cfg_.use_accelerometer) return Status::kOk;
+  const Status s = acc_.step(t, a_A);
+  if (accepted(s)) resolve();
+  return s;
+}
+
+Status Pipeline::stepStars(const StarEpoch& in) {
+  if (!configured_) {
+    health_.record(Status::kNotConfigured);
+    return Status::kNotConfigured;
+  }
+  if (cfg_.heads.n_heads >= 2) {
+    const int R = cfg_.wahba_reference_slot;
+    for (int k = 0; k < cfg_.heads.n_heads; ++k)
+      if (k != R) wahba_.setRelative(k, monitor_.correctedRelative(R, k));
+  }
+  return wahba_.step(in);
+}
+
+void Pipeline::flush() {
+  while (n_pending_ > 0) {
+    Pending& p = pending_[static_cast<std::size_t>(p_head_)];
+    if (!p.acc_done) {
+      AccOutput a;
+      if (acc_.evaluateAt(p.row.t, a) == Status::kOk) {
+        p.row.a_acc_B = a.a_X;
+        p.row.has_acc = true;
+      }
+    }
+    if (!p.rate_done) {
+      RateOutput r;
+      if (rates_.evaluateAt(p.row.t, r) == Status::kOk) {
+        p.row.w_B = r.w_X;
+        p.row.a_sc_B = r.alpha_X;
+        p.row.has_rates = true;
+      }
+    }
+    emitOldest();
+  }
+}
+
+bool Pipeline::popRow(PipelineRow& out) {
+  if (n_ready_ == 0) return false;
+  out = ready_[static_cast<std::size_t>(r_head_)];
+  r_head_ = (r_head_ + 1) % kMaxPendingRows;
+  --n_ready_;
+  return true;
+}
+
+}  // namespace boresight::core

@@ -1,0 +1,95 @@
+#include "boresight/core/rates.h"
+
+#include "boresight/core/rotation.h"
+
+namespace boresight::core {
+
+namespace {
+Quat quatOf(const Eigen::Vector4d& v) { return Quat(v[0], v[1], v[2], v[3]); }  // v = (w, x, y, z)
+}  // namespace
+
+Status AttitudeRates::configure(const CrnConfig& cfg) {
+  configured_ = false;
+  CrnConfig c = cfg;
+  c.max_order = 2;
+  const Status s = crn_.configure(c);
+  if (s != Status::kOk) return s;
+  configured_ = true;
+  reset();
+  return Status::kOk;
+}
+
+void AttitudeRates::reset() {
+  crn_.reset();
+  have_prev_ = false;
+  prev_ = Quat::Identity();
+  n_out_ = 0;
+}
+
+RateOutput AttitudeRates::fromFiltered(const CrnStream<4>::Output& o) {
+  const Quat q = quatOf(o.y[0]), qd = quatOf(o.y[1]), qdd = quatOf(o.y[2]);
+  const double n2 = o.y[0].squaredNorm();
+  RateOutput r;
+  r.t = o.t;
+  r.q_I_X = q.normalized();
+  r.w_X = 2.0 * (q.conjugate() * qd).vec() / n2;
+  r.alpha_X = (2.0 * (q.conjugate() * qdd).vec() - 2.0 * o.y[0].dot(o.y[1]) * r.w_X) / n2;
+  return r;
+}
+
+Status AttitudeRates::step(TimeUs t, const Quat& q_I_X) {
+  n_out_ = 0;
+  if (!configured_) return crn_.step(t, Eigen::Vector4d::Constant(std::nan("")));  // counted by the stream
+  Quat q = q_I_X;
+  if (have_prev_) q = continuous(q, prev_);
+  const Eigen::Vector4d v(q.w(), q.x(), q.y(), q.z());
+  const Status s = crn_.step(t, v);
+  if (accepted(s)) {
+    prev_ = q;
+    have_prev_ = true;
+  }
+  for (int i = 0; i < crn_.numOutputs(); ++i) out_[static_cast<std::size_t>(n_out_++)] = fromFiltered(crn_.output(i));
+  return s;
+}
+
+Status AttitudeRates::evaluateAt(TimeUs t, RateOutput& out) const {
+  CrnStream<4>::Output o;
+  const Status s = crn_.evaluateAt(t, o);
+  if (s == Status::kOk) out = fromFiltered(o);
+  return s;
+}
+
+Status AccAngularFilter::configure(const CrnConfig& cfg, const Mat3& C_X_A) {
+  configured_ = false;
+  if (!C_X_A.allFinite() || !(C_X_A * C_X_A.transpose()).isApprox(Mat3::Identity(), 1e-9) ||
+      C_X_A.determinant() < 0)
+    return Status::kInvalidConfig;
+  CrnConfig c = cfg;
+  c.max_order = 2;  // orders 1-2 serve the Taylor step in evaluateAt
+  const Status s = crn_.configure(c);
+  if (s != Status::kOk) return s;
+  C_X_A_ = C_X_A;
+  configured_ = true;
+  return Status::kOk;
+}
+
+void AccAngularFilter::reset() { crn_.reset(); }
+
+Status AccAngularFilter::step(TimeUs t, const Vec3& a_A) {
+  if (!configured_) return crn_.step(t, Vec3::Constant(std::nan("")));
+  return crn_.step(t, C_X_A_ * a_A);
+}
+
+AccOutput AccAngularFilter::output(int i) const {
+  const auto& o = crn_.output(i);
+  return AccOutput{o.t, o.y[0]};
+}
+
+Status AccAngularFilter::evaluateAt(TimeUs t, AccOutput& out) const {
+  CrnStream<3>::Output o;
+  const Status s = crn_.evaluateAt(t, o);
+  if (s == Status::kOk) out = AccOutput{t, o.y[0]};
+  return s;
+}
+
+}  // namespace boresight::core
