@@ -1,2 +1,226 @@
+// boresight convert: Level-1 SCA1A / ACC1A files -> LCM log ordered by sensor time, and back.
+#include <boresight/io/any_product.h>
+#include <boresight/io/lcm_log.h>
+#include <boresight/io/level1.h>
+#include <boresight/io/time_format.h>
+
+#include "args.h"
 #include "commands.h"
-namespace boresight::cli { int runConvert(int, char**) { return 1; } }
+
+#include <algorithm>
+#include <cstdio>
+#include <map>
+#include <string>
+#include <sys/stat.h>
+#include <vector>
+
+namespace boresight::cli {
+namespace {
+
+const char* kUsage =
+    "usage: boresight convert INPUT... --out LOG.lcm\n"
+    "       boresight convert LOG.lcm --to-level1 DIR [--satellite C]\n"
+    "\n"
+    "Level-1 to LCM: SCA1A records become star_head_sample_t messages on channel STAR_HEAD and ACC1A\n"
+    "records accel_sample_t messages on channel ACCEL, merged in sensor-time order (ties: heads by id,\n"
+    "then the accelerometer). Other products are not node inputs: they are listed and skipped.\n"
+    "Rejected lines are counted and reported per file; --strict stops at the first one.\n"
+    "\n"
+    "LCM to Level-1: writes SCA1A_<date>_<sat>_04.txt and ACC1A_<date>_<sat>_04.txt in DIR. The LCM\n"
+    "types carry time, head, quaternion, star count and accelerations; the SCA1A fields nlocks,\n"
+    "sca_confid, sca_mode and qualflg and the ACC1A ICU block number are not in them and come back as 0.\n"
+    "\n"
+    "  --out LOG.lcm       LCM log to write\n"
+    "  --to-level1 DIR     convert an LCM log back to Level-1 files in DIR (created if missing)\n"
+    "  --satellite C       satellite letter for the Level-1 files written back (default C)\n"
+    "  --strict            stop at the first malformed line instead of skipping it\n";
+
+struct Event {
+  TimeUs t;
+  int order;  // head id for heads, 100 for the accelerometer: deterministic ties
+  bool is_head;
+  std::size_t index;
+};
+
+int toLcm(const Args& a) {
+  std::vector<io::HeadSample> heads;
+  std::vector<io::AccelSample> accels;
+  io::ReadOptions opt;
+  if (a.has("--strict")) opt.on_error = io::OnError::Stop;
+  int status = 0;
+  std::map<int, std::int32_t> head_seq;
+  std::int32_t acc_seq = 0;
+  for (const auto& f : a.positional()) {
+    std::string name = io::productNameFromPath(f);
+    if (name == "SCA1A") {
+      auto p = io::readProduct<io::Sca1aRecord>(f, opt);
+      if (!p.ok) {
+        std::fprintf(stderr, "%s\n", p.error.c_str());
+        return 1;
+      }
+      for (const auto& r : p.records) {
+        io::HeadSample h;
+        h.utime = r.t;
+        h.head_id = r.head;
+        for (int i = 0; i < 4; ++i) h.q[i] = r.q[i];
+        h.star_count = r.nstars;
+        h.flags = 1;
+        h.seq = head_seq[r.head]++;
+        heads.push_back(h);
+      }
+      std::printf("%s: %zu SCA1A records, %zu rejected\n", f.c_str(), p.records.size(), p.rejected_count);
+      for (std::size_t i = 0; i < p.rejected.size() && i < 5; ++i) std::printf("    rejected %s\n", p.rejected[i].str().c_str());
+    } else if (name == "ACC1A") {
+      auto p = io::readProduct<io::FlaggedRecord>(f, opt);
+      if (!p.ok) {
+        std::fprintf(stderr, "%s\n", p.error.c_str());
+        return 1;
+      }
+      std::size_t without_ang = 0;
+      for (const auto& r : p.records) {
+        io::AccelSample s;
+        s.utime = r.t;
+        s.flags = 0;
+        if (r.has(io::acc_bits::kAngX) && r.has(io::acc_bits::kAngY) && r.has(io::acc_bits::kAngZ)) {
+          for (int i = 0; i < 3; ++i) s.ang_accel[i] = r.value[static_cast<std::size_t>(io::acc_bits::kAngX + i)];
+          s.flags |= 1;
+        } else {
+          ++without_ang;
+        }
+        if (r.has(io::acc_bits::kLinX) && r.has(io::acc_bits::kLinY) && r.has(io::acc_bits::kLinZ)) {
+          for (int i = 0; i < 3; ++i) s.lin_accel[i] = r.value[static_cast<std::size_t>(io::acc_bits::kLinX + i)];
+          s.flags |= 2;
+        }
+        s.seq = acc_seq++;
+        accels.push_back(s);
+      }
+      std::printf("%s: %zu ACC1A records (%zu without angular acceleration: flagged invalid), %zu rejected\n",
+                  f.c_str(), p.records.size(), without_ang, p.rejected_count);
+      for (std::size_t i = 0; i < p.rejected.size() && i < 5; ++i) std::printf("    rejected %s\n", p.rejected[i].str().c_str());
+    } else {
+      std::printf("%s: %s is not a node input (SCA1A, ACC1A): skipped\n", f.c_str(), name.empty() ? "unknown product" : name.c_str());
+      if (name.empty()) status = 1;
+    }
+  }
+  std::vector<Event> ev;
+  ev.reserve(heads.size() + accels.size());
+  for (std::size_t i = 0; i < heads.size(); ++i) ev.push_back({heads[i].utime, heads[i].head_id, true, i});
+  for (std::size_t i = 0; i < accels.size(); ++i) ev.push_back({accels[i].utime, 100, false, i});
+  std::stable_sort(ev.begin(), ev.end(), [](const Event& x, const Event& y) {
+    return x.t != y.t ? x.t < y.t : x.order < y.order;
+  });
+  io::LcmLogWriter w;
+  std::string err;
+  const std::string out = a.get("--out");
+  if (!w.open(out, &err)) {
+    std::fprintf(stderr, "boresight convert: %s\n", err.c_str());
+    return 1;
+  }
+  for (const auto& e : ev) {
+    bool ok = e.is_head ? w.write(heads[e.index]) : w.write(accels[e.index]);
+    if (!ok) {
+      std::fprintf(stderr, "boresight convert: %s: write failed\n", out.c_str());
+      return 1;
+    }
+  }
+  w.close();
+  std::printf("%s: %zu star head samples, %zu accelerometer samples", out.c_str(), heads.size(), accels.size());
+  if (!ev.empty()) std::printf(", %s .. %s", io::formatTime(ev.front().t).c_str(), io::formatTime(ev.back().t).c_str());
+  std::printf("\n");
+  return status;
+}
+
+int toLevel1(const Args& a) {
+  if (a.positional().size() != 1) {
+    std::fprintf(stderr, "boresight convert: --to-level1 takes exactly one LCM log\n");
+    return 2;
+  }
+  const std::string log = a.positional()[0], dir = a.get("--to-level1");
+  std::string sat_s = a.get("--satellite", "C");
+  if (sat_s.size() != 1 || sat_s[0] < 'A' || sat_s[0] > 'Z') {
+    std::fprintf(stderr, "boresight convert: --satellite wants one capital letter, not '%s'\n", sat_s.c_str());
+    return 2;
+  }
+  const char sat = sat_s[0];
+  io::LcmLogReader r;
+  std::string err;
+  if (!r.open(log, &err)) {
+    std::fprintf(stderr, "boresight convert: %s\n", err.c_str());
+    return 1;
+  }
+  auto sca = io::makeProduct<io::Sca1aRecord>(io::Product::SCA1A, sat);
+  auto acc = io::makeProduct<io::FlaggedRecord>(io::Product::ACC1A, sat);
+  io::HeadSample h;
+  io::AccelSample s;
+  std::size_t invalid_acc = 0;
+  for (;;) {
+    auto k = r.next(h, s);
+    if (k == io::LcmLogReader::Kind::End) break;
+    if (k == io::LcmLogReader::Kind::Head) {
+      io::Sca1aRecord rec;
+      rec.t = h.utime;
+      rec.satellite = sat;
+      rec.head = static_cast<std::uint8_t>(h.head_id);
+      for (int i = 0; i < 4; ++i) rec.q[i] = h.q[i];
+      rec.nstars = h.star_count;
+      sca.records.push_back(rec);
+    } else if (k == io::LcmLogReader::Kind::Accel) {
+      io::FlaggedRecord rec;
+      rec.t = s.utime;
+      rec.time_ref = 'R';
+      rec.satellite = sat;
+      rec.prod_flag = io::Bits{0, 32};
+      if (s.flags & 2) {
+        rec.prod_flag.value |= 0x7u;
+        for (int i = 0; i < 3; ++i) rec.value[static_cast<std::size_t>(i)] = s.lin_accel[i];
+      }
+      if (s.flags & 1) {
+        rec.prod_flag.value |= 0x38u;
+        for (int i = 0; i < 3; ++i) rec.value[static_cast<std::size_t>(3 + i)] = s.ang_accel[i];
+      } else {
+        ++invalid_acc;
+      }
+      acc.records.push_back(rec);
+    }
+  }
+  ::mkdir(dir.c_str(), 0777);
+  int status = 0;
+  auto write = [&](const auto& prod, const char* name) {
+    if (prod.records.empty()) return;
+    std::string path = dir + "/" + name + "_" + io::formatDate(prod.records.front().t) + "_" + sat + "_04.txt";
+    std::string e;
+    if (!io::writeProduct(path, prod, &e)) {
+      std::fprintf(stderr, "boresight convert: %s\n", e.c_str());
+      status = 1;
+      return;
+    }
+    std::printf("%s: %zu records\n", path.c_str(), prod.records.size());
+  };
+  write(sca, "SCA1A");
+  write(acc, "ACC1A");
+  if (r.unknownChannel() || r.decodeFailures())
+    std::printf("%s: %llu events on other channels and %llu undecodable messages skipped\n", log.c_str(),
+                static_cast<unsigned long long>(r.unknownChannel()), static_cast<unsigned long long>(r.decodeFailures()));
+  if (invalid_acc) std::printf("%zu accelerometer samples had no valid angular acceleration\n", invalid_acc);
+  return status;
+}
+
+}  // namespace
+
+int runConvert(int argc, char** argv) {
+  Args a(argc, argv, {"--out", "--to-level1", "--satellite"}, {"--help", "-h", "--strict"});
+  if (a.help()) {
+    std::fputs(kUsage, stdout);
+    return 0;
+  }
+  if (!a.ok() || a.positional().empty() || (a.has("--out") == a.has("--to-level1"))) {
+    std::fprintf(stderr, "boresight convert: %s\n\n%s",
+                 !a.ok() ? a.error().c_str()
+                         : a.positional().empty() ? "no INPUT given" : "give exactly one of --out and --to-level1",
+                 kUsage);
+    return 2;
+  }
+  return a.has("--out") ? toLcm(a) : toLevel1(a);
+}
+
+}  // namespace boresight::cli

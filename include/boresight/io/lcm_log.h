@@ -1,0 +1,75 @@
+// LCM log files of the node's input messages (star head samples, accelerometer samples).
+//
+// Channels: "STAR_HEAD" carries boresight_lcm::star_head_sample_t, "ACCEL" boresight_lcm::accel_sample_t.
+// The event timestamp of each log entry is set to the message's sensor time tag (utime), so a log
+// written here plays back in sensor-time order; readers still use the message's own utime.
+#pragma once
+
+#include <boresight/core/conventions.h>
+
+#include <cstdint>
+#include <memory>
+#include <string>
+
+namespace boresight::io {
+
+constexpr const char* kStarHeadChannel = "STAR_HEAD";
+constexpr const char* kAccelChannel = "ACCEL";
+
+/// Plain mirrors of the LCM types (so users of this header need no generated code).
+struct HeadSample {
+  TimeUs utime = 0;
+  int head_id = 1;
+  double q[4] = {1, 0, 0, 0};  ///< q_I_S, scalar first
+  int star_count = 0;
+  std::int32_t flags = 1;  ///< bit 0 valid, bit 1 degraded, bit 2 blinded
+  std::int32_t seq = 0;
+};
+struct AccelSample {
+  TimeUs utime = 0;
+  double ang_accel[3] = {0, 0, 0};  ///< rad/s^2, accelerometer frame A
+  double lin_accel[3] = {0, 0, 0};  ///< m/s^2, accelerometer frame A
+  std::int32_t flags = 3;  ///< bit 0 angular valid, bit 1 linear valid
+  std::int32_t seq = 0;
+};
+
+class LcmLogWriter {
+ public:
+  LcmLogWriter();
+  ~LcmLogWriter();
+  LcmLogWriter(const LcmLogWriter&) = delete;
+  LcmLogWriter& operator=(const LcmLogWriter&) = delete;
+  /// Opens (truncates) the log. False with *error on failure.
+  bool open(const std::string& path, std::string* error);
+  bool write(const HeadSample& s);
+  bool write(const AccelSample& s);
+  void close();
+  std::uint64_t written() const { return written_; }
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  std::uint64_t written_ = 0;
+};
+
+/// Reads a log event by event. Unknown channels and undecodable messages are counted, not fatal.
+class LcmLogReader {
+ public:
+  enum class Kind { Head, Accel, Skipped, End };
+  LcmLogReader();
+  ~LcmLogReader();
+  LcmLogReader(const LcmLogReader&) = delete;
+  LcmLogReader& operator=(const LcmLogReader&) = delete;
+  bool open(const std::string& path, std::string* error);
+  /// Next event: fills head or accel. Skipped: unknown channel or decode failure (see counters).
+  Kind next(HeadSample& head, AccelSample& accel);
+  std::uint64_t unknownChannel() const { return unknown_channel_; }
+  std::uint64_t decodeFailures() const { return decode_failures_; }
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  std::uint64_t unknown_channel_ = 0, decode_failures_ = 0;
+};
+
+}  // namespace boresight::io

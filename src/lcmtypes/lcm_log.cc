@@ -1,0 +1,138 @@
+// LCM log writing and reading for the node's input types.
+#include <boresight/io/lcm_log.h>
+
+#include "boresight_lcm/accel_sample_t.hpp"
+#include "boresight_lcm/star_head_sample_t.hpp"
+
+#include <lcm/lcm-cpp.hpp>
+
+#include <cstring>
+#include <vector>
+
+namespace boresight::io {
+namespace {
+// Log event timestamps are Unix microseconds: map the GPS J2000 sensor tag onto them without leap
+// seconds. Only the order and spacing of events matter for playback; the message utime is the truth.
+constexpr std::int64_t kUnixUsOfGraceEpoch = 946728000LL * 1000000LL;
+
+template <typename Msg>
+bool writeMsg(lcm::LogFile& log, const char* channel, std::int64_t utime, const Msg& m, std::vector<char>& buf) {
+  int n = m.getEncodedSize();
+  if (n < 0) return false;
+  buf.resize(static_cast<std::size_t>(n));
+  if (m.encode(buf.data(), 0, n) != n) return false;
+  lcm::LogEvent ev;
+  ev.eventnum = 0;
+  ev.timestamp = utime + kUnixUsOfGraceEpoch;
+  ev.channel = channel;
+  ev.datalen = n;
+  ev.data = buf.data();
+  return log.writeEvent(&ev) == 0;
+}
+}  // namespace
+
+struct LcmLogWriter::Impl {
+  std::unique_ptr<lcm::LogFile> log;
+  std::vector<char> buf;
+};
+
+LcmLogWriter::LcmLogWriter() : impl_(new Impl) {}
+LcmLogWriter::~LcmLogWriter() { close(); }
+
+bool LcmLogWriter::open(const std::string& path, std::string* error) {
+  impl_->log.reset(new lcm::LogFile(path, "w"));
+  if (!impl_->log->good()) {
+    impl_->log.reset();
+    if (error) *error = path + ": cannot create LCM log: " + std::strerror(errno);
+    return false;
+  }
+  written_ = 0;
+  return true;
+}
+
+bool LcmLogWriter::write(const HeadSample& s) {
+  if (!impl_->log) return false;
+  boresight_lcm::star_head_sample_t m;
+  m.utime = s.utime;
+  m.head_id = static_cast<int8_t>(s.head_id);
+  for (int i = 0; i < 4; ++i) m.q[i] = s.q[i];
+  m.star_count = static_cast<int16_t>(s.star_count);
+  m.flags = s.flags;
+  m.seq = s.seq;
+  bool ok = writeMsg(*impl_->log, kStarHeadChannel, s.utime, m, impl_->buf);
+  written_ += ok ? 1 : 0;
+  return ok;
+}
+
+bool LcmLogWriter::write(const AccelSample& s) {
+  if (!impl_->log) return false;
+  boresight_lcm::accel_sample_t m;
+  m.utime = s.utime;
+  for (int i = 0; i < 3; ++i) {
+    m.ang_accel[i] = s.ang_accel[i];
+    m.lin_accel[i] = s.lin_accel[i];
+  }
+  m.flags = s.flags;
+  m.seq = s.seq;
+  bool ok = writeMsg(*impl_->log, kAccelChannel, s.utime, m, impl_->buf);
+  written_ += ok ? 1 : 0;
+  return ok;
+}
+
+void LcmLogWriter::close() { impl_->log.reset(); }
+
+struct LcmLogReader::Impl {
+  std::unique_ptr<lcm::LogFile> log;
+};
+
+LcmLogReader::LcmLogReader() : impl_(new Impl) {}
+LcmLogReader::~LcmLogReader() = default;
+
+bool LcmLogReader::open(const std::string& path, std::string* error) {
+  impl_->log.reset(new lcm::LogFile(path, "r"));
+  if (!impl_->log->good()) {
+    impl_->log.reset();
+    if (error) *error = path + ": cannot open LCM log: " + std::strerror(errno);
+    return false;
+  }
+  return true;
+}
+
+LcmLogReader::Kind LcmLogReader::next(HeadSample& head, AccelSample& accel) {
+  if (!impl_->log) return Kind::End;
+  const lcm::LogEvent* ev = impl_->log->readNextEvent();
+  if (!ev) return Kind::End;
+  if (ev->channel == kStarHeadChannel) {
+    boresight_lcm::star_head_sample_t m;
+    if (m.decode(ev->data, 0, ev->datalen) != ev->datalen) {
+      ++decode_failures_;
+      return Kind::Skipped;
+    }
+    head.utime = m.utime;
+    head.head_id = m.head_id;
+    for (int i = 0; i < 4; ++i) head.q[i] = m.q[i];
+    head.star_count = m.star_count;
+    head.flags = m.flags;
+    head.seq = m.seq;
+    return Kind::Head;
+  }
+  if (ev->channel == kAccelChannel) {
+    boresight_lcm::accel_sample_t m;
+    if (m.decode(ev->data, 0, ev->datalen) != ev->datalen) {
+      ++decode_failures_;
+      return Kind::Skipped;
+    }
+    accel.utime = m.utime;
+    for (int i = 0; i < 3; ++i) {
+      accel.ang_accel[i] = m.ang_accel[i];
+      accel.lin_accel[i] = m.lin_accel[i];
+    }
+    accel.flags = m.flags;
+    accel.seq = m.seq;
+    return Kind::Accel;
+  }
+  ++unknown_channel_;
+  return Kind::Skipped;
+}
+
+}  // namespace boresight::io
