@@ -63,16 +63,28 @@ Status HeadFusion::step(const ValidHeads& in) {
     health_.record(Status::kNumericalFailure);
     return Status::kNumericalFailure;
   }
+  // Gauss-Newton on sum_i |Log(Exp(-x) q^-1 q_i)|^2_{W_i}, exact Jacobian, started at the first head;
+  // two steps reach the optimum to third order in the head errors.
   Quat q = q_I_B[static_cast<std::size_t>(ref)];
-  for (int iter = 0; iter < 2; ++iter) {  // linearise at the first head, then once at the result
-    Vec3 rhs = Vec3::Zero();
+  for (int iter = 0; iter < 2; ++iter) {
+    Mat3 H = Mat3::Zero();
+    Vec3 g = Vec3::Zero();
     const Quat q_inv = q.conjugate();
     for (int k = 0; k < cfg_.n_heads; ++k) {
       if (!in.has(k)) continue;
       const auto u = static_cast<std::size_t>(k);
-      rhs += W[u] * quatLog(q_inv * q_I_B[u]);
+      const Vec3 r = quatLog(q_inv * q_I_B[u]);
+      const Mat3 A = jacobianLeftInverse(r);
+      const Mat3 AtW = A.transpose() * W[u];
+      H += AtW * A;
+      g += AtW * r;
     }
-    q = (q * quatExp(P * rhs)).normalized();
+    Mat3 Hinv;
+    if (!invertSpd3(H, Hinv)) {
+      health_.record(Status::kNumericalFailure);
+      return Status::kNumericalFailure;
+    }
+    q = (q * quatExp(Hinv * g)).normalized();
   }
   if (have_last_) q = continuous(q, out_.q_I_B);
   out_.t = in.t;

@@ -3,8 +3,9 @@
 // Head i measures C_I_Si = C_I_Si_true Exp(eps_i), eps_i ~ N(0, Sigma_i) in Si with
 // Sigma_i = s_c^2 I + (s_r^2 - s_c^2) b b^T. Through its mounting, C_I_B_i = C_I_Si C_Si_B
 // = C_I_B_true Exp(C_B_Si eps_i): the error in B has covariance C_B_Si Sigma_i C_Si_B, information W_i.
-// The fused C_I_B = C_ref Exp(dx) minimises sum_i |Log(C_ref^T C_I_B_i) - dx|^2_{W_i}; the minimum is
-// dx = (sum W_i)^-1 sum W_i Log(C_ref^T C_I_B_i), re-linearised once at the result; P_B = (sum W_i)^-1.
+// The fused C_I_B minimises sum_i |Log(C_I_B^T C_I_B_i)|^2_{W_i} (weighted least squares on the
+// small-angle differences): to first order dx = (sum W_i)^-1 sum W_i Log(C_ref^T C_I_B_i); the code
+// takes two Gauss-Newton steps with the exact SO(3) Jacobian from the first head. P_B = (sum W_i)^-1.
 // Any subset of the heads may be present; a head dropping out changes the weights, not the frame.
 #pragma once
 

@@ -46,6 +46,19 @@ inline Vec3 quatLog(const Quat& q) {
 inline Mat3 so3Exp(const Vec3& phi) { return quatExp(phi).toRotationMatrix(); }
 inline Vec3 so3Log(const Mat3& C) { return quatLog(Quat(C)); }
 
+/// Inverse left Jacobian of SO(3): Log(Exp(-x) Exp(r)) = r - jacobianLeftInverse(r) x + O(x^2).
+inline Mat3 jacobianLeftInverse(const Vec3& r) {
+  const double th = r.norm();
+  const Mat3 R = skew(r);
+  double c;
+  if (th < 1e-4) {
+    c = 1.0 / 12.0 + th * th / 720.0;
+  } else {
+    c = 1.0 / (th * th) - (1.0 + std::cos(th)) / (2.0 * th * std::sin(th));
+  }
+  return Mat3::Identity() - 0.5 * R + c * R * R;
+}
+
 /// Rotation angle (rad, in [0, pi]) between two attitudes.
 inline double angleBetween(const Quat& a, const Quat& b) { return quatLog(a.conjugate() * b).norm(); }
 

@@ -1,0 +1,231 @@
+// CRN filter: designed response against METHODS 1.4, derivatives of sinusoids, centre stamping,
+// output decimation, gaps (restart and bridge), evaluation at arbitrary tags.
+#include "boresight/core/crn.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+namespace boresight::core {
+namespace {
+
+CrnConfig grace(double fs = 10.0) {
+  CrnConfig c;
+  c.fs_hz = fs;
+  c.nc = 7;
+  c.bandwidth_hz = 0.1;
+  c.length_s = 70.7;
+  c.max_order = 2;
+  return c;
+}
+
+double dB(double g) { return 20.0 * std::log10(std::abs(g)); }
+
+double findCrossing(const CrnKernel& k, double level_db) {
+  double lo = 0.05, hi = 0.2;
+  for (int i = 0; i < 60; ++i) {
+    const double m = 0.5 * (lo + hi);
+    (dB(k.response(0, m)) > level_db ? lo : hi) = m;
+  }
+  return lo;
+}
+
+TEST(CrnDesign, GraceResponseMatchesMethods) {
+  CrnKernel k;
+  ASSERT_EQ(designCrn(grace(), k), Status::kOk);
+  EXPECT_EQ(k.nf, 707);
+  EXPECT_EQ(k.half, 353);
+  EXPECT_EQ(k.nb, 7);
+  double worst = 0;
+  for (double f = 0; f <= 0.05 + 1e-12; f += 0.0005) worst = std::max(worst, std::abs(k.response(0, f) - 1.0));
+  EXPECT_LT(worst, 0.0012) << "flat to 0.12 % up to 0.05 Hz";
+  EXPECT_GT(worst, 0.0005) << "the CRN is not perfectly flat: a near-zero deviation means the design is wrong";
+  EXPECT_NEAR(findCrossing(k, -3.0), 0.0955, 0.0010);
+  EXPECT_NEAR(findCrossing(k, -6.0), 0.1065, 0.0010);
+  EXPECT_NEAR(dB(k.response(0, 0.15)), -40.0, 1.5);
+  for (double f = 0.2; f <= 5.0; f += 0.0013) EXPECT_LT(dB(k.response(0, f) + 1e-300), -95.0) << f;
+  std::printf("CRN 10 Hz: max |H-1| to 0.05 Hz %.4f %%, -3 dB %.4f Hz, -6 dB %.4f Hz, %.1f dB at 0.15 Hz\n",
+              100 * worst, findCrossing(k, -3.0), findCrossing(k, -6.0), dB(k.response(0, 0.15)));
+}
+
+TEST(CrnDesign, TwoHertzVersionHasNearlyTheSameResponse) {
+  CrnKernel k10, k2;
+  ASSERT_EQ(designCrn(grace(10.0), k10), Status::kOk);
+  ASSERT_EQ(designCrn(grace(2.0), k2), Status::kOk);
+  EXPECT_EQ(k2.nf, 141);
+  for (double f = 0; f <= 0.3; f += 0.001) EXPECT_NEAR(k2.response(0, f), k10.response(0, f), 0.01) << f;
+}
+
+TEST(CrnDesign, DerivativeKernelsAreIdealTimesLowPass) {
+  CrnKernel k;
+  ASSERT_EQ(designCrn(grace(), k), Status::kOk);
+  for (double f = 0.001; f <= 0.05; f += 0.001) {
+    const double w = 2 * kPi * f;
+    EXPECT_NEAR(k.response(1, f) / w, k.response(0, f), 2e-4) << f;
+    EXPECT_NEAR(-k.response(2, f) / (w * w), k.response(0, f), 2e-4) << f;
+  }
+}
+
+TEST(CrnDesign, RejectsBadParameters) {
+  CrnKernel k;
+  CrnConfig c = grace();
+  c.length_s = 200;  // 2000 taps > kMaxCrnTaps
+  EXPECT_EQ(designCrn(c, k), Status::kInvalidConfig);
+  c = grace();
+  c.fs_hz = std::nan("");
+  EXPECT_EQ(designCrn(c, k), Status::kInvalidConfig);
+  c = grace();
+  c.nc = 0;
+  EXPECT_EQ(designCrn(c, k), Status::kInvalidConfig);
+}
+
+// Feeds x(t) = sum of sinusoids below 0.05 Hz; every output must be stamped at its centre tap and
+// give the value and the first two derivatives at that tag to 0.2 % of the amplitude of each.
+TEST(CrnStreamTest, SinusoidDerivativesAndCentreStamping) {
+  constexpr int kRuns = 50;  // random frequencies, phases, fs
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> fr(0.001, 0.05), ph(0, 2 * kPi);
+  for (int run = 0; run < kRuns; ++run) {
+    const double fs = (run % 2) ? 10.0 : 2.0;
+    CrnConfig c = grace(fs);
+    c.output_period_us = 2 * kUsPerSecond;
+    CrnStream<1> s;
+    ASSERT_EQ(s.configure(c), Status::kOk);
+    const double f = fr(rng), p = ph(rng), w = 2 * kPi * f;
+    const TimeUs dt = static_cast<TimeUs>(std::llround(1e6 / fs));
+    const TimeUs t0 = 700000000LL * kUsPerSecond + 30000;  // GRACE-FO-like epoch, off-grid by 30 ms
+    int outputs = 0;
+    double e0 = 0, e1 = 0, e2 = 0;
+    for (int i = 0; i < static_cast<int>(400 * fs); ++i) {
+      const TimeUs t = t0 + i * dt;
+      const double ts = toSeconds(t - t0);
+      ASSERT_EQ(s.step(t, Eigen::Matrix<double, 1, 1>(std::sin(w * ts + p))), Status::kOk);
+      for (int o = 0; o < s.numOutputs(); ++o) {
+        const auto& out = s.output(o);
+        // centre stamping: the tag is (Nf-1)/2 samples before the newest input
+        EXPECT_EQ(out.t, t - s.kernel().half * dt);
+        const double tc = toSeconds(out.t - t0);
+        e0 = std::max(e0, std::abs(out.y[0][0] - std::sin(w * tc + p)));
+        e1 = std::max(e1, std::abs(out.y[1][0] - w * std::cos(w * tc + p)) / w);
+        e2 = std::max(e2, std::abs(out.y[2][0] + w * w * std::sin(w * tc + p)) / (w * w));
+        ++outputs;
+      }
+    }
+    EXPECT_GT(outputs, 100);
+    EXPECT_LT(e0, 0.002) << "f " << f << " fs " << fs;
+    EXPECT_LT(e1, 0.002) << "f " << f << " fs " << fs;
+    EXPECT_LT(e2, 0.002) << "f " << f << " fs " << fs;
+  }
+}
+
+TEST(CrnStreamTest, AboveTheBandIsSuppressed) {
+  // a 0.3 Hz line (GRACE: below -95 dB from 0.2 Hz) disappears from all three outputs
+  CrnStream<1> s;
+  ASSERT_EQ(s.configure(grace()), Status::kOk);
+  double worst = 0;
+  for (int i = 0; i < 3000; ++i) {
+    const TimeUs t = i * 100000;
+    s.step(t, Eigen::Matrix<double, 1, 1>(std::sin(2 * kPi * 0.3 * toSeconds(t))));
+    for (int o = 0; o < s.numOutputs(); ++o) worst = std::max(worst, std::abs(s.output(o).y[0][0]));
+  }
+  EXPECT_LT(worst, 1e-4);
+}
+
+TEST(CrnStreamTest, OutputCostFollowsTheOutputGrid) {
+  // 10 Hz in, 1 s grid: exactly one output per second once the window is full, on whole seconds
+  CrnStream<3> s;
+  CrnConfig c = grace();
+  c.output_period_us = kUsPerSecond;
+  ASSERT_EQ(s.configure(c), Status::kOk);
+  int outputs = 0;
+  const int n = 10 * 600;
+  for (int i = 0; i < n; ++i) {
+    const TimeUs t = 5 * kUsPerSecond + i * 100000 + (i % 3) * 700;  // jitter of a few hundred us
+    ASSERT_EQ(s.step(t, Vec3(1, 2, 3)), Status::kOk);
+    for (int o = 0; o < s.numOutputs(); ++o) {
+      EXPECT_LE(std::abs(s.output(o).t % kUsPerSecond), 2000);
+      EXPECT_NEAR(s.output(o).y[0][2], 3.0, 1e-12);
+      EXPECT_NEAR(s.output(o).y[1][2], 0.0, 1e-12);
+      EXPECT_NEAR(s.output(o).y[2][2], 0.0, 1e-12);
+      ++outputs;
+    }
+  }
+  const int expected = (n - 707) / 10 + 1;
+  EXPECT_NEAR(outputs, expected, 1);
+}
+
+TEST(CrnStreamTest, GapRestartsOrIsBridgedAndIsReported) {
+  for (GapPolicy pol : {GapPolicy::kRestart, GapPolicy::kBridge}) {
+    CrnConfig c = grace(2.0);
+    c.gap_policy = pol;
+    c.max_bridge_samples = 10;
+    c.output_period_us = 500000;  // every sample
+    CrnStream<1> s;
+    ASSERT_EQ(s.configure(c), Status::kOk);
+    auto x = [](TimeUs t) { return Eigen::Matrix<double, 1, 1>(0.3 + 0.01 * toSeconds(t)); };  // a ramp: bridged exactly
+    TimeUs t = 0;
+    int outputs_after_gap = 0;
+    for (int i = 0; i < 400; ++i) {
+      t += 500000;
+      ASSERT_EQ(s.step(t, x(t)), Status::kOk);
+    }
+    // a gap of 5 missing samples
+    t += 6 * 500000;
+    const Status st = s.step(t, x(t));
+    if (pol == GapPolicy::kBridge) {
+      EXPECT_EQ(st, Status::kGapBridged);
+      EXPECT_EQ(s.health().count(Status::kGapBridged), 1u);
+      EXPECT_EQ(s.numOutputs(), 6);  // the centres passed over by the 6 pushed samples
+      for (int o = 0; o < s.numOutputs(); ++o) EXPECT_NEAR(s.output(o).y[0][0], x(s.output(o).t)[0], 1e-9);
+    } else {
+      EXPECT_EQ(st, Status::kGapRestarted);
+      EXPECT_EQ(s.health().count(Status::kGapRestarted), 1u);
+      EXPECT_EQ(s.numOutputs(), 0);
+      // nothing for a full window after a restart
+      for (int i = 0; i < 139; ++i) {
+        t += 500000;
+        s.step(t, x(t));
+        outputs_after_gap += s.numOutputs();
+      }
+      EXPECT_EQ(outputs_after_gap, 0);
+      t += 500000;
+      s.step(t, x(t));
+      EXPECT_EQ(s.numOutputs(), 1);
+    }
+    // a gap longer than the bridge limit always restarts
+    t += 30 * 500000;
+    EXPECT_EQ(s.step(t, x(t)), Status::kGapRestarted);
+  }
+}
+
+TEST(CrnStreamTest, EvaluateAtAnyTagInsideTheHistory) {
+  constexpr int kRuns = 200;
+  CrnConfig c = grace(10.0);
+  c.output_period_us = 0;
+  CrnStream<1> s;
+  ASSERT_EQ(s.configure(c), Status::kOk);
+  const double f = 0.03, w = 2 * kPi * f;
+  auto x = [&](TimeUs t) { return std::cos(w * toSeconds(t)); };
+  TimeUs t = 123456;
+  for (int i = 0; i < 1000; ++i) {
+    t += 100000;
+    s.step(t, Eigen::Matrix<double, 1, 1>(x(t)));
+  }
+  std::mt19937_64 rng(3);
+  std::uniform_int_distribution<TimeUs> tag(t - 60 * kUsPerSecond, t - 36 * kUsPerSecond);
+  for (int r = 0; r < kRuns; ++r) {
+    const TimeUs tau = tag(rng);
+    CrnStream<1>::Output o;
+    ASSERT_EQ(s.evaluateAt(tau, o), Status::kOk);
+    EXPECT_EQ(o.t, tau);
+    EXPECT_NEAR(o.y[0][0], x(tau), 0.002);
+    EXPECT_NEAR(o.y[1][0] / w, -std::sin(w * toSeconds(tau)), 0.002);
+  }
+  CrnStream<1>::Output o;
+  EXPECT_EQ(s.evaluateAt(t - 10 * kUsPerSecond, o), Status::kNotReady);
+  EXPECT_EQ(s.evaluateAt(t - 100 * kUsPerSecond, o), Status::kUnavailable);
+}
+
+}  // namespace
+}  // namespace boresight::core
