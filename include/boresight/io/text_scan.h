@@ -10,6 +10,7 @@
 #include <charconv>
 #include <cstdint>
 #include <cstring>
+#include <limits>
 #include <string>
 #include <string_view>
 
@@ -40,27 +41,45 @@ class FieldScanner {
 
   bool f64(double& out, const char* name) {
     ++index_;
-    std::string_view t = token();
-    if (t.empty()) return fail(name, "missing", t);
-    const char* b = t.data();
+    skipSpace();
+    if (p_ == end_) return fail(name, "missing", {});
+    const char* b = p_;
     if (*b == '+') ++b;  // from_chars rejects a leading '+'; Level-1 files never have one, but be lenient
-    auto r = std::from_chars(b, t.data() + t.size(), out);
+    auto r = std::from_chars(b, end_, out);
+    if (r.ec == std::errc() && (r.ptr == end_ || isSpace(*r.ptr))) {
+      p_ = r.ptr;
+      if (out - out == 0.0) return true;
+      return fail(name, "non-finite number", tokenAt(b));
+    }
+    std::string_view t = tokenAt(p_);
     if (r.ec == std::errc::result_out_of_range) return fail(name, "number out of range", t);
-    if (r.ec != std::errc() || r.ptr != t.data() + t.size()) return fail(name, "not a number", t);
-    if (!(out - out == 0.0)) return fail(name, "non-finite number", t);
-    return true;
+    return fail(name, "not a number", t);
   }
 
   template <typename Int>
   bool integer(Int& out, const char* name) {
     ++index_;
-    std::string_view t = token();
-    if (t.empty()) return fail(name, "missing", t);
-    const char* b = t.data();
-    if (*b == '+') ++b;
-    auto r = std::from_chars(b, t.data() + t.size(), out);
-    if (r.ec == std::errc::result_out_of_range) return fail(name, "integer out of range", t);
-    if (r.ec != std::errc() || r.ptr != t.data() + t.size()) return fail(name, "not an integer", t);
+    skipSpace();
+    if (p_ == end_) return fail(name, "missing", {});
+    // Decimal digits with an optional sign; up to 18 digits cannot overflow the int64 accumulator.
+    const char* b = p_;
+    bool neg = false;
+    if (*b == '-' || *b == '+') neg = *b++ == '-';
+    const char* d = b;
+    std::int64_t v = 0;
+    while (d < end_ && static_cast<unsigned>(*d - '0') < 10u && d - b < 18) v = v * 10 + (*d++ - '0');
+    const bool delimited = d == end_ || isSpace(*d);
+    if (d == b || !delimited) {
+      std::string_view t = tokenAt(p_);
+      bool digits_only = d > b && d < end_ && static_cast<unsigned>(*d - '0') < 10u;
+      return fail(name, digits_only ? "integer out of range" : "not an integer", t);
+    }
+    if (neg) v = -v;
+    if (v < static_cast<std::int64_t>(std::numeric_limits<Int>::min()) ||
+        v > static_cast<std::int64_t>(std::numeric_limits<Int>::max()))
+      return fail(name, "integer out of range", tokenAt(p_));
+    out = static_cast<Int>(v);
+    p_ = d;
     return true;
   }
 
@@ -125,13 +144,31 @@ class FieldScanner {
     return e;
   }
 
+  /// Records a codec's own rejection of the current field ("field N (name): what: 'tok'").
+  bool reject(const char* name, const char* what, std::string_view tok = {}) { return fail(name, what, tok); }
+
   const std::string& reason() const { return reason_; }
   int fieldIndex() const { return index_; }
 
   static bool parseBits(std::string_view t, Bits& out) {
     if (t.empty() || t.size() > 32) return false;
     std::uint32_t v = 0;
-    for (char c : t) {
+    std::size_t i = 0;
+    // Eight characters at a time: all must be '0' or '1'; gather their low bits, first char highest.
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Warray-bounds"  // GCC 12 cannot see the loop guard for short literals
+    for (; i + 8 <= t.size(); i += 8) {
+      std::uint64_t w;
+      std::memcpy(&w, t.data() + i, 8);
+      if ((w & 0xFEFEFEFEFEFEFEFEull) != 0x3030303030303030ull) return false;
+      std::uint64_t bitsx = w & 0x0101010101010101ull;  // little-endian: byte 0 is the first char
+      // Move byte k's bit to position (7-k) of the top byte.
+      std::uint32_t byte = static_cast<std::uint32_t>((bitsx * 0x8040201008040201ull) >> 56);
+      v = (v << 8) | byte;
+    }
+#pragma GCC diagnostic pop
+    for (; i < t.size(); ++i) {
+      char c = t[i];
       if (c != '0' && c != '1') return false;
       v = (v << 1) | static_cast<std::uint32_t>(c - '0');
     }
@@ -143,6 +180,16 @@ class FieldScanner {
   static bool isSpace(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
 
  private:
+  void skipSpace() {
+    while (p_ < end_ && isSpace(*p_)) ++p_;
+  }
+  /// The token starting at b (for messages); leaves the scanner at its end.
+  std::string_view tokenAt(const char* b) {
+    const char* e = b;
+    while (e < end_ && !isSpace(*e)) ++e;
+    p_ = e;
+    return std::string_view(b, static_cast<std::size_t>(e - b));
+  }
   bool fail(const char* name, const char* what, std::string_view tok) {
     reason_.clear();
     reason_ += "field ";
