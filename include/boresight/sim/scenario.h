@@ -1,0 +1,50 @@
+// Simulation scenarios: a YAML file (config/sim_*.yaml) parsed and validated into a plain struct.
+//
+// Every key is checked: unknown keys, wrong types, out-of-range values and malformed effects give
+// one error "FILE:LINE: key 'heads[1].noise_cross_arcsec': reason". Units are in the key names
+// (_deg, _arcsec, _s, _us, _km, _Nm, _rad_s2 ...); frames are documented in config/sim_gracefo.yaml.
+#pragma once
+
+#include <boresight/core/conventions.h>
+#include <boresight/model/effects.h>
+#include <boresight/model/sensors.h>
+#include <boresight/sim/attitude.h>
+#include <boresight/sim/orbit.h>
+
+#include <string>
+#include <vector>
+
+namespace boresight::sim {
+
+struct OutputConfig {
+  bool lcm_log = true;
+  double gnv1b_interval_s = 1.0;
+  std::string version = "04";  ///< the release field of the file names (SCA1A_2023-06-01_C_04.txt)
+};
+
+struct Scenario {
+  std::string file;                  ///< where it was read from (messages, truth.yaml)
+  char satellite = 'C';
+  TimeUs start = 0;                  ///< GPS microseconds past 2000-01-01 12:00:00 GPS
+  double duration_s = 86400;         ///< default duration (the command line overrides it)
+  std::string star_catalogue;        ///< resolved path
+  OrbitConfig orbit;
+  AttitudeConfig attitude;
+  std::vector<model::HeadConfig> heads;
+  double mounting_error_sigma_rad = 0;  ///< random extra mounting error per head axis (drawn from the seed)
+  model::AccelConfig acc;
+  std::vector<model::EffectSpec> effects;
+  OutputConfig output;
+};
+
+/// Parses YAML text. `file` names it in messages; relative paths (stars, GNV1B) resolve against `dir`.
+bool parseScenario(const std::string& yaml_text, const std::string& file, const std::string& dir, Scenario& out,
+                   std::string* error);
+bool loadScenario(const std::string& path, Scenario& out, std::string* error);
+
+/// GPS calendar "YYYY-MM-DD[THH:MM:SS]" -> microseconds past the GPS J2000 epoch (no leap seconds).
+bool parseGpsCalendar(const std::string& s, TimeUs& t);
+/// Microseconds past the epoch -> "YYYY-MM-DD" (GPS calendar date).
+std::string gpsDate(TimeUs t);
+
+}  // namespace boresight::sim

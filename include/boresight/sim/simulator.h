@@ -1,0 +1,99 @@
+// The telemetry simulator: a time-ordered stream of head, accelerometer and orbit samples drawn from
+// the scenario's orbit, attitude dynamics and sensor/effect models. Memory is bounded: the dynamics
+// keep a fixed ring of steps and every sample goes straight to the sinks.
+//
+// Time tags: a sensor's tag pattern is start + offset + n / rate (+ drift, + shared jitter); a tag is
+// the (receiver) time at which the sample was taken, so without a time_offset effect the sample
+// describes the truth at exactly its tag.
+#pragma once
+
+#include <boresight/model/sensors.h>
+#include <boresight/sim/attitude.h>
+#include <boresight/sim/orbit.h>
+#include <boresight/sim/scenario.h>
+#include <boresight/sim/stars.h>
+
+#include <functional>
+#include <memory>
+
+namespace boresight::sim {
+
+enum BlindReason : std::uint8_t { kBlindNone = 0, kBlindSun = 1, kBlindEarth = 2, kBlindMoon = 4 };
+
+struct HeadSampleOut {
+  TimeUs tag = 0;
+  int head = 1;
+  std::uint64_t index = 0;  ///< sample number of this head since the start
+  Quat q_I_Si = Quat::Identity();  ///< what the head delivers (noise, effects)
+  int nstars = 0;
+  std::uint8_t blind = kBlindNone;  ///< a blinded head delivers nothing (sinks skip it)
+  bool outlier = false, sign_flipped = false;
+  // Truth, for tests and the audit:
+  double t_true_s = 0;           ///< seconds since the start at which the sample describes the truth
+  Quat q_I_B = Quat::Identity();
+  Quat q_I_Si_expected = Quat::Identity();  ///< model prediction without noise
+};
+
+struct AccSampleOut {
+  TimeUs tag = 0;
+  std::uint64_t index = 0;
+  Vec3 ang_A = Vec3::Zero();   ///< rad/s^2, frame A, what the accelerometer delivers
+  Vec3 lin_A = Vec3::Zero();   ///< m/s^2, frame A
+  double t_true_s = 0;
+  Vec3 a_B_true = Vec3::Zero();  ///< true mean angular acceleration over the sample, B
+};
+
+struct OrbitSampleOut {
+  TimeUs t = 0;                ///< GPS time
+  Vec3 r_E = Vec3::Zero(), v_E = Vec3::Zero();  ///< Earth-fixed (GNV1B 'E'), m and m/s
+  Vec3 r_I = Vec3::Zero(), v_I = Vec3::Zero();
+};
+
+class SimSink {
+ public:
+  virtual ~SimSink() = default;
+  virtual void head(const HeadSampleOut&) {}
+  virtual void accel(const AccSampleOut&) {}
+  virtual void orbit(const OrbitSampleOut&) {}
+};
+
+struct SimStats {
+  std::vector<std::uint64_t> head_samples, head_blinded_sun, head_blinded_earth, head_blinded_moon, head_missing,
+      head_outliers, head_sign_flips;
+  std::uint64_t acc_samples = 0, acc_missing = 0, orbit_samples = 0, thruster_pulses = 0, star_refreshes = 0;
+  double max_abs_alpha = 0;  ///< rad/s^2, largest true angular acceleration component seen by the accelerometer
+};
+
+class Simulator {
+ public:
+  Simulator();
+  ~Simulator();
+  /// Builds orbit, dynamics and models; draws the random mounting errors. False with *error.
+  bool init(const Scenario& sc, std::uint64_t seed, double duration_s, std::string* error);
+  /// Runs the whole span, calling the sink in time order; progress(fraction) about every 1 %.
+  void run(SimSink& sink, const std::function<void(double)>& progress = {});
+
+  const Scenario& scenario() const { return sc_; }
+  std::uint64_t seed() const { return seed_; }
+  double duration() const { return duration_s_; }
+  const std::vector<model::HeadModel>& heads() const { return heads_; }
+  const model::AccelModel& accel() const { return acc_; }
+  const Orbit& orbit() const { return *orbit_; }
+  const StarCatalogue& stars() const { return stars_; }
+  const SimStats& stats() const { return stats_; }
+  /// Orbit context at an absolute GPS time (what the effect models see).
+  model::OrbitContext context(double t_rel_s) const;
+
+ private:
+  struct Impl;
+  Scenario sc_;
+  std::uint64_t seed_ = 0;
+  double duration_s_ = 0;
+  std::unique_ptr<Orbit> orbit_;
+  std::vector<model::HeadModel> heads_;
+  model::AccelModel acc_;
+  StarCatalogue stars_;
+  SimStats stats_;
+};
+
+}  // namespace boresight::sim

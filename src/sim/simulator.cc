@@ -1,0 +1,314 @@
+#include <boresight/model/random.h>
+#include <boresight/model/rotation.h>
+#include <boresight/sim/ephemeris.h>
+#include <boresight/sim/simulator.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace boresight::sim {
+namespace {
+
+using model::CounterRng;
+using model::Stream;
+
+/// A sensor's time-tag pattern: start + offset + n * period + drift + jitter (integer microseconds).
+struct TagStream {
+  TimeUs start = 0, period = 1;
+  double drift_ppm = 0, jitter_us = 0;
+  CounterRng jitter_rng{0, Stream::HeadTagJitter, 0};
+  std::uint64_t n = 0;
+  TimeUs tag(std::uint64_t k) const {
+    const double nominal = static_cast<double>(k) * static_cast<double>(period);
+    TimeUs t = start + static_cast<TimeUs>(k) * period + static_cast<TimeUs>(std::llround(drift_ppm * 1e-6 * nominal));
+    if (jitter_us > 0) t += static_cast<TimeUs>(std::llround((2 * jitter_rng.uniform(k) - 1) * jitter_us));
+    return t;
+  }
+  TimeUs next() const { return tag(n); }
+};
+
+/// Random gaps as a Poisson process on 1 s slots, evaluated in time order.
+struct GapTracker {
+  model::RandomGaps g;
+  const std::vector<model::Interval>* fixed = nullptr;
+  const std::vector<model::Interval>* dropouts = nullptr;
+  CounterRng rng{0, Stream::HeadGap, 0};
+  std::int64_t next_slot = 0;
+  double until = -1;
+  bool missing(double t) {
+    if (g.per_s > 0) {
+      const auto slot = static_cast<std::int64_t>(std::floor(t));
+      for (; next_slot <= slot; ++next_slot) {
+        const auto k = static_cast<std::uint64_t>(next_slot);
+        if (rng.uniform(k, 0) < g.per_s) until = std::max(until, static_cast<double>(next_slot) - g.mean_s * std::log(rng.uniform(k, 1)));
+      }
+      if (t < until) return true;
+    }
+    if (fixed)
+      for (const auto& i : *fixed)
+        if (i.contains(t)) return true;
+    if (dropouts)
+      for (const auto& i : *dropouts)
+        if (i.contains(t)) return true;
+    return false;
+  }
+};
+
+TagStream makeTags(TimeUs start, double rate_hz, TimeUs offset_us, double drift, double jitter, std::uint64_t seed,
+                   Stream stream) {
+  TagStream s;
+  s.period = static_cast<TimeUs>(std::llround(1e6 / rate_hz));
+  // First tag: the first whole second at or after the start, plus the offset.
+  const TimeUs sec0 = ((start + kUsPerSecond - 1) / kUsPerSecond) * kUsPerSecond;
+  s.start = sec0 + offset_us;
+  while (s.start - s.period >= start) s.start -= s.period;
+  s.drift_ppm = drift;
+  s.jitter_us = jitter;
+  // Heads that share rate and offset share the jitter (one camera electronics unit stamps them).
+  s.jitter_rng = CounterRng(seed, stream, static_cast<std::uint64_t>(s.period) * 1000003ULL + static_cast<std::uint64_t>(offset_us));
+  return s;
+}
+
+}  // namespace
+
+Simulator::Simulator() = default;
+Simulator::~Simulator() = default;
+
+bool Simulator::init(const Scenario& sc, std::uint64_t seed, double duration_s, std::string* error) {
+  sc_ = sc;
+  seed_ = seed;
+  duration_s_ = duration_s > 0 ? duration_s : sc.duration_s;
+  stats_ = SimStats{};
+  if (!stars_.load(sc_.star_catalogue, error)) return false;
+  for (const auto& h : sc_.heads)
+    if (h.limiting_mag > stars_.faintest() + 1e-9) {
+      if (error)
+        *error = sc_.file + ": head " + std::to_string(h.id) + ": limiting_magnitude " + std::to_string(h.limiting_mag) +
+                 " is fainter than the star catalogue's limit " + std::to_string(stars_.faintest());
+      return false;
+    }
+  orbit_ = makeOrbit(sc_.orbit, toSeconds(sc_.start), duration_s_ + 5.0, error);
+  if (!orbit_) return false;
+  heads_.clear();
+  for (auto h : sc_.heads) {
+    if (sc_.mounting_error_sigma_rad > 0) {
+      const CounterRng r(seed, Stream::MountingDraw, static_cast<std::uint64_t>(h.id));
+      h.mounting_error_rad += sc_.mounting_error_sigma_rad * Vec3(r.normal(0, 0), r.normal(0, 1), r.normal(0, 2));
+    }
+    heads_.emplace_back(h, model::headEffectsFor(sc_.effects, h.id));
+  }
+  acc_ = model::AccelModel(sc_.acc, model::accEffectsFor(sc_.effects));
+  const std::size_t n = heads_.size();
+  stats_.head_samples.assign(n, 0);
+  stats_.head_blinded_sun.assign(n, 0);
+  stats_.head_blinded_earth.assign(n, 0);
+  stats_.head_blinded_moon.assign(n, 0);
+  stats_.head_missing.assign(n, 0);
+  stats_.head_outliers.assign(n, 0);
+  stats_.head_sign_flips.assign(n, 0);
+  return true;
+}
+
+model::OrbitContext Simulator::context(double t_rel) const {
+  const double t = toSeconds(sc_.start) + t_rel;
+  const OrbitState os = orbit_->state(t);
+  model::OrbitContext c;
+  c.t_s = t_rel;
+  c.arg_lat_rad = os.arg_lat_rad;
+  c.beta_rad = os.beta_rad;
+  c.v_sat_I = os.v_I;
+  c.v_earth_I = earthVelocity(t);
+  return c;
+}
+
+void Simulator::run(SimSink& sink, const std::function<void(double)>& progress) {
+  const double t0 = toSeconds(sc_.start);
+  const TimeUs end = sc_.start + static_cast<TimeUs>(std::llround(duration_s_ * 1e6));
+  AttitudeSim att(sc_.attitude, *orbit_, t0, seed_);
+  const std::size_t nh = heads_.size();
+
+  std::vector<TagStream> head_tags;
+  std::vector<GapTracker> head_gaps(nh);
+  std::vector<CounterRng> noise, outl, flip;
+  std::vector<FovStarCounter> counters;
+  std::vector<Quat> prev_q(nh, Quat(1, 0, 0, 0));
+  for (std::size_t i = 0; i < nh; ++i) {
+    const auto& c = heads_[i].config();
+    const auto id = static_cast<std::uint64_t>(c.id);
+    head_tags.push_back(makeTags(sc_.start, c.rate_hz, c.tag_offset_us, c.tag_drift_ppm, c.tag_jitter_us, seed_, Stream::HeadTagJitter));
+    head_gaps[i].g = heads_[i].effects().random_gaps;
+    head_gaps[i].fixed = &heads_[i].effects().gaps;
+    head_gaps[i].dropouts = &heads_[i].effects().dropouts;
+    head_gaps[i].rng = CounterRng(seed_, Stream::HeadGap, id);
+    noise.emplace_back(seed_, Stream::HeadNoise, id);
+    outl.emplace_back(seed_, Stream::HeadOutlier, id);
+    flip.emplace_back(seed_, Stream::HeadSignFlip, id);
+    counters.emplace_back(&stars_, c.fov_half_angle_rad, c.limiting_mag);
+  }
+  const auto& ac = acc_.config();
+  TagStream acc_tags = makeTags(sc_.start, ac.rate_hz, ac.tag_offset_us, ac.tag_drift_ppm, ac.tag_jitter_us, seed_, Stream::AccTagJitter);
+  GapTracker acc_gaps;
+  acc_gaps.g = acc_.effects().random_gaps;
+  acc_gaps.fixed = &acc_.effects().gaps;
+  acc_gaps.rng = CounterRng(seed_, Stream::AccGap, 0);
+  const CounterRng acc_noise(seed_, Stream::AccNoise, 0), acc_lf_rng(seed_, Stream::AccLowFreq, 0);
+  const double acc_T = 1.0 / ac.rate_hz;
+  const double lf_phi = std::exp(-acc_T / ac.lowfreq_tau_s);
+  Vec3 lf(ac.lowfreq_rad_s2.x() * acc_lf_rng.normal(0, 0), ac.lowfreq_rad_s2.y() * acc_lf_rng.normal(0, 1),
+          ac.lowfreq_rad_s2.z() * acc_lf_rng.normal(0, 2));
+
+  const TimeUs gnv_period = static_cast<TimeUs>(std::llround(sc_.output.gnv1b_interval_s * 1e6));
+  TimeUs gnv_next = ((sc_.start + gnv_period - 1) / gnv_period) * gnv_period;
+
+  // Slowly varying directions, cached.
+  double sun_t = -1e300, moon_t = -1e300;
+  Vec3 sun_I = Vec3::UnitX(), moon_I = Vec3::UnitX(), v_earth = Vec3::Zero();
+  double ctx_tau = std::numeric_limits<double>::quiet_NaN();
+  model::OrbitContext ctx;
+  Vec3 r_I = Vec3::Zero(), v_I = Vec3::Zero();
+  auto contextAt = [&](double tau) {
+    if (tau == ctx_tau) return;
+    ctx_tau = tau;
+    const double t = t0 + tau;
+    if (std::abs(t - sun_t) > 10.0) {
+      sun_t = t;
+      sun_I = sunDirection(t);
+      v_earth = earthVelocity(t);
+    }
+    if (std::abs(t - moon_t) > 30.0) {
+      moon_t = t;
+      moon_I = moonPosition(t);
+    }
+    orbit_->posVel(t, r_I, v_I);
+    const Vec3 h = r_I.cross(v_I).normalized();
+    Vec3 node = Vec3::UnitZ().cross(h);
+    if (node.norm() < 1e-12) node = Vec3::UnitX();
+    node.normalize();
+    const Vec3 rn = r_I.normalized();
+    ctx.t_s = tau;
+    ctx.arg_lat_rad = std::atan2(h.dot(node.cross(rn)), node.dot(rn));
+    ctx.beta_rad = std::asin(std::clamp(h.dot(sun_I), -1.0, 1.0));
+    ctx.v_sat_I = v_I;
+    ctx.v_earth_I = v_earth;
+  };
+
+  double next_progress = 0;
+  for (;;) {
+    // The earliest pending sample of all streams (heads in order, then accelerometer, then orbit).
+    TimeUs tmin = std::numeric_limits<TimeUs>::max();
+    int which = -3;
+    for (std::size_t i = 0; i < nh; ++i)
+      if (head_tags[i].next() < tmin) {
+        tmin = head_tags[i].next();
+        which = static_cast<int>(i);
+      }
+    if (acc_tags.next() < tmin) {
+      tmin = acc_tags.next();
+      which = -1;
+    }
+    if (gnv_next < tmin) {
+      tmin = gnv_next;
+      which = -2;
+    }
+    if (tmin >= end) break;
+    const double tag_rel = static_cast<double>(tmin - sc_.start) * 1e-6;
+    if (progress && tag_rel >= next_progress) {
+      progress(tag_rel / duration_s_);
+      next_progress += duration_s_ / 100.0;
+    }
+    att.advanceTo(tag_rel + 3.0);
+
+    if (which == -2) {
+      OrbitSampleOut o;
+      o.t = tmin;
+      const double t = toSeconds(tmin);
+      orbit_->posVel(t, o.r_I, o.v_I);
+      const Mat3 C = C_E_I(t);
+      o.r_E = C * o.r_I;
+      o.v_E = C * (o.v_I - Vec3(0, 0, kEarthRate_rad_s).cross(o.r_I));
+      sink.orbit(o);
+      ++stats_.orbit_samples;
+      gnv_next += gnv_period;
+      continue;
+    }
+    if (which == -1) {
+      const std::uint64_t n = acc_tags.n++;
+      AccSampleOut a;
+      a.tag = tmin;
+      a.index = n;
+      a.t_true_s = tag_rel - acc_.effects().time_offset_s;
+      a.a_B_true = att.meanAngularAcceleration(a.t_true_s, acc_T);
+      stats_.max_abs_alpha = std::max(stats_.max_abs_alpha, a.a_B_true.cwiseAbs().maxCoeff());
+      const Vec3 white(acc_noise.normal(n, 0), acc_noise.normal(n, 1), acc_noise.normal(n, 2));
+      a.ang_A = acc_.predict(a.a_B_true) + ac.white_rad_s2.cwiseProduct(white) + lf;
+      const Vec3 lw(acc_noise.normal(n, 3), acc_noise.normal(n, 4), acc_noise.normal(n, 5));
+      a.lin_A = ac.lin_bias_m_s2 + ac.lin_white_m_s2.cwiseProduct(lw);
+      const Vec3 lfw(acc_lf_rng.normal(n + 1, 0), acc_lf_rng.normal(n + 1, 1), acc_lf_rng.normal(n + 1, 2));
+      lf = lf_phi * lf + std::sqrt(1 - lf_phi * lf_phi) * ac.lowfreq_rad_s2.cwiseProduct(lfw);
+      if (acc_gaps.missing(tag_rel)) {
+        ++stats_.acc_missing;
+        continue;
+      }
+      ++stats_.acc_samples;
+      sink.accel(a);
+      continue;
+    }
+    const auto i = static_cast<std::size_t>(which);
+    const std::uint64_t n = head_tags[i].n++;
+    const model::HeadModel& hm = heads_[i];
+    const auto& hc = hm.config();
+    if (head_gaps[i].missing(tag_rel)) {
+      ++stats_.head_missing[i];
+      continue;
+    }
+    HeadSampleOut s;
+    s.tag = tmin;
+    s.head = hc.id;
+    s.index = n;
+    s.t_true_s = tag_rel - hm.effects().time_offset_s;
+    Vec3 w_B;
+    att.eval(s.t_true_s, s.q_I_B, w_B);
+    contextAt(s.t_true_s);
+    s.q_I_Si_expected = hm.predict(s.q_I_B, ctx);
+    const Vec3 b_I = hm.boresightInertial(s.q_I_Si_expected);
+    const double rn = r_I.norm();
+    const double earth_radius_angle = std::asin(std::min(1.0, kEarthRadius_m / rn));
+    if (b_I.dot(sun_I) > std::cos(hc.sun_exclusion_rad)) s.blind |= kBlindSun;
+    if (std::acos(std::clamp(b_I.dot(-r_I / rn), -1.0, 1.0)) < earth_radius_angle + hc.earth_exclusion_rad)
+      s.blind |= kBlindEarth;
+    if (b_I.dot((moon_I - r_I).normalized()) > std::cos(hc.moon_exclusion_rad)) s.blind |= kBlindMoon;
+    if (s.blind) {
+      stats_.head_blinded_sun[i] += (s.blind & kBlindSun) != 0;
+      stats_.head_blinded_earth[i] += (s.blind & kBlindEarth) != 0;
+      stats_.head_blinded_moon[i] += (s.blind & kBlindMoon) != 0;
+      sink.head(s);
+      continue;
+    }
+    Quat q = s.q_I_Si_expected * model::quatExp(hm.noiseRotVec(noise[i], n));
+    const auto& e = hm.effects();
+    if (e.outlier_prob > 0 && outl[i].uniform(n, 0) < e.outlier_prob) {
+      const Vec3 axis(outl[i].normal(n, 1), outl[i].normal(n, 2), outl[i].normal(n, 3));
+      q = q * model::quatExp(axis.normalized() * e.outlier_rad);
+      s.outlier = true;
+      ++stats_.head_outliers[i];
+    }
+    // Deliver a sign-continuous quaternion (q0 >= 0 at the first sample).
+    if (q.coeffs().dot(prev_q[i].coeffs()) < 0) q.coeffs() = -q.coeffs();
+    prev_q[i] = q;
+    if (e.sign_flip_prob > 0 && flip[i].uniform(n, 0) < e.sign_flip_prob) {
+      q.coeffs() = -q.coeffs();
+      s.sign_flipped = true;
+      ++stats_.head_sign_flips[i];
+    }
+    s.q_I_Si = q;
+    s.nstars = counters[i].count(b_I);
+    ++stats_.head_samples[i];
+    sink.head(s);
+  }
+  stats_.thruster_pulses = att.thrusterPulses();
+  for (const auto& c : counters) stats_.star_refreshes += c.refreshes();
+  if (progress) progress(1.0);
+}
+
+}  // namespace boresight::sim

@@ -1,0 +1,82 @@
+#include <boresight/sim/stars.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+
+namespace boresight::sim {
+
+bool StarCatalogue::load(const std::string& path, std::string* error) {
+  std::ifstream in(path);
+  if (!in) {
+    if (error) *error = path + ": cannot open star catalogue";
+    return false;
+  }
+  stars_.clear();
+  std::string line;
+  std::size_t line_no = 0;
+  while (std::getline(in, line)) {
+    ++line_no;
+    if (line.empty() || line[0] == '#' || line.rfind("hip,", 0) == 0) continue;
+    const char* p = line.c_str();
+    char* e = nullptr;
+    double v[4];
+    bool ok = true;
+    for (int k = 0; k < 4 && ok; ++k) {
+      v[k] = std::strtod(p, &e);
+      ok = e != p && std::isfinite(v[k]);
+      if (k < 3) ok = ok && *e == ',';
+      p = e + 1;
+    }
+    if (!ok) {
+      if (error) *error = path + ":" + std::to_string(line_no) + ": expected hip,ra_deg,dec_deg,hp_mag";
+      return false;
+    }
+    const double ra = v[1] * kRadPerDeg, dec = v[2] * kRadPerDeg;
+    stars_.push_back({static_cast<int>(v[0]), Vec3(std::cos(dec) * std::cos(ra), std::cos(dec) * std::sin(ra), std::sin(dec)), v[3]});
+    faintest_ = std::max(faintest_, v[3]);
+  }
+  if (stars_.empty()) {
+    if (error) *error = path + ": no stars";
+    return false;
+  }
+  return true;
+}
+
+void StarCatalogue::inCone(const Vec3& dir, double half_angle_rad, double max_mag, std::vector<int>& out) const {
+  out.clear();
+  const double c = std::cos(half_angle_rad);
+  for (std::size_t i = 0; i < stars_.size(); ++i)
+    if (stars_[i].mag <= max_mag && stars_[i].u_I.dot(dir) >= c) out.push_back(static_cast<int>(i));
+}
+
+std::size_t StarCatalogue::countInCone(const Vec3& dir, double half_angle_rad, double max_mag) const {
+  std::vector<int> v;
+  inCone(dir, half_angle_rad, max_mag, v);
+  return v.size();
+}
+
+std::vector<Vec3> starVectorsInHead(const StarCatalogue& cat, const Quat& q_I_Si, const Vec3& boresight_Si,
+                                    double half_angle_rad, double max_mag) {
+  std::vector<int> idx;
+  cat.inCone((q_I_Si * boresight_Si).normalized(), half_angle_rad, max_mag, idx);
+  std::vector<Vec3> out;
+  out.reserve(idx.size());
+  const Quat q_Si_I = q_I_Si.conjugate();
+  for (int i : idx) out.push_back(q_Si_I * cat.stars()[static_cast<std::size_t>(i)].u_I);
+  return out;
+}
+
+int FovStarCounter::count(const Vec3& b) {
+  if (centre_.isZero() || b.dot(centre_) < std::cos(0.9 * margin_)) {
+    cat_->inCone(b, half_ + margin_, mag_, cand_);
+    centre_ = b;
+    ++refreshes_;
+  }
+  const double c = std::cos(half_);
+  int n = 0;
+  for (int i : cand_) n += cat_->stars()[static_cast<std::size_t>(i)].u_I.dot(b) >= c;
+  return n;
+}
+
+}  // namespace boresight::sim
