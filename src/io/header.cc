@@ -181,6 +181,7 @@ bool parseHeader(std::string_view text, Header& h, std::size_t* data_offset, std
     if (startsWith(l, "END OF HEADER")) {
       ended_once = true;
       *data_offset = pos;
+      if (h.binary) return true;  // packed records follow: never look at them as text
       continue;
     }
     if (!fixedKeyValue(l, key, value)) {
@@ -192,6 +193,8 @@ bool parseHeader(std::string_view text, Header& h, std::size_t* data_offset, std
       if (parseInt64(value, n)) h.declared_records = n;
     } else if (key == "SATELLITE NAME") {
       h.satellite = satelliteFromPlatform(value);
+    } else if (startsWith(key, "FILE FORMAT")) {
+      h.binary = value == "0";
     } else if (key == "FILENAME") {
       std::string n = productNameFromPath(value);
       if (!n.empty()) h.product_name = n;

@@ -78,7 +78,13 @@ std::vector<std::string> synthHeader(Product p, char satellite, const std::vecto
   return out;
 }
 
-std::vector<std::string> headerForWrite(const Header& h, std::size_t records) {
+std::vector<std::string> headerForWrite(const Header& hin, std::size_t records) {
+  Header h = hin;
+  if (h.binary && h.style != HeaderStyle::Fixed) {
+    // GRACE binary products carry the fixed header: drop a YAML one and synthesise.
+    h.lines.clear();
+    h.style = HeaderStyle::Fixed;
+  }
   std::vector<std::string> lines = h.lines;
   if (lines.empty()) {
     lines = synthHeader(h.product, h.satellite == '?' ? 'C' : h.satellite, h.columns,
@@ -94,8 +100,25 @@ std::vector<std::string> headerForWrite(const Header& h, std::size_t records) {
   for (auto& l : lines) {
     if (l.rfind("    num_records:", 0) == 0) l = "    num_records: " + n;
     if (l.rfind("NUMBER OF DATA RECORDS", 0) == 0) l = fixedLine("NUMBER OF DATA RECORDS", n);
+    if (l.rfind("FILE FORMAT 0=BINARY 1=ASCII", 0) == 0) l = fixedLine("FILE FORMAT 0=BINARY 1=ASCII", h.binary ? "0" : "1");
+  }
+  if (h.binary) {
+    bool has_format = false;
+    for (const auto& l : lines) has_format = has_format || l.rfind("FILE FORMAT 0=BINARY 1=ASCII", 0) == 0;
+    if (!has_format) lines.insert(lines.begin(), fixedLine("FILE FORMAT 0=BINARY 1=ASCII", "0"));
+    // Everything after the first END OF HEADER would be taken for records: stop there.
+    for (std::size_t i = 0; i < lines.size(); ++i)
+      if (lines[i].rfind("END OF HEADER", 0) == 0) {
+        lines.resize(i + 1);
+        break;
+      }
   }
   return lines;
+}
+
+void failFile(std::string& error, bool& ok, std::string_view file, std::size_t line, const std::string& reason) {
+  ok = false;
+  error = std::string(file) + ":" + std::to_string(line) + ": " + reason;
 }
 
 bool resolveProduct(Header& h, std::string_view file, const ReadOptions& opt, std::string* error) {

@@ -10,12 +10,21 @@
 //     static std::vector<std::string> columns(Product p);          // for synthesised headers
 //   };
 // and BORESIGHT_IO_INSTANTIATE(Codec) in its .cc file provides readProduct<Record> & co.
+//
+// A codec whose product also exists as GRACE big-endian binary Level-1B adds
+//     static constexpr std::size_t kBinarySize = 47;                      // packed record bytes
+//     static bool decode(const unsigned char* p, Record& r, std::string& reason);
+//     static void encode(unsigned char* p, const Record& r);
+// and parseProduct() reads such files (header FILE FORMAT 0) while formatProduct() writes them when
+// header.binary is set.
 #pragma once
 
 #include <boresight/io/level1.h>
 
 #include <cstdio>
+#include <cstring>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 namespace boresight::io::detail {
@@ -58,14 +67,114 @@ inline void writeTimeSeconds(LineWriter& w, TimeUs t) {
 }
 inline bool isSatelliteId(char c) { return c >= 'A' && c <= 'Z'; }
 
+// ---- big-endian packing (GRACE binary Level-1B) ----
+namespace be {
+inline std::uint64_t load64(const unsigned char* p) {
+  std::uint64_t v = 0;
+  for (int i = 0; i < 8; ++i) v = (v << 8) | p[i];
+  return v;
+}
+inline std::uint32_t load32(const unsigned char* p) {
+  return (std::uint32_t{p[0]} << 24) | (std::uint32_t{p[1]} << 16) | (std::uint32_t{p[2]} << 8) | std::uint32_t{p[3]};
+}
+inline double f64(const unsigned char* p) {
+  std::uint64_t u = load64(p);
+  double d;
+  std::memcpy(&d, &u, sizeof d);
+  return d;
+}
+inline std::int32_t i32(const unsigned char* p) {
+  std::uint32_t u = load32(p);
+  std::int32_t v;
+  std::memcpy(&v, &u, sizeof v);
+  return v;
+}
+inline void put64(unsigned char* p, std::uint64_t v) {
+  for (int i = 7; i >= 0; --i) {
+    p[i] = static_cast<unsigned char>(v & 0xffu);
+    v >>= 8;
+  }
+}
+inline void putF64(unsigned char* p, double d) {
+  std::uint64_t u;
+  std::memcpy(&u, &d, sizeof u);
+  put64(p, u);
+}
+inline void putI32(unsigned char* p, std::int32_t v) {
+  std::uint32_t u;
+  std::memcpy(&u, &v, sizeof u);
+  p[0] = static_cast<unsigned char>(u >> 24);
+  p[1] = static_cast<unsigned char>(u >> 16);
+  p[2] = static_cast<unsigned char>(u >> 8);
+  p[3] = static_cast<unsigned char>(u);
+}
+/// A finite float64 field, or a reason.
+inline bool finite(double v, const char* name, std::string& reason) {
+  if (v - v == 0.0) return true;
+  reason = std::string("field ") + name + ": non-finite number";
+  return false;
+}
+/// GPS seconds (int32 in the files) to TimeUs; the writer truncates to whole seconds and clamps.
+inline std::int32_t secondsForBinary(TimeUs t) {
+  std::int64_t sec, usec;
+  splitTime(t, sec, usec);
+  if (sec > INT32_MAX) return INT32_MAX;
+  if (sec < INT32_MIN) return INT32_MIN;
+  return static_cast<std::int32_t>(sec);
+}
+}  // namespace be
+
+template <typename C, typename = void>
+struct HasBinary : std::false_type {};
+template <typename C>
+struct HasBinary<C, std::void_t<decltype(C::kBinarySize)>> : std::true_type {};
+
 /// Synthesised header: YAML for GRACE-FO (satellites C, D), fixed for GRACE (A, B) and static products.
 std::vector<std::string> synthHeader(Product p, char satellite, const std::vector<std::string>& columns,
                                      const std::array<std::string, 32>* flag_fields);
-/// Header lines for writing: kept lines with the record count replaced, or synthesised ones.
+/// Header lines for writing: kept lines with the record count and the FILE FORMAT entry (from
+/// h.binary) replaced, or synthesised ones. A binary product always gets a fixed header.
 std::vector<std::string> headerForWrite(const Header& h, std::size_t records);
+/// "file:line: reason" for a ProductFile that could not be read.
+void failFile(std::string& error, bool& ok, std::string_view file, std::size_t line, const std::string& reason);
 /// Resolve which product a file is; false with *error when unknown.
 bool resolveProduct(Header& h, std::string_view file, const ReadOptions& opt, std::string* error);
 bool writeText(const std::string& path, const std::string& text, std::string* error);
+
+/// Packed big-endian records after a binary header. Record k (1-based) is reported as line
+/// header_lines + k, with the record number and byte offset in the reason; a truncated trailing
+/// record is reported, never read past.
+template <typename Codec>
+void parseBinaryBody(std::string_view body, const ReadOptions& opt, ProductFile<typename Codec::Record>& f) {
+  constexpr std::size_t n = Codec::kBinarySize;
+  const auto* p = reinterpret_cast<const unsigned char*>(body.data());
+  const std::size_t full = body.size() / n;
+  f.records.reserve(full);
+  std::string reason;
+  auto reject = [&](std::size_t k, const std::string& why) {
+    ++f.rejected_count;
+    const std::size_t line = f.header.line_count + k + 1;
+    std::string r = "record " + std::to_string(k + 1) + " (byte " + std::to_string(k * n) + " after the header): " + why;
+    if (f.rejected.size() < opt.max_issues_kept) f.rejected.push_back(ParseIssue{f.file, line, r});
+    if (opt.on_error == OnError::Stop) {
+      f.ok = false;
+      f.error = f.file + ":" + std::to_string(line) + ": " + r;
+      return false;
+    }
+    return true;
+  };
+  for (std::size_t k = 0; k < full; ++k) {
+    typename Codec::Record r{};
+    if (Codec::decode(p + k * n, r, reason)) {
+      f.records.push_back(r);
+    } else if (!reject(k, reason)) {
+      return;
+    }
+  }
+  const std::size_t rest = body.size() - full * n;
+  if (rest != 0)
+    reject(full, "truncated record: " + std::to_string(rest) + " of " + std::to_string(n) + " bytes");
+}
 
 template <typename Codec>
 ProductFile<typename Codec::Record> parseText(std::string_view text, std::string_view file, const ReadOptions& opt) {
@@ -91,6 +200,16 @@ ProductFile<typename Codec::Record> parseText(std::string_view text, std::string
     return f;
   }
   const Product product = f.header.product;
+  if (f.header.binary) {
+    if constexpr (HasBinary<Codec>::value) {
+      parseBinaryBody<Codec>(text.substr(off), opt, f);
+    } else {
+      f.ok = false;
+      f.error = f.file + ":" + std::to_string(f.header.line_count) + ": binary " + f.header.product_name +
+                " (FILE FORMAT 0) is not supported; binary readers exist for SCA1B, ACC1B, ACT1B, GNV1B, GNI1B";
+    }
+    return f;
+  }
   const char* p = text.data() + off;
   const char* end = text.data() + text.size();
   std::size_t line_no = f.header.line_count;
@@ -107,11 +226,9 @@ ProductFile<typename Codec::Record> parseText(std::string_view text, std::string
     FieldScanner s(p, le);
     p = nl ? nl + 1 : end;
     if (s.atEnd()) continue;  // blank line
-    Rec r{};
-    if (Codec::parse(s, r, product) && s.finish()) {
-      f.records.push_back(r);
-      continue;
-    }
+    Rec& r = f.records.emplace_back();
+    if (Codec::parse(s, r, product) && s.finish()) continue;
+    f.records.pop_back();
     ++f.rejected_count;
     if (f.rejected.size() < opt.max_issues_kept) f.rejected.push_back(ParseIssue{f.file, line_no, s.reason()});
     if (opt.on_error == OnError::Stop) {
@@ -128,9 +245,23 @@ std::string formatText(const ProductFile<typename Codec::Record>& f) {
   std::string out;
   Header h = f.header;
   if (h.product == Product::Unknown) h.product = Codec::defaultProduct();
+  if constexpr (!HasBinary<Codec>::value) h.binary = false;
   for (const auto& l : headerForWrite(h, f.records.size())) {
     out += l;
     out += '\n';
+  }
+  if constexpr (HasBinary<Codec>::value) {
+    if (h.binary) {
+      constexpr std::size_t n = Codec::kBinarySize;
+      const std::size_t start = out.size();
+      out.resize(start + n * f.records.size());
+      auto* p = reinterpret_cast<unsigned char*>(&out[start]);
+      for (const auto& r : f.records) {
+        Codec::encode(p, r);
+        p += n;
+      }
+      return out;
+    }
   }
   out.reserve(out.size() + f.records.size() * 160);
   LineWriter w(out);

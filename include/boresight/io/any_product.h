@@ -3,7 +3,9 @@
 
 #include <boresight/io/level1.h>
 
+#include <cstdint>
 #include <optional>
+#include <string_view>
 #include <string>
 #include <vector>
 
@@ -25,7 +27,30 @@ struct ProductSummary {
 };
 
 /// Identify the product (file name, then header) and read it with its typed reader, or with a generic
-/// reader (first field: time) for Level-1 products without one. Never throws.
+/// reader (first field: time) for Level-1 products without one. Also recognised:
+///  - `.rpt` daily report files (one line; the first token names the product file, e.g.
+///    "SCA1A_2023-06-01_C_04.dat"): product "<NAME> report", 1 record, no time;
+///  - GRACE binary Level-1B (fixed header with FILE FORMAT 0): binary == true; read for SCA1B,
+///    ACC1B, ACT1B, GNV1B and GNI1B, ok == false with a reason for other binary products.
+/// Anything else (RINEX, prose, garbage) gives ok == false and error "file:line: reason". Never throws.
 ProductSummary summarizeProduct(const std::string& path, const ReadOptions& opt = {});
+/// The same on text already in memory; `file` names it (and identifies the product).
+ProductSummary summarizeText(std::string_view text, const std::string& file, const ReadOptions& opt = {});
+
+/// One record of a Level-1 product read without its layout: the time tag and how many
+/// whitespace-separated tokens the line holds.
+struct GenericRecord {
+  TimeUs t = 0;  ///< first field (integer seconds), plus the second as microseconds when it is a fraction
+  std::uint16_t tokens = 0;  ///< tokens on the line (saturates at 65535)
+};
+
+/// Generic reader for Level-1 products without a typed codec (KBR1B, MAG1B, GNV1A, GPS1A, ...).
+/// The first field must be an integer time in seconds. The second field is taken as the
+/// microseconds of that time when the YAML header names it "*frac*", or, without YAML columns,
+/// when the first data line's second field is an integer 0..999999 followed (as third or fourth
+/// field) by a one-character time_ref 'R' or 'G'; that choice then holds for the whole file.
+/// Any Level-1 product (typed or not) can be read this way; there is no writer.
+ProductFile<GenericRecord> parseGeneric(std::string_view text, std::string_view file, const ReadOptions& opt = {});
+ProductFile<GenericRecord> readGeneric(const std::string& path, const ReadOptions& opt = {});
 
 }  // namespace boresight::io

@@ -60,10 +60,14 @@ struct Header {
   std::array<std::string, 32> flag_fields;  ///< prod_flag bit -> field name (YAML flag_meanings)
   std::vector<std::string> lines;  ///< the header's raw lines, so a writer can keep them
   std::size_t line_count = 0;      ///< lines the header occupies (data line numbers follow)
+  /// Fixed header "FILE FORMAT 0=BINARY 1=ASCII : 0": packed big-endian records follow END OF HEADER.
+  /// formatProduct() writes binary when this is set (for record types with a binary layout).
+  bool binary = false;
 };
 
 /// Parse a header at the start of `text`. On success returns true and sets *data_offset to the
-/// first byte after the header. A file with no recognisable header end is an error.
+/// first byte after the header. A file with no recognisable header end is an error. For a binary
+/// header (FILE FORMAT 0) parsing stops at the first END OF HEADER line.
 bool parseHeader(std::string_view text, Header& h, std::size_t* data_offset, std::string* error);
 
 struct ParseIssue {
@@ -183,6 +187,100 @@ struct GnvRecord {
   friend bool operator==(const GnvRecord&, const GnvRecord&);
 };
 
+/// IMU1A / IMU1B (gyro filtered angle, three gyros interleaved):
+/// rcvtime_intg rcvtime_frac time_ref GRACEFO_id gyro_id FiltAng qualflg
+struct ImuRecord {
+  TimeUs t = 0;
+  char time_ref = 'R';
+  char satellite = 'C';
+  std::int32_t gyro_id = 1;  ///< 1..3
+  double filt_ang = 0;       ///< accumulated filtered angle [deg]
+  Bits qualflg{0, 8};
+  friend bool operator==(const ImuRecord&, const ImuRecord&);
+};
+
+/// THR1A / THR1B (thruster firings): time_intg time_frac time_ref id, 14 thrust counts
+/// (att_ctrl_1_1..1_6, att_ctrl_2_1..2_6, undef_1..2), 14 on-times [ms] (att_ctrl_1_1..2_6,
+/// orb_ctrl_1..2), 14 accumulated durations [ms], qualflg. All counters are integers.
+constexpr int kThrusters = 14;
+struct ThrRecord {
+  TimeUs t = 0;
+  char time_ref = 'R';
+  char satellite = 'C';
+  std::int64_t thrust_count[kThrusters] = {};
+  std::int64_t on_time[kThrusters] = {};    ///< ms
+  std::int64_t accum_dur[kThrusters] = {};  ///< ms
+  Bits qualflg{0, 8};
+  friend bool operator==(const ThrRecord&, const ThrRecord&);
+};
+
+/// IHK1A / IHK1B (housekeeping, one sensor per record):
+/// time_intg time_frac time_ref id qualflg sensortype sensorvalue sensorname
+/// The name is a short code ("21", "rfsp"); it is kept in a fixed array so the record stays
+/// trivially copyable. A name of several words is read with single spaces between them.
+constexpr std::size_t kIhkNameMax = 15;
+struct IhkRecord {
+  TimeUs t = 0;
+  char time_ref = 'R';
+  char satellite = 'C';
+  Bits qualflg{0, 8};
+  char sensortype = 'T';  ///< 'T' temperature, 'V' voltage, 'A' current, other characters occur
+  double value = 0;
+  char name[kIhkNameMax + 1] = {};  ///< NUL-terminated
+  std::string_view sensorName() const {
+    std::size_t n = 0;
+    while (n < sizeof name && name[n] != '\0') ++n;
+    return std::string_view(name, n);
+  }
+  /// Sets the name; false (and no change) when longer than kIhkNameMax or empty.
+  bool setSensorName(std::string_view n);
+  friend bool operator==(const IhkRecord&, const IhkRecord&);
+};
+
+/// HRT1A / HRT1B (30 high-resolution temperatures [deg C], old fixed header):
+/// time_intg time_frac time_ref id T1..T30 [qualflg]
+/// The trailing qualflg varies in width and may be absent (qualflg.width == 0 then, and the
+/// writer leaves it out again).
+constexpr int kHrtTemps = 30;
+struct HrtRecord {
+  TimeUs t = 0;
+  char time_ref = 'R';
+  char satellite = 'C';
+  double temp[kHrtTemps] = {};
+  Bits qualflg{0, 8};
+  friend bool operator==(const HrtRecord&, const HrtRecord&);
+};
+
+/// TIM1B (OBC to receiver time mapping):
+/// obctime id TS_suppid rcvtime_intg rcvtime_frac first_icu_blknr final_icu_blknr qualflg
+/// rcvtime_frac is kept as written: NANOseconds in GRACE-FO RL04 (valid 0..999999999), microseconds
+/// in the GRACE 2003 files. t is obctime (whole seconds).
+struct TimRecord {
+  TimeUs t = 0;  ///< obctime * 1e6
+  char satellite = 'C';
+  std::int32_t ts_suppid = 0;
+  std::int64_t rcvtime_intg = 0;
+  std::int64_t rcvtime_frac = 0;
+  std::int64_t first_icu_blknr = -1;
+  std::int64_t final_icu_blknr = -1;
+  Bits qualflg{0, 8};
+  friend bool operator==(const TimRecord&, const TimRecord&);
+};
+
+/// CLK1A / CLK1B (receiver clock offset; GPS time = rcv_time + eps_time):
+/// rcv_time id clock_id eps_time eps_err eps_drift drift_err qualflg
+struct ClkRecord {
+  TimeUs t = 0;  ///< rcv_time, whole seconds
+  char satellite = 'C';
+  std::int32_t clock_id = -1;
+  double eps_time = 0;   ///< s
+  double eps_err = 0;    ///< s
+  double eps_drift = 0;  ///< s/s
+  double drift_err = 0;  ///< s/s
+  Bits qualflg{0, 8};
+  friend bool operator==(const ClkRecord&, const ClkRecord&);
+};
+
 // ------------------------------------------------------------------------------------------------
 // Reading and writing. Each record type has explicit instantiations in src/io.
 // ------------------------------------------------------------------------------------------------
@@ -196,7 +294,9 @@ template <typename Rec>
 ProductFile<Rec> parseProduct(std::string_view text, std::string_view file, const ReadOptions& opt = {});
 
 /// The whole product as text: the kept header lines (or a minimal synthesised header of the right
-/// style with the record count updated) followed by one line per record.
+/// style with the record count updated) followed by one line per record. When f.header.binary is
+/// set and the record type has a GRACE binary layout (Sca1bRecord, Acc1bRecord, GnvRecord), the
+/// header is a fixed one with FILE FORMAT 0 and packed big-endian records follow it.
 template <typename Rec>
 std::string formatProduct(const ProductFile<Rec>& f);
 
@@ -223,6 +323,23 @@ ProductFile<Rec> makeProduct(Product product, char satellite);
 
 BORESIGHT_IO_DECLARE(Sca1aRecord)
 BORESIGHT_IO_DECLARE(FlaggedRecord)
+BORESIGHT_IO_DECLARE(QsaRecord)
+BORESIGHT_IO_DECLARE(Sca1bRecord)
+BORESIGHT_IO_DECLARE(Acc1bRecord)
+BORESIGHT_IO_DECLARE(GnvRecord)
+BORESIGHT_IO_DECLARE(ImuRecord)
+BORESIGHT_IO_DECLARE(ThrRecord)
+BORESIGHT_IO_DECLARE(IhkRecord)
+BORESIGHT_IO_DECLARE(HrtRecord)
+BORESIGHT_IO_DECLARE(TimRecord)
+BORESIGHT_IO_DECLARE(ClkRecord)
+
+/// GRACE big-endian binary Level-1B record sizes (bytes), as read by JPL's GraceRead library.
+namespace binary_layout {
+constexpr std::size_t kSca1b = 47;  ///< int32 gps_time, char id, int8 sca_id, 5 x float64, uint8 qualflg
+constexpr std::size_t kAcc1b = 78;  ///< int32 gps_time, char id, 9 x float64, uint8 qualflg
+constexpr std::size_t kGnv1b = 103; ///< int32 gps_time, char id, char coord_ref, 12 x float64, uint8 qualflg
+}  // namespace binary_layout
 
 /// Whole file into memory. Returns false and sets *error ("file: reason") on failure.
 bool readFileToString(const std::string& path, std::string& out, std::string* error);
