@@ -1,0 +1,145 @@
+// The boresight program, run as a user would: help, bad usage, inspect (with JSON) and convert.
+#include <boresight/io/level1.h>
+
+#include "real_data.h"
+
+#include <yaml-cpp/yaml.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <sys/wait.h>
+#include <unistd.h>
+
+using namespace boresight::io;
+using boresight::test::realFile;
+
+namespace {
+
+struct CliRun {
+  int status;
+  std::string out;
+};
+
+CliRun run(const std::string& args) {
+  std::string cmd = std::string(BORESIGHT_CLI) + " " + args + " 2>&1";
+  CliRun r{-1, {}};
+  FILE* p = ::popen(cmd.c_str(), "r");
+  if (!p) return r;
+  char buf[4096];
+  std::size_t n;
+  while ((n = std::fread(buf, 1, sizeof buf, p)) > 0) r.out.append(buf, n);
+  int st = ::pclose(p);
+  r.status = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+  return r;
+}
+
+std::string tempDir() {
+  char tmpl[] = "/tmp/boresight_cli_XXXXXX";
+  const char* d = ::mkdtemp(tmpl);
+  return d ? d : "/tmp";
+}
+
+}  // namespace
+
+TEST(Cli, HelpForEveryCommand) {
+  CliRun top = run("--help");
+  EXPECT_EQ(top.status, 0);
+  for (const char* cmd : {"inspect", "convert", "process", "simulate"}) {
+    if (top.out.find(std::string("  ") + cmd + " ") == std::string::npos) continue;  // not built
+    CliRun r = run(std::string(cmd) + " --help");
+    EXPECT_EQ(r.status, 0) << cmd;
+    EXPECT_NE(r.out.find("usage: boresight " + std::string(cmd)), std::string::npos) << r.out;
+  }
+}
+
+TEST(Cli, BadUsageIsExitTwoWithAReason) {
+  CliRun r = run("inspect --no-such-option x");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.out.find("unknown option --no-such-option"), std::string::npos) << r.out;
+  EXPECT_EQ(run("no-such-command").status, 2);
+  EXPECT_EQ(run("convert a.txt").status, 2);  // neither --out nor --to-level1
+}
+
+TEST(Cli, InspectReportsRejectedLinesWithFileAndLine) {
+  std::string dir = tempDir();
+  std::string path = dir + "/SCA1A_2023-06-01_C_04.txt";
+  {
+    std::ofstream f(path);
+    f << "header:\n  dimensions:\n    num_records: 5\n# End of YAML header\n";
+    f << "738849600 29992 C 1 P -0.28 -0.58 0.69 0.31 0 47 1 0 0 11000001 11000000\n";
+    f << "738849600 29992 C 2 P 0.46 0.88 nan 0.068 0 52 2 0 0 11000001 11000000\n";
+    f << "738849600 29992 C 3 P 0.12 0.18\n";
+  }
+  CliRun r = run("inspect " + path + " --json " + dir + "/out.json");
+  EXPECT_EQ(r.status, 0) << r.out;
+  EXPECT_NE(r.out.find(path + ":6: field 8 (quatjcoeff): non-finite number: 'nan'"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find(path + ":7: field 8 (quatjcoeff): missing"), std::string::npos) << r.out;
+  YAML::Node j = YAML::LoadFile(dir + "/out.json");
+  ASSERT_EQ(j["files"].size(), 1u);
+  EXPECT_EQ(j["files"][0]["records"].as<int>(), 1);
+  EXPECT_EQ(j["files"][0]["header_records"].as<int>(), 5);
+  EXPECT_EQ(j["files"][0]["rejected"].size(), 2u);
+  EXPECT_EQ(j["files"][0]["rejected"][0]["line"].as<int>(), 6);
+
+  CliRun missing = run("inspect " + dir + "/SCA1A_missing.txt");
+  EXPECT_EQ(missing.status, 1);
+  EXPECT_NE(missing.out.find("cannot open"), std::string::npos) << missing.out;
+}
+
+TEST(CliReal, InspectGraceFoHeadsAndQsa1b) {
+  BORESIGHT_REQUIRE_REAL_DATA();
+  std::string dir = tempDir();
+  CliRun r = run("inspect " + realFile("gracefo/2023-06-01_L1A/SCA1A_2023-06-01_C_04.txt") + " " +
+              realFile("gracefo/static_2018-05-22/QSA1B_2018-05-22_C_04.txt") + " --json " + dir + "/iba.json");
+  ASSERT_EQ(r.status, 0) << r.out;
+  std::printf("%s", r.out.c_str());
+  YAML::Node j = YAML::LoadFile(dir + "/iba.json");
+  ASSERT_EQ(j["files"].size(), 2u);
+  EXPECT_EQ(j["files"][0]["product"].as<std::string>(), "SCA1A");
+  EXPECT_EQ(j["files"][0]["records"].as<int>(), 100);
+  EXPECT_EQ(j["files"][0]["satellite"].as<std::string>(), "C");
+  EXPECT_DOUBLE_EQ(j["files"][0]["first_time"].as<double>(), 738849600.029992);
+  ASSERT_EQ(j["pairs"].size(), 3u);
+  for (const auto& p : j["pairs"]) {
+    EXPECT_LT(p["iba_std_arcsec"].as<double>(), 8.0);
+    EXPECT_GT(p["iba_mean_deg"].as<double>(), 80.0);
+    EXPECT_LT(std::abs(p["iba_offset_arcsec"].as<double>()), 180.0);
+    EXPECT_NEAR(p["iba_mean_deg"].as<double>() - p["iba_nominal_deg"].as<double>(),
+                p["iba_offset_arcsec"].as<double>() / 3600.0, 1e-9);
+  }
+}
+
+TEST(CliReal, ConvertToLcmAndBackKeepsWhatTheMessagesCarry) {
+  BORESIGHT_REQUIRE_REAL_DATA();
+  std::string dir = tempDir();
+  std::string sca = realFile("gracefo/2023-06-01_L1A/SCA1A_2023-06-01_C_04.txt");
+  std::string acc = realFile("gracefo/2023-06-01_L1A/ACC1A_2023-06-01_C_04.txt");
+  CliRun a = run("convert " + sca + " " + acc + " --out " + dir + "/x.lcm");
+  ASSERT_EQ(a.status, 0) << a.out;
+  EXPECT_NE(a.out.find("100 star head samples, 100 accelerometer samples"), std::string::npos) << a.out;
+  CliRun b = run("convert " + dir + "/x.lcm --to-level1 " + dir + "/l1");
+  ASSERT_EQ(b.status, 0) << b.out;
+  auto s0 = readProduct<Sca1aRecord>(sca);
+  auto s1 = readProduct<Sca1aRecord>(dir + "/l1/SCA1A_2023-06-01_C_04.txt");
+  ASSERT_TRUE(s1.ok) << s1.error;
+  ASSERT_EQ(s0.records.size(), s1.records.size());
+  // The log is in sensor-time order with heads by id at equal times: the same order as the file.
+  for (std::size_t i = 0; i < s0.records.size(); ++i) {
+    const auto &x = s0.records[i], &y = s1.records[i];
+    EXPECT_EQ(x.t, y.t);
+    EXPECT_EQ(x.head, y.head);
+    EXPECT_EQ(x.nstars, y.nstars);
+    for (int k = 0; k < 4; ++k) EXPECT_EQ(x.q[k], y.q[k]);
+  }
+  auto a0 = readProduct<FlaggedRecord>(acc);
+  auto a1 = readProduct<FlaggedRecord>(dir + "/l1/ACC1A_2023-06-01_C_04.txt");
+  ASSERT_TRUE(a1.ok) << a1.error;
+  ASSERT_EQ(a0.records.size(), a1.records.size());
+  for (std::size_t i = 0; i < a0.records.size(); ++i) {
+    EXPECT_EQ(a0.records[i].t, a1.records[i].t);
+    for (int k = 0; k < 6; ++k) EXPECT_EQ(a0.records[i].value[k], a1.records[i].value[k]);
+  }
+}
