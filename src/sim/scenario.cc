@@ -434,6 +434,23 @@ bool parseScenario(const std::string& text, const std::string& file, const std::
   return c.ok;
 }
 
+bool addEffectArgs(Scenario& sc, const std::vector<std::string>& args, std::string* error) {
+  for (const auto& a : args) {
+    model::EffectSpec e;
+    if (!model::parseEffectArg(a, e, error)) return false;
+    if (e.sensor != "all" && e.sensor != "acc") {
+      bool found = false;
+      for (const auto& h : sc.heads) found |= std::to_string(h.id) == e.sensor;
+      if (!found) {
+        if (error) *error = "--effect " + e.name + ": key 'sensor': the scenario has no head " + e.sensor;
+        return false;
+      }
+    }
+    sc.effects.push_back(e);
+  }
+  return true;
+}
+
 bool loadScenario(const std::string& path, Scenario& out, std::string* error) {
   std::ifstream in(path, std::ios::binary);
   if (!in) {

@@ -42,6 +42,9 @@ bool parseScenario(const std::string& yaml_text, const std::string& file, const 
                    std::string* error);
 bool loadScenario(const std::string& path, Scenario& out, std::string* error);
 
+/// Adds effects given as "NAME:key=value,..." (the --effect option), checking their target heads exist.
+bool addEffectArgs(Scenario& sc, const std::vector<std::string>& args, std::string* error);
+
 /// GPS calendar "YYYY-MM-DD[THH:MM:SS]" -> microseconds past the GPS J2000 epoch (no leap seconds).
 bool parseGpsCalendar(const std::string& s, TimeUs& t);
 /// Microseconds past the epoch -> "YYYY-MM-DD" (GPS calendar date).

@@ -1,0 +1,110 @@
+// Simulator output: real-format Level-1 files (SCA1A, ACC1A, GNV1B streamed in chunks, QSA1B), an
+// LCM log of the node's input messages, and truth.yaml.
+//
+// Streaming: the io writers format whole ProductFile objects. ChunkedProductWriter calls
+// io::formatProduct on chunks of records, drops the repeated header of each chunk, appends the
+// records to a body file, and at close() writes the header (with the true record count) followed by
+// the body. Memory is one chunk, whatever the duration.
+#pragma once
+
+#include <boresight/io/level1.h>
+#include <boresight/sim/simulator.h>
+
+#include <cstdio>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace boresight::sim {
+
+template <typename Rec>
+class ChunkedProductWriter {
+ public:
+  ChunkedProductWriter() = default;
+  ~ChunkedProductWriter();
+  ChunkedProductWriter(const ChunkedProductWriter&) = delete;
+  ChunkedProductWriter& operator=(const ChunkedProductWriter&) = delete;
+  /// `proto` supplies the header (makeProduct(...)); its records are ignored.
+  bool open(const std::string& path, const io::ProductFile<Rec>& proto, std::string* error,
+            std::size_t chunk_records = 16384);
+  void add(const Rec& r) {
+    chunk_.records.push_back(r);
+    if (chunk_.records.size() >= chunk_size_) flush();
+  }
+  bool close(std::string* error);
+  std::uint64_t count() const { return count_; }
+
+ private:
+  void flush();
+  std::string path_, body_path_;
+  io::ProductFile<Rec> chunk_;
+  std::size_t chunk_size_ = 16384, header_lines_ = 0;
+  std::FILE* body_ = nullptr;
+  std::uint64_t count_ = 0;
+  bool io_error_ = false;
+};
+
+/// "SCA1A_2023-06-01_C_04.txt" for the scenario's start date, satellite and version.
+std::string productFileName(const char* product, const Scenario& sc);
+
+/// Writes SCA1A (all heads, blinded samples skipped), ACC1A and GNV1B as the simulation runs.
+class Level1Sink : public SimSink {
+ public:
+  bool open(const std::string& dir, const Scenario& sc, std::string* error);
+  void head(const HeadSampleOut& s) override;
+  void accel(const AccSampleOut& a) override;
+  void orbit(const OrbitSampleOut& o) override;
+  bool close(std::string* error);
+  std::vector<std::string> files() const { return files_; }
+
+ private:
+  char sat_ = 'C';
+  ChunkedProductWriter<io::Sca1aRecord> sca_;
+  ChunkedProductWriter<io::FlaggedRecord> acc_;
+  ChunkedProductWriter<io::GnvRecord> gnv_;
+  std::vector<std::string> files_;
+};
+
+/// The node's input messages (io::LcmLogWriter): heads on STAR_HEAD, accelerometer on ACCEL.
+class LcmSink : public SimSink {
+ public:
+  LcmSink();
+  ~LcmSink() override;
+  bool open(const std::string& path, std::string* error);
+  void head(const HeadSampleOut& s) override;
+  void accel(const AccSampleOut& a) override;
+  bool close(std::string* error);
+  std::uint64_t written() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+/// Forwards every sample to several sinks.
+class TeeSink : public SimSink {
+ public:
+  void add(SimSink* s) { sinks_.push_back(s); }
+  void head(const HeadSampleOut& s) override {
+    for (auto* k : sinks_) k->head(s);
+  }
+  void accel(const AccSampleOut& a) override {
+    for (auto* k : sinks_) k->accel(a);
+  }
+  void orbit(const OrbitSampleOut& o) override {
+    for (auto* k : sinks_) k->orbit(o);
+  }
+
+ private:
+  std::vector<SimSink*> sinks_;
+};
+
+/// QSA1B with the NOMINAL alignment q_Si_B of every head (what the ground calibration says).
+bool writeQsa1b(const std::string& path, const Simulator& sim, std::string* error);
+
+/// truth.yaml: seed, scenario, every injected effect with all parameters, each head's true mounting
+/// (q_Si_B, error angles), the accelerometer's true frame, biases and scale, and run statistics.
+bool writeTruthYaml(const std::string& path, const Simulator& sim, const std::vector<std::string>& effect_args,
+                    const std::vector<std::string>& files, std::string* error);
+
+}  // namespace boresight::sim

@@ -1,0 +1,304 @@
+#include <boresight/model/rotation.h>
+#include <boresight/sim/output.h>
+
+#include <yaml-cpp/yaml.h>
+
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+
+namespace boresight::sim {
+namespace {
+
+std::size_t countLines(const std::string& s) {
+  std::size_t n = 0;
+  for (char c : s) n += c == '\n';
+  return n;
+}
+
+/// Byte offset after the first `lines` newlines.
+std::size_t afterLines(const std::string& s, std::size_t lines) {
+  std::size_t pos = 0;
+  for (std::size_t i = 0; i < lines; ++i) {
+    const auto nl = s.find('\n', pos);
+    if (nl == std::string::npos) return s.size();
+    pos = nl + 1;
+  }
+  return pos;
+}
+
+}  // namespace
+
+template <typename Rec>
+ChunkedProductWriter<Rec>::~ChunkedProductWriter() {
+  if (body_) {
+    std::fclose(body_);
+    std::remove(body_path_.c_str());
+  }
+}
+
+template <typename Rec>
+bool ChunkedProductWriter<Rec>::open(const std::string& path, const io::ProductFile<Rec>& proto, std::string* error,
+                                     std::size_t chunk_records) {
+  path_ = path;
+  body_path_ = path + ".body.tmp";
+  chunk_ = proto;
+  chunk_.records.clear();
+  chunk_size_ = chunk_records == 0 ? 1 : chunk_records;
+  chunk_.records.reserve(chunk_size_);
+  header_lines_ = countLines(io::formatProduct(chunk_));
+  count_ = 0;
+  io_error_ = false;
+  body_ = std::fopen(body_path_.c_str(), "wb");
+  if (!body_) {
+    if (error) *error = body_path_ + ": " + std::strerror(errno);
+    return false;
+  }
+  return true;
+}
+
+template <typename Rec>
+void ChunkedProductWriter<Rec>::flush() {
+  if (chunk_.records.empty() || !body_) return;
+  const std::string text = io::formatProduct(chunk_);
+  const std::size_t off = afterLines(text, header_lines_);
+  if (std::fwrite(text.data() + off, 1, text.size() - off, body_) != text.size() - off) io_error_ = true;
+  count_ += chunk_.records.size();
+  chunk_.records.clear();
+}
+
+template <typename Rec>
+bool ChunkedProductWriter<Rec>::close(std::string* error) {
+  if (!body_) return true;
+  flush();
+  const bool body_ok = std::fclose(body_) == 0 && !io_error_;
+  body_ = nullptr;
+  if (!body_ok) {
+    if (error) *error = body_path_ + ": write failed";
+    std::remove(body_path_.c_str());
+    return false;
+  }
+  // The header with the real record count: format an empty product, then set the count line.
+  io::ProductFile<Rec> h = chunk_;
+  h.records.clear();
+  std::string header = io::formatProduct(h);
+  const std::string yaml_key = "    num_records: ";
+  const auto p = header.find(yaml_key);
+  if (p != std::string::npos) {
+    const auto eol = header.find('\n', p);
+    header.replace(p + yaml_key.size(), eol - p - yaml_key.size(), std::to_string(count_));
+  }
+  std::FILE* out = std::fopen(path_.c_str(), "wb");
+  std::FILE* in = std::fopen(body_path_.c_str(), "rb");
+  bool ok = out && in && std::fwrite(header.data(), 1, header.size(), out) == header.size();
+  std::vector<char> buf(1 << 20);
+  while (ok && in) {
+    const std::size_t n = std::fread(buf.data(), 1, buf.size(), in);
+    if (n == 0) break;
+    ok = std::fwrite(buf.data(), 1, n, out) == n;
+  }
+  if (in) std::fclose(in);
+  if (out && std::fclose(out) != 0) ok = false;
+  std::remove(body_path_.c_str());
+  if (!ok && error) *error = path_ + ": write failed";
+  return ok;
+}
+
+template class ChunkedProductWriter<io::Sca1aRecord>;
+template class ChunkedProductWriter<io::FlaggedRecord>;
+template class ChunkedProductWriter<io::GnvRecord>;
+
+std::string productFileName(const char* product, const Scenario& sc) {
+  return std::string(product) + "_" + gpsDate(sc.start) + "_" + sc.satellite + "_" + sc.output.version + ".txt";
+}
+
+bool Level1Sink::open(const std::string& dir, const Scenario& sc, std::string* error) {
+  sat_ = sc.satellite;
+  files_ = {dir + "/" + productFileName("SCA1A", sc), dir + "/" + productFileName("ACC1A", sc),
+            dir + "/" + productFileName("GNV1B", sc)};
+  return sca_.open(files_[0], io::makeProduct<io::Sca1aRecord>(io::Product::SCA1A, sat_), error) &&
+         acc_.open(files_[1], io::makeProduct<io::FlaggedRecord>(io::Product::ACC1A, sat_), error) &&
+         gnv_.open(files_[2], io::makeProduct<io::GnvRecord>(io::Product::GNV1B, sat_), error, 4096);
+}
+
+void Level1Sink::head(const HeadSampleOut& s) {
+  if (s.blind) return;  // a blinded head delivers nothing
+  io::Sca1aRecord r;
+  r.t = s.tag;
+  r.satellite = sat_;
+  r.head = static_cast<std::uint8_t>(s.head);
+  r.desig = 'P';
+  quatToScalarFirst(s.q_I_Si, r.q);
+  r.nlocks = 0;
+  r.nstars = s.nstars;
+  r.confid = s.nstars >= 20 ? 1 : s.nstars >= 8 ? 2 : 3;
+  // sca_mode / qualflg bit patterns as in the 2023-06-01 GRACE C sample (11000001 / 11000000).
+  r.mode = io::Bits{0xC1, 8};
+  r.qualflg = io::Bits{0xC0, 8};
+  sca_.add(r);
+}
+
+void Level1Sink::accel(const AccSampleOut& a) {
+  io::FlaggedRecord r;
+  r.t = a.tag;
+  r.time_ref = 'R';
+  r.satellite = sat_;
+  r.qualflg = io::Bits{0, 8};
+  r.prod_flag = io::Bits{(1u << io::acc_bits::kIcuBlock) | 0x3Fu, 32};
+  for (int k = 0; k < 3; ++k) {
+    r.value[static_cast<std::size_t>(io::acc_bits::kLinX + k)] = a.lin_A[k];
+    r.value[static_cast<std::size_t>(io::acc_bits::kAngX + k)] = a.ang_A[k];
+  }
+  r.value[io::acc_bits::kIcuBlock] = 0;
+  acc_.add(r);
+}
+
+void Level1Sink::orbit(const OrbitSampleOut& o) {
+  io::GnvRecord g;
+  g.t = o.t;
+  g.satellite = sat_;
+  g.coord_ref = 'E';
+  for (int k = 0; k < 3; ++k) {
+    g.pos[k] = o.r_E[k];
+    g.vel[k] = o.v_E[k];
+    g.pos_err[k] = 1e-3;  // m, 1-sigma (the simulated orbit is exact; the value marks it as good)
+    g.vel_err[k] = 1e-6;  // m/s
+  }
+  g.qualflg = io::Bits{0, 8};
+  gnv_.add(g);
+}
+
+bool Level1Sink::close(std::string* error) {
+  return sca_.close(error) && acc_.close(error) && gnv_.close(error);
+}
+
+bool writeQsa1b(const std::string& path, const Simulator& sim, std::string* error) {
+  auto f = io::makeProduct<io::QsaRecord>(io::Product::QSA1B, sim.scenario().satellite);
+  f.header.style = io::HeaderStyle::Fixed;  // GRACE-FO static products use the fixed header
+  for (const auto& h : sim.heads()) {
+    io::QsaRecord r;
+    r.t = (sim.scenario().start / kUsPerSecond) * kUsPerSecond;
+    r.satellite = sim.scenario().satellite;
+    r.sensor = h.config().id;
+    quatToScalarFirst(h.config().q_Si_B_nominal, r.q);
+    r.zero = 0;
+    r.qualflg = io::Bits{0, 8};
+    f.records.push_back(r);
+  }
+  return io::writeProduct(path, f, error);
+}
+
+namespace {
+
+void emitVec(YAML::Emitter& y, const Vec3& v, double scale = 1.0) {
+  y << YAML::Flow << YAML::BeginSeq << v.x() * scale << v.y() * scale << v.z() * scale << YAML::EndSeq;
+}
+void emitQuat(YAML::Emitter& y, const Quat& q) {
+  double a[4];
+  quatToScalarFirst(q, a);
+  y << YAML::Flow << YAML::BeginSeq << a[0] << a[1] << a[2] << a[3] << YAML::EndSeq;
+}
+void emitMat(YAML::Emitter& y, const Mat3& m) {
+  y << YAML::BeginSeq;
+  for (int i = 0; i < 3; ++i) y << YAML::Flow << YAML::BeginSeq << m(i, 0) << m(i, 1) << m(i, 2) << YAML::EndSeq;
+  y << YAML::EndSeq;
+}
+
+}  // namespace
+
+bool writeTruthYaml(const std::string& path, const Simulator& sim, const std::vector<std::string>& effect_args,
+                    const std::vector<std::string>& files, std::string* error) {
+  const Scenario& sc = sim.scenario();
+  const SimStats& st = sim.stats();
+  YAML::Emitter y;
+  y.SetDoublePrecision(17);
+  y << YAML::Comment(
+      "boresight simulate: the truth behind the simulated files. Angles in arcseconds unless named; quaternions "
+      "scalar first; q_Si_B maps body (SRF) to head; C_A_B maps body to accelerometer frame.");
+  y << YAML::BeginMap;
+  y << YAML::Key << "scenario" << YAML::Value << sc.file;
+  y << YAML::Key << "seed" << YAML::Value << sim.seed();
+  y << YAML::Key << "satellite" << YAML::Value << std::string(1, sc.satellite);
+  y << YAML::Key << "start_gps_us" << YAML::Value << sc.start;
+  y << YAML::Key << "start_date_gps" << YAML::Value << gpsDate(sc.start);
+  y << YAML::Key << "duration_s" << YAML::Value << sim.duration();
+  y << YAML::Key << "effect_args" << YAML::Value << YAML::Flow << effect_args;
+  y << YAML::Key << "effects" << YAML::Value << YAML::BeginSeq;
+  for (const auto& e : sc.effects) {
+    y << YAML::BeginMap << YAML::Key << "name" << YAML::Value << e.name << YAML::Key << "sensor" << YAML::Value
+      << e.sensor << YAML::Key << "origin" << YAML::Value << e.origin;
+    for (const auto& [k, v] : e.values) y << YAML::Key << k << YAML::Value << v;
+    y << YAML::EndMap;
+  }
+  y << YAML::EndSeq;
+  y << YAML::Key << "heads" << YAML::Value << YAML::BeginSeq;
+  for (std::size_t i = 0; i < sim.heads().size(); ++i) {
+    const auto& h = sim.heads()[i];
+    const auto& c = h.config();
+    const auto& e = h.effects();
+    y << YAML::BeginMap;
+    y << YAML::Key << "id" << YAML::Value << c.id;
+    y << YAML::Key << "q_Si_B_nominal" << YAML::Value;
+    emitQuat(y, c.q_Si_B_nominal);
+    y << YAML::Key << "q_Si_B_true" << YAML::Value;
+    emitQuat(y, h.qSiBTrue());
+    y << YAML::Comment("constant mounting; time-varying effects below come on top");
+    y << YAML::Key << "mounting_error_arcsec" << YAML::Value;
+    emitVec(y, c.mounting_error_rad, kArcsecPerRad);
+    y << YAML::Key << "relative_misalignment_arcsec" << YAML::Value;
+    emitVec(y, e.misalignment_rad, kArcsecPerRad);
+    y << YAML::Key << "boresight" << YAML::Value;
+    emitVec(y, c.boresight_Si);
+    y << YAML::Key << "noise_cross_arcsec" << YAML::Value << h.sigmaCross() * kArcsecPerRad;
+    y << YAML::Key << "noise_about_arcsec" << YAML::Value << h.sigmaAbout() * kArcsecPerRad;
+    y << YAML::Key << "time_offset_s" << YAML::Value << e.time_offset_s;
+    y << YAML::Key << "rate_hz" << YAML::Value << c.rate_hz;
+    y << YAML::Key << "samples_written" << YAML::Value << st.head_samples[i];
+    y << YAML::Key << "blinded_sun" << YAML::Value << st.head_blinded_sun[i];
+    y << YAML::Key << "blinded_earth" << YAML::Value << st.head_blinded_earth[i];
+    y << YAML::Key << "blinded_moon" << YAML::Value << st.head_blinded_moon[i];
+    y << YAML::Key << "missing_gaps_dropouts" << YAML::Value << st.head_missing[i];
+    y << YAML::Key << "outliers" << YAML::Value << st.head_outliers[i];
+    y << YAML::Key << "sign_flips" << YAML::Value << st.head_sign_flips[i];
+    y << YAML::EndMap;
+  }
+  y << YAML::EndSeq;
+  const auto& a = sim.accel();
+  y << YAML::Key << "accelerometer" << YAML::Value << YAML::BeginMap;
+  y << YAML::Key << "C_A_B_nominal" << YAML::Value;
+  emitMat(y, a.config().C_A_B);
+  y << YAML::Key << "C_A_B_true" << YAML::Value;
+  emitMat(y, a.C_A_B_true());
+  y << YAML::Key << "misalignment_arcsec" << YAML::Value;
+  emitVec(y, a.effects().misalignment_rad, kArcsecPerRad);
+  y << YAML::Key << "bias_rad_s2" << YAML::Value;
+  emitVec(y, a.config().bias_rad_s2 + a.effects().bias_rad_s2);
+  y << YAML::Key << "injected_bias_rad_s2" << YAML::Value;
+  emitVec(y, a.effects().bias_rad_s2);
+  y << YAML::Key << "scale_error" << YAML::Value;
+  emitVec(y, a.effects().scale);
+  y << YAML::Key << "white_noise_rad_s2" << YAML::Value;
+  emitVec(y, a.config().white_rad_s2);
+  y << YAML::Key << "lowfreq_noise_rad_s2" << YAML::Value;
+  emitVec(y, a.config().lowfreq_rad_s2);
+  y << YAML::Key << "time_offset_s" << YAML::Value << a.effects().time_offset_s;
+  y << YAML::Key << "samples_written" << YAML::Value << st.acc_samples;
+  y << YAML::Key << "missing_gaps" << YAML::Value << st.acc_missing;
+  y << YAML::EndMap;
+  y << YAML::Key << "attitude" << YAML::Value << YAML::BeginMap;
+  y << YAML::Key << "thruster_pulses" << YAML::Value << st.thruster_pulses;
+  y << YAML::Key << "max_abs_angular_acceleration_rad_s2" << YAML::Value << st.max_abs_alpha;
+  y << YAML::EndMap;
+  y << YAML::Key << "files" << YAML::Value << files;
+  y << YAML::EndMap;
+  std::ofstream out(path);
+  out << y.c_str() << "\n";
+  if (!out) {
+    if (error) *error = path + ": write failed";
+    return false;
+  }
+  return true;
+}
+
+}  // namespace boresight::sim
