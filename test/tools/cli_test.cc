@@ -143,3 +143,41 @@ TEST(CliReal, ConvertToLcmAndBackKeepsWhatTheMessagesCarry) {
     for (int k = 0; k < 6; ++k) EXPECT_EQ(a0.records[i].value[k], a1.records[i].value[k]);
   }
 }
+
+TEST(CliReal, ProcessRealGraceFoAndCompareWithSca1b) {
+  BORESIGHT_REQUIRE_REAL_DATA();
+  std::string dir = tempDir();
+  const std::string l1a = realFile("gracefo/2023-06-01_L1A/"), l1b = realFile("gracefo/2023-06-01_L1B/");
+  CliRun r = run("process --config " BORESIGHT_SOURCE_DIR "/config/gracefo.yaml " + l1a + "SCA1A_2023-06-01_C_04.txt " +
+                 l1a + "ACC1A_2023-06-01_C_04.txt " + realFile("gracefo/static_2018-05-22/QSA1B_2018-05-22_C_04.txt") +
+                 " --out " + dir + "/p.csv --compare-sca1b " + l1b + "SCA1B_2023-06-01_C_04.txt --clk1b " + l1b +
+                 "CLK1B_2023-06-01_C_04.txt");
+  ASSERT_EQ(r.status, 0) << r.out;
+  std::printf("%s", r.out.c_str());
+  std::ifstream csv(dir + "/p.csv");
+  std::string header, line;
+  std::getline(csv, header);
+  EXPECT_EQ(header.rfind("time_s,q0,q1,q2,q3,w_x,w_y,w_z,a_sc_x,a_sc_y,a_sc_z,a_acc_x,a_acc_y,a_acc_z,iba_12_deg,", 0), 0u)
+      << header;
+  int rows = 0;
+  while (std::getline(csv, line)) {
+    ++rows;
+    EXPECT_EQ(line.substr(line.size() - 2), ",3") << "all three heads fused: " << line;
+  }
+  EXPECT_GE(rows, 15);  // 16.5 s of 2 Hz heads, one row per second
+  // The comparison is printed with its numbers whatever they are; the scatter must be small (the
+  // fused attitude is consistent), the mean is a finding, not an assertion.
+  EXPECT_NE(r.out.find("Fused attitude versus SCA1B"), std::string::npos);
+  EXPECT_NE(r.out.find("smallest mean difference with the fused attitude taken at SCA1B time"), std::string::npos);
+}
+
+TEST(Cli, ProcessConfigErrorsNameFileAndKey) {
+  std::string dir = tempDir();
+  {
+    std::ofstream f(dir + "/bad.yaml");
+    f << "platform: x\nheads:\n  mounting: qsa1b\n  list:\n    - id: 1\n      sigma_roll_arcsec: -3\n";
+  }
+  CliRun r = run("process --config " + dir + "/bad.yaml x.txt --out " + dir + "/o.csv");
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.out.find(dir + "/bad.yaml: heads.list[0].sigma_roll_arcsec: must be > 0"), std::string::npos) << r.out;
+}

@@ -22,6 +22,22 @@ struct PairIba {
   std::optional<double> offset_arcsec; ///< mean - nominal
 };
 
+/// A head's alignment valid at t: the latest QSA1B record of the head at or before t, else its
+/// earliest record; nullptr when the head has none. (QSA1B may hold a history of alignments.)
+inline const QsaRecord* alignmentAt(const std::vector<QsaRecord>& qsa, int head, TimeUs t) {
+  const QsaRecord* best = nullptr;
+  for (const auto& q : qsa) {
+    if (q.sensor != head) continue;
+    if (!best) {
+      best = &q;
+      continue;
+    }
+    const bool q_valid = q.t <= t, best_valid = best->t <= t;
+    if ((q_valid && (!best_valid || q.t >= best->t)) || (!q_valid && !best_valid && q.t < best->t)) best = &q;
+  }
+  return best;
+}
+
 /// Angle between the boresights b_a = R(q_a) axis and b_b = R(q_b) axis (radians), robust near 0 and pi.
 inline double boresightAngle(const Quat& q_I_Sa, const Quat& q_I_Sb, const Vec3& axis) {
   Vec3 a = q_I_Sa.normalized() * axis, b = q_I_Sb.normalized() * axis;
@@ -60,19 +76,8 @@ inline std::vector<PairIba> interBoresightAngles(const std::vector<Sca1aRecord>&
         p.std_arcsec = p.epochs > 1 ? std::sqrt(std::max(0.0, (sum2 - n * m * m) / (n - 1))) * kArcsecPerRad : 0.0;
       }
       if (qsa) {
-        // QSA1B may hold a history: take each head's latest alignment valid at the first epoch.
         const TimeUs t0 = epochs.empty() ? 0 : epochs.begin()->first;
-        auto pick = [&](int head) {
-          const QsaRecord* best = nullptr;
-          for (const auto& q : *qsa) {
-            if (q.sensor != head) continue;
-            bool valid = q.t <= t0;
-            if (!best || (valid && (best->t > t0 || q.t >= best->t)) || (!valid && best->t > t0 && q.t < best->t))
-              best = &q;
-          }
-          return best;
-        };
-        const QsaRecord *qa = pick(p.head_a), *qb = pick(p.head_b);
+        const QsaRecord *qa = alignmentAt(*qsa, p.head_a, t0), *qb = alignmentAt(*qsa, p.head_b, t0);
         if (qa && qb) {
           // q_Si_B: the boresight in B is R(q)^T axis.
           Vec3 ba = quatFromScalarFirst(qa->q).normalized().conjugate() * axis;
