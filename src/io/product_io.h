@@ -21,7 +21,10 @@
 
 #include <boresight/io/level1.h>
 
+#include <algorithm>
 #include <cstdio>
+#include <exception>
+#include <thread>
 #include <cstring>
 #include <string>
 #include <type_traits>
@@ -176,6 +179,43 @@ void parseBinaryBody(std::string_view body, const ReadOptions& opt, ProductFile<
     reject(full, "truncated record: " + std::to_string(rest) + " of " + std::to_string(n) + " bytes");
 }
 
+/// Bodies smaller than this are parsed on one thread (ReadOptions::threads == 0).
+constexpr std::size_t kParallelMinBytes = 8u << 20;
+
+/// Parses the record lines in [p, end): appends records to f.records, counts and keeps rejected
+/// lines (numbered from line_base + 1), and counts the lines seen. With OnError::Stop the first
+/// rejected line sets f.ok = false and f.error and ends the parse.
+template <typename Codec>
+void parseLines(const char* p, const char* end, std::size_t line_base, Product product, const ReadOptions& opt,
+                ProductFile<typename Codec::Record>& f, std::size_t& lines) {
+  std::size_t line_no = line_base;
+  // Reserve from the first record's length: avoids regrowth on full-day files.
+  if (p < end && f.records.empty()) {
+    const void* nl = std::memchr(p, '\n', static_cast<std::size_t>(end - p));
+    std::size_t first_len = nl ? static_cast<std::size_t>(static_cast<const char*>(nl) - p) + 1 : 0;
+    if (first_len > 8) f.records.reserve(static_cast<std::size_t>(end - p) / first_len + 16);
+  }
+  while (p < end) {
+    const char* nl = static_cast<const char*>(std::memchr(p, '\n', static_cast<std::size_t>(end - p)));
+    const char* le = nl ? nl : end;
+    ++line_no;
+    FieldScanner s(p, le);
+    p = nl ? nl + 1 : end;
+    if (s.atEnd()) continue;  // blank line
+    auto& r = f.records.emplace_back();
+    if (Codec::parse(s, r, product) && s.finish()) continue;
+    f.records.pop_back();
+    ++f.rejected_count;
+    if (f.rejected.size() < opt.max_issues_kept) f.rejected.push_back(ParseIssue{f.file, line_no, s.reason()});
+    if (opt.on_error == OnError::Stop) {
+      f.ok = false;
+      f.error = f.file + ":" + std::to_string(line_no) + ": " + s.reason();
+      break;
+    }
+  }
+  lines = line_no - line_base;
+}
+
 template <typename Codec>
 ProductFile<typename Codec::Record> parseText(std::string_view text, std::string_view file, const ReadOptions& opt) {
   using Rec = typename Codec::Record;
@@ -210,32 +250,60 @@ ProductFile<typename Codec::Record> parseText(std::string_view text, std::string
     }
     return f;
   }
-  const char* p = text.data() + off;
+  const char* body = text.data() + off;
   const char* end = text.data() + text.size();
-  std::size_t line_no = f.header.line_count;
-  // Reserve from the first record's length: avoids regrowth on full-day files.
-  if (p < end) {
-    const void* nl = std::memchr(p, '\n', static_cast<std::size_t>(end - p));
-    std::size_t first_len = nl ? static_cast<std::size_t>(static_cast<const char*>(nl) - p) + 1 : 0;
-    if (first_len > 8) f.records.reserve(static_cast<std::size_t>(end - p) / first_len + 16);
+  const std::size_t body_size = static_cast<std::size_t>(end - body);
+  unsigned threads = opt.threads > 0 ? static_cast<unsigned>(opt.threads) : std::thread::hardware_concurrency();
+  if (opt.threads == 0 && body_size < kParallelMinBytes) threads = 1;
+  if (opt.on_error == OnError::Stop) threads = 1;  // the first error in file order must win
+  threads = std::max(1u, std::min(threads, 8u));
+  if (threads == 1) {
+    std::size_t lines = 0;
+    parseLines<Codec>(body, end, f.header.line_count, product, opt, f, lines);
+    return f;
   }
-  while (p < end) {
-    const char* nl = static_cast<const char*>(std::memchr(p, '\n', static_cast<std::size_t>(end - p)));
-    const char* le = nl ? nl : end;
-    ++line_no;
-    FieldScanner s(p, le);
-    p = nl ? nl + 1 : end;
-    if (s.atEnd()) continue;  // blank line
-    Rec& r = f.records.emplace_back();
-    if (Codec::parse(s, r, product) && s.finish()) continue;
-    f.records.pop_back();
-    ++f.rejected_count;
-    if (f.rejected.size() < opt.max_issues_kept) f.rejected.push_back(ParseIssue{f.file, line_no, s.reason()});
-    if (opt.on_error == OnError::Stop) {
-      f.ok = false;
-      f.error = f.file + ":" + std::to_string(line_no) + ": " + s.reason();
-      return f;
+  // Chunks of whole lines, parsed concurrently; results appended in file order. Line numbers of
+  // later chunks are known only once the earlier ones are counted, so they are shifted after the join.
+  std::vector<const char*> cut{body};
+  for (unsigned k = 1; k < threads; ++k) {
+    const char* c = body + body_size * k / threads;
+    if (c < cut.back()) c = cut.back();
+    const void* nl = std::memchr(c, '\n', static_cast<std::size_t>(end - c));
+    cut.push_back(nl ? static_cast<const char*>(nl) + 1 : end);
+  }
+  cut.push_back(end);
+  std::vector<ProductFile<Rec>> part(threads);
+  std::vector<std::size_t> lines(threads, 0);
+  std::vector<std::exception_ptr> failure(threads);
+  std::vector<std::thread> pool;
+  for (unsigned k = 0; k < threads; ++k) {
+    part[k].file = f.file;
+    auto work = [&, k] {
+      try {
+        parseLines<Codec>(cut[k], cut[k + 1], 0, product, opt, part[k], lines[k]);
+      } catch (...) {
+        failure[k] = std::current_exception();
+      }
+    };
+    if (k + 1 < threads) pool.emplace_back(work);
+    else work();
+  }
+  for (auto& t : pool) t.join();
+  for (auto& e : failure)
+    if (e) std::rethrow_exception(e);
+  std::size_t total = 0;
+  for (const auto& pp : part) total += pp.records.size();
+  f.records.reserve(total);
+  std::size_t base = f.header.line_count;
+  for (unsigned k = 0; k < threads; ++k) {
+    f.records.insert(f.records.end(), part[k].records.begin(), part[k].records.end());
+    f.rejected_count += part[k].rejected_count;
+    for (auto& issue : part[k].rejected) {
+      if (f.rejected.size() >= opt.max_issues_kept) break;
+      issue.line += base;
+      f.rejected.push_back(std::move(issue));
     }
+    base += lines[k];
   }
   return f;
 }

@@ -84,6 +84,9 @@ struct ReadOptions {
   std::size_t max_issues_kept = 1000;  ///< issues beyond this are counted but not kept
   /// Force the product instead of identifying it from the file name and header.
   Product product = Product::Unknown;
+  /// Threads for the record lines of an ASCII file: 0 = automatic (all hardware threads for bodies
+  /// of 8 MB and more, else one), n = exactly n. OnError::Stop always parses on one thread.
+  int threads = 0;
 };
 
 template <typename Rec>
