@@ -95,8 +95,10 @@ void parseBench(benchmark::State& state, const std::string& path) {
     return;
   }
   std::size_t n = 0;
+  ReadOptions opt;
+  opt.threads = static_cast<int>(state.range(0));
   for (auto _ : state) {
-    auto f = parseProduct<Rec>(text, path);
+    auto f = parseProduct<Rec>(text, path, opt);
     n = f.records.size();
     if (!f.ok || f.rejected_count) state.SkipWithError("parse failed");
     benchmark::DoNotOptimize(f.records.data());
@@ -106,6 +108,7 @@ void parseBench(benchmark::State& state, const std::string& path) {
   state.counters["file_MB"] = static_cast<double>(text.size()) / 1e6;
 }
 
+// Threads: state.range(0) (0 = automatic: every hardware thread). Throughput is per wall-clock second.
 void BM_ParseSca1aFullDay(benchmark::State& s) { parseBench<Sca1aRecord>(s, sca1aPath()); }
 void BM_ParseAcc1aFullDay(benchmark::State& s) { parseBench<FlaggedRecord>(s, acc1aPath()); }
 // From disk, including the read into memory.
@@ -124,9 +127,9 @@ void BM_ReadAcc1aFullDayFromFile(benchmark::State& state) {
 
 }  // namespace
 
-BENCHMARK(BM_ParseSca1aFullDay)->Unit(benchmark::kMillisecond)->MinTime(2.0);
-BENCHMARK(BM_ParseAcc1aFullDay)->Unit(benchmark::kMillisecond)->MinTime(2.0);
-BENCHMARK(BM_ReadAcc1aFullDayFromFile)->Unit(benchmark::kMillisecond)->MinTime(2.0);
+BENCHMARK(BM_ParseSca1aFullDay)->Arg(1)->Arg(0)->Unit(benchmark::kMillisecond)->MinTime(2.0)->UseRealTime();
+BENCHMARK(BM_ParseAcc1aFullDay)->Arg(1)->Arg(0)->Unit(benchmark::kMillisecond)->MinTime(2.0)->UseRealTime();
+BENCHMARK(BM_ReadAcc1aFullDayFromFile)->Unit(benchmark::kMillisecond)->MinTime(2.0)->UseRealTime();
 
 int main(int argc, char** argv) {
   bool only = false;
