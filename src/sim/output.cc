@@ -122,11 +122,10 @@ bool Level1Sink::open(const std::string& dir, const Scenario& sc, std::string* e
          gnv_.open(files_[2], io::makeProduct<io::GnvRecord>(io::Product::GNV1B, sat_), error, 4096);
 }
 
-void Level1Sink::head(const HeadSampleOut& s) {
-  if (s.blind) return;  // a blinded head delivers nothing
+io::Sca1aRecord toSca1a(const HeadSampleOut& s, char satellite) {
   io::Sca1aRecord r;
   r.t = s.tag;
-  r.satellite = sat_;
+  r.satellite = satellite;
   r.head = static_cast<std::uint8_t>(s.head);
   r.desig = 'P';
   quatToScalarFirst(s.q_I_Si, r.q);
@@ -136,14 +135,14 @@ void Level1Sink::head(const HeadSampleOut& s) {
   // sca_mode / qualflg bit patterns as in the 2023-06-01 GRACE C sample (11000001 / 11000000).
   r.mode = io::Bits{0xC1, 8};
   r.qualflg = io::Bits{0xC0, 8};
-  sca_.add(r);
+  return r;
 }
 
-void Level1Sink::accel(const AccSampleOut& a) {
+io::FlaggedRecord toAcc1a(const AccSampleOut& a, char satellite) {
   io::FlaggedRecord r;
   r.t = a.tag;
   r.time_ref = 'R';
-  r.satellite = sat_;
+  r.satellite = satellite;
   r.qualflg = io::Bits{0, 8};
   r.prod_flag = io::Bits{(1u << io::acc_bits::kIcuBlock) | 0x3Fu, 32};
   for (int k = 0; k < 3; ++k) {
@@ -151,13 +150,13 @@ void Level1Sink::accel(const AccSampleOut& a) {
     r.value[static_cast<std::size_t>(io::acc_bits::kAngX + k)] = a.ang_A[k];
   }
   r.value[io::acc_bits::kIcuBlock] = 0;
-  acc_.add(r);
+  return r;
 }
 
-void Level1Sink::orbit(const OrbitSampleOut& o) {
+io::GnvRecord toGnv1b(const OrbitSampleOut& o, char satellite) {
   io::GnvRecord g;
   g.t = o.t;
-  g.satellite = sat_;
+  g.satellite = satellite;
   g.coord_ref = 'E';
   for (int k = 0; k < 3; ++k) {
     g.pos[k] = o.r_E[k];
@@ -166,8 +165,17 @@ void Level1Sink::orbit(const OrbitSampleOut& o) {
     g.vel_err[k] = 1e-6;  // m/s
   }
   g.qualflg = io::Bits{0, 8};
-  gnv_.add(g);
+  return g;
 }
+
+void Level1Sink::head(const HeadSampleOut& s) {
+  if (s.blind) return;  // a blinded head delivers nothing
+  sca_.add(toSca1a(s, sat_));
+}
+
+void Level1Sink::accel(const AccSampleOut& a) { acc_.add(toAcc1a(a, sat_)); }
+
+void Level1Sink::orbit(const OrbitSampleOut& o) { gnv_.add(toGnv1b(o, sat_)); }
 
 bool Level1Sink::close(std::string* error) {
   return sca_.close(error) && acc_.close(error) && gnv_.close(error);

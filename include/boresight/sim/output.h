@@ -47,6 +47,11 @@ class ChunkedProductWriter {
 /// "SCA1A_2023-06-01_C_04.txt" for the scenario's start date, satellite and version.
 std::string productFileName(const char* product, const Scenario& sc);
 
+/// The Level-1 records the simulator writes for a sample (also used by tests to compare read-backs).
+io::Sca1aRecord toSca1a(const HeadSampleOut& s, char satellite);
+io::FlaggedRecord toAcc1a(const AccSampleOut& a, char satellite);
+io::GnvRecord toGnv1b(const OrbitSampleOut& o, char satellite);
+
 /// Writes SCA1A (all heads, blinded samples skipped), ACC1A and GNV1B as the simulation runs.
 class Level1Sink : public SimSink {
  public:
