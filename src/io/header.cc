@@ -112,7 +112,7 @@ bool parseHeader(std::string_view text, Header& h, std::size_t* data_offset, std
     if (!trim(line).empty()) break;
   }
   pos = first;
-  h.line_count = 0;
+  --h.line_count;  // leading blank lines count for the data line numbers; the header starts after them
   std::string_view t = trimRight(line);
   if (t == "header:") {
     h.style = HeaderStyle::Yaml;

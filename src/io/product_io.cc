@@ -96,15 +96,44 @@ std::vector<std::string> headerForWrite(const Header& hin, std::size_t records) 
         if (l.rfind("SATELLITE NAME", 0) == 0) l = fixedLine("SATELLITE NAME", std::string("GRACE ") + h.satellite);
     }
   }
+  // The written header tells the truth: every record-count entry the reader would take (any
+  // indentation, any spacing before ':') gets the real count, and one is added when there is none.
   const std::string n = std::to_string(records);
+  bool has_count = false;
+  const bool yaml = !lines.empty() && lines.front().rfind("header:", 0) == 0;
   for (auto& l : lines) {
-    if (l.rfind("    num_records:", 0) == 0) l = "    num_records: " + n;
-    if (l.rfind("NUMBER OF DATA RECORDS", 0) == 0) l = fixedLine("NUMBER OF DATA RECORDS", n);
-    if (l.rfind("FILE FORMAT 0=BINARY 1=ASCII", 0) == 0) l = fixedLine("FILE FORMAT 0=BINARY 1=ASCII", h.binary ? "0" : "1");
+    const std::size_t ind = l.find_first_not_of(" \t");
+    const std::string_view t = ind == std::string::npos ? std::string_view() : std::string_view(l).substr(ind);
+    if (yaml) {
+      if (t.rfind("num_records:", 0) == 0) {
+        l = l.substr(0, ind) + "num_records: " + n;
+        has_count = true;
+      }
+      continue;
+    }
+    const std::size_t colon = t.find(':');
+    if (colon == std::string_view::npos) continue;
+    std::string_view key = t.substr(0, colon);
+    while (!key.empty() && (key.back() == ' ' || key.back() == '\t')) key.remove_suffix(1);
+    if (key == "NUMBER OF DATA RECORDS") {
+      l = fixedLine("NUMBER OF DATA RECORDS", n);
+      has_count = true;
+    } else if (key.rfind("FILE FORMAT", 0) == 0) {
+      l = fixedLine("FILE FORMAT 0=BINARY 1=ASCII", h.binary ? "0" : "1");
+    }
+  }
+  if (!has_count) {
+    if (yaml) {
+      lines.insert(lines.begin() + 1, {"  dimensions:", "    num_records: " + n});
+    } else {
+      std::size_t end = 0;
+      while (end < lines.size() && lines[end].rfind("END OF HEADER", 0) != 0) ++end;
+      lines.insert(lines.begin() + static_cast<std::ptrdiff_t>(end), fixedLine("NUMBER OF DATA RECORDS", n));
+    }
   }
   if (h.binary) {
     bool has_format = false;
-    for (const auto& l : lines) has_format = has_format || l.rfind("FILE FORMAT 0=BINARY 1=ASCII", 0) == 0;
+    for (const auto& l : lines) has_format = has_format || l.rfind("FILE FORMAT 0=BINARY 1=ASCII  : 0", 0) == 0;
     if (!has_format) lines.insert(lines.begin(), fixedLine("FILE FORMAT 0=BINARY 1=ASCII", "0"));
     // Everything after the first END OF HEADER would be taken for records: stop there.
     for (std::size_t i = 0; i < lines.size(); ++i)

@@ -23,7 +23,7 @@ struct Sca1bCodec {
   static Product defaultProduct() { return Product::SCA1B; }
   static bool parse(FieldScanner& s, Record& r, Product) {
     return detail::scanTimeSeconds(s, r.t) && s.ch(r.satellite, "GRACEFO_id") &&
-           s.integerIn(r.sca_id, 0, 127, "sca_id") && s.f64(r.q[0], "quatangle") && s.f64(r.q[1], "quaticoeff") &&
+           s.integerIn(r.sca_id, -128, 127, "sca_id") && s.f64(r.q[0], "quatangle") && s.f64(r.q[1], "quaticoeff") &&
            s.f64(r.q[2], "quatjcoeff") && s.f64(r.q[3], "quatkcoeff") && s.f64(r.qual_rss, "qual_rss") &&
            s.bits(r.qualflg, "qualflg");
   }

@@ -63,7 +63,7 @@ TEST(BadInput, MalformedLinesGiveFileLineReason) {
       {"700000002 C 23 0.5 -0.5 0.5 -0.5 1e-06 00000000 extra", "unexpected extra field"},
       {"7000x0002 C 23 0.5 -0.5 0.5 -0.5 1e-06 00000000", "field 1 (gps_time): not an integer"},
       {"700000002 CC 23 0.5 -0.5 0.5 -0.5 1e-06 00000000", "field 2 (GRACEFO_id): expected one character"},
-      {"700000002 C 999 0.5 -0.5 0.5 -0.5 1e-06 00000000", "field 3 (sca_id): outside [0, 127]"},
+      {"700000002 C 999 0.5 -0.5 0.5 -0.5 1e-06 00000000", "field 3 (sca_id): outside [-128, 127]"},
       {"700000002 C 23 1e999 -0.5 0.5 -0.5 1e-06 00000000", "number out of range"},
       {std::string("700000002 C 23 0.5 -0.5 \x01\xff 0.5 1e-06 00000000"), "not a number"},
   };
@@ -288,4 +288,33 @@ TEST(BadInput, IhkSensorNameTooLongAndHrtWithoutQualflg) {
   EXPECT_EQ(g.records[1].sensorName(), "two words");
   ASSERT_EQ(g.rejected_count, 1u);
   EXPECT_NE(g.rejected[0].reason.find("too long"), std::string::npos) << g.rejected[0].str();
+}
+
+TEST(BadInput, HeaderWithoutRecordCountGetsOneWhenWritten) {
+  for (char sat : {'C', 'A'}) {
+    std::string text = sca1bText(sat, 3, nullptr);
+    const std::string key = sat == 'C' ? "num_records:" : "NUMBER OF DATA RECORDS";
+    std::size_t p = text.find(key);
+    ASSERT_NE(p, std::string::npos);
+    p = text.rfind('\n', p) + 1;
+    text.erase(p, text.find('\n', p) - p + 1);
+    auto f = parseProduct<Sca1bRecord>(text, "SCA1B_x.txt");
+    ASSERT_TRUE(f.ok) << f.error;
+    EXPECT_FALSE(f.header.declared_records.has_value());
+    auto g = parseProduct<Sca1bRecord>(formatProduct(f), "SCA1B_x.txt");
+    ASSERT_TRUE(g.ok) << g.error;
+    ASSERT_TRUE(g.header.declared_records.has_value());
+    EXPECT_EQ(*g.header.declared_records, 3);
+    EXPECT_EQ(g.records, f.records);
+  }
+}
+
+TEST(BadInput, LeadingBlankLinesKeepLineNumbersRight) {
+  std::size_t hl = 0;
+  const std::string good = sca1bText('C', 3, &hl);
+  std::string text = "\n\n" + replaceRecord(good, hl, 2, "bad line");
+  auto f = parseProduct<Sca1bRecord>(text, "SCA1B_x.txt");
+  ASSERT_TRUE(f.ok) << f.error;
+  ASSERT_EQ(f.rejected.size(), 1u);
+  EXPECT_EQ(f.rejected[0].line, hl + 2 + 2);
 }

@@ -1,0 +1,115 @@
+#!/usr/bin/env bash
+# Runs every libFuzzer target of BUILD_DIR for a bounded time and fails if any of them crashes.
+# Usage: test/fuzz/run_fuzzers.sh BUILD_DIR [SECONDS_PER_TARGET=30]
+# BUILD_DIR must have been configured with clang and -DBORESIGHT_BUILD_FUZZ=ON, e.g.
+#   CC=clang CXX=clang++ cmake -S . -B build-fuzz -G Ninja -DBORESIGHT_BUILD_FUZZ=ON -DBORESIGHT_BUILD_BENCH=OFF
+#   ninja -C build-fuzz boresight_fuzzers
+# Seed corpora are made at run time in a temporary folder from the real samples when they are present
+# (../shared/data/real next to the project, or $BORESIGHT_REAL_DATA); nothing is written to the repo.
+set -euo pipefail
+
+build=${1:?usage: run_fuzzers.sh BUILD_DIR [SECONDS_PER_TARGET]}
+secs=${2:-30}
+here=$(cd "$(dirname "$0")" && pwd)
+real=${BORESIGHT_REAL_DATA:-$here/../../../shared/data/real}
+fuzzdir=$build/test/fuzz
+[[ -d $fuzzdir ]] || { echo "no fuzz targets in $fuzzdir (configure with clang and -DBORESIGHT_BUILD_FUZZ=ON)" >&2; exit 2; }
+
+work=$(mktemp -d "${TMPDIR:-/tmp}/boresight-fuzz.XXXXXX")
+trap 'rm -rf "$work"' EXIT
+
+# reader -> product name patterns of the real files that seed it
+declare -A seeds=(
+  [header]="*" [summary]="*" [generic]="KBR1B MAG1B GNV1A GPS1A GPS1B MAS1B TNK1B USO1B ILG1A"
+  [sca1a]="SCA1A" [flagged]="ACC1A ACT1A AHK1A AHK1B" [sca1b]="SCA1B" [acc1b]="ACC1B ACT1B"
+  [gnv]="GNV1B GNI1B" [qsa]="QSA1B QKS1B" [imu]="IMU1A IMU1B" [thr]="THR1A THR1B" [ihk]="IHK1A IHK1B"
+  [hrt]="HRT1A HRT1B" [tim]="TIM1B" [clk]="CLK1A CLK1B"
+)
+
+# mode byte: bit0 stop-on-error, bits1-2 kind (0 whole file, 1 ASCII header + body, 2 binary header + body)
+seed_file() {  # seed_file OUT MODE_BYTE_OCTAL FILE [skip_header]
+  local out=$1 mode=$2 src=$3
+  { printf "\\$mode"; cat "$src"; } > "$out"
+}
+
+make_corpus() {
+  local -
+  set -f  # the patterns below are for find, not for the shell
+  local reader=$1 dir=$work/corpus_$reader
+  mkdir -p "$dir"
+  printf '\000' > "$dir/empty"
+  [[ -d $real ]] || return 0
+  local n=0 pat f
+  for pat in ${seeds[$reader]}; do
+    while IFS= read -r -d '' f; do
+      n=$((n + 1))
+      seed_file "$dir/whole_$n" 000 "$f"
+      if [[ $reader != header && $reader != summary && $reader != generic ]]; then
+        # records only, behind the target's own synthesised header (kind 1)
+        { printf '\002'; awk 'body{print} /# End of YAML header|END OF HEADER/{body=1}' "$f"; } > "$dir/body_$n"
+      fi
+    done < <(find "$real" -type f \( -name "${pat}_*" -o -name "${pat}" \) -print0 2>/dev/null | sort -z | head -z -n 60)
+  done
+  # Binary records for the binary readers (kind 2), converted from the real ASCII with python3 when present.
+  if command -v python3 >/dev/null && [[ $reader == sca1b || $reader == acc1b || $reader == gnv ]]; then
+    python3 - "$reader" "$real" "$dir" <<'PY'
+import struct, sys, glob, os
+reader, real, out = sys.argv[1:4]
+pats = {"sca1b": ["SCA1B"], "acc1b": ["ACC1B", "ACT1B"], "gnv": ["GNV1B", "GNI1B"]}[reader]
+k = 0
+for pat in pats:
+    for path in sorted(glob.glob(os.path.join(real, "**", pat + "_*"), recursive=True)):
+        if path.endswith(".rpt"):
+            continue
+        body, data = False, b""
+        for line in open(path, errors="replace"):
+            if body:
+                t = line.split()
+                try:
+                    if reader == "sca1b":
+                        data += struct.pack(">icb5dB", int(t[0]), t[1].encode(), int(t[2]), *map(float, t[3:8]), int(t[8], 2))
+                    elif reader == "acc1b":
+                        data += struct.pack(">ic9dB", int(t[0]), t[1].encode(), *map(float, t[2:11]), int(t[11], 2))
+                    else:
+                        data += struct.pack(">icc12dB", int(t[0]), t[1].encode(), t[2].encode(), *map(float, t[3:15]), int(t[15], 2))
+                except (ValueError, IndexError, struct.error):
+                    pass
+            if "End of YAML header" in line or line.startswith("END OF HEADER"):
+                body = True
+        k += 1
+        with open(os.path.join(out, "binary_%d" % k), "wb") as f:
+            f.write(b"\x04" + data[: 40 * 103])
+PY
+  fi
+}
+
+status=0
+summary=()
+for exe in "$fuzzdir"/fuzz_*; do
+  [[ -x $exe && -f $exe ]] || continue
+  name=$(basename "$exe")
+  reader=${name#fuzz_}
+  make_corpus "$reader"
+  log=$work/$name.log
+  mkdir -p "$work/artifacts_$reader"
+  echo "== $name: ${secs}s, seeds: $(ls "$work/corpus_$reader" | wc -l)"
+  if "$exe" -max_total_time="$secs" -timeout=10 -rss_limit_mb=2048 -max_len=65536 -print_final_stats=1 \
+      -artifact_prefix="$work/artifacts_$reader/" "$work/corpus_$reader" >"$log" 2>&1; then
+    execs=$(grep -Eo 'stat::number_of_executed_units: *[0-9]+' "$log" | grep -Eo '[0-9]+$' || echo '?')
+    summary+=("$name ok: $execs executions in ${secs}s")
+  else
+    status=1
+    summary+=("$name CRASHED")
+    echo "---- $name failed; last lines of its log:"
+    tail -n 40 "$log"
+    for a in "$work/artifacts_$reader"/*; do
+      [[ -f $a ]] || continue
+      mkdir -p "$build/fuzz-artifacts"
+      cp "$a" "$build/fuzz-artifacts/${reader}_$(basename "$a")"
+      echo "reproducer kept: $build/fuzz-artifacts/${reader}_$(basename "$a")"
+    done
+  fi
+done
+printf '%s\n' "${summary[@]}"
+[[ ${#summary[@]} -gt 0 ]] || { echo "no fuzz executables found in $fuzzdir" >&2; exit 2; }
+exit $status
