@@ -135,4 +135,78 @@ LcmLogReader::Kind LcmLogReader::next(HeadSample& head, AccelSample& accel) {
   return Kind::Skipped;
 }
 
+HeadSample headFromSca1a(const Sca1aRecord& r, std::int32_t seq) {
+  HeadSample h;
+  h.utime = r.t;
+  h.head_id = r.head;
+  for (int i = 0; i < 4; ++i) h.q[i] = r.q[i];
+  h.star_count = r.nstars;
+  h.flags = 1;
+  h.seq = seq;
+  return h;
+}
+
+AccelSample accelFromAcc1a(const FlaggedRecord& r, std::int32_t seq) {
+  AccelSample s;
+  s.utime = r.t;
+  s.flags = 0;
+  if (r.has(acc_bits::kAngX) && r.has(acc_bits::kAngY) && r.has(acc_bits::kAngZ)) {
+    for (int i = 0; i < 3; ++i) s.ang_accel[i] = r.value[static_cast<std::size_t>(acc_bits::kAngX + i)];
+    s.flags |= 1;
+  }
+  if (r.has(acc_bits::kLinX) && r.has(acc_bits::kLinY) && r.has(acc_bits::kLinZ)) {
+    for (int i = 0; i < 3; ++i) s.lin_accel[i] = r.value[static_cast<std::size_t>(acc_bits::kLinX + i)];
+    s.flags |= 2;
+  }
+  s.seq = seq;
+  return s;
+}
+
+bool readLcmAsLevel1(const std::string& path, char satellite, bool drop_invalid, LcmAsLevel1& out,
+                     std::string* error) {
+  out = LcmAsLevel1{};
+  LcmLogReader r;
+  if (!r.open(path, error)) return false;
+  HeadSample h;
+  AccelSample s;
+  for (;;) {
+    auto k = r.next(h, s);
+    if (k == LcmLogReader::Kind::End) break;
+    if (k == LcmLogReader::Kind::Head) {
+      if (!(h.flags & 1)) {
+        ++out.invalid_heads;
+        if (drop_invalid) continue;
+      }
+      Sca1aRecord rec;
+      rec.t = h.utime;
+      rec.satellite = satellite;
+      rec.head = static_cast<std::uint8_t>(h.head_id);
+      for (int i = 0; i < 4; ++i) rec.q[i] = h.q[i];
+      rec.nstars = h.star_count;
+      out.sca.push_back(rec);
+    } else if (k == LcmLogReader::Kind::Accel) {
+      if (!(s.flags & 1)) ++out.invalid_accel;
+      FlaggedRecord rec;
+      rec.t = s.utime;
+      rec.time_ref = 'R';
+      rec.satellite = satellite;
+      rec.prod_flag = Bits{0, 32};
+      if (s.flags & 2) {
+        rec.prod_flag.value |= 0x7u;
+        for (int i = 0; i < 3; ++i) rec.value[static_cast<std::size_t>(acc_bits::kLinX + i)] = s.lin_accel[i];
+      }
+      if (s.flags & 1) {
+        rec.prod_flag.value |= 0x38u;
+        for (int i = 0; i < 3; ++i) rec.value[static_cast<std::size_t>(acc_bits::kAngX + i)] = s.ang_accel[i];
+      } else if (drop_invalid) {
+        continue;
+      }
+      out.acc.push_back(rec);
+    }
+  }
+  out.unknown_channel = r.unknownChannel();
+  out.decode_failures = r.decodeFailures();
+  return true;
+}
+
 }  // namespace boresight::io

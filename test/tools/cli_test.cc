@@ -181,3 +181,24 @@ TEST(Cli, ProcessConfigErrorsNameFileAndKey) {
   EXPECT_EQ(r.status, 1);
   EXPECT_NE(r.out.find(dir + "/bad.yaml: heads.list[0].sigma_roll_arcsec: must be > 0"), std::string::npos) << r.out;
 }
+
+TEST(CliReal, ProcessGivesTheSameRowsFromAnLcmLogAsFromLevel1) {
+  BORESIGHT_REQUIRE_REAL_DATA();
+  std::string dir = tempDir();
+  const std::string l1a = realFile("gracefo/2023-06-01_L1A/");
+  const std::string qsa = realFile("gracefo/static_2018-05-22/QSA1B_2018-05-22_C_04.txt");
+  const std::string cfg = " --config " BORESIGHT_SOURCE_DIR "/config/gracefo.yaml ";
+  ASSERT_EQ(run("convert " + l1a + "SCA1A_2023-06-01_C_04.txt " + l1a + "ACC1A_2023-06-01_C_04.txt --out " + dir +
+                "/x.lcm").status, 0);
+  CliRun a = run("process" + cfg + l1a + "SCA1A_2023-06-01_C_04.txt " + l1a + "ACC1A_2023-06-01_C_04.txt " + qsa +
+                 " --out " + dir + "/a.csv");
+  CliRun b = run("process" + cfg + dir + "/x.lcm " + qsa + " --out " + dir + "/b.csv");
+  ASSERT_EQ(a.status, 0) << a.out;
+  ASSERT_EQ(b.status, 0) << b.out;
+  std::ifstream fa(dir + "/a.csv"), fb(dir + "/b.csv");
+  std::stringstream sa, sb;
+  sa << fa.rdbuf();
+  sb << fb.rdbuf();
+  EXPECT_GT(sa.str().size(), 1000u);
+  EXPECT_EQ(sa.str(), sb.str());
+}

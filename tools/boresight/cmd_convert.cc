@@ -58,16 +58,7 @@ int toLcm(const Args& a) {
         std::fprintf(stderr, "%s\n", p.error.c_str());
         return 1;
       }
-      for (const auto& r : p.records) {
-        io::HeadSample h;
-        h.utime = r.t;
-        h.head_id = r.head;
-        for (int i = 0; i < 4; ++i) h.q[i] = r.q[i];
-        h.star_count = r.nstars;
-        h.flags = 1;
-        h.seq = head_seq[r.head]++;
-        heads.push_back(h);
-      }
+      for (const auto& r : p.records) heads.push_back(io::headFromSca1a(r, head_seq[r.head]++));
       std::printf("%s: %zu SCA1A records, %zu rejected\n", f.c_str(), p.records.size(), p.rejected_count);
       for (std::size_t i = 0; i < p.rejected.size() && i < 5; ++i) std::printf("    rejected %s\n", p.rejected[i].str().c_str());
     } else if (name == "ACC1A") {
@@ -78,21 +69,8 @@ int toLcm(const Args& a) {
       }
       std::size_t without_ang = 0;
       for (const auto& r : p.records) {
-        io::AccelSample s;
-        s.utime = r.t;
-        s.flags = 0;
-        if (r.has(io::acc_bits::kAngX) && r.has(io::acc_bits::kAngY) && r.has(io::acc_bits::kAngZ)) {
-          for (int i = 0; i < 3; ++i) s.ang_accel[i] = r.value[static_cast<std::size_t>(io::acc_bits::kAngX + i)];
-          s.flags |= 1;
-        } else {
-          ++without_ang;
-        }
-        if (r.has(io::acc_bits::kLinX) && r.has(io::acc_bits::kLinY) && r.has(io::acc_bits::kLinZ)) {
-          for (int i = 0; i < 3; ++i) s.lin_accel[i] = r.value[static_cast<std::size_t>(io::acc_bits::kLinX + i)];
-          s.flags |= 2;
-        }
-        s.seq = acc_seq++;
-        accels.push_back(s);
+        accels.push_back(io::accelFromAcc1a(r, acc_seq++));
+        without_ang += (accels.back().flags & 1) ? 0 : 1;
       }
       std::printf("%s: %zu ACC1A records (%zu without angular acceleration: flagged invalid), %zu rejected\n",
                   f.c_str(), p.records.size(), without_ang, p.rejected_count);
@@ -142,47 +120,16 @@ int toLevel1(const Args& a) {
     return 2;
   }
   const char sat = sat_s[0];
-  io::LcmLogReader r;
+  io::LcmAsLevel1 in;
   std::string err;
-  if (!r.open(log, &err)) {
+  if (!io::readLcmAsLevel1(log, sat, false, in, &err)) {
     std::fprintf(stderr, "boresight convert: %s\n", err.c_str());
     return 1;
   }
   auto sca = io::makeProduct<io::Sca1aRecord>(io::Product::SCA1A, sat);
   auto acc = io::makeProduct<io::FlaggedRecord>(io::Product::ACC1A, sat);
-  io::HeadSample h;
-  io::AccelSample s;
-  std::size_t invalid_acc = 0;
-  for (;;) {
-    auto k = r.next(h, s);
-    if (k == io::LcmLogReader::Kind::End) break;
-    if (k == io::LcmLogReader::Kind::Head) {
-      io::Sca1aRecord rec;
-      rec.t = h.utime;
-      rec.satellite = sat;
-      rec.head = static_cast<std::uint8_t>(h.head_id);
-      for (int i = 0; i < 4; ++i) rec.q[i] = h.q[i];
-      rec.nstars = h.star_count;
-      sca.records.push_back(rec);
-    } else if (k == io::LcmLogReader::Kind::Accel) {
-      io::FlaggedRecord rec;
-      rec.t = s.utime;
-      rec.time_ref = 'R';
-      rec.satellite = sat;
-      rec.prod_flag = io::Bits{0, 32};
-      if (s.flags & 2) {
-        rec.prod_flag.value |= 0x7u;
-        for (int i = 0; i < 3; ++i) rec.value[static_cast<std::size_t>(i)] = s.lin_accel[i];
-      }
-      if (s.flags & 1) {
-        rec.prod_flag.value |= 0x38u;
-        for (int i = 0; i < 3; ++i) rec.value[static_cast<std::size_t>(3 + i)] = s.ang_accel[i];
-      } else {
-        ++invalid_acc;
-      }
-      acc.records.push_back(rec);
-    }
-  }
+  sca.records = std::move(in.sca);
+  acc.records = std::move(in.acc);
   ::mkdir(dir.c_str(), 0777);
   int status = 0;
   auto write = [&](const auto& prod, const char* name) {
@@ -198,10 +145,14 @@ int toLevel1(const Args& a) {
   };
   write(sca, "SCA1A");
   write(acc, "ACC1A");
-  if (r.unknownChannel() || r.decodeFailures())
+  if (in.unknown_channel || in.decode_failures)
     std::printf("%s: %llu events on other channels and %llu undecodable messages skipped\n", log.c_str(),
-                static_cast<unsigned long long>(r.unknownChannel()), static_cast<unsigned long long>(r.decodeFailures()));
-  if (invalid_acc) std::printf("%zu accelerometer samples had no valid angular acceleration\n", invalid_acc);
+                static_cast<unsigned long long>(in.unknown_channel), static_cast<unsigned long long>(in.decode_failures));
+  if (in.invalid_accel)
+    std::printf("%llu accelerometer samples had no valid angular acceleration\n",
+                static_cast<unsigned long long>(in.invalid_accel));
+  if (in.invalid_heads)
+    std::printf("%llu head samples were flagged invalid (kept)\n", static_cast<unsigned long long>(in.invalid_heads));
   return status;
 }
 

@@ -55,39 +55,20 @@ bool readInputs(const Args& a, Input& in) {
   if (a.has("--strict")) opt.on_error = io::OnError::Stop;
   for (const auto& f : a.positional()) {
     if (f.size() > 4 && f.substr(f.size() - 4) == ".lcm") {
-      io::LcmLogReader r;
+      io::LcmAsLevel1 l;
       std::string err;
-      if (!r.open(f, &err)) {
+      if (!io::readLcmAsLevel1(f, 'C', true, l, &err)) {
         std::fprintf(stderr, "boresight process: %s\n", err.c_str());
         return false;
       }
-      io::HeadSample h;
-      io::AccelSample s;
-      for (;;) {
-        auto k = r.next(h, s);
-        if (k == io::LcmLogReader::Kind::End) break;
-        if (k == io::LcmLogReader::Kind::Head) {
-          io::Sca1aRecord rec;
-          rec.t = h.utime;
-          rec.head = static_cast<std::uint8_t>(h.head_id);
-          for (int i = 0; i < 4; ++i) rec.q[i] = h.q[i];
-          rec.nstars = h.star_count;
-          if (h.flags & 1) in.sca.push_back(rec);
-          else ++in.rejected_lines;
-        } else if (k == io::LcmLogReader::Kind::Accel) {
-          io::FlaggedRecord rec;
-          rec.t = s.utime;
-          if (s.flags & 1) {
-            rec.prod_flag.value = 0x38u;
-            for (int i = 0; i < 3; ++i) rec.value[static_cast<std::size_t>(3 + i)] = s.ang_accel[i];
-            in.acc.push_back(rec);
-          } else {
-            ++in.rejected_lines;
-          }
-        }
-      }
-      std::printf("%s: LCM log, %llu messages on other channels, %llu undecodable\n", f.c_str(),
-                  static_cast<unsigned long long>(r.unknownChannel()), static_cast<unsigned long long>(r.decodeFailures()));
+      in.sca.insert(in.sca.end(), l.sca.begin(), l.sca.end());
+      in.acc.insert(in.acc.end(), l.acc.begin(), l.acc.end());
+      in.rejected_lines += l.invalid_heads + l.invalid_accel + l.decode_failures;
+      std::printf("%s: LCM log, %zu head and %zu accelerometer samples; invalid: %llu head, %llu accelerometer; "
+                  "%llu on other channels, %llu undecodable\n",
+                  f.c_str(), l.sca.size(), l.acc.size(), static_cast<unsigned long long>(l.invalid_heads),
+                  static_cast<unsigned long long>(l.invalid_accel), static_cast<unsigned long long>(l.unknown_channel),
+                  static_cast<unsigned long long>(l.decode_failures));
       continue;
     }
     std::string name = io::productNameFromPath(f);

@@ -6,10 +6,12 @@
 #pragma once
 
 #include <boresight/core/conventions.h>
+#include <boresight/io/level1.h>
 
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <vector>
 
 namespace boresight::io {
 
@@ -71,5 +73,24 @@ class LcmLogReader {
   std::unique_ptr<Impl> impl_;
   std::uint64_t unknown_channel_ = 0, decode_failures_ = 0;
 };
+
+// ---- Level-1 <-> message conversions (used by `boresight convert` and `boresight process`) ----
+
+/// An SCA1A record as a head message (valid; nstars as star count).
+HeadSample headFromSca1a(const Sca1aRecord& r, std::int32_t seq);
+/// An ACC1A record as an accelerometer message; the validity bits say which triples were present.
+AccelSample accelFromAcc1a(const FlaggedRecord& r, std::int32_t seq);
+
+/// The contents of a log as Level-1 records. The fields the messages do not carry (SCA1A nlocks,
+/// sca_confid, sca_mode, qualflg; ACC1A ICU block number) are 0; absent triples are absent bits.
+struct LcmAsLevel1 {
+  std::vector<Sca1aRecord> sca;
+  std::vector<FlaggedRecord> acc;
+  std::uint64_t invalid_heads = 0;   ///< head messages without the valid bit (dropped if asked)
+  std::uint64_t invalid_accel = 0;   ///< accelerometer messages without valid angular acceleration
+  std::uint64_t unknown_channel = 0, decode_failures = 0;
+};
+bool readLcmAsLevel1(const std::string& path, char satellite, bool drop_invalid, LcmAsLevel1& out,
+                     std::string* error);
 
 }  // namespace boresight::io
