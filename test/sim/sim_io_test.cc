@@ -1,0 +1,226 @@
+// Files written by the simulator read back through the io readers with identical values; runs are
+// deterministic for a seed; scenarios are validated with FILE:LINE: key 'k': reason messages.
+#include "sim_test_util.h"
+
+#include <boresight/io/lcm_log.h>
+#include <boresight/sim/output.h>
+
+#include <yaml-cpp/yaml.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+namespace boresight {
+namespace {
+
+namespace fs = std::filesystem;
+using simtest::gracefo;
+
+std::string slurp(const std::string& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+struct Written {
+  fs::path dir;
+  simtest::Capture cap;
+  std::vector<std::string> files;
+  std::unique_ptr<sim::Simulator> sim;
+};
+
+/// The simulate pipeline (as the command runs it) with a capture sink alongside.
+std::unique_ptr<Written> simulateTo(const sim::Scenario& sc, std::uint64_t seed, double duration, const std::string& name,
+                                    std::size_t chunk_note = 0) {
+  (void)chunk_note;
+  auto w = std::make_unique<Written>();
+  w->dir = fs::temp_directory_path() / ("boresight_sim_io_" + name);
+  fs::remove_all(w->dir);
+  fs::create_directories(w->dir);
+  w->sim = std::make_unique<sim::Simulator>();
+  std::string err;
+  EXPECT_TRUE(w->sim->init(sc, seed, duration, &err)) << err;
+  sim::Level1Sink l1;
+  sim::LcmSink log;
+  sim::TeeSink tee;
+  EXPECT_TRUE(l1.open(w->dir.string(), sc, &err)) << err;
+  EXPECT_TRUE(log.open((w->dir / "sim.lcmlog").string(), &err)) << err;
+  tee.add(&l1);
+  tee.add(&log);
+  tee.add(&w->cap);
+  w->sim->run(tee);
+  EXPECT_TRUE(l1.close(&err)) << err;
+  EXPECT_TRUE(log.close(&err)) << err;
+  w->files = l1.files();
+  const std::string qsa = (w->dir / sim::productFileName("QSA1B", sc)).string();
+  EXPECT_TRUE(sim::writeQsa1b(qsa, *w->sim, &err)) << err;
+  w->files.push_back(qsa);
+  EXPECT_TRUE(sim::writeTruthYaml((w->dir / "truth.yaml").string(), *w->sim, {}, w->files, &err)) << err;
+  return w;
+}
+
+TEST(SimIo, Level1FilesAndLcmLogReadBackIdentical) {
+  auto sc = simtest::withEffects(gracefo(), {"sign_flips:sensor=1,rate=0.05", "outliers:sensor=2,rate=0.01"});
+  // 3600 s: more than one 16384-record chunk of SCA1A and ACC1A, so chunk joins are exercised.
+  auto w = simulateTo(sc, 5, 3600, "roundtrip");
+  const char sat = sc.satellite;
+
+  const auto sca = io::readProduct<io::Sca1aRecord>(w->files[0]);
+  ASSERT_TRUE(sca.ok) << sca.error;
+  EXPECT_EQ(sca.rejected_count, 0u);
+  std::vector<io::Sca1aRecord> expect_sca;
+  for (const auto& h : w->cap.heads)
+    if (!h.blind) expect_sca.push_back(sim::toSca1a(h, sat));
+  ASSERT_EQ(sca.records.size(), expect_sca.size());
+  ASSERT_GT(sca.records.size(), 16384u);
+  for (std::size_t i = 0; i < expect_sca.size(); ++i) ASSERT_TRUE(sca.records[i] == expect_sca[i]) << "SCA1A record " << i;
+  ASSERT_TRUE(sca.header.declared_records.has_value());
+  EXPECT_EQ(*sca.header.declared_records, static_cast<std::int64_t>(expect_sca.size()));
+  EXPECT_EQ(sca.header.satellite, sat);
+
+  const auto acc = io::readProduct<io::FlaggedRecord>(w->files[1]);
+  ASSERT_TRUE(acc.ok) << acc.error;
+  EXPECT_EQ(acc.rejected_count, 0u);
+  ASSERT_EQ(acc.records.size(), w->cap.acc.size());
+  ASSERT_GT(acc.records.size(), 16384u);
+  for (std::size_t i = 0; i < acc.records.size(); ++i)
+    ASSERT_TRUE(acc.records[i] == sim::toAcc1a(w->cap.acc[i], sat)) << "ACC1A record " << i;
+  EXPECT_EQ(*acc.header.declared_records, static_cast<std::int64_t>(acc.records.size()));
+  // The angular acceleration columns carry the simulated values bit for bit.
+  EXPECT_EQ(acc.records[100].value[io::acc_bits::kAngY], w->cap.acc[100].ang_A.y());
+
+  const auto gnv = io::readProduct<io::GnvRecord>(w->files[2]);
+  ASSERT_TRUE(gnv.ok) << gnv.error;
+  ASSERT_EQ(gnv.records.size(), w->cap.orb.size());
+  ASSERT_EQ(gnv.records.size(), 3600u);
+  for (std::size_t i = 0; i < gnv.records.size(); ++i)
+    ASSERT_TRUE(gnv.records[i] == sim::toGnv1b(w->cap.orb[i], sat)) << "GNV1B record " << i;
+
+  const auto qsa = io::readProduct<io::QsaRecord>(w->files[3]);
+  ASSERT_TRUE(qsa.ok) << qsa.error;
+  ASSERT_EQ(qsa.records.size(), 3u);
+  for (std::size_t i = 0; i < 3; ++i) {
+    double q[4];
+    quatToScalarFirst(sc.heads[i].q_Si_B_nominal, q);
+    EXPECT_EQ(qsa.records[i].sensor, sc.heads[i].id);
+    for (int k = 0; k < 4; ++k) EXPECT_EQ(qsa.records[i].q[k], q[k]);
+  }
+
+  // LCM log: the same samples in the same order, values bit for bit.
+  io::LcmLogReader rd;
+  std::string err;
+  ASSERT_TRUE(rd.open((w->dir / "sim.lcmlog").string(), &err)) << err;
+  io::HeadSample hs;
+  io::AccelSample as;
+  std::size_t ih = 0, ia = 0;
+  std::vector<const sim::HeadSampleOut*> delivered;
+  for (const auto& h : w->cap.heads)
+    if (!h.blind) delivered.push_back(&h);
+  for (;;) {
+    const auto k = rd.next(hs, as);
+    if (k == io::LcmLogReader::Kind::End) break;
+    ASSERT_NE(k, io::LcmLogReader::Kind::Skipped);
+    if (k == io::LcmLogReader::Kind::Head) {
+      ASSERT_LT(ih, delivered.size());
+      const auto& e = *delivered[ih++];
+      EXPECT_EQ(hs.utime, e.tag);
+      EXPECT_EQ(hs.head_id, e.head);
+      double q[4];
+      quatToScalarFirst(e.q_I_Si, q);
+      for (int j = 0; j < 4; ++j) ASSERT_EQ(hs.q[j], q[j]);
+      EXPECT_EQ(hs.star_count, e.nstars);
+    } else {
+      ASSERT_LT(ia, w->cap.acc.size());
+      const auto& e = w->cap.acc[ia++];
+      EXPECT_EQ(as.utime, e.tag);
+      for (int j = 0; j < 3; ++j) ASSERT_EQ(as.ang_accel[j], e.ang_A[j]);
+    }
+  }
+  EXPECT_EQ(ih, delivered.size());
+  EXPECT_EQ(ia, w->cap.acc.size());
+
+  // truth.yaml: the true mounting of each head and the injected effects.
+  const YAML::Node t = YAML::LoadFile((w->dir / "truth.yaml").string());
+  EXPECT_EQ(t["seed"].as<std::uint64_t>(), 5u);
+  ASSERT_EQ(t["heads"].size(), 3u);
+  for (std::size_t i = 0; i < 3; ++i) {
+    double q[4];
+    quatToScalarFirst(w->sim->heads()[i].qSiBTrue(), q);
+    for (std::size_t k = 0; k < 4; ++k) EXPECT_EQ(t["heads"][i]["q_Si_B_true"][k].as<double>(), q[k]);
+    EXPECT_NEAR(t["heads"][i]["mounting_error_arcsec"][2].as<double>(), sc.heads[i].mounting_error_rad.z() * kArcsecPerRad, 1e-9);
+  }
+  ASSERT_EQ(t["effects"].size(), 2u);
+  EXPECT_EQ(t["effects"][0]["name"].as<std::string>(), "sign_flips");
+  EXPECT_EQ(t["effects"][0]["rate"].as<double>(), 0.05);
+  EXPECT_EQ(t["heads"][0]["sign_flips"].as<std::uint64_t>(), w->sim->stats().head_sign_flips[0]);
+  fs::remove_all(w->dir);
+}
+
+TEST(SimIo, SameSeedSameBytesOtherSeedOtherBytes) {
+  const auto sc = gracefo();
+  auto a = simulateTo(sc, 77, 300, "det_a"), b = simulateTo(sc, 77, 300, "det_b"), c = simulateTo(sc, 78, 300, "det_c");
+  for (std::size_t i = 0; i < a->files.size(); ++i) {
+    const auto fa = slurp(a->files[i]), fb = slurp(b->files[i]);
+    EXPECT_FALSE(fa.empty());
+    EXPECT_EQ(fa, fb) << a->files[i];
+  }
+  EXPECT_EQ(slurp((a->dir / "sim.lcmlog").string()), slurp((b->dir / "sim.lcmlog").string()));
+  EXPECT_NE(slurp(a->files[0]), slurp(c->files[0]));
+  for (auto* w : {a.get(), b.get(), c.get()}) fs::remove_all(w->dir);
+}
+
+std::string parseError(const std::string& yaml) {
+  sim::Scenario sc;
+  std::string err;
+  EXPECT_FALSE(sim::parseScenario(yaml, "bad.yaml", simtest::sourceDir() + "/config", sc, &err)) << yaml;
+  return err;
+}
+
+TEST(SimIo, ScenarioErrorsNameFileLineKeyAndReason) {
+  const std::string base = slurp(simtest::sourceDir() + "/config/sim_gracefo.yaml");
+  sim::Scenario ok;
+  std::string err;
+  ASSERT_TRUE(sim::parseScenario(base, "good.yaml", simtest::sourceDir() + "/config", ok, &err)) << err;
+  EXPECT_EQ(ok.heads.size(), 3u);
+  EXPECT_NEAR(ok.orbit.altitude_m, 490e3, 1e-6);
+  EXPECT_NEAR(ok.heads[0].noise_about_rad * kArcsecPerRad, 48, 1e-9);
+  EXPECT_EQ(ok.acc.C_A_B, accToBodyDefault().transpose());
+
+  auto replace = [&](const std::string& from, const std::string& to) {
+    std::string s = base;
+    const auto p = s.find(from);
+    EXPECT_NE(p, std::string::npos) << from;
+    return s.replace(p, from.size(), to);
+  };
+  std::string e = parseError(replace("  altitude_km: 490", "  altitude_km: high"));
+  EXPECT_NE(e.find("bad.yaml:"), std::string::npos) << e;
+  EXPECT_NE(e.find("key 'orbit.altitude_km': expected a number"), std::string::npos) << e;
+  e = parseError(replace("  inclination_deg: 89.0", "  inclination_deg: 200"));
+  EXPECT_NE(e.find("key 'orbit.inclination_deg': value 200 outside [0, 180]"), std::string::npos) << e;
+  e = parseError(replace("  altitude_km: 490", "  altitude_kn: 490"));
+  EXPECT_NE(e.find("key 'orbit.altitude_kn': unknown key"), std::string::npos) << e;
+  e = parseError(replace("  noise_cross_arcsec: 6 ", "  noise_cross_arcsec: [6] "));
+  EXPECT_NE(e.find("key 'head_defaults.noise_cross_arcsec'"), std::string::npos) << e;
+  e = parseError(replace("effects: []", "effects:\n  - {name: thermal_periodic, sensor: 2, harmonic: 0}"));
+  EXPECT_NE(e.find("effects[0]: effect thermal_periodic: key 'harmonic'"), std::string::npos) << e;
+  e = parseError(replace("effects: []", "effects:\n  - {name: step, sensor: 5, at_s: 3}"));
+  EXPECT_NE(e.find("no head 5"), std::string::npos) << e;
+  e = parseError(replace("    - [0, 1, 0]", "    - [0, 2, 0]"));
+  EXPECT_NE(e.find("key 'accelerometer.C_A_B': expected a 3x3 proper rotation"), std::string::npos) << e;
+  e = parseError(replace("  - id: 2", "  - id: 1"));
+  EXPECT_NE(e.find("duplicate head id"), std::string::npos) << e;
+  e = parseError(replace("start: \"2023-06-01T00:00:00\"", "start: \"2023-13-01\""));
+  EXPECT_NE(e.find("key 'start'"), std::string::npos) << e;
+  e = parseError("orbit: [1, 2\n");
+  EXPECT_NE(e.find("YAML syntax"), std::string::npos) << e;
+  // Line numbers point at the offending line.
+  const std::string bad = replace("  altitude_km: 490", "  altitude_km: high");
+  std::size_t line = 1;
+  for (std::size_t i = 0; i < bad.find("altitude_km: high"); ++i) line += bad[i] == '\n';
+  EXPECT_NE(parseError(bad).find("bad.yaml:" + std::to_string(line) + ":"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace boresight
