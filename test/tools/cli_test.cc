@@ -5,6 +5,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
@@ -47,7 +48,7 @@ std::string tempDir() {
 TEST(Cli, HelpForEveryCommand) {
   CliRun top = run("--help");
   EXPECT_EQ(top.status, 0);
-  for (const char* cmd : {"inspect", "convert", "process", "simulate"}) {
+  for (const char* cmd : {"inspect", "convert", "process", "simulate", "plot"}) {
     if (top.out.find(std::string("  ") + cmd + " ") == std::string::npos) continue;  // not built
     CliRun r = run(std::string(cmd) + " --help");
     EXPECT_EQ(r.status, 0) << cmd;
@@ -201,4 +202,27 @@ TEST(CliReal, ProcessGivesTheSameRowsFromAnLcmLogAsFromLevel1) {
   sb << fb.rdbuf();
   EXPECT_GT(sa.str().size(), 1000u);
   EXPECT_EQ(sa.str(), sb.str());
+}
+
+TEST(Cli, PlotDrawsColumnsAndNamesMissingOnes) {
+  std::string dir = tempDir();
+  {
+    std::ofstream f(dir + "/t.csv");
+    f << "time_s,a,b\n";
+    for (int i = 0; i < 50; ++i) f << 100 + i << "," << std::sin(i * 0.1) << "," << (i % 10 == 0 ? "" : "0.5") << "\n";
+  }
+  CliRun r = run("plot " + dir + "/t.csv --y a,b --relative-x --out " + dir + "/t.svg");
+  ASSERT_EQ(r.status, 0) << r.out;
+  std::ifstream s(dir + "/t.svg");
+  std::stringstream ss;
+  ss << s.rdbuf();
+  const std::string svg = ss.str();
+  EXPECT_NE(svg.find("<svg"), std::string::npos);
+  // Series b has a gap every ten rows: its path restarts (several 'M' moves).
+  std::size_t paths = 0, pos = 0;
+  while ((pos = svg.find("<path", pos)) != std::string::npos) ++paths, ++pos;
+  EXPECT_EQ(paths, 2u);
+  CliRun bad = run("plot " + dir + "/t.csv --y nope --out " + dir + "/u.svg");
+  EXPECT_EQ(bad.status, 1);
+  EXPECT_NE(bad.out.find("no column 'nope'"), std::string::npos) << bad.out;
 }

@@ -8,5 +8,6 @@ int runInspect(int argc, char** argv);
 int runConvert(int argc, char** argv);
 int runProcess(int argc, char** argv);
 int runSimulate(int argc, char** argv);
+int runPlot(int argc, char** argv);
 
 }  // namespace boresight::cli

@@ -21,6 +21,7 @@ const Command kCommands[] = {
 #ifdef BORESIGHT_HAVE_PROCESS
     {"process", "run the real-time core over Level-1 files or an LCM log and write a CSV", boresight::cli::runProcess},
 #endif
+    {"plot", "line plots of CSV columns (e.g. process output) as SVG", boresight::cli::runPlot},
 #ifdef BORESIGHT_HAVE_SIMULATE
     {"simulate", "simulate real-format telemetry with known truth and injected effects", boresight::cli::runSimulate},
 #endif
