@@ -49,7 +49,7 @@ Status HeadFusion::step(const ValidHeads& in) {
     const auto u = static_cast<std::size_t>(k);
     q_I_B[u] = in.q_I_Si[u] * q_Si_B_[u];
     const double sc = in.sigma_scale[u];
-    W[u] = W_B_[u] / (sc * sc);
+    W[u] = (sc == 1.0) ? W_B_[u] : Mat3(W_B_[u] / (sc * sc));
     W_sum += W[u];
     if (ref < 0) ref = k;
     ++used;
@@ -63,10 +63,22 @@ Status HeadFusion::step(const ValidHeads& in) {
     health_.record(Status::kNumericalFailure);
     return Status::kNumericalFailure;
   }
-  // Gauss-Newton on sum_i |Log(Exp(-x) q^-1 q_i)|^2_{W_i}, exact Jacobian, started at the first head;
-  // two steps reach the optimum to third order in the head errors.
+  // Weighted least squares on sum_i |Log(Exp(-x) q^-1 q_i)|^2_{W_i}, started at the first head:
+  // step 1 with the first-order Jacobian (identity: H = sum W_i, already inverted in P), step 2 a
+  // Gauss-Newton step with the exact SO(3) Jacobian; the result is the optimum to third order in the
+  // head errors.
   Quat q = q_I_B[static_cast<std::size_t>(ref)];
-  for (int iter = 0; iter < 2; ++iter) {
+  {
+    Vec3 rhs = Vec3::Zero();
+    const Quat q_inv = q.conjugate();
+    for (int k = 0; k < cfg_.n_heads; ++k) {
+      if (!in.has(k)) continue;
+      const auto u = static_cast<std::size_t>(k);
+      rhs += W[u] * quatLog(q_inv * q_I_B[u]);
+    }
+    q = (q * quatExp(P * rhs)).normalized();
+  }
+  {
     Mat3 H = Mat3::Zero();
     Vec3 g = Vec3::Zero();
     const Quat q_inv = q.conjugate();
@@ -76,8 +88,8 @@ Status HeadFusion::step(const ValidHeads& in) {
       const Vec3 r = quatLog(q_inv * q_I_B[u]);
       const Mat3 A = jacobianLeftInverse(r);
       const Mat3 AtW = A.transpose() * W[u];
-      H += AtW * A;
-      g += AtW * r;
+      H.noalias() += AtW * A;
+      g.noalias() += AtW * r;
     }
     Mat3 Hinv;
     if (!invertSpd3(H, Hinv)) {

@@ -81,22 +81,30 @@ void Pipeline::resolve() {
   const bool have_att = rates_.stream().hasSamples();
   const TimeUs att_newest = rates_.stream().newestTime();
   const TimeUs rate_deadline = rates_.stream().delayUs() + 2 * head_dt_us_;
-  bool acc_blocked = false;
+  // rows are in time order: the rate deadline and the accelerometer's readiness both move forward,
+  // so each scan stops at the first row that is still waiting
   for (int i = 0; i < n_pending_; ++i) {
     Pending& p = pending_[static_cast<std::size_t>((p_head_ + i) % kMaxPendingRows)];
-    if (!p.rate_done && have_att && att_newest - p.row.t > rate_deadline) p.rate_done = true;
-    if (!p.acc_done && !acc_blocked) {
-      AccOutput a;
-      const Status s = acc_.evaluateAt(p.row.t, a);
-      if (s == Status::kOk) {
-        p.row.a_acc_B = a.a_X;
-        p.row.has_acc = true;
-        p.acc_done = true;
-      } else if (s == Status::kUnavailable) {
-        p.acc_done = true;
-      } else {
-        acc_blocked = true;  // later rows are not ready either
-      }
+    if (p.rate_done) continue;
+    if (have_att && att_newest - p.row.t > rate_deadline) {
+      p.rate_done = true;
+    } else {
+      break;
+    }
+  }
+  for (int i = 0; i < n_pending_; ++i) {
+    Pending& p = pending_[static_cast<std::size_t>((p_head_ + i) % kMaxPendingRows)];
+    if (p.acc_done) continue;
+    AccOutput a;
+    const Status s = acc_.evaluateAt(p.row.t, a);
+    if (s == Status::kOk) {
+      p.row.a_acc_B = a.a_X;
+      p.row.has_acc = true;
+      p.acc_done = true;
+    } else if (s == Status::kUnavailable) {
+      p.acc_done = true;
+    } else {
+      break;  // later rows are not ready either
     }
   }
   while (n_pending_ > 0) {

@@ -65,7 +65,8 @@ Status AccAngularFilter::configure(const CrnConfig& cfg, const Mat3& C_X_A) {
       C_X_A.determinant() < 0)
     return Status::kInvalidConfig;
   CrnConfig c = cfg;
-  c.max_order = 2;  // orders 1-2 serve the Taylor step in evaluateAt
+  c.max_order = 1;  // order 1 serves the Taylor step in evaluateAt (|dt| <= half an interval: the
+                    // omitted second-order term is below 5e-4 of the signal at 0.1 Hz, 10 Hz input)
   const Status s = crn_.configure(c);
   if (s != Status::kOk) return s;
   C_X_A_ = C_X_A;

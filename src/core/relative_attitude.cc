@@ -17,7 +17,10 @@ Status RelativeAttitudeMeans::configure(const HeadSetConfig& cfg) {
     for (int b = a + 1; b < cfg.n_heads; ++b) {
       const Mat3 C_Sa_B = cfg.head[static_cast<std::size_t>(a)].q_Si_B.normalized().toRotationMatrix();
       const Mat3 C_Sb_B = cfg.head[static_cast<std::size_t>(b)].q_Si_B.normalized().toRotationMatrix();
-      C_Sj_Si0_[static_cast<std::size_t>(pairIndex(a, b))] = C_Sb_B * C_Sa_B.transpose();
+      const auto p = static_cast<std::size_t>(pairIndex(a, b));
+      C_Sj_Si0_[p] = C_Sb_B * C_Sa_B.transpose();
+      const Mat3 S = Sigma_[static_cast<std::size_t>(b)] + C_Sj_Si0_[p] * Sigma_[static_cast<std::size_t>(a)] * C_Sj_Si0_[p].transpose();
+      if (!invertSpd3(S, W1_[p])) return Status::kInvalidConfig;
     }
   configured_ = true;
   reset();
@@ -53,12 +56,14 @@ Status RelativeAttitudeMeans::step(const ValidHeads& in) {
       const auto p = static_cast<std::size_t>(pairIndex(a, b));
       const Quat B = q_Sa_I * in.q_I_Si[ub];
       const double sa = in.sigma_scale[ua], sb = in.sigma_scale[ub];
-      const Mat3& C = C_Sj_Si0_[p];
-      const Mat3 S = sb * sb * Sigma_[ub] + sa * sa * C * Sigma_[ua] * C.transpose();
-      Mat3 W;
-      if (!invertSpd3(S, W)) {
-        health_.record(Status::kNumericalFailure);
-        continue;
+      Mat3 W = W1_[p];
+      if (sa != 1.0 || sb != 1.0) {
+        const Mat3& C = C_Sj_Si0_[p];
+        const Mat3 S = sb * sb * Sigma_[ub] + sa * sa * C * Sigma_[ua] * C.transpose();
+        if (!invertSpd3(S, W)) {
+          health_.record(Status::kNumericalFailure);
+          continue;
+        }
       }
       Acc& A = acc_[p];
       if (A.n == 0) A.q_ref = B;
@@ -68,6 +73,7 @@ Status RelativeAttitudeMeans::step(const ValidHeads& in) {
       A.W_eta += W * eta;
       A.eta_sum += eta;
       A.eta_eta += eta * eta.transpose();
+      if ((A.n & 63u) != 1u) continue;  // re-anchoring check every 64 epochs
       Mat3 P;
       if (!invertSpd3(A.W_sum, P)) continue;
       const Vec3 m = P * A.W_eta;

@@ -28,6 +28,8 @@ Status BoresightMonitor::configure(const HeadSetConfig& cfg) {
       n_[p] = nn.normalized();
       cov_[p] = headCovariance(ha.sigma_cross_rad, ha.sigma_roll_rad, ha.boresight_Si) +
                 C0_[p] * headCovariance(hb.sigma_cross_rad, hb.sigma_roll_rad, hb.boresight_Si) * C0_[p].transpose();
+      if (!invertSpd3(cov_[p], W1_[p])) return Status::kInvalidConfig;
+      q0_[p] = Quat(C0_[p]).normalized();
     }
   configured_ = true;
   reset();
@@ -69,18 +71,22 @@ Status BoresightMonitor::step(const ValidHeads& in) {
       r.iba_ground_rad = alpha0_[p];
       r.iba_dev_rad = r.iba_rad - alpha0_[p];
       r.T_Si = so3Exp(r.iba_dev_rad * n_[p]);
-      r.delta_Si = so3Log(q_Sa_Sb.toRotationMatrix() * C0_[p].transpose());
+      r.delta_Si = quatLog(q_Sa_Sb * q0_[p].conjugate());
       const double sa = in.sigma_scale[ua], sb = in.sigma_scale[ub];
-      const Mat3 Sa = headCovariance(cfg_.head[ua].sigma_cross_rad, cfg_.head[ua].sigma_roll_rad, ba);
-      const Mat3 Sb = headCovariance(cfg_.head[ub].sigma_cross_rad, cfg_.head[ub].sigma_roll_rad, cfg_.head[ub].boresight_Si);
-      r.cov_delta_Si = (sa == 1.0 && sb == 1.0) ? cov_[p] : Mat3(sa * sa * Sa + sb * sb * C0_[p] * Sb * C0_[p].transpose());
       r.n_iba_Si = n_[p];
       r.valid = true;
       T_last_[p] = r.T_Si;
-      Mat3 W;
-      if (!invertSpd3(r.cov_delta_Si, W)) {
-        health_.record(Status::kNumericalFailure);
-        continue;
+      Mat3 W = W1_[p];
+      if (sa == 1.0 && sb == 1.0) {
+        r.cov_delta_Si = cov_[p];
+      } else {
+        const Mat3 Sa = headCovariance(cfg_.head[ua].sigma_cross_rad, cfg_.head[ua].sigma_roll_rad, ba);
+        const Mat3 Sb = headCovariance(cfg_.head[ub].sigma_cross_rad, cfg_.head[ub].sigma_roll_rad, cfg_.head[ub].boresight_Si);
+        r.cov_delta_Si = sa * sa * Sa + sb * sb * C0_[p] * Sb * C0_[p].transpose();
+        if (!invertSpd3(r.cov_delta_Si, W)) {
+          health_.record(Status::kNumericalFailure);
+          continue;
+        }
       }
       Acc& A = acc_[p];
       ++A.n;

@@ -221,16 +221,25 @@ class CrnStream {
     o.t = tc;
   }
 
+  // One pass over the window per channel for all orders: a 3 x Nf row-major kernel times the window.
   void evaluate(int c, int top, Output& o) const {
     const int M = kernel_.half;
     const int nf = kernel_.nf;
-    for (int order = 0; order <= 2; ++order) o.y[static_cast<std::size_t>(order)].setZero();
+    using KernelMap = Eigen::Map<const Eigen::Matrix<double, 3, Eigen::Dynamic, Eigen::RowMajor>, 0, Eigen::OuterStride<>>;
+    const KernelMap G(kernel_.g[0].data(), 3, nf, Eigen::OuterStride<>(kMaxCrnTaps));
     for (int ch = 0; ch < N; ++ch) {
       const Eigen::Map<const Eigen::VectorXd> win(&buf_[static_cast<std::size_t>(ch)][static_cast<std::size_t>(c - M)], nf);
-      for (int order = 0; order <= top; ++order) {
-        const Eigen::Map<const Eigen::VectorXd> g(kernel_.g[static_cast<std::size_t>(order)].data(), nf);
-        o.y[static_cast<std::size_t>(order)][ch] = g.dot(win);
+      Eigen::Vector3d y;
+      if (top == 0) {
+        y[0] = G.row(0).dot(win.transpose());
+        y[1] = y[2] = 0;
+      } else if (top == 1) {
+        y.head<2>().noalias() = G.topRows<2>() * win;
+        y[2] = 0;
+      } else {
+        y.noalias() = G * win;
       }
+      for (int order = 0; order < 3; ++order) o.y[static_cast<std::size_t>(order)][ch] = order <= top ? y[order] : 0.0;
     }
   }
 

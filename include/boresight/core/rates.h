@@ -9,8 +9,8 @@
 // (exact for q = n u with u unit: vec(u* u') = w/2 and d/dt vec(u* u') = vec(u* u'') since u'* u' is real).
 //
 // AccAngularFilter takes a_A (rad/s^2, accelerometer frame) at its rate (GRACE-FO 10 Hz), rotates it
-// to X with the configured C_X_A and runs the same CRN low-pass (order 0; orders 1-2 only for the
-// Taylor step to a requested tag). evaluateAt(t) puts it on the attitude stream's output tags.
+// to X with the configured C_X_A and runs the same CRN low-pass (order 0; order 1 only for the
+// first-order Taylor step to a requested tag). evaluateAt(t) puts it on the attitude stream's output tags.
 #pragma once
 
 #include "boresight/core/crn.h"
@@ -26,7 +26,7 @@ struct RateOutput {
 
 class AttitudeRates {
  public:
-  /// cfg.max_order is forced to 2.
+  /// cfg.max_order is forced to 2 (rate and acceleration need q, q' and q'').
   Status configure(const CrnConfig& cfg);
   void reset();
   /// One attitude sample; outputs (centre-stamped, on cfg.output_period_us) via output(i).

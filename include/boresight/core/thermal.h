@@ -57,6 +57,8 @@ class BoresightMonitor {
   std::array<Vec3, kMaxPairs> n_{};         ///< IBA sensing axis in Si
   std::array<double, kMaxPairs> alpha0_{};
   std::array<Mat3, kMaxPairs> cov_{};       ///< Sigma_i + C0 Sigma_j C0^T
+  std::array<Mat3, kMaxPairs> W1_{};        ///< its inverse
+  std::array<Quat, kMaxPairs> q0_{};        ///< C0 as a quaternion
   std::array<Mat3, kMaxPairs> T_last_{};
   std::array<PairDeformation, kMaxPairs> cur_{};
   struct Acc {
