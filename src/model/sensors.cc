@@ -30,7 +30,9 @@ Mat3 HeadModel::noiseCovariance() const {
 }
 
 Vec3 HeadModel::noiseRotVec(const CounterRng& rng, std::uint64_t n) const {
-  return sigmaCross() * (rng.normal(n, 0) * e1_ + rng.normal(n, 1) * e2_) + sigmaAbout() * rng.normal(n, 2) * b_;
+  double n0, n1;
+  rng.normal2(n, 0, n0, n1);
+  return sigmaCross() * (n0 * e1_ + n1 * e2_) + sigmaAbout() * rng.normal(n, 2) * b_;
 }
 
 AccelModel::AccelModel(const AccelConfig& cfg, const AccEffects& eff) : cfg_(cfg), eff_(eff) {

@@ -52,15 +52,28 @@ AttitudeSim::AttitudeSim(const AttitudeConfig& cfg, const Orbit& orbit, double t
     dist_phase1_[j] = 2 * kPi * rng.uniform(100 + static_cast<std::uint64_t>(j), 0);
     dist_phase2_[j] = 2 * kPi * rng.uniform(100 + static_cast<std::uint64_t>(j), 1);
   }
-  Step s{0.0, cfg_.initial_deviation_rad, cfg_.initial_rate_rad_s, Vec3::Zero()};
-  s.alpha = controlAlpha(s, nullptr);
+  Step s{0.0, cfg_.initial_deviation_rad, cfg_.initial_rate_rad_s, Vec3::Zero(), Vec3::Zero()};
+  finishStep(s, nullptr);
   ring_[0] = s;
   count_ = 1;
 }
 
-Vec3 AttitudeSim::controlAlpha(const Step& s, int* fired) const {
+void AttitudeSim::finishStep(Step& s, int* fired) {
+  Vec3 r, v;
+  orbit_.posVel(t0_gps_ + s.t0, r, v);
+  const Quat q_I_R = referenceAttitude(r, v, cfg_.along_track_sign, cfg_.pitch_offset_rad);
+  s.w_R = q_I_R.conjugate() * (r.cross(v) / r.squaredNorm());
+  s.alpha = controlAlpha(s, r, v, fired);
+}
+
+Vec3 AttitudeSim::controlAlpha(const Step& s, const Vec3& r, const Vec3& v, int* fired) const {
   const double t = s.t0;
-  const OrbitState os = orbit_.state(t0_gps_ + t);
+  // Argument of latitude from the node line (no Sun needed here).
+  const Vec3 h = r.cross(v).normalized();
+  Vec3 node = Vec3::UnitZ().cross(h);
+  if (node.norm() < 1e-12) node = Vec3::UnitX();
+  node.normalize();
+  const double u = std::atan2(h.dot(node.cross(r)), node.dot(r));
   Vec3 alpha;
   for (int j = 0; j < 3; ++j) {
     const double I = cfg_.inertia_kg_m2[j];
@@ -70,7 +83,7 @@ Vec3 AttitudeSim::controlAlpha(const Step& s, int* fired) const {
     for (int k = 0; k < 3; ++k) bg += std::sin(mtq_freq_[j][k] * t + mtq_phase_[j][k]);
     torque += cfg_.mtq_background_torque_Nm[j] * bg / std::sqrt(3.0);
     torque += cfg_.disturbance_torque_Nm[j] *
-              (std::cos(os.arg_lat_rad + dist_phase1_[j]) + 0.5 * std::cos(2 * os.arg_lat_rad + dist_phase2_[j]));
+              (std::cos(u + dist_phase1_[j]) + 0.5 * std::cos(2 * u + dist_phase2_[j]));
     alpha[j] = torque / I;
     // Thrusters: leave the deadband moving outwards -> one pulse back towards the centre.
     if (std::abs(s.d0[j]) > cfg_.deadband_rad[j] && s.d0[j] * s.dd0[j] >= 0) {
@@ -88,9 +101,10 @@ void AttitudeSim::advanceTo(double t) {
   while (ring_[static_cast<std::size_t>((count_ - 1) % static_cast<std::int64_t>(kHistory))].t0 + cfg_.step_s <= t) {
     const Step& p = ring_[static_cast<std::size_t>((count_ - 1) % static_cast<std::int64_t>(kHistory))];
     const double h = cfg_.step_s;
-    Step s{static_cast<double>(count_) * h, p.d0 + p.dd0 * h + 0.5 * p.alpha * h * h, p.dd0 + p.alpha * h, Vec3::Zero()};
+    Step s{static_cast<double>(count_) * h, p.d0 + p.dd0 * h + 0.5 * p.alpha * h * h, p.dd0 + p.alpha * h, Vec3::Zero(),
+           Vec3::Zero()};
     int fired = 0;
-    s.alpha = controlAlpha(s, &fired);
+    finishStep(s, &fired);
     pulses_ += static_cast<std::uint64_t>(fired);
     ring_[static_cast<std::size_t>(count_ % static_cast<std::int64_t>(kHistory))] = s;
     ++count_;
@@ -144,11 +158,30 @@ void AttitudeSim::eval(double t, Quat& q_I_B, Vec3& w_B) const {
   w_B = q_I_B.conjugate() * w_orbit_I + rightJacobian(d) * dd;
 }
 
+Vec3 AttitudeSim::rate(double t) const {
+  const Step& s = stepAt(t);
+  const double tau = t - s.t0;
+  Vec3 d = s.d0 + s.dd0 * tau + 0.5 * s.alpha * tau * tau;
+  Vec3 dd = s.dd0 + s.alpha * tau;
+  if (!cfg_.manoeuvres.empty()) {
+    Vec3 dm, ddm;
+    manoeuvre(t, dm, ddm);
+    d += dm;
+    dd += ddm;
+  }
+  // The orbit rate seen in R is constant for a circular orbit (up to the nodal drift, ~1e-8 rad/s);
+  // it is taken from the start of the step.
+  return model::quatExp(d).conjugate() * s.w_R + rightJacobian(d) * dd;
+}
+
 Vec3 AttitudeSim::meanAngularAcceleration(double t, double T) const {
-  Quat q;
   Vec3 wa, wb;
-  eval(t - 0.5 * T, q, wa);
-  eval(t + 0.5 * T, q, wb);
+  // Consecutive samples share an end point: reuse the rate computed at the previous call's end.
+  const double ta = t - 0.5 * T, tb = t + 0.5 * T;
+  wa = std::abs(ta - cache_t_) < 1e-9 ? cache_w_ : rate(ta);
+  wb = rate(tb);
+  cache_t_ = tb;
+  cache_w_ = wb;
   return (wb - wa) / T;
 }
 

@@ -32,29 +32,42 @@ std::size_t afterLines(const std::string& s, std::size_t lines) {
 
 template <typename Rec>
 ChunkedProductWriter<Rec>::~ChunkedProductWriter() {
-  if (body_) {
-    std::fclose(body_);
-    std::remove(body_path_.c_str());
-  }
+  if (body_) std::fclose(body_);
 }
 
 template <typename Rec>
 bool ChunkedProductWriter<Rec>::open(const std::string& path, const io::ProductFile<Rec>& proto, std::string* error,
                                      std::size_t chunk_records) {
   path_ = path;
-  body_path_ = path + ".body.tmp";
   chunk_ = proto;
   chunk_.records.clear();
   chunk_size_ = chunk_records == 0 ? 1 : chunk_records;
   chunk_.records.reserve(chunk_size_);
-  header_lines_ = countLines(io::formatProduct(chunk_));
+  std::string header = io::formatProduct(chunk_);
+  header_lines_ = countLines(header);
   count_ = 0;
   io_error_ = false;
-  body_ = std::fopen(body_path_.c_str(), "wb");
+  // The record count is known only at the end: give its header field a fixed width now (the readers
+  // trim blanks) and overwrite it in place at close(), so the body is written once, straight to the file.
+  count_offset_ = std::string::npos;
+  count_width_ = 0;
+  for (const char* key : {"    num_records: ", "NUMBER OF DATA RECORDS"}) {
+    const auto p = header.find(key);
+    if (p == std::string::npos) continue;
+    const auto eol = header.find('\n', p);
+    std::size_t v = p + std::strlen(key);
+    if (key[0] == 'N') v = header.find(':', p) + 2;  // fixed header: "KEY   : value"
+    if (key[0] == ' ') header.replace(v, eol - v, std::string(kCountWidth, ' '));
+    count_offset_ = v;
+    count_width_ = key[0] == ' ' ? kCountWidth : header.find('\n', p) - v;
+    break;
+  }
+  body_ = std::fopen(path_.c_str(), "wb");
   if (!body_) {
-    if (error) *error = body_path_ + ": " + std::strerror(errno);
+    if (error) *error = path_ + ": " + std::strerror(errno);
     return false;
   }
+  if (std::fwrite(header.data(), 1, header.size(), body_) != header.size()) io_error_ = true;
   return true;
 }
 
@@ -72,35 +85,16 @@ template <typename Rec>
 bool ChunkedProductWriter<Rec>::close(std::string* error) {
   if (!body_) return true;
   flush();
-  const bool body_ok = std::fclose(body_) == 0 && !io_error_;
+  bool ok = !io_error_;
+  if (ok && count_offset_ != std::string::npos) {
+    std::string n = std::to_string(count_);
+    if (n.size() > count_width_) n = n.substr(0, count_width_);  // cannot happen below 10^12 records
+    n.resize(count_width_, ' ');
+    ok = std::fseek(body_, static_cast<long>(count_offset_), SEEK_SET) == 0 &&
+         std::fwrite(n.data(), 1, n.size(), body_) == n.size();
+  }
+  ok = (std::fclose(body_) == 0) && ok;
   body_ = nullptr;
-  if (!body_ok) {
-    if (error) *error = body_path_ + ": write failed";
-    std::remove(body_path_.c_str());
-    return false;
-  }
-  // The header with the real record count: format an empty product, then set the count line.
-  io::ProductFile<Rec> h = chunk_;
-  h.records.clear();
-  std::string header = io::formatProduct(h);
-  const std::string yaml_key = "    num_records: ";
-  const auto p = header.find(yaml_key);
-  if (p != std::string::npos) {
-    const auto eol = header.find('\n', p);
-    header.replace(p + yaml_key.size(), eol - p - yaml_key.size(), std::to_string(count_));
-  }
-  std::FILE* out = std::fopen(path_.c_str(), "wb");
-  std::FILE* in = std::fopen(body_path_.c_str(), "rb");
-  bool ok = out && in && std::fwrite(header.data(), 1, header.size(), out) == header.size();
-  std::vector<char> buf(1 << 20);
-  while (ok && in) {
-    const std::size_t n = std::fread(buf.data(), 1, buf.size(), in);
-    if (n == 0) break;
-    ok = std::fwrite(buf.data(), 1, n, out) == n;
-  }
-  if (in) std::fclose(in);
-  if (out && std::fclose(out) != 0) ok = false;
-  std::remove(body_path_.c_str());
   if (!ok && error) *error = path_ + ": write failed";
   return ok;
 }

@@ -19,13 +19,20 @@ struct TagStream {
   double drift_ppm = 0, jitter_us = 0;
   CounterRng jitter_rng{0, Stream::HeadTagJitter, 0};
   std::uint64_t n = 0;
+  TimeUs cached = 0;  ///< tag(n), updated by advance()
+  void reset() { cached = tag(n); }
+  std::uint64_t advance() {
+    const std::uint64_t k = n++;
+    cached = tag(n);
+    return k;
+  }
   TimeUs tag(std::uint64_t k) const {
     const double nominal = static_cast<double>(k) * static_cast<double>(period);
     TimeUs t = start + static_cast<TimeUs>(k) * period + static_cast<TimeUs>(std::llround(drift_ppm * 1e-6 * nominal));
     if (jitter_us > 0) t += static_cast<TimeUs>(std::llround((2 * jitter_rng.uniform(k) - 1) * jitter_us));
     return t;
   }
-  TimeUs next() const { return tag(n); }
+  TimeUs next() const { return cached; }
 };
 
 /// Random gaps as a Poisson process on 1 s slots, evaluated in time order.
@@ -67,6 +74,7 @@ TagStream makeTags(TimeUs start, double rate_hz, TimeUs offset_us, double drift,
   s.jitter_us = jitter;
   // Heads that share rate and offset share the jitter (one camera electronics unit stamps them).
   s.jitter_rng = CounterRng(seed, stream, static_cast<std::uint64_t>(s.period) * 1000003ULL + static_cast<std::uint64_t>(offset_us));
+  s.reset();
   return s;
 }
 
@@ -233,29 +241,37 @@ void Simulator::run(SimSink& sink, const std::function<void(double)>& progress) 
       continue;
     }
     if (which == -1) {
-      const std::uint64_t n = acc_tags.n++;
+      const std::uint64_t n = acc_tags.advance();
+      // Low-frequency noise: one Gauss-Markov step per sample, whether or not the sample is missing.
+      const Vec3 lf_now = lf;
+      {
+        double g0, g1, g2, g3;
+        acc_lf_rng.normal2(n + 1, 0, g0, g1);
+        acc_lf_rng.normal2(n + 1, 1, g2, g3);
+        lf = lf_phi * lf + std::sqrt(1 - lf_phi * lf_phi) * ac.lowfreq_rad_s2.cwiseProduct(Vec3(g0, g1, g2));
+      }
+      if (acc_gaps.missing(tag_rel)) {
+        ++stats_.acc_missing;
+        continue;
+      }
       AccSampleOut a;
       a.tag = tmin;
       a.index = n;
       a.t_true_s = tag_rel - acc_.effects().time_offset_s;
       a.a_B_true = att.meanAngularAcceleration(a.t_true_s, acc_T);
       stats_.max_abs_alpha = std::max(stats_.max_abs_alpha, a.a_B_true.cwiseAbs().maxCoeff());
-      const Vec3 white(acc_noise.normal(n, 0), acc_noise.normal(n, 1), acc_noise.normal(n, 2));
-      a.ang_A = acc_.predict(a.a_B_true) + ac.white_rad_s2.cwiseProduct(white) + lf;
-      const Vec3 lw(acc_noise.normal(n, 3), acc_noise.normal(n, 4), acc_noise.normal(n, 5));
-      a.lin_A = ac.lin_bias_m_s2 + ac.lin_white_m_s2.cwiseProduct(lw);
-      const Vec3 lfw(acc_lf_rng.normal(n + 1, 0), acc_lf_rng.normal(n + 1, 1), acc_lf_rng.normal(n + 1, 2));
-      lf = lf_phi * lf + std::sqrt(1 - lf_phi * lf_phi) * ac.lowfreq_rad_s2.cwiseProduct(lfw);
-      if (acc_gaps.missing(tag_rel)) {
-        ++stats_.acc_missing;
-        continue;
-      }
+      double w[6];
+      acc_noise.normal2(n, 0, w[0], w[1]);
+      acc_noise.normal2(n, 1, w[2], w[3]);
+      acc_noise.normal2(n, 2, w[4], w[5]);
+      a.ang_A = acc_.predict(a.a_B_true) + ac.white_rad_s2.cwiseProduct(Vec3(w[0], w[1], w[2])) + lf_now;
+      a.lin_A = ac.lin_bias_m_s2 + ac.lin_white_m_s2.cwiseProduct(Vec3(w[3], w[4], w[5]));
       ++stats_.acc_samples;
       sink.accel(a);
       continue;
     }
     const auto i = static_cast<std::size_t>(which);
-    const std::uint64_t n = head_tags[i].n++;
+    const std::uint64_t n = head_tags[i].advance();
     const model::HeadModel& hm = heads_[i];
     const auto& hc = hm.config();
     if (head_gaps[i].missing(tag_rel)) {

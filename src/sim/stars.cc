@@ -1,5 +1,6 @@
 #include <boresight/sim/stars.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
@@ -40,14 +41,29 @@ bool StarCatalogue::load(const std::string& path, std::string* error) {
     if (error) *error = path + ": no stars";
     return false;
   }
+  by_z_.resize(stars_.size());
+  for (std::size_t i = 0; i < stars_.size(); ++i) by_z_[i] = static_cast<int>(i);
+  std::sort(by_z_.begin(), by_z_.end(), [&](int a, int b) {
+    return stars_[static_cast<std::size_t>(a)].u_I.z() < stars_[static_cast<std::size_t>(b)].u_I.z();
+  });
+  z_sorted_.resize(stars_.size());
+  for (std::size_t i = 0; i < stars_.size(); ++i) z_sorted_[i] = stars_[static_cast<std::size_t>(by_z_[i])].u_I.z();
   return true;
 }
 
 void StarCatalogue::inCone(const Vec3& dir, double half_angle_rad, double max_mag, std::vector<int>& out) const {
   out.clear();
   const double c = std::cos(half_angle_rad);
-  for (std::size_t i = 0; i < stars_.size(); ++i)
+  // Only the declination band that can hold the cone: z = sin(dec) within sin(dec0 -+ r).
+  const double dec0 = std::asin(std::clamp(dir.z(), -1.0, 1.0));
+  const double zlo = std::sin(std::max(-kPi / 2, dec0 - half_angle_rad)) - 1e-12;
+  const double zhi = std::sin(std::min(kPi / 2, dec0 + half_angle_rad)) + 1e-12;
+  auto it = std::lower_bound(z_sorted_.begin(), z_sorted_.end(), zlo);
+  for (auto k = static_cast<std::size_t>(it - z_sorted_.begin()); k < z_sorted_.size() && z_sorted_[k] <= zhi; ++k) {
+    const auto i = static_cast<std::size_t>(by_z_[k]);
     if (stars_[i].mag <= max_mag && stars_[i].u_I.dot(dir) >= c) out.push_back(static_cast<int>(i));
+  }
+  std::sort(out.begin(), out.end());
 }
 
 std::size_t StarCatalogue::countInCone(const Vec3& dir, double half_angle_rad, double max_mag) const {

@@ -37,10 +37,19 @@ class CounterRng {
   double uniform(std::uint64_t index, std::uint64_t sub = 0) const {
     return (static_cast<double>(bits(index, sub) >> 11) + 0.5) * (1.0 / 9007199254740992.0);
   }
-  /// Standard normal (Box-Muller on two counter draws).
+  /// Standard normal (Box-Muller on two counter draws): subs 2k and 2k+1 share one pair of draws
+  /// (cosine and sine branch), so normal2() gives both at the cost of one.
   double normal(std::uint64_t index, std::uint64_t sub = 0) const {
-    const double u1 = uniform(index, 2 * sub), u2 = uniform(index, 2 * sub + 1);
-    return std::sqrt(-2.0 * std::log(u1)) * std::cos(6.283185307179586 * u2);
+    const double u1 = uniform(index, 2 * (sub / 2)), u2 = uniform(index, 2 * (sub / 2) + 1);
+    const double r = std::sqrt(-2.0 * std::log(u1)), a = 6.283185307179586 * u2;
+    return r * ((sub & 1) ? std::sin(a) : std::cos(a));
+  }
+  /// normal(index, 2k) and normal(index, 2k+1) together.
+  void normal2(std::uint64_t index, std::uint64_t k, double& n0, double& n1) const {
+    const double u1 = uniform(index, 2 * k), u2 = uniform(index, 2 * k + 1);
+    const double r = std::sqrt(-2.0 * std::log(u1)), a = 6.283185307179586 * u2;
+    n0 = r * std::cos(a);
+    n1 = r * std::sin(a);
   }
 
  private:

@@ -68,19 +68,25 @@ class AttitudeSim {
   struct Step {
     double t0;
     Vec3 d0, dd0, alpha;
+    Vec3 w_R = Vec3::Zero();  ///< orbit angular velocity in the reference frame R at t0 (rad/s)
   };
+  /// Body rate only (no orbit evaluation): w_B = R(Exp(d))^T w_R + Jr(d) d'.
+  Vec3 rate(double t) const;
   const Step& stepAt(double t) const;
-  Vec3 controlAlpha(const Step& s, int* fired) const;
+  Vec3 controlAlpha(const Step& s, const Vec3& r, const Vec3& v, int* fired) const;
+  void finishStep(Step& s, int* fired);
   void manoeuvre(double t, Vec3& d, Vec3& dd) const;
 
   AttitudeConfig cfg_;
   const Orbit& orbit_;
   double t0_gps_;
   std::vector<Step> ring_;
-  std::int64_t first_ = 0, count_ = 0;  ///< index of the oldest kept step; steps computed
+  std::int64_t count_ = 0;  ///< steps computed (the ring keeps the last kHistory)
   Vec3 mtq_freq_[3], mtq_phase_[3];
   Vec3 dist_phase1_, dist_phase2_;
   std::uint64_t pulses_ = 0;
+  mutable double cache_t_ = -1e300;  ///< meanAngularAcceleration: last end point and its rate
+  mutable Vec3 cache_w_ = Vec3::Zero();
 };
 
 }  // namespace boresight::sim

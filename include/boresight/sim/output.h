@@ -1,10 +1,11 @@
 // Simulator output: real-format Level-1 files (SCA1A, ACC1A, GNV1B streamed in chunks, QSA1B), an
 // LCM log of the node's input messages, and truth.yaml.
 //
-// Streaming: the io writers format whole ProductFile objects. ChunkedProductWriter calls
-// io::formatProduct on chunks of records, drops the repeated header of each chunk, appends the
-// records to a body file, and at close() writes the header (with the true record count) followed by
-// the body. Memory is one chunk, whatever the duration.
+// Streaming: the io writers format whole ProductFile objects. ChunkedProductWriter writes the header
+// of io::formatProduct(empty product) with the record-count field widened to a fixed width, then
+// calls io::formatProduct on chunks of records, drops each chunk's repeated header, appends the
+// records, and at close() overwrites the count field in place (left-aligned, blank-padded: the
+// readers trim blanks). Memory is one chunk, whatever the duration.
 #pragma once
 
 #include <boresight/io/level1.h>
@@ -36,9 +37,11 @@ class ChunkedProductWriter {
 
  private:
   void flush();
-  std::string path_, body_path_;
+  static constexpr std::size_t kCountWidth = 12;
+  std::string path_;
   io::ProductFile<Rec> chunk_;
   std::size_t chunk_size_ = 16384, header_lines_ = 0;
+  std::size_t count_offset_ = std::string::npos, count_width_ = 0;
   std::FILE* body_ = nullptr;
   std::uint64_t count_ = 0;
   bool io_error_ = false;

@@ -27,6 +27,8 @@ class StarCatalogue {
 
  private:
   std::vector<Star> stars_;
+  std::vector<int> by_z_;      ///< star indices sorted by u_I.z (sin of declination)
+  std::vector<double> z_sorted_;
   double faintest_ = -99;
 };
 
@@ -39,7 +41,7 @@ std::vector<Vec3> starVectorsInHead(const StarCatalogue& cat, const Quat& q_I_Si
 /// rescans the whole catalogue only when the boresight has moved more than the margin.
 class FovStarCounter {
  public:
-  FovStarCounter(const StarCatalogue* cat, double half_angle_rad, double max_mag, double margin_rad = 2 * kRadPerDeg)
+  FovStarCounter(const StarCatalogue* cat, double half_angle_rad, double max_mag, double margin_rad = 3 * kRadPerDeg)
       : cat_(cat), half_(half_angle_rad), mag_(max_mag), margin_(margin_rad) {}
   int count(const Vec3& boresight_I);
   std::uint64_t refreshes() const { return refreshes_; }
