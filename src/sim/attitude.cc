@@ -174,15 +174,14 @@ Vec3 AttitudeSim::rate(double t) const {
   return model::quatExp(d).conjugate() * s.w_R + rightJacobian(d) * dd;
 }
 
-Vec3 AttitudeSim::meanAngularAcceleration(double t, double T) const {
-  Vec3 wa, wb;
+Vec3 AttitudeSim::meanAngularAcceleration(std::int64_t t_us, std::int64_t T_us) const {
   // Consecutive samples share an end point: reuse the rate computed at the previous call's end.
-  const double ta = t - 0.5 * T, tb = t + 0.5 * T;
-  wa = std::abs(ta - cache_t_) < 1e-9 ? cache_w_ : rate(ta);
-  wb = rate(tb);
+  const std::int64_t ta = t_us - T_us / 2, tb = ta + T_us;
+  const Vec3 wa = ta == cache_t_ ? cache_w_ : rate(static_cast<double>(ta) * 1e-6);
+  const Vec3 wb = rate(static_cast<double>(tb) * 1e-6);
   cache_t_ = tb;
   cache_w_ = wb;
-  return (wb - wa) / T;
+  return (wb - wa) / (static_cast<double>(T_us) * 1e-6);
 }
 
 }  // namespace boresight::sim

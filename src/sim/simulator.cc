@@ -162,6 +162,8 @@ void Simulator::run(SimSink& sink, const std::function<void(double)>& progress) 
   acc_gaps.rng = CounterRng(seed_, Stream::AccGap, 0);
   const CounterRng acc_noise(seed_, Stream::AccNoise, 0), acc_lf_rng(seed_, Stream::AccLowFreq, 0);
   const double acc_T = 1.0 / ac.rate_hz;
+  const auto acc_T_us = static_cast<std::int64_t>(std::llround(1e6 / ac.rate_hz));
+  const auto acc_offset_us = static_cast<std::int64_t>(std::llround(acc_.effects().time_offset_s * 1e6));
   const double lf_phi = std::exp(-acc_T / ac.lowfreq_tau_s);
   Vec3 lf(ac.lowfreq_rad_s2.x() * acc_lf_rng.normal(0, 0), ac.lowfreq_rad_s2.y() * acc_lf_rng.normal(0, 1),
           ac.lowfreq_rad_s2.z() * acc_lf_rng.normal(0, 2));
@@ -257,8 +259,9 @@ void Simulator::run(SimSink& sink, const std::function<void(double)>& progress) 
       AccSampleOut a;
       a.tag = tmin;
       a.index = n;
-      a.t_true_s = tag_rel - acc_.effects().time_offset_s;
-      a.a_B_true = att.meanAngularAcceleration(a.t_true_s, acc_T);
+      const std::int64_t t_true_us = (tmin - sc_.start) - acc_offset_us;
+      a.t_true_s = static_cast<double>(t_true_us) * 1e-6;
+      a.a_B_true = att.meanAngularAcceleration(t_true_us, acc_T_us);
       stats_.max_abs_alpha = std::max(stats_.max_abs_alpha, a.a_B_true.cwiseAbs().maxCoeff());
       double w[6];
       acc_noise.normal2(n, 0, w[0], w[1]);

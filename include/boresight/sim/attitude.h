@@ -16,6 +16,7 @@
 #include <boresight/core/conventions.h>
 #include <boresight/sim/orbit.h>
 
+#include <climits>
 #include <cstdint>
 #include <vector>
 
@@ -55,8 +56,10 @@ class AttitudeSim {
   void advanceTo(double t);
   /// Body attitude q_I_B and rate w_B (rad/s, B) at t; valid for t in the last kHistory steps.
   void eval(double t, Quat& q_I_B, Vec3& w_B) const;
-  /// Mean angular acceleration over [t - T/2, t + T/2] (rad/s^2, B).
-  Vec3 meanAngularAcceleration(double t, double T) const;
+  /// Mean angular acceleration over [t - T/2, t + T/2] (rad/s^2, B); times in integer microseconds
+  /// since the start, so that the rate at a shared end point is the same number whether it is
+  /// computed or reused (bitwise reproducible with or without gaps).
+  Vec3 meanAngularAcceleration(std::int64_t t_us, std::int64_t T_us) const;
   /// The commanded deviation alpha of the step containing t (rad/s^2, B; diagnostics and tests).
   Vec3 stepAlpha(double t) const;
   double earliestValid() const;
@@ -85,7 +88,7 @@ class AttitudeSim {
   Vec3 mtq_freq_[3], mtq_phase_[3];
   Vec3 dist_phase1_, dist_phase2_;
   std::uint64_t pulses_ = 0;
-  mutable double cache_t_ = -1e300;  ///< meanAngularAcceleration: last end point and its rate
+  mutable std::int64_t cache_t_ = INT64_MIN;  ///< meanAngularAcceleration: last end point (us) and its rate
   mutable Vec3 cache_w_ = Vec3::Zero();
 };
 
