@@ -171,6 +171,24 @@ TEST(SimIo, SameSeedSameBytesOtherSeedOtherBytes) {
   for (auto* w : {a.get(), b.get(), c.get()}) fs::remove_all(w->dir);
 }
 
+TEST(SimIo, EveryCommittedScenarioLoadsAndRuns) {
+  std::size_t n = 0;
+  for (const auto& e : fs::directory_iterator(simtest::sourceDir() + "/config")) {
+    const std::string name = e.path().filename().string();
+    if (name.rfind("sim_", 0) != 0 || e.path().extension() != ".yaml") continue;
+    sim::Scenario sc;
+    std::string err;
+    ASSERT_TRUE(sim::loadScenario(e.path().string(), sc, &err)) << err;
+    sim::Simulator s;
+    ASSERT_TRUE(s.init(sc, 1, 30, &err)) << name << ": " << err;
+    simtest::Capture cap;
+    s.run(cap);
+    EXPECT_EQ(cap.acc.size(), 300u) << name;
+    ++n;
+  }
+  EXPECT_GE(n, 2u);
+}
+
 std::string parseError(const std::string& yaml) {
   sim::Scenario sc;
   std::string err;
