@@ -39,8 +39,8 @@ Status HeadFusion::step(const ValidHeads& in) {
     health_.record(r);
     return r;
   }
-  std::array<Quat, kMaxHeads> q_I_B{};
-  std::array<Mat3, kMaxHeads> W{};
+  auto q_I_B = filled<Quat, kMaxHeads>(Quat::Identity());
+  auto W = filled<Mat3, kMaxHeads>(Mat3::Zero());
   int ref = -1;
   int used = 0;
   Mat3 W_sum = Mat3::Zero();

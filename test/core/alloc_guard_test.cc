@@ -59,6 +59,12 @@ void free(void* p) { __libc_free(p); }
 }
 #endif
 
+// The replacements below pair operator new with malloc and operator delete with free on purpose;
+// GCC cannot see that through inlining and warns about a mismatch.
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
+#endif
+
 void* operator new(std::size_t n) {
   note();
   if (void* p = std::malloc(n ? n : 1)) return p;

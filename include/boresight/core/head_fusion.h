@@ -34,8 +34,8 @@ class HeadFusion {
  private:
   HeadSetConfig cfg_{};
   bool configured_ = false;
-  std::array<Quat, kMaxHeads> q_Si_B_{};
-  std::array<Mat3, kMaxHeads> W_B_{};
+  std::array<Quat, kMaxHeads> q_Si_B_ = filled<Quat, kMaxHeads>(Quat::Identity());
+  std::array<Mat3, kMaxHeads> W_B_ = filled<Mat3, kMaxHeads>(Mat3::Zero());
   bool have_last_ = false;
   TimeUs last_t_ = 0;
   FusedAttitude out_{};

@@ -8,6 +8,7 @@
 
 #include "boresight/core/capacities.h"
 #include "boresight/core/conventions.h"
+#include "boresight/core/rotation.h"
 #include "boresight/core/status.h"
 
 #include <array>
@@ -66,7 +67,7 @@ struct HeadEpoch {
 struct ValidHeads {
   TimeUs t = 0;
   std::uint32_t mask = 0;  ///< bit s set when slot s is valid
-  std::array<Quat, kMaxHeads> q_I_Si{};
+  std::array<Quat, kMaxHeads> q_I_Si = filled<Quat, kMaxHeads>(Quat::Identity());
   std::array<double, kMaxHeads> sigma_scale{};
 
   bool has(int slot) const { return (mask >> slot) & 1u; }

@@ -58,9 +58,9 @@ class RelativeAttitudeMeans {
   };
   HeadSetConfig cfg_{};
   bool configured_ = false;
-  std::array<Mat3, kMaxHeads> Sigma_{};           ///< head covariance in its own frame
-  std::array<Mat3, kMaxPairs> C_Sj_Si0_{};         ///< ground relative matrices
-  std::array<Mat3, kMaxPairs> W1_{};               ///< pair information at unit sigma scales
+  std::array<Mat3, kMaxHeads> Sigma_ = filled<Mat3, kMaxHeads>(Mat3::Zero());           ///< head covariance in its own frame
+  std::array<Mat3, kMaxPairs> C_Sj_Si0_ = filled<Mat3, kMaxPairs>(Mat3::Zero());         ///< ground relative matrices
+  std::array<Mat3, kMaxPairs> W1_ = filled<Mat3, kMaxPairs>(Mat3::Zero());               ///< pair information at unit sigma scales
   std::array<Acc, kMaxPairs> acc_{};
   bool have_last_ = false;
   TimeUs last_t_ = 0;

@@ -5,9 +5,19 @@
 
 #include "boresight/core/conventions.h"
 
+#include <array>
 #include <cmath>
+#include <cstddef>
 
 namespace boresight::core {
+
+/// An array with every element set (Eigen types are not initialised by their default constructors).
+template <typename T, std::size_t N>
+std::array<T, N> filled(const T& value) {
+  std::array<T, N> a;
+  a.fill(value);
+  return a;
+}
 
 /// Cross-product matrix: skew(a) b = a x b.
 inline Mat3 skew(const Vec3& a) {

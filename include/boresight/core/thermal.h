@@ -53,13 +53,13 @@ class BoresightMonitor {
  private:
   HeadSetConfig cfg_{};
   bool configured_ = false;
-  std::array<Mat3, kMaxPairs> C0_{};        ///< C_Si_Sj^0
-  std::array<Vec3, kMaxPairs> n_{};         ///< IBA sensing axis in Si
+  std::array<Mat3, kMaxPairs> C0_ = filled<Mat3, kMaxPairs>(Mat3::Zero());        ///< C_Si_Sj^0
+  std::array<Vec3, kMaxPairs> n_ = filled<Vec3, kMaxPairs>(Vec3::Zero());         ///< IBA sensing axis in Si
   std::array<double, kMaxPairs> alpha0_{};
-  std::array<Mat3, kMaxPairs> cov_{};       ///< Sigma_i + C0 Sigma_j C0^T
-  std::array<Mat3, kMaxPairs> W1_{};        ///< its inverse
-  std::array<Quat, kMaxPairs> q0_{};        ///< C0 as a quaternion
-  std::array<Mat3, kMaxPairs> T_last_{};
+  std::array<Mat3, kMaxPairs> cov_ = filled<Mat3, kMaxPairs>(Mat3::Zero());       ///< Sigma_i + C0 Sigma_j C0^T
+  std::array<Mat3, kMaxPairs> W1_ = filled<Mat3, kMaxPairs>(Mat3::Zero());        ///< its inverse
+  std::array<Quat, kMaxPairs> q0_ = filled<Quat, kMaxPairs>(Quat::Identity());        ///< C0 as a quaternion
+  std::array<Mat3, kMaxPairs> T_last_ = filled<Mat3, kMaxPairs>(Mat3::Identity());
   std::array<PairDeformation, kMaxPairs> cur_{};
   struct Acc {
     std::uint64_t n = 0;

@@ -59,10 +59,10 @@ class MultiHeadWahba {
  private:
   WahbaConfig cfg_{};
   bool configured_ = false;
-  std::array<Mat3, kMaxHeads> C_SR_Sk0_{};
-  std::array<Mat3, kMaxHeads> C_SR_Sk_{};
+  std::array<Mat3, kMaxHeads> C_SR_Sk0_ = filled<Mat3, kMaxHeads>(Mat3::Identity());
+  std::array<Mat3, kMaxHeads> C_SR_Sk_ = filled<Mat3, kMaxHeads>(Mat3::Identity());
   Quat q_SR_B_ = Quat::Identity();
-  std::array<Vec3, kMaxStarInputs> u_{};
+  std::array<Vec3, kMaxStarInputs> u_ = filled<Vec3, kMaxStarInputs>(Vec3::Zero());
   std::array<double, kMaxStarInputs> w_{};
   std::array<std::int16_t, kMaxStarInputs> idx_{};
   bool have_last_ = false;
