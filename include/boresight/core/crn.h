@@ -11,7 +11,7 @@
 // (the limit of "unit gain at a low reference frequency").
 //
 // Streaming: a ring of the last kCrnRing samples (each written twice so that any window is
-// contiguous) and, only at output epochs, one dot product per channel and derivative order: the
+// contiguous) and, only at output epochs, one folded dot product per channel and order: the
 // cost follows the output rate, not the input rate. The output is stamped at the centre tap, M/fs
 // after the newest input (35.3 s for GRACE), which keeps the kernel zero-phase.
 // Output epochs (grid mode): a centre sample whose time tag is within half a sampling interval of a
@@ -221,25 +221,23 @@ class CrnStream {
     o.t = tc;
   }
 
-  // One pass over the window per channel for all orders: a 3 x Nf row-major kernel times the window.
+  // Folded dot products (the kernels are even or odd about the centre tap): per channel and order
+  // one pass over the M sample pairs, y = g[0] x_c + sum_n g[n] (x_{c+n} +- x_{c-n}).
   void evaluate(int c, int top, Output& o) const {
     const int M = kernel_.half;
-    const int nf = kernel_.nf;
-    using KernelMap = Eigen::Map<const Eigen::Matrix<double, 3, Eigen::Dynamic, Eigen::RowMajor>, 0, Eigen::OuterStride<>>;
-    const KernelMap G(kernel_.g[0].data(), 3, nf, Eigen::OuterStride<>(kMaxCrnTaps));
     for (int ch = 0; ch < N; ++ch) {
-      const Eigen::Map<const Eigen::VectorXd> win(&buf_[static_cast<std::size_t>(ch)][static_cast<std::size_t>(c - M)], nf);
-      Eigen::Vector3d y;
-      if (top == 0) {
-        y[0] = G.row(0).dot(win.transpose());
-        y[1] = y[2] = 0;
-      } else if (top == 1) {
-        y.head<2>().noalias() = G.topRows<2>() * win;
-        y[2] = 0;
-      } else {
-        y.noalias() = G * win;
+      const double* x = &buf_[static_cast<std::size_t>(ch)][static_cast<std::size_t>(c)];
+      const Eigen::Map<const Eigen::VectorXd> hi(x + 1, M);
+      const Eigen::Map<const Eigen::VectorXd> lo(x - M, M);
+      for (int order = 0; order < 3; ++order) {
+        double y = 0;
+        if (order <= top) {
+          const double* g = kernel_.g[static_cast<std::size_t>(order)].data() + M;
+          const Eigen::Map<const Eigen::VectorXd> gh(g + 1, M);
+          y = (order == 1) ? gh.dot(hi - lo.reverse()) : g[0] * x[0] + gh.dot(hi + lo.reverse());
+        }
+        o.y[static_cast<std::size_t>(order)][ch] = y;
       }
-      for (int order = 0; order < 3; ++order) o.y[static_cast<std::size_t>(order)][ch] = order <= top ? y[order] : 0.0;
     }
   }
 
