@@ -3,6 +3,7 @@
 #include "commands.h"
 
 #include <algorithm>
+#include <cstdlib>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -15,11 +16,12 @@ namespace {
 
 const char* kUsage =
     "usage: boresight plot FILE.csv --y COL[,COL...] [--x COL] --out PLOT.svg [--title TEXT]\n"
-    "                  [--ylabel TEXT] [--xlabel TEXT] [--relative-x]\n"
+    "                  [--ylabel TEXT] [--xlabel TEXT] [--relative-x] [--smooth N]\n"
     "\n"
     "Draws the named columns of a CSV table (such as the output of `boresight process`) against the\n"
     "--x column (default: the first column) as an SVG line plot. Empty cells are gaps in the line.\n"
-    "  --relative-x   subtract the first x value (times in seconds since the start)\n";
+    "  --relative-x   subtract the first x value (times in seconds since the start)\n"
+    "  --smooth N     plot the centred running mean over N rows (gaps: the mean of what is there)\n";
 
 std::vector<std::string> split(const std::string& s, char sep) {
   std::vector<std::string> out;
@@ -52,7 +54,7 @@ double tickStep(double range, int target) {
 }  // namespace
 
 int runPlot(int argc, char** argv) {
-  Args a(argc, argv, {"--x", "--y", "--out", "--title", "--ylabel", "--xlabel"}, {"--help", "-h", "--relative-x"});
+  Args a(argc, argv, {"--x", "--y", "--out", "--title", "--ylabel", "--xlabel", "--smooth"}, {"--help", "-h", "--relative-x"});
   if (a.help()) {
     std::fputs(kUsage, stdout);
     return 0;
@@ -115,6 +117,27 @@ int runPlot(int argc, char** argv) {
   if (x.empty()) {
     std::fprintf(stderr, "boresight plot: %s: no rows with a numeric x\n", path.c_str());
     return 1;
+  }
+  const int smooth = std::atoi(a.get("--smooth", "1").c_str());
+  if (smooth < 1) {
+    std::fprintf(stderr, "boresight plot: --smooth wants a positive number of rows\n");
+    return 2;
+  }
+  if (smooth > 1) {
+    for (auto& s : y) {
+      std::vector<double> m(s.size(), NAN);
+      const long h = smooth / 2, n = static_cast<long>(s.size());
+      double sum = 0;
+      long cnt = 0;
+      // Sliding window [i-h, i+h] over the finite values.
+      for (long i = -h; i < n; ++i) {
+        long add = i + h, drop = i - h - 1;
+        if (add < n && std::isfinite(s[std::size_t(add)])) sum += s[std::size_t(add)], ++cnt;
+        if (drop >= 0 && std::isfinite(s[std::size_t(drop)])) sum -= s[std::size_t(drop)], --cnt;
+        if (i >= 0 && std::isfinite(s[std::size_t(i)]) && cnt > 0) m[std::size_t(i)] = sum / double(cnt);
+      }
+      s = m;
+    }
   }
   double x0 = a.has("--relative-x") ? x.front() : 0.0;
   for (double& v : x) v -= x0;
