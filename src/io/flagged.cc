@@ -46,8 +46,9 @@ struct FlaggedCodec {
           s.bits(r.qualflg, "qualflg") && s.bits(r.prod_flag, "prod_flag")))
       return false;
     const bool ahk = isAhk(p);
-    for (int b = 0; b < 32; ++b) {
-      if (!r.has(b)) continue;
+    // Only the set bits, lowest first.
+    for (std::uint32_t m = r.prod_flag.value; m != 0; m &= m - 1) {
+      const int b = __builtin_ctz(m);
       if (ahk && b == kAhkStatusFlagBit) {
         if (!s.bits(r.status_flag, bitName(p, b))) return false;
         continue;
