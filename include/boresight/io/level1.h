@@ -138,6 +138,25 @@ struct FlaggedRecord {
 namespace acc_bits {
 constexpr int kLinX = 0, kLinY = 1, kLinZ = 2, kAngX = 3, kAngY = 4, kAngZ = 5, kIcuBlock = 26;
 }
+/// ACC1A / ACT1A in their science layout, compact (104 bytes against FlaggedRecord's 296, which
+/// matters for a full day of 864 000 records): prod_flag may use only bits 0-5 (linear and angular
+/// acceleration) and 26-28 (ICU block number, 10 Hz and MHz clock counts). A line with any other
+/// field is rejected with a reason that says so; read such files as FlaggedRecord.
+struct Acc1aRecord {
+  TimeUs t = 0;
+  char time_ref = 'R';
+  char satellite = 'C';
+  Bits qualflg{0, 8};
+  Bits prod_flag{0, 32};
+  double lin[3] = {0, 0, 0};  ///< m/s^2, accelerometer frame A (bits 0-2)
+  double ang[3] = {0, 0, 0};  ///< rad/s^2, accelerometer frame A (bits 3-5)
+  double counters[3] = {0, 0, 0};  ///< icu_blk_nr, Tenhz_count, Mhz_count (bits 26-28)
+  bool has(int bit) const { return prod_flag.test(bit); }
+  friend bool operator==(const Acc1aRecord&, const Acc1aRecord&);
+};
+/// The prod_flag bits an Acc1aRecord can hold.
+constexpr std::uint32_t kAcc1aRecordBits = 0x3Fu | (7u << 26);
+
 /// AHK1A/AHK1B: the bit that holds a 32-character status bit string.
 constexpr int kAhkStatusFlagBit = 29;
 
@@ -326,6 +345,7 @@ ProductFile<Rec> makeProduct(Product product, char satellite);
 
 BORESIGHT_IO_DECLARE(Sca1aRecord)
 BORESIGHT_IO_DECLARE(FlaggedRecord)
+BORESIGHT_IO_DECLARE(Acc1aRecord)
 BORESIGHT_IO_DECLARE(QsaRecord)
 BORESIGHT_IO_DECLARE(Sca1bRecord)
 BORESIGHT_IO_DECLARE(Acc1bRecord)
