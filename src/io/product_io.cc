@@ -96,6 +96,15 @@ std::vector<std::string> headerForWrite(const Header& hin, std::size_t records) 
         if (l.rfind("SATELLITE NAME", 0) == 0) l = fixedLine("SATELLITE NAME", std::string("GRACE ") + h.satellite);
     }
   }
+  if (h.binary) {
+    // Everything after the first END OF HEADER would be taken for records: stop there, before the
+    // record count and the format entry are checked (a repeated header must not satisfy them).
+    for (std::size_t i = 0; i < lines.size(); ++i)
+      if (lines[i].rfind("END OF HEADER", 0) == 0) {
+        lines.resize(i + 1);
+        break;
+      }
+  }
   // The written header tells the truth: every record-count entry the reader would take (any
   // indentation, any spacing before ':') gets the real count, and one is added when there is none.
   const std::string n = std::to_string(records);
@@ -135,12 +144,6 @@ std::vector<std::string> headerForWrite(const Header& hin, std::size_t records) 
     bool has_format = false;
     for (const auto& l : lines) has_format = has_format || l.rfind("FILE FORMAT 0=BINARY 1=ASCII  : 0", 0) == 0;
     if (!has_format) lines.insert(lines.begin(), fixedLine("FILE FORMAT 0=BINARY 1=ASCII", "0"));
-    // Everything after the first END OF HEADER would be taken for records: stop there.
-    for (std::size_t i = 0; i < lines.size(); ++i)
-      if (lines[i].rfind("END OF HEADER", 0) == 0) {
-        lines.resize(i + 1);
-        break;
-      }
   }
   return lines;
 }

@@ -143,6 +143,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   runTyped<Sca1aRecord>(body, mode, Product::SCA1A, false);
 #elif defined(BORESIGHT_FUZZ_FLAGGED)
   runTyped<FlaggedRecord>(body, mode, (mode & 16) ? Product::AHK1A : Product::ACC1A, false);
+#elif defined(BORESIGHT_FUZZ_ACC1A)
+  runTyped<Acc1aRecord>(body, mode, (mode & 16) ? Product::ACT1A : Product::ACC1A, false);
 #elif defined(BORESIGHT_FUZZ_SCA1B)
   runTyped<Sca1bRecord>(body, mode, Product::SCA1B, true);
 #elif defined(BORESIGHT_FUZZ_ACC1B)

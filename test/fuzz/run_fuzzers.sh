@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Runs every libFuzzer target of BUILD_DIR for a bounded time and fails if any of them crashes.
-# Usage: test/fuzz/run_fuzzers.sh BUILD_DIR [SECONDS_PER_TARGET=30]
+# Usage: test/fuzz/run_fuzzers.sh BUILD_DIR [SECONDS_PER_TARGET=30]   (BORESIGHT_FUZZ_SEED: libFuzzer seed, default 1)
 # BUILD_DIR must have been configured with clang and -DBORESIGHT_BUILD_FUZZ=ON, e.g.
 #   CC=clang CXX=clang++ cmake -S . -B build-fuzz -G Ninja -DBORESIGHT_BUILD_FUZZ=ON -DBORESIGHT_BUILD_BENCH=OFF
 #   ninja -C build-fuzz boresight_fuzzers
@@ -21,7 +21,7 @@ trap 'rm -rf "$work"' EXIT
 # reader -> product name patterns of the real files that seed it
 declare -A seeds=(
   [header]="*" [summary]="*" [generic]="KBR1B MAG1B GNV1A GPS1A GPS1B MAS1B TNK1B USO1B ILG1A"
-  [sca1a]="SCA1A" [flagged]="ACC1A ACT1A AHK1A AHK1B" [sca1b]="SCA1B" [acc1b]="ACC1B ACT1B"
+  [sca1a]="SCA1A" [flagged]="ACC1A ACT1A AHK1A AHK1B" [acc1a]="ACC1A ACT1A" [sca1b]="SCA1B" [acc1b]="ACC1B ACT1B"
   [gnv]="GNV1B GNI1B" [qsa]="QSA1B QKS1B" [imu]="IMU1A IMU1B" [thr]="THR1A THR1B" [ihk]="IHK1A IHK1B"
   [hrt]="HRT1A HRT1B" [tim]="TIM1B" [clk]="CLK1A CLK1B"
 )
@@ -93,7 +93,7 @@ for exe in "$fuzzdir"/fuzz_*; do
   log=$work/$name.log
   mkdir -p "$work/artifacts_$reader"
   echo "== $name: ${secs}s, seeds: $(ls "$work/corpus_$reader" | wc -l)"
-  if "$exe" -max_total_time="$secs" -timeout=10 -rss_limit_mb=2048 -max_len=65536 -print_final_stats=1 \
+  if "$exe" -seed="${BORESIGHT_FUZZ_SEED:-1}" -max_total_time="$secs" -timeout=10 -rss_limit_mb=2048 -max_len=65536 -print_final_stats=1 \
       -artifact_prefix="$work/artifacts_$reader/" "$work/corpus_$reader" >"$log" 2>&1; then
     execs=$(grep -Eo 'stat::number_of_executed_units: *[0-9]+' "$log" | grep -Eo '[0-9]+$' || echo '?')
     summary+=("$name ok: $execs executions in ${secs}s")
