@@ -30,15 +30,7 @@ void HeadFusion::reset() {
 }
 
 Status HeadFusion::step(const ValidHeads& in) {
-  if (!configured_) {
-    health_.record(Status::kNotConfigured);
-    return Status::kNotConfigured;
-  }
-  if (have_last_ && in.t <= last_t_) {
-    const Status r = in.t == last_t_ ? Status::kDuplicateTime : Status::kTimeBackwards;
-    health_.record(r);
-    return r;
-  }
+  if (const Status g = admitStep(configured_, have_last_, last_t_, in.t, health_); g != Status::kOk) return g;
   auto q_I_B = filled<Quat, kMaxHeads>(Quat::Identity());
   auto W = filled<Mat3, kMaxHeads>(Mat3::Zero());
   int ref = -1;

@@ -35,15 +35,7 @@ void RelativeAttitudeMeans::reset() {
 }
 
 Status RelativeAttitudeMeans::step(const ValidHeads& in) {
-  if (!configured_) {
-    health_.record(Status::kNotConfigured);
-    return Status::kNotConfigured;
-  }
-  if (have_last_ && in.t <= last_t_) {
-    const Status r = in.t == last_t_ ? Status::kDuplicateTime : Status::kTimeBackwards;
-    health_.record(r);
-    return r;
-  }
+  if (const Status g = admitStep(configured_, have_last_, last_t_, in.t, health_); g != Status::kOk) return g;
   have_last_ = true;
   last_t_ = in.t;
   for (int a = 0; a < cfg_.n_heads; ++a) {

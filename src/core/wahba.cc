@@ -46,15 +46,7 @@ Status MultiHeadWahba::setRelative(int slot, const Mat3& C_SR_Sk) {
 }
 
 Status MultiHeadWahba::step(const StarEpoch& in) {
-  if (!configured_) {
-    health_.record(Status::kNotConfigured);
-    return Status::kNotConfigured;
-  }
-  if (have_last_ && in.t <= last_t_) {
-    const Status r = in.t == last_t_ ? Status::kDuplicateTime : Status::kTimeBackwards;
-    health_.record(r);
-    return r;
-  }
+  if (const Status g = admitStep(configured_, have_last_, last_t_, in.t, health_); g != Status::kOk) return g;
   int n = in.n < 0 ? 0 : in.n;
   if (n > kMaxStarInputs) {
     health_.record(Status::kCapacityExceeded);

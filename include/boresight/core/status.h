@@ -51,4 +51,15 @@ struct Health {
   void clear() { by_status.fill(0); }
 };
 
+/// The entry check of every component's step(): kNotConfigured before a successful configure(), then
+/// kDuplicateTime / kTimeBackwards unless t is later than the last accepted tag. A refusal is counted
+/// in h; kOk means the caller goes on (and records t as its last tag when it accepts the input).
+inline Status admitStep(bool configured, bool have_last, std::int64_t last_t, std::int64_t t, Health& h) {
+  Status r = Status::kOk;
+  if (!configured) r = Status::kNotConfigured;
+  else if (have_last && t <= last_t) r = t == last_t ? Status::kDuplicateTime : Status::kTimeBackwards;
+  if (r != Status::kOk) h.record(r);
+  return r;
+}
+
 }  // namespace boresight::core
