@@ -15,10 +15,8 @@ Status RelativeAttitudeMeans::configure(const HeadSetConfig& cfg) {
   }
   for (int a = 0; a < cfg.n_heads; ++a)
     for (int b = a + 1; b < cfg.n_heads; ++b) {
-      const Mat3 C_Sa_B = cfg.head[static_cast<std::size_t>(a)].q_Si_B.normalized().toRotationMatrix();
-      const Mat3 C_Sb_B = cfg.head[static_cast<std::size_t>(b)].q_Si_B.normalized().toRotationMatrix();
       const auto p = static_cast<std::size_t>(pairIndex(a, b));
-      C_Sj_Si0_[p] = C_Sb_B * C_Sa_B.transpose();
+      C_Sj_Si0_[p] = groundRelative(cfg, b, a);
       const Mat3 S = Sigma_[static_cast<std::size_t>(b)] + C_Sj_Si0_[p] * Sigma_[static_cast<std::size_t>(a)] * C_Sj_Si0_[p].transpose();
       if (!invertSpd3(S, W1_[p])) return Status::kInvalidConfig;
     }

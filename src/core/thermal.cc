@@ -20,7 +20,7 @@ Status BoresightMonitor::configure(const HeadSetConfig& cfg) {
       const auto p = static_cast<std::size_t>(pairIndex(a, b));
       const HeadConfig& ha = cfg.head[static_cast<std::size_t>(a)];
       const HeadConfig& hb = cfg.head[static_cast<std::size_t>(b)];
-      C0_[p] = ha.q_Si_B.normalized().toRotationMatrix() * hb.q_Si_B.normalized().toRotationMatrix().transpose();
+      C0_[p] = core::groundRelative(cfg, a, b);
       const Vec3 v0 = C0_[p] * hb.boresight_Si;
       alpha0_[p] = angle(ha.boresight_Si, v0);
       const Vec3 nn = ha.boresight_Si.cross(v0);

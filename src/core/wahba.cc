@@ -17,11 +17,10 @@ Status MultiHeadWahba::configure(const WahbaConfig& cfg) {
   if (!(cfg.min_information >= 0) || !(cfg.unit_tolerance > 0)) return Status::kInvalidConfig;
   cfg_ = cfg;
   const auto R = static_cast<std::size_t>(cfg.reference_slot);
-  const Mat3 C_SR_B = cfg.heads.head[R].q_Si_B.normalized().toRotationMatrix();
   q_SR_B_ = cfg.heads.head[R].q_Si_B.normalized();
   for (int k = 0; k < cfg.heads.n_heads; ++k) {
     const auto u = static_cast<std::size_t>(k);
-    C_SR_Sk0_[u] = C_SR_B * cfg.heads.head[u].q_Si_B.normalized().toRotationMatrix().transpose();
+    C_SR_Sk0_[u] = groundRelative(cfg.heads, cfg.reference_slot, k);
   }
   configured_ = true;
   reset();

@@ -36,6 +36,15 @@ struct HeadSetConfig {
 /// Checks a HeadSetConfig (ids unique and positive, unit boresights and mountings, sigmas > 0).
 Status validate(const HeadSetConfig& cfg);
 
+/// Ground (nominal) relative matrix C_Sa_Sb^0 = C_Sa_B (C_Sb_B)^T of slots a and b from the configured
+/// mountings; identity for a == b. The one definition used by the pair means, the IBA monitor and Wahba.
+inline Mat3 groundRelative(const HeadSetConfig& cfg, int a, int b) {
+  if (a == b) return Mat3::Identity();
+  const Mat3 C_Sa_B = cfg.head[static_cast<std::size_t>(a)].q_Si_B.normalized().toRotationMatrix();
+  const Mat3 C_Sb_B = cfg.head[static_cast<std::size_t>(b)].q_Si_B.normalized().toRotationMatrix();
+  return C_Sa_B * C_Sb_B.transpose();
+}
+
 /// Slot of a head id, or -1.
 inline int slotOf(const HeadSetConfig& cfg, int head_id) {
   for (int s = 0; s < cfg.n_heads && s < kMaxHeads; ++s)
