@@ -1,3 +1,4 @@
+#include <boresight/io/time_format.h>
 #include <boresight/model/rotation.h>
 #include <boresight/sim/output.h>
 
@@ -104,7 +105,7 @@ template class ChunkedProductWriter<io::FlaggedRecord>;
 template class ChunkedProductWriter<io::GnvRecord>;
 
 std::string productFileName(const char* product, const Scenario& sc) {
-  return std::string(product) + "_" + gpsDate(sc.start) + "_" + sc.satellite + "_" + sc.output.version + ".txt";
+  return std::string(product) + "_" + io::formatDate(sc.start) + "_" + sc.satellite + "_" + sc.output.version + ".txt";
 }
 
 bool Level1Sink::open(const std::string& dir, const Scenario& sc, std::string* error) {
@@ -223,7 +224,7 @@ bool writeTruthYaml(const std::string& path, const Simulator& sim, const std::ve
   y << YAML::Key << "seed" << YAML::Value << sim.seed();
   y << YAML::Key << "satellite" << YAML::Value << std::string(1, sc.satellite);
   y << YAML::Key << "start_gps_us" << YAML::Value << sc.start;
-  y << YAML::Key << "start_date_gps" << YAML::Value << gpsDate(sc.start);
+  y << YAML::Key << "start_date_gps" << YAML::Value << io::formatDate(sc.start);
   y << YAML::Key << "duration_s" << YAML::Value << sim.duration();
   y << YAML::Key << "effect_args" << YAML::Value << YAML::Flow << effect_args;
   y << YAML::Key << "effects" << YAML::Value << YAML::BeginSeq;

@@ -1,3 +1,5 @@
+#include <boresight/io/config_keys.h>
+#include <boresight/io/time_format.h>
 #include <boresight/sim/scenario.h>
 
 #include <yaml-cpp/yaml.h>
@@ -138,9 +140,9 @@ class MapReader {
     for (const auto& kv : n_) {
       const std::string k = kv.first.Scalar();
       if (!used_.count(k) && !also_allowed.count(k)) {
-        std::string known;
-        for (const auto& u : used_) known += (known.empty() ? "" : ", ") + u;
-        c_.fail(kv.first, key(k.c_str()), "unknown key (known here: " + known + ")");
+        std::vector<std::string> known(used_.begin(), used_.end());
+        known.insert(known.end(), also_allowed.begin(), also_allowed.end());
+        c_.fail(kv.first, key(k.c_str()), io::unknownKeyMessage(k, known));
         return;
       }
     }
@@ -180,51 +182,20 @@ void readHead(MapReader& r, model::HeadConfig& h) {
 
 }  // namespace
 
-bool parseGpsCalendar(const std::string& s, TimeUs& t) {
-  int y = 0, mo = 0, d = 0, hh = 0, mm = 0;
-  double ss = 0;
-  char c1 = 0, c2 = 0;
-  std::istringstream is(s);
-  is.imbue(std::locale::classic());
-  is >> y >> c1 >> mo >> c2 >> d;
-  if (is.fail() || c1 != '-' || c2 != '-' || mo < 1 || mo > 12 || d < 1 || d > 31) return false;
-  if (!is.eof()) {
-    char T = 0, k1 = 0, k2 = 0;
-    is >> T >> hh >> k1 >> mm >> k2 >> ss;
-    if (is.fail() || (T != 'T' && T != ' ') || k1 != ':' || k2 != ':' || hh > 23 || mm > 59 || ss < 0 || ss >= 60)
-      return false;
-  }
-  // Days from civil (H. Hinnant's algorithm), relative to 2000-01-01.
-  const int yy = y - (mo <= 2);
-  const int era = (yy >= 0 ? yy : yy - 399) / 400;
-  const int yoe = yy - era * 400;
-  const int doy = (153 * (mo + (mo > 2 ? -3 : 9)) + 2) / 5 + d - 1;
-  const int doe = yoe * 365 + yoe / 4 - yoe / 100 + doy;
-  const std::int64_t days = static_cast<std::int64_t>(era) * 146097 + doe - 719468 - 10957;
-  const double sec = static_cast<double>(days) * 86400.0 + hh * 3600.0 + mm * 60.0 + ss - 43200.0;
-  t = static_cast<TimeUs>(std::llround(sec * 1e6));
-  return true;
-}
-
-std::string gpsDate(TimeUs t) {
-  const std::int64_t s = static_cast<std::int64_t>(std::floor((static_cast<double>(t) * 1e-6 + 43200.0) / 86400.0));
-  const std::int64_t z = s + 10957 + 719468;
-  const std::int64_t era = (z >= 0 ? z : z - 146096) / 146097;
-  const std::int64_t doe = z - era * 146097;
-  const std::int64_t yoe = (doe - doe / 1460 + doe / 36524 - doe / 146096) / 365;
-  const std::int64_t doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
-  const std::int64_t mp = (5 * doy + 2) / 153;
-  const std::int64_t d = doy - (153 * mp + 2) / 5 + 1;
-  const std::int64_t m = mp + (mp < 10 ? 3 : -9);
-  const std::int64_t y = yoe + era * 400 + (m <= 2);
-  char buf[80];
-  std::snprintf(buf, sizeof buf, "%04lld-%02lld-%02lld", static_cast<long long>(y), static_cast<long long>(m),
-                static_cast<long long>(d));
-  return buf;
-}
+namespace {
+bool parseScenarioAt(const std::string& text, const std::string& file, const std::string& dir, Scenario& out,
+                     std::string* error, int depth);
+bool loadScenarioAt(const std::string& path, Scenario& out, std::string* error, int depth);
+}  // namespace
 
 bool parseScenario(const std::string& text, const std::string& file, const std::string& dir, Scenario& out,
                    std::string* error) {
+  return parseScenarioAt(text, file, dir, out, error, 0);
+}
+
+namespace {
+bool parseScenarioAt(const std::string& text, const std::string& file, const std::string& dir, Scenario& out,
+                     std::string* error, int depth) {
   Ctx c{file, error};
   YAML::Node root;
   try {
@@ -238,26 +209,57 @@ bool parseScenario(const std::string& text, const std::string& file, const std::
     return false;
   }
   Scenario s;
-  s.file = file;
   MapReader top(root, "", c);
-  std::string sat = "C";
+  bool overlay = false;
+  if (top.has("base")) {  // an overlay: start from the base scenario's values
+    std::string base;
+    top.str("base", base);
+    if (depth >= 4) {
+      c.fail(root["base"], "base", "overlays nested deeper than 4 levels");
+      return false;
+    }
+    const std::string base_path = (!base.empty() && base[0] == '/') ? base : dir + "/" + base;
+    std::string base_err;
+    if (c.ok && !loadScenarioAt(base_path, s, &base_err, depth + 1)) {
+      c.fail(root["base"], "base", "the base scenario does not load: " + base_err);
+      return false;
+    }
+    overlay = true;
+  } else {
+    top.node("base");
+    s.start = 0;
+    (void)io::parseGpsCalendar("2023-06-01T00:00:00", s.start);
+    s.star_catalogue = dir + "/stars_bright.csv";
+    s.head_defaults.noise_cross_rad = 6 * kRadPerArcsec;
+    s.head_defaults.noise_about_rad = 48 * kRadPerArcsec;
+  }
+  s.file = file;
+  std::string sat(1, s.satellite);
   top.str("satellite", sat);
   if (sat.size() != 1 || sat[0] < 'A' || sat[0] > 'Z')
     c.fail(root["satellite"], "satellite", "expected one letter (C, D for GRACE-FO)");
   s.satellite = sat.empty() ? 'C' : sat[0];
-  std::string start = "2023-06-01T00:00:00";
-  top.str("start", start);
-  if (!parseGpsCalendar(start, s.start))
-    c.fail(root["start"], "start", "expected a GPS calendar time YYYY-MM-DDTHH:MM:SS");
+  if (top.has("start")) {
+    std::string start;
+    top.str("start", start);
+    if (!io::parseGpsCalendar(start, s.start))
+      c.fail(root["start"], "start", "expected a GPS calendar time YYYY-MM-DDTHH:MM:SS");
+  } else {
+    top.node("start");
+  }
   top.num("duration_s", s.duration_s, 1, 366 * 86400.0);
-  std::string stars = "stars_bright.csv";
-  top.str("stars", stars);
-  s.star_catalogue = (!stars.empty() && stars[0] == '/') ? stars : dir + "/" + stars;
+  if (top.has("stars")) {
+    std::string stars;
+    top.str("stars", stars);
+    s.star_catalogue = (!stars.empty() && stars[0] == '/') ? stars : dir + "/" + stars;
+  } else {
+    top.node("stars");
+  }
   top.num("mounting_error_sigma_arcsec", s.mounting_error_sigma_rad, 0, 3600, kRadPerArcsec);
 
   {  // orbit
     MapReader r(top.node("orbit"), "orbit", c);
-    std::string type = "circular";
+    std::string type = s.orbit.type == OrbitConfig::Type::Gnv1b ? "gnv1b" : "circular";
     r.str("type", type);
     if (type == "circular") s.orbit.type = OrbitConfig::Type::Circular;
     else if (type == "gnv1b") s.orbit.type = OrbitConfig::Type::Gnv1b;
@@ -270,7 +272,7 @@ bool parseScenario(const std::string& text, const std::string& file, const std::
     std::string gnv;
     r.str("gnv1b_file", gnv);
     if (!gnv.empty()) s.orbit.gnv1b_file = gnv[0] == '/' ? gnv : dir + "/" + gnv;
-    if (s.orbit.type == OrbitConfig::Type::Gnv1b && gnv.empty())
+    if (s.orbit.type == OrbitConfig::Type::Gnv1b && s.orbit.gnv1b_file.empty())
       c.fail(root["orbit"], "orbit.gnv1b_file", "required when orbit.type is gnv1b");
     r.finish();
   }
@@ -301,6 +303,7 @@ bool parseScenario(const std::string& text, const std::string& file, const std::
     const YAML::Node man = r.node("manoeuvres");
     if (man.IsDefined() && !man.IsNull()) {
       if (!man.IsSequence()) c.fail(man, "attitude.manoeuvres", "expected a list");
+      a.manoeuvres.clear();  // an overlay's list replaces the base's
       for (std::size_t i = 0; c.ok && man.IsSequence() && i < man.size(); ++i) {
         Manoeuvre m;
         MapReader mr(man[i], "attitude.manoeuvres[" + std::to_string(i) + "]", c);
@@ -316,10 +319,10 @@ bool parseScenario(const std::string& text, const std::string& file, const std::
     r.finish();
   }
   {  // heads
-    model::HeadConfig def;
-    def.noise_cross_rad = 6 * kRadPerArcsec;
-    def.noise_about_rad = 48 * kRadPerArcsec;
+    model::HeadConfig& def = s.head_defaults;
     if (top.has("head_defaults")) {
+      if (overlay && !top.has("heads"))
+        c.fail(root["head_defaults"], "head_defaults", "an overlay that changes head_defaults must list its heads too");
       MapReader r(top.node("head_defaults"), "head_defaults", c);
       readHead(r, def);
       r.finish();
@@ -327,10 +330,13 @@ bool parseScenario(const std::string& text, const std::string& file, const std::
       top.node("head_defaults");
     }
     const YAML::Node hs = top.node("heads");
-    if (!hs.IsSequence() || hs.size() == 0) {
+    if (overlay && !hs.IsDefined()) {
+      // the base's heads stay
+    } else if (!hs.IsSequence() || hs.size() == 0) {
       c.fail(hs.IsDefined() ? hs : root, "heads", "expected a non-empty list of heads");
     } else {
       std::set<int> ids;
+      s.heads.clear();  // an overlay's list replaces the base's
       for (std::size_t i = 0; c.ok && i < hs.size(); ++i) {
         model::HeadConfig h = def;
         const std::string pre = "heads[" + std::to_string(i) + "]";
@@ -356,9 +362,9 @@ bool parseScenario(const std::string& text, const std::string& file, const std::
     a.tag_offset_us = off;
     r.num("time_tag_jitter_us", a.tag_jitter_us, 0, 1000);
     r.num("time_tag_drift_ppm", a.tag_drift_ppm, -1000, 1000);
-    if (r.has("C_A_B")) {
+    if (r.has("C_B_A")) {  // the one accelerometer rotation of every configuration file: A -> B
       double m[9];
-      const YAML::Node x = r.node("C_A_B");
+      const YAML::Node x = r.node("C_B_A");
       bool ok = x.IsSequence() && x.size() == 3;
       for (std::size_t i = 0; ok && i < 3; ++i) {
         ok = x[i].IsSequence() && x[i].size() == 3;
@@ -367,10 +373,10 @@ bool parseScenario(const std::string& text, const std::string& file, const std::
       Mat3 C;
       if (ok) C << m[0], m[1], m[2], m[3], m[4], m[5], m[6], m[7], m[8];
       if (!ok || (C * C.transpose() - Mat3::Identity()).norm() > 1e-6 || C.determinant() < 0)
-        c.fail(x, "accelerometer.C_A_B", "expected a 3x3 proper rotation matrix (rows)");
-      else a.C_A_B = C;
+        c.fail(x, "accelerometer.C_B_A", "expected a 3x3 proper rotation matrix (rows)");
+      else a.C_A_B = C.transpose();
     } else {
-      r.node("C_A_B");
+      r.node("C_B_A");
     }
     r.vec3("white_noise_rad_s2", a.white_rad_s2, 0, 1);
     r.vec3("lowfreq_noise_rad_s2", a.lowfreq_rad_s2, 0, 1);
@@ -393,6 +399,7 @@ bool parseScenario(const std::string& text, const std::string& file, const std::
     const YAML::Node es = top.node("effects");
     if (es.IsDefined() && !es.IsNull()) {
       if (!es.IsSequence()) c.fail(es, "effects", "expected a list of effects");
+      s.effects.clear();  // an overlay's list replaces the base's
       for (std::size_t i = 0; c.ok && es.IsSequence() && i < es.size(); ++i) {
         const std::string pre = "effects[" + std::to_string(i) + "]";
         if (!es[i].IsMap() || !es[i]["name"].IsDefined()) {
@@ -434,6 +441,8 @@ bool parseScenario(const std::string& text, const std::string& file, const std::
   return c.ok;
 }
 
+}  // namespace
+
 bool addEffectArgs(Scenario& sc, const std::vector<std::string>& args, std::string* error) {
   for (const auto& a : args) {
     model::EffectSpec e;
@@ -452,6 +461,11 @@ bool addEffectArgs(Scenario& sc, const std::vector<std::string>& args, std::stri
 }
 
 bool loadScenario(const std::string& path, Scenario& out, std::string* error) {
+  return loadScenarioAt(path, out, error, 0);
+}
+
+namespace {
+bool loadScenarioAt(const std::string& path, Scenario& out, std::string* error, int depth) {
   std::ifstream in(path, std::ios::binary);
   if (!in) {
     if (error) *error = path + ": cannot open scenario file";
@@ -461,7 +475,8 @@ bool loadScenario(const std::string& path, Scenario& out, std::string* error) {
   ss << in.rdbuf();
   const auto slash = path.find_last_of('/');
   const std::string dir = slash == std::string::npos ? "." : path.substr(0, slash);
-  return parseScenario(ss.str(), path, dir, out, error);
+  return parseScenarioAt(ss.str(), path, dir, out, error, depth);
 }
+}  // namespace
 
 }  // namespace boresight::sim

@@ -225,8 +225,8 @@ TEST(SimIo, ScenarioErrorsNameFileLineKeyAndReason) {
   EXPECT_NE(e.find("effects[0]: effect thermal_periodic: key 'harmonic'"), std::string::npos) << e;
   e = parseError(replace("effects: []", "effects:\n  - {name: step, sensor: 5, at_s: 3}"));
   EXPECT_NE(e.find("no head 5"), std::string::npos) << e;
-  e = parseError(replace("    - [0, 1, 0]", "    - [0, 2, 0]"));
-  EXPECT_NE(e.find("key 'accelerometer.C_A_B': expected a 3x3 proper rotation"), std::string::npos) << e;
+  e = parseError(replace("    - [0, 0, 1]\n    - [1, 0, 0]", "    - [0, 0, 2]\n    - [1, 0, 0]"));
+  EXPECT_NE(e.find("key 'accelerometer.C_B_A': expected a 3x3 proper rotation"), std::string::npos) << e;
   e = parseError(replace("  - id: 2", "  - id: 1"));
   EXPECT_NE(e.find("duplicate head id"), std::string::npos) << e;
   e = parseError(replace("start: \"2023-06-01T00:00:00\"", "start: \"2023-13-01\""));

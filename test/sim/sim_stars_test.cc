@@ -1,4 +1,5 @@
 // Star catalogue and field of view; Sun/Earth/Moon exclusion; Sun and Moon directions.
+#include <boresight/io/time_format.h>
 #include "sim_test_util.h"
 
 #include <boresight/sim/ephemeris.h>
@@ -106,17 +107,17 @@ TEST(SimStars, SunAndMoonDirectionsAreRight) {
   // March equinox 2023-03-20 21:24 UTC: the Sun crosses the equator at RA 0; June solstice
   // 2023-06-21 14:58 UTC: declination +23.44 deg, RA 90 deg (GPS = UTC + 18 s).
   TimeUs eq, sol;
-  ASSERT_TRUE(sim::parseGpsCalendar("2023-03-20T21:24:18", eq));
-  ASSERT_TRUE(sim::parseGpsCalendar("2023-06-21T14:58:18", sol));
+  ASSERT_TRUE(io::parseGpsCalendar("2023-03-20T21:24:18", eq));
+  ASSERT_TRUE(io::parseGpsCalendar("2023-06-21T14:58:18", sol));
   const Vec3 se = sim::sunDirection(toSeconds(eq)), ss = sim::sunDirection(toSeconds(sol));
   EXPECT_NEAR(std::asin(se.z()) / kRadPerDeg, 0.0, 0.02);
   EXPECT_NEAR(std::atan2(se.y(), se.x()) / kRadPerDeg, 0.0, 0.05);
   EXPECT_NEAR(std::asin(ss.z()) / kRadPerDeg, 23.44, 0.02);
   EXPECT_NEAR(std::atan2(ss.y(), ss.x()) / kRadPerDeg, 90.0, 0.05);
   TimeUs t;
-  ASSERT_TRUE(sim::parseGpsCalendar("2023-06-01T00:00:00", t));
+  ASSERT_TRUE(io::parseGpsCalendar("2023-06-01T00:00:00", t));
   EXPECT_EQ(t, 738849600LL * 1000000);
-  EXPECT_EQ(sim::gpsDate(t), "2023-06-01");
+  EXPECT_EQ(io::formatDate(t), "2023-06-01");
   EXPECT_NEAR(sim::earthVelocity(toSeconds(t)).norm(), 29.4e3, 0.3e3);
   // The Moon stays between perigee and apogee distances.
   for (int d = 0; d < 30; ++d) {

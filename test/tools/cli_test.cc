@@ -180,7 +180,7 @@ TEST(Cli, ProcessConfigErrorsNameFileAndKey) {
   }
   CliRun r = run("process --config " + dir + "/bad.yaml x.txt --out " + dir + "/o.csv");
   EXPECT_EQ(r.status, 1);
-  EXPECT_NE(r.out.find(dir + "/bad.yaml: heads.list[0].sigma_roll_arcsec: must be > 0"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find(dir + "/bad.yaml:6: key 'heads.list[0].sigma_roll_arcsec': must be > 0"), std::string::npos) << r.out;
 }
 
 TEST(CliReal, ProcessGivesTheSameRowsFromAnLcmLogAsFromLevel1) {

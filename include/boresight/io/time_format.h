@@ -4,7 +4,10 @@
 
 #include <boresight/core/conventions.h>
 
+#include <cmath>
 #include <cstdio>
+#include <locale>
+#include <sstream>
 #include <string>
 
 namespace boresight::io {
@@ -60,6 +63,38 @@ inline std::string formatDate(TimeUs t) {
   char buf[96];
   std::snprintf(buf, sizeof buf, "%04d-%02d-%02d", c.year, c.month, c.day);
   return buf;
+}
+
+/// GPS calendar "YYYY-MM-DD" or "YYYY-MM-DDTHH:MM:SS[.ffffff]" (a space may replace the T) ->
+/// microseconds past the GPS J2000 epoch; false when the text is not such a date. The inverse of
+/// formatTime / formatDate.
+inline bool parseGpsCalendar(const std::string& text, TimeUs& t) {
+  int y = 0, mo = 0, d = 0, hh = 0, mm = 0;
+  double ss = 0;
+  char c1 = 0, c2 = 0;
+  std::istringstream is(text);
+  is.imbue(std::locale::classic());
+  is >> y >> c1 >> mo >> c2 >> d;
+  if (is.fail() || c1 != '-' || c2 != '-' || mo < 1 || mo > 12 || d < 1 || d > 31) return false;
+  if (!is.eof()) {
+    char sep = 0, k1 = 0, k2 = 0;
+    is >> std::noskipws >> sep >> std::skipws >> hh >> k1 >> mm >> k2 >> ss;
+    if (is.fail() || (sep != 'T' && sep != ' ') || k1 != ':' || k2 != ':' || hh < 0 || hh > 23 || mm < 0 ||
+        mm > 59 || ss < 0 || ss >= 60)
+      return false;
+    is >> std::ws;
+    if (!is.eof()) return false;
+  }
+  // Days from civil (H. Hinnant's algorithm), relative to 2000-01-01.
+  const int yy = y - (mo <= 2 ? 1 : 0);
+  const int era = (yy >= 0 ? yy : yy - 399) / 400;
+  const int yoe = yy - era * 400;
+  const int doy = (153 * (mo + (mo > 2 ? -3 : 9)) + 2) / 5 + d - 1;
+  const int doe = yoe * 365 + yoe / 4 - yoe / 100 + doy;
+  const std::int64_t days = static_cast<std::int64_t>(era) * 146097 + doe - 719468 - 10957;
+  const std::int64_t whole_s = days * 86400 + hh * 3600 + mm * 60 - 43200;
+  t = whole_s * kUsPerSecond + static_cast<TimeUs>(std::llround(ss * 1e6));
+  return true;
 }
 
 }  // namespace boresight::io

@@ -30,6 +30,7 @@ struct Scenario {
   std::string star_catalogue;        ///< resolved path
   OrbitConfig orbit;
   AttitudeConfig attitude;
+  model::HeadConfig head_defaults;    ///< what every head starts from (an overlay's new heads too)
   std::vector<model::HeadConfig> heads;
   double mounting_error_sigma_rad = 0;  ///< random extra mounting error per head axis (drawn from the seed)
   model::AccelConfig acc;
@@ -37,7 +38,9 @@ struct Scenario {
   OutputConfig output;
 };
 
-/// Parses YAML text. `file` names it in messages; relative paths (stars, GNV1B) resolve against `dir`.
+/// Parses YAML text. `file` names it in messages; relative paths (stars, GNV1B, base) resolve against `dir`.
+/// Overlays: a top-level `base: FILE` loads that scenario first and the keys given here replace its
+/// values (a list - heads, manoeuvres, effects - replaces the base's list whole); at most 4 levels.
 bool parseScenario(const std::string& yaml_text, const std::string& file, const std::string& dir, Scenario& out,
                    std::string* error);
 bool loadScenario(const std::string& path, Scenario& out, std::string* error);
@@ -45,9 +48,6 @@ bool loadScenario(const std::string& path, Scenario& out, std::string* error);
 /// Adds effects given as "NAME:key=value,..." (the --effect option), checking their target heads exist.
 bool addEffectArgs(Scenario& sc, const std::vector<std::string>& args, std::string* error);
 
-/// GPS calendar "YYYY-MM-DD[THH:MM:SS]" -> microseconds past the GPS J2000 epoch (no leap seconds).
-bool parseGpsCalendar(const std::string& s, TimeUs& t);
-/// Microseconds past the epoch -> "YYYY-MM-DD" (GPS calendar date).
-std::string gpsDate(TimeUs t);
+// Calendar dates: io::parseGpsCalendar and io::formatDate (boresight/io/time_format.h).
 
 }  // namespace boresight::sim
