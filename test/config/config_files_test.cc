@@ -24,9 +24,9 @@ std::string slurp(const std::string& path) {
   return s.str();
 }
 
-/// Writes text to a temporary file in the build tree and returns its path.
+/// Writes text to a file in the test's temporary directory and returns its path.
 std::string writeTemp(const std::string& name, const std::string& text) {
-  const std::string path = "config_test_" + name;
+  const std::string path = ::testing::TempDir() + "config_test_" + name;
   std::ofstream(path) << text;
   return path;
 }
