@@ -9,6 +9,7 @@ pkgs=(
   libeigen3-dev libceres-dev libyaml-cpp-dev
   liblcm-dev liblcm-bin libglib2.0-dev
   libgtest-dev libgmock-dev googletest libbenchmark-dev
+  libcli11-dev nlohmann-json3-dev
   python3
 )
 if [[ "${1:-}" == "--fuzz" ]]; then

@@ -1,5 +1,5 @@
 // boresight plot FILE.csv --y COL[,COL...] [--x COL] --out PLOT.svg: line plots of CSV columns as SVG.
-#include "args.h"
+#include "cli_common.h"
 #include "commands.h"
 
 #include <algorithm>
@@ -14,14 +14,9 @@
 namespace boresight::cli {
 namespace {
 
-const char* kUsage =
-    "usage: boresight plot FILE.csv --y COL[,COL...] [--x COL] --out PLOT.svg [--title TEXT]\n"
-    "                  [--ylabel TEXT] [--xlabel TEXT] [--relative-x] [--smooth N]\n"
-    "\n"
+const char* kDescription =
     "Draws the named columns of a CSV table (such as the output of `boresight process`) against the\n"
-    "--x column (default: the first column) as an SVG line plot. Empty cells are gaps in the line.\n"
-    "  --relative-x   subtract the first x value (times in seconds since the start)\n"
-    "  --smooth N     plot the centred running mean over N rows (gaps: the mean of what is there)\n";
+    "--x column (default: the first column) as an SVG line plot. Empty cells are gaps in the line.";
 
 std::vector<std::string> split(const std::string& s, char sep) {
   std::vector<std::string> out;
@@ -54,16 +49,22 @@ double tickStep(double range, int target) {
 }  // namespace
 
 int runPlot(int argc, char** argv) {
-  Args a(argc, argv, {"--x", "--y", "--out", "--title", "--ylabel", "--xlabel", "--smooth"}, {"--help", "-h", "--relative-x"});
-  if (a.help()) {
-    std::fputs(kUsage, stdout);
-    return 0;
-  }
-  if (!a.ok() || a.positional().size() != 1 || !a.has("--y") || !a.has("--out")) {
-    std::fprintf(stderr, "boresight plot: %s\n\n%s", !a.ok() ? a.error().c_str() : "need FILE.csv, --y and --out", kUsage);
-    return 2;
-  }
-  const std::string path = a.positional()[0];
+  CLI::App app{kDescription, "boresight plot"};
+  std::string path, xname, ylist, outpath, title, ylabel, xlabel;
+  int smooth = 1;
+  bool relative_x = false;
+  app.add_option("FILE.csv", path, "the table")->required();
+  app.add_option("--y", ylist, "columns to draw, COL[,COL...]")->required()->type_name("COLS");
+  app.add_option("--out", outpath, "the SVG file to write")->required()->type_name("PLOT.svg");
+  app.add_option("--x", xname, "x column (default: the first column)")->type_name("COL");
+  app.add_option("--title", title, "plot title (default: the file name)");
+  app.add_option("--ylabel", ylabel, "y axis label");
+  app.add_option("--xlabel", xlabel, "x axis label (default: the x column)");
+  app.add_flag("--relative-x", relative_x, "subtract the first x value (times in seconds since the start)");
+  app.add_option("--smooth", smooth, "plot the centred running mean over N rows (gaps: the mean of what is there)")
+      ->check(CLI::PositiveNumber)
+      ->type_name("N");
+  if (const int rc = parseCommandLine(app, argc, argv); rc >= 0) return rc;
   std::ifstream in(path);
   if (!in) {
     std::fprintf(stderr, "boresight plot: %s: cannot open\n", path.c_str());
@@ -79,13 +80,13 @@ int runPlot(int argc, char** argv) {
     auto it = std::find(head.begin(), head.end(), name);
     return it == head.end() ? -1 : static_cast<int>(it - head.begin());
   };
-  int xc = a.has("--x") ? col(a.get("--x")) : 0;
+  int xc = !xname.empty() ? col(xname) : 0;
   if (xc < 0) {
-    std::fprintf(stderr, "boresight plot: %s: no column '%s'\n", path.c_str(), a.get("--x").c_str());
+    std::fprintf(stderr, "boresight plot: %s: no column '%s'\n", path.c_str(), xname.c_str());
     return 1;
   }
   std::vector<int> yc;
-  std::vector<std::string> ynames = split(a.get("--y"), ',');
+  std::vector<std::string> ynames = split(ylist, ',');
   for (const auto& n : ynames) {
     int c = col(n);
     if (c < 0) {
@@ -118,11 +119,6 @@ int runPlot(int argc, char** argv) {
     std::fprintf(stderr, "boresight plot: %s: no rows with a numeric x\n", path.c_str());
     return 1;
   }
-  const int smooth = std::atoi(a.get("--smooth", "1").c_str());
-  if (smooth < 1) {
-    std::fprintf(stderr, "boresight plot: --smooth wants a positive number of rows\n");
-    return 2;
-  }
   if (smooth > 1) {
     for (auto& s : y) {
       std::vector<double> m(s.size(), NAN);
@@ -139,7 +135,7 @@ int runPlot(int argc, char** argv) {
       s = m;
     }
   }
-  double x0 = a.has("--relative-x") ? x.front() : 0.0;
+  double x0 = relative_x ? x.front() : 0.0;
   for (double& v : x) v -= x0;
   double xmin = *std::min_element(x.begin(), x.end()), xmax = *std::max_element(x.begin(), x.end());
   double ymin = INFINITY, ymax = -INFINITY;
@@ -161,7 +157,7 @@ int runPlot(int argc, char** argv) {
   svg << "<svg xmlns='http://www.w3.org/2000/svg' width='" << W << "' height='" << H
       << "' font-family='sans-serif' font-size='12'>\n<rect width='100%' height='100%' fill='white'/>\n";
   svg << "<text x='" << W / 2 << "' y='22' text-anchor='middle' font-size='15'>"
-      << esc(a.get("--title", path)) << "</text>\n";
+      << esc(title.empty() ? path : title) << "</text>\n";
   double xs = tickStep(xmax - xmin, 8), ys = tickStep(ymax - ymin, 6);
   for (double t = std::ceil(xmin / xs) * xs; t <= xmax + 1e-9 * xs; t += xs) {
     svg << "<line x1='" << px(t) << "' y1='" << T << "' x2='" << px(t) << "' y2='" << H - B << "' stroke='#ddd'/>";
@@ -174,9 +170,9 @@ int runPlot(int argc, char** argv) {
   svg << "<rect x='" << L << "' y='" << T << "' width='" << W - L - R << "' height='" << H - T - B
       << "' fill='none' stroke='#444'/>\n";
   svg << "<text x='" << (L + W - R) / 2 << "' y='" << H - 12 << "' text-anchor='middle'>"
-      << esc(a.get("--xlabel", head[std::size_t(xc)] + (x0 != 0 ? " - " + std::to_string(x0) : ""))) << "</text>\n";
+      << esc(!xlabel.empty() ? xlabel : head[std::size_t(xc)] + (x0 != 0 ? " - " + std::to_string(x0) : "")) << "</text>\n";
   svg << "<text transform='translate(16," << (T + H - B) / 2 << ") rotate(-90)' text-anchor='middle'>"
-      << esc(a.get("--ylabel", "")) << "</text>\n";
+      << esc(ylabel) << "</text>\n";
   for (std::size_t k = 0; k < y.size(); ++k) {
     const char* c = colors[k % 7];
     svg << "<path fill='none' stroke='" << c << "' stroke-width='1.3' d='";
@@ -194,12 +190,12 @@ int runPlot(int argc, char** argv) {
         << "'/><text x='" << L + 28 + 150 * double(k) << "' y='" << T + 13 << "'>" << esc(ynames[k]) << "</text>\n";
   }
   svg << "</svg>\n";
-  std::ofstream out(a.get("--out"));
+  std::ofstream out(outpath);
   if (!(out << svg.str())) {
-    std::fprintf(stderr, "boresight plot: cannot write %s\n", a.get("--out").c_str());
+    std::fprintf(stderr, "boresight plot: cannot write %s\n", outpath.c_str());
     return 1;
   }
-  std::printf("%s: %zu points, %zu series%s\n", a.get("--out").c_str(), x.size(), y.size(),
+  std::printf("%s: %zu points, %zu series%s\n", outpath.c_str(), x.size(), y.size(),
               bad ? (", " + std::to_string(bad) + " rows without x skipped").c_str() : "");
   return 0;
 }

@@ -1,5 +1,5 @@
 // boresight simulate: real-format GRACE-FO Level-1 telemetry with known truth and injected effects.
-#include "args.h"
+#include "cli_common.h"
 #include "commands.h"
 
 #include <boresight/model/effects.h>
@@ -19,28 +19,18 @@
 namespace boresight::cli {
 namespace {
 
-void simulateUsage(std::FILE* out) {
-  std::fprintf(out,
-               "usage: boresight simulate --scenario FILE --seed N --duration SECONDS --out DIR\n"
-               "                          [--effect NAME:key=value,...]... [--no-lcm] [--quiet]\n"
-               "       boresight simulate --list-effects\n\n"
-               "Simulates GRACE-FO-like telemetry from a scenario (config/sim_gracefo.yaml) and writes into DIR:\n"
-               "  SCA1A_<date>_<sat>_<ver>.txt  all star-camera heads (blinded samples are absent)\n"
-               "  ACC1A_..., GNV1B_...          accelerometer (10 Hz, frame A) and orbit (Earth-fixed, 1 Hz)\n"
-               "  QSA1B_...                     the NOMINAL head alignment (the true one is in truth.yaml)\n"
-               "  sim.lcmlog                    the node's input messages (STAR_HEAD, ACCEL)\n"
-               "  truth.yaml                    seed, every injected effect, true mountings, run statistics\n\n"
-               "  --scenario FILE   scenario YAML (units and frames in its comments)\n"
-               "  --seed N          random seed (unsigned); the same seed gives identical files\n"
-               "  --duration S      simulated seconds (default: the scenario's duration_s)\n"
-               "  --out DIR         output folder (created)\n"
-               "  --effect SPEC     add an effect, repeatable; SPEC = NAME[:key=value,...], e.g.\n"
-               "                    thermal_periodic:sensor=2,harmonic=1,x_arcsec=5\n"
-               "                    time_offset:sensor=acc,offset_ms=30\n"
-               "  --no-lcm          do not write the LCM log\n"
-               "  --quiet           no progress bar or summary\n"
-               "  --list-effects    print the effect catalogue and exit\n");
-}
+const char* kFooter =
+    "Writes into DIR:\n"
+    "  SCA1A_<date>_<sat>_<ver>.txt  all star-camera heads (blinded samples are absent)\n"
+    "  ACC1A_..., GNV1B_...          accelerometer (10 Hz, frame A) and orbit (Earth-fixed, 1 Hz)\n"
+    "  QSA1B_...                     the NOMINAL head alignment (the true one is in truth.yaml)\n"
+    "  sim.lcmlog                    the node's input messages (STAR_HEAD, ACCEL)\n"
+    "  truth.yaml                    seed, every injected effect, true mountings, run statistics\n"
+    "\n"
+    "--effect SPEC: NAME[:key=value,...], repeatable, e.g.\n"
+    "  thermal_periodic:sensor=2,harmonic=1,x_arcsec=5\n"
+    "  time_offset:sensor=acc,offset_ms=30\n"
+    "`boresight simulate --list-effects` prints the catalogue.\n";
 
 bool makeDirs(const std::string& dir, std::string* error) {
   std::string cur;
@@ -84,56 +74,53 @@ class ProgressBar {
 }  // namespace
 
 int runSimulate(int argc, char** argv) {
-  Args a(argc, argv, {"--scenario", "--seed", "--duration", "--out", "--effect"},
-         {"--help", "-h", "--no-lcm", "--quiet", "--list-effects"});
-  if (a.help()) {
-    simulateUsage(stdout);
-    return 0;
-  }
-  if (a.has("--list-effects")) {
+  CLI::App app{"Simulates GRACE-FO-like telemetry (real Level-1 formats, an LCM log, truth.yaml) from a scenario\n"
+               "(config/sim_gracefo.yaml) with named physical effects.",
+               "boresight simulate"};
+  std::string scenario, out, seed_s;
+  std::vector<std::string> effects;
+  double duration = 0;
+  bool list_effects = false, no_lcm = false, quiet = false;
+  app.add_option("--scenario", scenario, "scenario YAML (units and frames in its comments)")->type_name("FILE");
+  app.add_option("--seed", seed_s, "random seed (unsigned); the same seed gives identical files")->type_name("N");
+  app.add_option("--duration", duration, "simulated seconds (default: the scenario's duration_s)")
+      ->check(CLI::Range(1e-6, 366 * 86400.0))
+      ->type_name("S");
+  app.add_option("--out", out, "output folder (created)")->type_name("DIR");
+  app.add_option("--effect", effects, "add an effect SPEC, repeatable (below)")->take_all()->expected(1)->allow_extra_args(false)->type_name("SPEC");
+  app.add_flag("--no-lcm", no_lcm, "do not write the LCM log");
+  app.add_flag("--quiet", quiet, "no progress bar or summary");
+  app.add_flag("--list-effects", list_effects, "print the effect catalogue and exit");
+  app.footer(kFooter);
+  if (const int rc = parseCommandLine(app, argc, argv); rc >= 0) return rc;
+  if (list_effects) {
     std::printf("effects (NAME:key=value,...; angles in arcsec, times in s since the start):\n%s",
                 model::effectCatalogueText().c_str());
     return 0;
   }
-  if (!a.ok() || !a.positional().empty() || !a.has("--scenario") || !a.has("--out") || !a.has("--seed")) {
-    std::fprintf(stderr, "boresight simulate: %s\n\n",
-                 !a.ok() ? a.error().c_str()
-                         : !a.positional().empty() ? ("unexpected argument " + a.positional()[0]).c_str()
-                                                   : "--scenario, --seed and --out are required");
-    simulateUsage(stderr);
+  if (scenario.empty() || out.empty() || seed_s.empty()) {
+    std::fprintf(stderr, "boresight simulate: --scenario, --seed and --out are required (--help lists the options)\n");
     return 2;
   }
   char* end = nullptr;
-  const std::string seed_s = a.get("--seed");
   errno = 0;
   const unsigned long long seed = std::strtoull(seed_s.c_str(), &end, 10);
-  if (seed_s.empty() || *end || errno || seed_s[0] == '-') {
+  if (*end || errno || seed_s[0] == '-') {
     std::fprintf(stderr, "boresight simulate: --seed: '%s' is not an unsigned integer\n", seed_s.c_str());
     return 2;
   }
-  double duration = 0;
-  if (a.has("--duration")) {
-    const std::string d = a.get("--duration");
-    duration = std::strtod(d.c_str(), &end);
-    if (d.empty() || *end || !(duration > 0) || duration > 366 * 86400.0) {
-      std::fprintf(stderr, "boresight simulate: --duration: '%s' is not a number of seconds in (0, 366 days]\n", d.c_str());
-      return 2;
-    }
-  }
   std::string err;
   sim::Scenario sc;
-  if (!sim::loadScenario(a.get("--scenario"), sc, &err) || !sim::addEffectArgs(sc, a.all("--effect"), &err)) {
+  if (!sim::loadScenario(scenario, sc, &err) || !sim::addEffectArgs(sc, effects, &err)) {
     std::fprintf(stderr, "boresight simulate: %s\n", err.c_str());
     return 1;
   }
-  const std::string out = a.get("--out");
   sim::Simulator simulator;
   if (!makeDirs(out, &err) || !simulator.init(sc, seed, duration, &err)) {
     std::fprintf(stderr, "boresight simulate: %s\n", err.c_str());
     return 1;
   }
-  const bool quiet = a.has("--quiet");
-  const bool lcm = sc.output.lcm_log && !a.has("--no-lcm");
+  const bool lcm = sc.output.lcm_log && !no_lcm;
   sim::Level1Sink l1;
   sim::LcmSink log;
   sim::TeeSink tee;
@@ -152,7 +139,7 @@ int runSimulate(int argc, char** argv) {
   files.push_back(qsa);
   if (lcm) files.push_back(out + "/sim.lcmlog");
   if (!l1.close(&err) || (lcm && !log.close(&err)) || !sim::writeQsa1b(qsa, simulator, &err) ||
-      !sim::writeTruthYaml(out + "/truth.yaml", simulator, a.all("--effect"), files, &err)) {
+      !sim::writeTruthYaml(out + "/truth.yaml", simulator, effects, files, &err)) {
     std::fprintf(stderr, "boresight simulate: %s\n", err.c_str());
     return 1;
   }
