@@ -1,4 +1,7 @@
-// libFuzzer target for the Level-1 readers; one executable per reader (BORESIGHT_FUZZ_<NAME>).
+// libFuzzer target for the Level-1 readers: one executable; the reader is chosen at run time by the
+// environment variable BORESIGHT_FUZZ_READER (header, sca1a, flagged, acc1a, sca1b, acc1b, gnv, qsa,
+// imu, thr, ihk, hrt, tim, clk, generic, summary), e.g.
+//   BORESIGHT_FUZZ_READER=sca1a build-fuzz/test/fuzz/fuzz_level1 -max_total_time=30 CORPUS
 //
 // Input layout: byte 0 selects the mode, the rest is the body.
 //   bit 0     : ReadOptions::on_error (0 skip, 1 stop)
@@ -20,7 +23,7 @@
 
 using namespace boresight::io;
 
-// A named namespace (not anonymous): each target uses only some helpers.
+// A named namespace (not anonymous), shared by all readers.
 namespace fuzz_helpers {
 
 [[noreturn]] void fail(const char* what) {
@@ -121,12 +124,22 @@ void runTyped(std::string_view body, std::uint8_t mode, Product p, bool has_bina
 }  // namespace fuzz_helpers
 using namespace fuzz_helpers;
 
-extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  if (size == 0) return 0;
-  const std::uint8_t mode = data[0];
-  const std::string_view body(reinterpret_cast<const char*>(data + 1), size - 1);
-  (void)mode;
-#if defined(BORESIGHT_FUZZ_HEADER)
+namespace fuzz_helpers {
+
+enum class Reader { Header, Sca1a, Flagged, Acc1a, Sca1b, Acc1b, Gnv, Qsa, Imu, Thr, Ihk, Hrt, Tim, Clk, Generic, Summary };
+struct NamedReader {
+  const char* name;
+  Reader reader;
+};
+constexpr NamedReader kReaders[] = {
+    {"header", Reader::Header}, {"sca1a", Reader::Sca1a}, {"flagged", Reader::Flagged}, {"acc1a", Reader::Acc1a},
+    {"sca1b", Reader::Sca1b},   {"acc1b", Reader::Acc1b}, {"gnv", Reader::Gnv},         {"qsa", Reader::Qsa},
+    {"imu", Reader::Imu},       {"thr", Reader::Thr},     {"ihk", Reader::Ihk},         {"hrt", Reader::Hrt},
+    {"tim", Reader::Tim},       {"clk", Reader::Clk},     {"generic", Reader::Generic}, {"summary", Reader::Summary},
+};
+Reader g_reader = Reader::Header;
+
+void fuzzHeader(std::string_view body) {
   Header h;
   std::size_t off = 12345;
   std::string err;
@@ -139,38 +152,16 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   }
   (void)productFromName(body.substr(0, 5));
   (void)productNameFromPath(body);
-#elif defined(BORESIGHT_FUZZ_SCA1A)
-  runTyped<Sca1aRecord>(body, mode, Product::SCA1A, false);
-#elif defined(BORESIGHT_FUZZ_FLAGGED)
-  runTyped<FlaggedRecord>(body, mode, (mode & 16) ? Product::AHK1A : Product::ACC1A, false);
-#elif defined(BORESIGHT_FUZZ_ACC1A)
-  runTyped<Acc1aRecord>(body, mode, (mode & 16) ? Product::ACT1A : Product::ACC1A, false);
-#elif defined(BORESIGHT_FUZZ_SCA1B)
-  runTyped<Sca1bRecord>(body, mode, Product::SCA1B, true);
-#elif defined(BORESIGHT_FUZZ_ACC1B)
-  runTyped<Acc1bRecord>(body, mode, (mode & 16) ? Product::ACT1B : Product::ACC1B, true);
-#elif defined(BORESIGHT_FUZZ_GNV)
-  runTyped<GnvRecord>(body, mode, (mode & 16) ? Product::GNI1B : Product::GNV1B, true);
-#elif defined(BORESIGHT_FUZZ_QSA)
-  runTyped<QsaRecord>(body, mode, (mode & 16) ? Product::QKS1B : Product::QSA1B, false);
-#elif defined(BORESIGHT_FUZZ_IMU)
-  runTyped<ImuRecord>(body, mode, Product::IMU1A, false);
-#elif defined(BORESIGHT_FUZZ_THR)
-  runTyped<ThrRecord>(body, mode, Product::THR1B, false);
-#elif defined(BORESIGHT_FUZZ_IHK)
-  runTyped<IhkRecord>(body, mode, Product::IHK1B, false);
-#elif defined(BORESIGHT_FUZZ_HRT)
-  runTyped<HrtRecord>(body, mode, Product::HRT1A, false);
-#elif defined(BORESIGHT_FUZZ_TIM)
-  runTyped<TimRecord>(body, mode, Product::TIM1B, false);
-#elif defined(BORESIGHT_FUZZ_CLK)
-  runTyped<ClkRecord>(body, mode, Product::CLK1B, false);
-#elif defined(BORESIGHT_FUZZ_GENERIC)
+}
+
+void fuzzGeneric(std::string_view body, std::uint8_t mode) {
   ReadOptions opt;
   opt.on_error = (mode & 1) ? OnError::Stop : OnError::Skip;
   auto f = parseGeneric(body, (mode & 2) ? "MAG1B_2023-06-01_C_04.txt" : "KBR1B_2003-09-14_X_00.asc", opt);
   checkIssues(f, body);
-#elif defined(BORESIGHT_FUZZ_SUMMARY)
+}
+
+void fuzzSummary(std::string_view body, std::uint8_t mode) {
   static const char* names[8] = {"SCA1A_2023-06-01_C_04.txt", "ACC1B_2003-09-14_A_00.dat", "GNV1B_2023-06-01_C_04.rpt",
                                  "x.dat", "THR1B_2003-09-14_A_00.asc", "KBR1B_2023-06-01_Y_04.txt",
                                  "HRT1A_2023-06-01_C_04.txt", "PROVENANCE.md"};
@@ -179,8 +170,45 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   ProductSummary s = summarizeText(body, names[(mode >> 1) & 7], opt);
   if (!s.ok && s.error.find('\n') != std::string::npos) fail("multi-line error");
   if (!s.ok && s.error.empty()) fail("failure without an error");
-#else
-#error "define one BORESIGHT_FUZZ_<READER>"
-#endif
+}
+
+}  // namespace fuzz_helpers
+
+extern "C" int LLVMFuzzerInitialize(int*, char***) {
+  const char* env = std::getenv("BORESIGHT_FUZZ_READER");
+  const std::string want = env ? env : "";
+  for (const auto& r : kReaders)
+    if (want == r.name) {
+      g_reader = r.reader;
+      return 0;
+    }
+  std::fprintf(stderr, "fuzz_level1: set BORESIGHT_FUZZ_READER to one of:");
+  for (const auto& r : kReaders) std::fprintf(stderr, " %s", r.name);
+  std::fprintf(stderr, " (got '%s')\n", want.c_str());
+  std::exit(2);
+}
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  if (size == 0) return 0;
+  const std::uint8_t mode = data[0];
+  const std::string_view body(reinterpret_cast<const char*>(data + 1), size - 1);
+  switch (g_reader) {
+    case Reader::Header: fuzzHeader(body); break;
+    case Reader::Sca1a: runTyped<Sca1aRecord>(body, mode, Product::SCA1A, false); break;
+    case Reader::Flagged: runTyped<FlaggedRecord>(body, mode, (mode & 16) ? Product::AHK1A : Product::ACC1A, false); break;
+    case Reader::Acc1a: runTyped<Acc1aRecord>(body, mode, (mode & 16) ? Product::ACT1A : Product::ACC1A, false); break;
+    case Reader::Sca1b: runTyped<Sca1bRecord>(body, mode, Product::SCA1B, true); break;
+    case Reader::Acc1b: runTyped<Acc1bRecord>(body, mode, (mode & 16) ? Product::ACT1B : Product::ACC1B, true); break;
+    case Reader::Gnv: runTyped<GnvRecord>(body, mode, (mode & 16) ? Product::GNI1B : Product::GNV1B, true); break;
+    case Reader::Qsa: runTyped<QsaRecord>(body, mode, (mode & 16) ? Product::QKS1B : Product::QSA1B, false); break;
+    case Reader::Imu: runTyped<ImuRecord>(body, mode, Product::IMU1A, false); break;
+    case Reader::Thr: runTyped<ThrRecord>(body, mode, Product::THR1B, false); break;
+    case Reader::Ihk: runTyped<IhkRecord>(body, mode, Product::IHK1B, false); break;
+    case Reader::Hrt: runTyped<HrtRecord>(body, mode, Product::HRT1A, false); break;
+    case Reader::Tim: runTyped<TimRecord>(body, mode, Product::TIM1B, false); break;
+    case Reader::Clk: runTyped<ClkRecord>(body, mode, Product::CLK1B, false); break;
+    case Reader::Generic: fuzzGeneric(body, mode); break;
+    case Reader::Summary: fuzzSummary(body, mode); break;
+  }
   return 0;
 }

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# Runs every libFuzzer target of BUILD_DIR for a bounded time and fails if any of them crashes.
-# Usage: test/fuzz/run_fuzzers.sh BUILD_DIR [SECONDS_PER_TARGET=30]   (BORESIGHT_FUZZ_SEED: libFuzzer seed, default 1)
+# Runs the libFuzzer target of BUILD_DIR on every reader for a bounded time and fails if any crashes.
+# Usage: test/fuzz/run_fuzzers.sh BUILD_DIR [SECONDS_PER_READER=30] [READER...]
+#   (default: every reader; BORESIGHT_FUZZ_SEED: libFuzzer seed, default 1)
 # BUILD_DIR must have been configured with clang and -DBORESIGHT_BUILD_FUZZ=ON, e.g.
 #   CC=clang CXX=clang++ cmake -S . -B build-fuzz -G Ninja -DBORESIGHT_BUILD_FUZZ=ON -DBORESIGHT_BUILD_BENCH=OFF
 #   ninja -C build-fuzz boresight_fuzzers
@@ -8,12 +9,14 @@
 # (../shared/data/real next to the project, or $BORESIGHT_REAL_DATA); nothing is written to the repo.
 set -euo pipefail
 
-build=${1:?usage: run_fuzzers.sh BUILD_DIR [SECONDS_PER_TARGET]}
+build=${1:?usage: run_fuzzers.sh BUILD_DIR [SECONDS_PER_READER] [READER...]}
 secs=${2:-30}
+shift 2 2>/dev/null || shift $#
 here=$(cd "$(dirname "$0")" && pwd)
 real=${BORESIGHT_REAL_DATA:-$here/../../../shared/data/real}
 fuzzdir=$build/test/fuzz
-[[ -d $fuzzdir ]] || { echo "no fuzz targets in $fuzzdir (configure with clang and -DBORESIGHT_BUILD_FUZZ=ON)" >&2; exit 2; }
+exe=$fuzzdir/fuzz_level1
+[[ -x $exe ]] || { echo "no $exe (configure with clang and -DBORESIGHT_BUILD_FUZZ=ON)" >&2; exit 2; }
 
 work=$(mktemp -d "${TMPDIR:-/tmp}/boresight-fuzz.XXXXXX")
 trap 'rm -rf "$work"' EXIT
@@ -83,17 +86,18 @@ PY
   fi
 }
 
+readers=("$@")
+[[ ${#readers[@]} -gt 0 ]] || readers=(header sca1a flagged acc1a sca1b acc1b gnv qsa imu thr ihk hrt tim clk generic summary)
 status=0
 summary=()
-for exe in "$fuzzdir"/fuzz_*; do
-  [[ -x $exe && -f $exe ]] || continue
-  name=$(basename "$exe")
-  reader=${name#fuzz_}
+for reader in "${readers[@]}"; do
+  [[ -n ${seeds[$reader]+x} ]] || { echo "unknown reader '$reader'" >&2; exit 2; }
+  name=fuzz_$reader
   make_corpus "$reader"
   log=$work/$name.log
   mkdir -p "$work/artifacts_$reader"
   echo "== $name: ${secs}s, seeds: $(ls "$work/corpus_$reader" | wc -l)"
-  if "$exe" -seed="${BORESIGHT_FUZZ_SEED:-1}" -max_total_time="$secs" -timeout=10 -rss_limit_mb=2048 -max_len=65536 -print_final_stats=1 \
+  if BORESIGHT_FUZZ_READER=$reader "$exe" -seed="${BORESIGHT_FUZZ_SEED:-1}" -max_total_time="$secs" -timeout=10 -rss_limit_mb=2048 -max_len=65536 -print_final_stats=1 \
       -artifact_prefix="$work/artifacts_$reader/" "$work/corpus_$reader" >"$log" 2>&1; then
     execs=$(grep -Eo 'stat::number_of_executed_units: *[0-9]+' "$log" | grep -Eo '[0-9]+$' || echo '?')
     summary+=("$name ok: $execs executions in ${secs}s")
@@ -111,5 +115,5 @@ for exe in "$fuzzdir"/fuzz_*; do
   fi
 done
 printf '%s\n' "${summary[@]}"
-[[ ${#summary[@]} -gt 0 ]] || { echo "no fuzz executables found in $fuzzdir" >&2; exit 2; }
+[[ ${#summary[@]} -gt 0 ]] || { echo "no reader was fuzzed" >&2; exit 2; }
 exit $status
