@@ -385,4 +385,12 @@ ProductFile<typename Codec::Record> makeEmpty(Product p, char satellite) {
   ProductFile<Codec::Record> makeProduct<Codec::Record>(Product p, char satellite) {                           \
     return detail::makeEmpty<Codec>(p, satellite);                                                             \
   }                                                                                                            \
+  template <>                                                                                                  \
+  bool parseRecord<Codec::Record>(FieldScanner & s, Codec::Record & r, Product p) {                            \
+    return Codec::parse(s, r, p) && s.finish();                                                                \
+  }                                                                                                            \
+  template <>                                                                                                  \
+  bool recordAccepts<Codec::Record>(Product p) {                                                               \
+    return Codec::accepts(p);                                                                                  \
+  }                                                                                                            \
   }

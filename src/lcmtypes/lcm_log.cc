@@ -6,6 +6,8 @@
 
 #include <lcm/lcm-cpp.hpp>
 
+#include <cerrno>
+#include <cstdio>
 #include <cstring>
 #include <vector>
 
@@ -89,6 +91,27 @@ LcmLogReader::LcmLogReader() : impl_(new Impl) {}
 LcmLogReader::~LcmLogReader() = default;
 
 bool LcmLogReader::open(const std::string& path, std::string* error) {
+  // An LCM log is recognised by its content: every event starts with the sync word 0xEDA1DA01
+  // (big-endian), so the first four bytes of a log are that word. Anything else is refused here
+  // rather than read as an empty log.
+  {
+    std::FILE* f = std::fopen(path.c_str(), "rb");
+    if (!f) {
+      if (error) *error = path + ": cannot open LCM log: " + std::strerror(errno);
+      return false;
+    }
+    unsigned char b[4] = {0, 0, 0, 0};
+    const std::size_t got = std::fread(b, 1, 4, f);
+    std::fclose(f);
+    // An empty file is an empty log (a writer that wrote no events leaves one).
+    if (got != 0 && (got != 4 || b[0] != 0xED || b[1] != 0xA1 || b[2] != 0xDA || b[3] != 0x01)) {
+      if (error)
+        *error = path + ": not an LCM log: " +
+                 (got < 4 ? std::string("shorter than one event header")
+                          : std::string("no LCM event sync word (0xEDA1DA01) at byte 0"));
+      return false;
+    }
+  }
   impl_->log.reset(new lcm::LogFile(path, "r"));
   if (!impl_->log->good()) {
     impl_->log.reset();

@@ -4,8 +4,10 @@
 #include <boresight/io/lcm_log.h>
 #include <boresight/io/level1.h>
 #include <boresight/io/time_format.h>
+#include <boresight/stream/engine.h>
+#include <boresight/stream/sources.h>
 
-#include "args.h"
+#include "cli_parse.h"
 #include "commands.h"
 
 #include <algorithm>
@@ -21,11 +23,13 @@ namespace {
 
 const char* kUsage =
     "usage: boresight process --config FILE INPUT... --out FILE.csv [--compare-sca1b FILE] [--clk1b FILE]\n"
+    "                         [--lookahead S] [--strict]\n"
     "\n"
     "Runs the real-time core (head fusion, CRN rates and angular acceleration, accelerometer angular\n"
     "acceleration through the same CRN, inter-boresight monitor) over Level-1 files (SCA1A, ACC1A, and\n"
-    "QSA1B for the mountings when the config says heads.mounting: qsa1b) or an LCM log (.lcm), in\n"
-    "sensor-time order, and writes one CSV row per output epoch:\n"
+    "QSA1B for the mountings when the config says heads.mounting: qsa1b) or LCM logs (recognised by\n"
+    "their content, whatever the extension), streamed in sensor-time order with constant memory, and\n"
+    "writes one CSV row per output epoch:\n"
     "  time_s            GPS seconds past 2000-01-01 12:00:00 (receiver time for Level-1A input)\n"
     "  q0,q1,q2,q3       fused body attitude q_I_B (R(q) = C_I_B), scalar first, through the mountings\n"
     "  w_x,w_y,w_z       angular rate, rad/s, body frame (empty where the CRN has too little data)\n"
@@ -41,64 +45,13 @@ const char* kUsage =
     "                        and scatter of the difference (arcsec, body axes)\n"
     "  --clk1b FILE          receiver-to-GPS clock offsets for that comparison (Level-1A tags are\n"
     "                        receiver time; without CLK1B they are compared as if they were GPS time)\n"
-    "  --strict              stop at the first malformed input line\n";
-
-struct Input {
-  std::vector<io::Sca1aRecord> sca;
-  std::vector<io::FlaggedRecord> acc;
-  std::vector<io::QsaRecord> qsa;
-  std::size_t rejected_lines = 0;
-};
-
-bool readInputs(const Args& a, Input& in) {
-  io::ReadOptions opt;
-  if (a.has("--strict")) opt.on_error = io::OnError::Stop;
-  for (const auto& f : a.positional()) {
-    if (f.size() > 4 && f.substr(f.size() - 4) == ".lcm") {
-      io::LcmAsLevel1 l;
-      std::string err;
-      if (!io::readLcmAsLevel1(f, 'C', true, l, &err)) {
-        std::fprintf(stderr, "boresight process: %s\n", err.c_str());
-        return false;
-      }
-      in.sca.insert(in.sca.end(), l.sca.begin(), l.sca.end());
-      in.acc.insert(in.acc.end(), l.acc.begin(), l.acc.end());
-      in.rejected_lines += l.invalid_heads + l.invalid_accel + l.decode_failures;
-      std::printf("%s: LCM log, %zu head and %zu accelerometer samples; invalid: %llu head, %llu accelerometer; "
-                  "%llu on other channels, %llu undecodable\n",
-                  f.c_str(), l.sca.size(), l.acc.size(), static_cast<unsigned long long>(l.invalid_heads),
-                  static_cast<unsigned long long>(l.invalid_accel), static_cast<unsigned long long>(l.unknown_channel),
-                  static_cast<unsigned long long>(l.decode_failures));
-      continue;
-    }
-    std::string name = io::productNameFromPath(f);
-    auto report = [&](const auto& p) {
-      std::printf("%s: %zu records, %zu rejected\n", f.c_str(), p.records.size(), p.rejected_count);
-      for (std::size_t i = 0; i < p.rejected.size() && i < 5; ++i) std::printf("    rejected %s\n", p.rejected[i].str().c_str());
-      in.rejected_lines += p.rejected_count;
-    };
-    if (name == "SCA1A") {
-      auto p = io::readProduct<io::Sca1aRecord>(f, opt);
-      if (!p.ok) return std::fprintf(stderr, "%s\n", p.error.c_str()), false;
-      report(p);
-      in.sca.insert(in.sca.end(), p.records.begin(), p.records.end());
-    } else if (name == "ACC1A") {
-      auto p = io::readProduct<io::FlaggedRecord>(f, opt);
-      if (!p.ok) return std::fprintf(stderr, "%s\n", p.error.c_str()), false;
-      report(p);
-      in.acc.insert(in.acc.end(), p.records.begin(), p.records.end());
-    } else if (name == "QSA1B") {
-      auto p = io::readProduct<io::QsaRecord>(f, opt);
-      if (!p.ok) return std::fprintf(stderr, "%s\n", p.error.c_str()), false;
-      report(p);
-      in.qsa.insert(in.qsa.end(), p.records.begin(), p.records.end());
-    } else {
-      std::fprintf(stderr, "boresight process: %s: not an input of process (SCA1A, ACC1A, QSA1B, .lcm)\n", f.c_str());
-      return false;
-    }
-  }
-  return true;
-}
+    "  --lookahead S         how far (seconds, default 2) samples may arrive out of time order and still be\n"
+    "                        sorted in; older ones are counted as rejected (late)\n"
+    "  --strict              stop at the first malformed input line\n"
+    "\n"
+    "Other Level-1 products among the inputs (GNV1B, SCA1B, CLK1B, ...) are listed as ignored. Level-1\n"
+    "files and LCM logs are not mixed in one run. Every record read is reported as used or rejected\n"
+    "with its reason.\n";
 
 /// Receiver time -> GPS time from CLK1B (t_gps = t_rcv + eps_time, linear between records).
 struct ClockMap {
@@ -150,15 +103,25 @@ Comparison compareAt(const std::vector<std::pair<double, Quat>>& fused, const st
   return c;
 }
 
-void compareSca1b(const std::vector<core::PipelineRow>& rows, const std::string& path, const ClockMap& clk) {
+/// The fused attitude of each row with heads (40 bytes a row: what the SCA1B comparison needs).
+class AttitudeTrack final : public stream::RowSink {
+ public:
+  bool write(const core::PipelineRow& r) override {
+    if (r.heads_used > 0) rows.emplace_back(r.t, r.q_I_B);
+    return true;
+  }
+  std::vector<std::pair<TimeUs, Quat>> rows;
+};
+
+void compareSca1b(const std::vector<std::pair<TimeUs, Quat>>& rows, const std::string& path, const ClockMap& clk) {
   auto p = io::readProduct<io::Sca1bRecord>(path);
   if (!p.ok) {
     std::fprintf(stderr, "boresight process: %s\n", p.error.c_str());
     return;
   }
   std::vector<std::pair<double, Quat>> fused;
-  for (const auto& r : rows)
-    if (r.heads_used > 0) fused.emplace_back(toSeconds(r.t) + clk.epsAt(r.t), r.q_I_B);
+  fused.reserve(rows.size());
+  for (const auto& r : rows) fused.emplace_back(toSeconds(r.first) + clk.epsAt(r.first), r.second);
   Comparison c0 = compareAt(fused, p.records, 0.0);
   if (c0.n == 0) {
     std::printf("SCA1B comparison: no common epochs\n");
@@ -185,152 +148,221 @@ void compareSca1b(const std::vector<core::PipelineRow>& rows, const std::string&
   for (int i = 0; i < 3; ++i) std::printf("  %c      %12.2f   %12.2f\n", ax[i], cb.mean[i], cb.sd[i]);
 }
 
+struct Inputs {
+  std::vector<std::string> sca, acc, lcm, qsa_files;
+  std::vector<std::pair<std::string, std::string>> ignored;  // file, product
+  std::vector<io::QsaRecord> qsa;
+};
+
+/// Sorts the inputs by what their content says they are. False (message printed) on a file that is
+/// neither a Level-1 product nor an LCM log, or on a mix of the two kinds.
+bool classify(const std::vector<std::string>& files, Inputs& in) {
+  for (const auto& f : files) {
+    stream::FileKind k = stream::identifyFile(f);
+    if (k.type == stream::FileKind::Type::kUnknown) {
+      std::fprintf(stderr, "boresight process: %s\n", k.reason.c_str());
+      return false;
+    }
+    if (k.type == stream::FileKind::Type::kLcmLog) {
+      in.lcm.push_back(f);
+      continue;
+    }
+    switch (k.product) {
+      case io::Product::SCA1A: in.sca.push_back(f); break;
+      case io::Product::ACC1A:
+      case io::Product::ACT1A: in.acc.push_back(f); break;
+      case io::Product::QSA1B: in.qsa_files.push_back(f); break;
+      default: in.ignored.emplace_back(f, k.product_name); break;
+    }
+  }
+  if (!in.lcm.empty() && !(in.sca.empty() && in.acc.empty())) {
+    std::fprintf(stderr,
+                 "boresight process: %s is an LCM log and %s is a Level-1 %s file: give either Level-1 files or LCM "
+                 "logs (they carry the same samples; mixing them would feed the core twice)\n",
+                 in.lcm.front().c_str(), (in.sca.empty() ? in.acc : in.sca).front().c_str(),
+                 in.sca.empty() ? "ACC1A" : "SCA1A");
+    return false;
+  }
+  for (const auto& f : in.qsa_files) {
+    auto p = io::readProduct<io::QsaRecord>(f);
+    if (!p.ok) {
+      std::fprintf(stderr, "boresight process: %s\n", p.error.c_str());
+      return false;
+    }
+    in.qsa.insert(in.qsa.end(), p.records.begin(), p.records.end());
+  }
+  return true;
+}
+
+/// The earliest head tag among the first head samples of the inputs (the QSA1B reference time).
+bool firstHeadTag(const Inputs& in, const io::ReadOptions& opt, TimeUs& t) {
+  bool found = false;
+  auto take = [&](stream::Source& s) {
+    stream::Sample x;
+    stream::Reject why;
+    for (int k = 0; k < 100000; ++k) {
+      auto n = s.next(x, why);
+      if (n == stream::Source::Next::kSample && x.kind == stream::Sample::Kind::kHead) {
+        if (!found || x.t < t) t = x.t;
+        found = true;
+        return;
+      }
+      if (n != stream::Source::Next::kSample && n != stream::Source::Next::kRejected) return;
+    }
+  };
+  for (const auto& f : in.sca) {
+    stream::Sca1aSource s;
+    if (s.open(f, opt, nullptr)) take(s);
+  }
+  for (const auto& f : in.lcm) {
+    stream::LcmLogSource s;
+    if (s.open(f, nullptr)) take(s);
+  }
+  return found;
+}
+
+/// Whether an LCM log carries accelerometer messages (looked for in its first 100 000 events).
+bool lcmHasAccel(const std::string& f) {
+  stream::LcmLogSource s;
+  if (!s.open(f, nullptr)) return false;
+  stream::Sample x;
+  stream::Reject why;
+  for (int k = 0; k < 100000; ++k) {
+    auto n = s.next(x, why);
+    if (n == stream::Source::Next::kSample && x.kind == stream::Sample::Kind::kAccel) return true;
+    if (n != stream::Source::Next::kSample && n != stream::Source::Next::kRejected) return false;
+  }
+  return false;
+}
+
 }  // namespace
 
 int runProcess(int argc, char** argv) {
-  Args a(argc, argv, {"--config", "--out", "--compare-sca1b", "--clk1b"}, {"--help", "-h", "--strict"});
-  if (a.help()) {
-    std::fputs(kUsage, stdout);
-    return 0;
-  }
-  if (!a.ok() || !a.has("--config") || !a.has("--out") || a.positional().empty()) {
-    std::fprintf(stderr, "boresight process: %s\n\n%s",
-                 !a.ok() ? a.error().c_str()
-                         : !a.has("--config") ? "--config is required"
-                                              : !a.has("--out") ? "--out is required" : "no INPUT given",
-                 kUsage);
-    return 2;
-  }
+  CLI::App app{"boresight process"};
+  std::string config, out, compare, clk1b;
+  std::vector<std::string> files;
+  bool strict = false;
+  double lookahead_s = 2.0;
+  app.add_option("--config", config)->required();
+  app.add_option("--out", out)->required();
+  app.add_option("--compare-sca1b", compare);
+  app.add_option("--clk1b", clk1b);
+  app.add_option("--lookahead", lookahead_s)->check(CLI::Range(0.0, 3600.0));
+  app.add_flag("--strict", strict);
+  app.add_option("inputs", files)->required();
+  if (int st = parseCommandLine(app, argc, argv, "process", kUsage); st >= 0) return st;
+
   io::PlatformConfig pc;
   std::string err;
-  if (!io::loadPlatformConfig(a.get("--config"), pc, &err)) {
+  if (!io::loadPlatformConfig(config, pc, &err)) {
     std::fprintf(stderr, "boresight process: %s\n", err.c_str());
     return 1;
   }
-  Input in;
-  if (!readInputs(a, in)) return 1;
-  if (in.sca.empty()) {
-    std::fprintf(stderr, "boresight process: no star sensor samples in the inputs\n");
+  Inputs in;
+  if (!classify(files, in)) return 1;
+  for (const auto& [f, product] : in.ignored)
+    std::printf("%s: %s is not an input of process (SCA1A, ACC1A, QSA1B, LCM log): ignored\n", f.c_str(),
+                product.c_str());
+  if (in.sca.empty() && in.lcm.empty()) {
+    std::fprintf(stderr, "boresight process: no star sensor input (SCA1A file or LCM log) among the inputs\n");
     return 1;
   }
-  std::stable_sort(in.sca.begin(), in.sca.end(), [](const io::Sca1aRecord& x, const io::Sca1aRecord& y) { return x.t < y.t; });
-  std::stable_sort(in.acc.begin(), in.acc.end(), [](const io::FlaggedRecord& x, const io::FlaggedRecord& y) { return x.t < y.t; });
+  io::ReadOptions opt;
+  if (strict) opt.on_error = io::OnError::Stop;
   if (pc.mounting_from_qsa1b) {
     if (in.qsa.empty()) {
       std::fprintf(stderr, "boresight process: %s takes the mountings from QSA1B (heads.mounting: qsa1b): give a QSA1B file\n",
-                   a.get("--config").c_str());
+                   config.c_str());
       return 1;
     }
-    if (!io::applyQsa1bMounting(pc, in.qsa, in.sca.front().t, &err)) {
+    TimeUs t0 = 0;
+    if (!firstHeadTag(in, opt, t0)) {
+      std::fprintf(stderr, "boresight process: no star sensor samples in the inputs\n");
+      return 1;
+    }
+    if (!io::applyQsa1bMounting(pc, in.qsa, t0, &err)) {
       std::fprintf(stderr, "boresight process: %s\n", err.c_str());
       return 1;
     }
   }
-  if (in.acc.empty()) pc.pipeline.use_accelerometer = false;
+  bool have_acc = !in.acc.empty();
+  for (const auto& f : in.lcm) have_acc = have_acc || lcmHasAccel(f);
+  if (!have_acc) pc.pipeline.use_accelerometer = false;
 
-  auto pipe = std::make_unique<core::Pipeline>();  // large fixed-size state: keep it off the stack
-  core::Status st = pipe->configure(pc.pipeline);
-  if (st != core::Status::kOk) {
-    std::fprintf(stderr, "boresight process: the core rejected the configuration: %s\n", core::statusName(st));
+  stream::AssemblerConfig acfg;
+  acfg.lookahead_us = static_cast<TimeUs>(std::llround(lookahead_s * 1e6));
+  stream::Engine engine(acfg);
+  if (!engine.configure(pc.pipeline, &err)) {
+    std::fprintf(stderr, "boresight process: %s\n", err.c_str());
     return 1;
   }
-
-  std::vector<core::PipelineRow> rows;
-  auto drain = [&] {
-    core::PipelineRow r;
-    while (pipe->popRow(r)) rows.push_back(r);
-  };
-  // Merge: head epochs (records with one tag) and accelerometer samples, in time order.
-  std::size_t i = 0, j = 0;
-  std::size_t acc_no_ang = 0, heads_over = 0;
-  while (i < in.sca.size() || j < in.acc.size()) {
-    bool take_head = j >= in.acc.size() || (i < in.sca.size() && in.sca[i].t <= in.acc[j].t);
-    if (take_head) {
-      core::HeadEpoch e;
-      e.t = in.sca[i].t;
-      while (i < in.sca.size() && in.sca[i].t == e.t) {
-        if (e.n < core::kMaxHeads) {
-          auto& s = e.sample[static_cast<std::size_t>(e.n++)];
-          s.head_id = in.sca[i].head;
-          s.q_I_Si = quatFromScalarFirst(in.sca[i].q);
-        } else {
-          ++heads_over;
-        }
-        ++i;
-      }
-      pipe->stepHeads(e);
-    } else {
-      const auto& r = in.acc[j++];
-      if (!(r.has(io::acc_bits::kAngX) && r.has(io::acc_bits::kAngY) && r.has(io::acc_bits::kAngZ))) {
-        ++acc_no_ang;
-        continue;
-      }
-      pipe->stepAcc(r.t, Vec3(r.value[3], r.value[4], r.value[5]));
+  auto addLevel1 = [&](auto source, const std::string& f) {
+    if (!source->open(f, opt, &err)) {
+      std::fprintf(stderr, "boresight process: %s\n", err.c_str());
+      return false;
     }
-    drain();
+    engine.addSource(std::move(source));
+    return true;
+  };
+  for (const auto& f : in.sca)
+    if (!addLevel1(std::make_unique<stream::Sca1aSource>(), f)) return 1;
+  for (const auto& f : in.acc)
+    if (!addLevel1(std::make_unique<stream::Acc1aSource>(), f)) return 1;
+  for (const auto& f : in.lcm) {
+    auto s = std::make_unique<stream::LcmLogSource>();
+    if (!s->open(f, &err)) {
+      std::fprintf(stderr, "boresight process: %s\n", err.c_str());
+      return 1;
+    }
+    engine.addSource(std::move(s));
   }
-  pipe->flush();
-  drain();
-
-  // CSV
-  const std::string out = a.get("--out");
-  std::FILE* f = std::fopen(out.c_str(), "w");
-  if (!f) {
-    std::fprintf(stderr, "boresight process: cannot write %s\n", out.c_str());
+  stream::CsvRowSink csv(out);
+  AttitudeTrack track;
+  engine.addSink(&csv);
+  if (!compare.empty()) engine.addSink(&track);
+  if (engine.run() != stream::Engine::Result::kDone) {
+    std::fprintf(stderr, "boresight process: %s\n", engine.error().c_str());
     return 1;
   }
-  const auto& hs = pc.pipeline.heads;
-  std::fprintf(f, "time_s,q0,q1,q2,q3,w_x,w_y,w_z,a_sc_x,a_sc_y,a_sc_z,a_acc_x,a_acc_y,a_acc_z");
-  for (int s1 = 0; s1 < hs.n_heads; ++s1)
-    for (int s2 = s1 + 1; s2 < hs.n_heads; ++s2)
-      std::fprintf(f, ",iba_%d%d_deg,iba_%d%d_dev_arcsec", hs.head[std::size_t(s1)].id, hs.head[std::size_t(s2)].id,
-                   hs.head[std::size_t(s1)].id, hs.head[std::size_t(s2)].id);
-  std::fprintf(f, ",heads_used\n");
-  auto num = [&](double v, const char* fmt) {
-    if (std::isfinite(v)) std::fprintf(f, fmt, v);
-    else std::fputc(',', f);
-  };
-  std::size_t with_rates = 0, with_acc = 0;
-  for (const auto& r : rows) {
-    std::int64_t sec = r.t / kUsPerSecond, us = r.t % kUsPerSecond;
-    if (us < 0) us += kUsPerSecond, --sec;
-    std::fprintf(f, "%lld.%06lld", static_cast<long long>(sec), static_cast<long long>(us));
-    double q[4];
-    quatToScalarFirst(r.q_I_B, q);
-    for (double v : q) std::fprintf(f, ",%.17g", v);
-    for (int k = 0; k < 3; ++k) num(r.has_rates ? r.w_B[k] : NAN, ",%.9e");
-    for (int k = 0; k < 3; ++k) num(r.has_rates ? r.a_sc_B[k] : NAN, ",%.9e");
-    for (int k = 0; k < 3; ++k) num(r.has_acc ? r.a_acc_B[k] : NAN, ",%.9e");
-    for (int s1 = 0; s1 < hs.n_heads; ++s1)
-      for (int s2 = s1 + 1; s2 < hs.n_heads; ++s2) {
-        int p = core::pairIndex(s1, s2);
-        num(r.iba_rad[std::size_t(p)] / kRadPerDeg, ",%.9f");
-        num(r.iba_dev_rad[std::size_t(p)] * kArcsecPerRad, ",%.3f");
-      }
-    std::fprintf(f, ",%d\n", r.heads_used);
-    with_rates += r.has_rates;
-    with_acc += r.has_acc;
-  }
-  std::fclose(f);
 
-  std::printf("\n%s: %zu rows (%zu with CRN rates, %zu with accelerometer values)\n", out.c_str(), rows.size(),
-              with_rates, with_acc);
-  if (rows.size() && !with_rates)
+  // Every input record is used or rejected with a reason.
+  for (std::size_t i = 0; i < engine.sourceCount(); ++i) {
+    const auto& c = engine.counters(i);
+    const auto& s = engine.source(i);
+    std::printf("%s: %llu read, %llu used", s.name().c_str(), static_cast<unsigned long long>(c.read),
+                static_cast<unsigned long long>(c.used()));
+    for (int r = 0; r < stream::kRejectCount; ++r)
+      if (c.rejected[std::size_t(r)])
+        std::printf(", %llu %s", static_cast<unsigned long long>(c.rejected[std::size_t(r)]),
+                    stream::rejectName(stream::Reject(r)));
+    std::printf("\n");
+    auto issues = s.issues();
+    for (std::size_t k = 0; k < issues.size() && k < 5; ++k) std::printf("    rejected %s\n", issues[k].c_str());
+  }
+  const auto& tot = engine.counters();
+  if (tot.used_heads == 0) {
+    std::fprintf(stderr, "boresight process: no star sensor samples in the inputs\n");
+    return 1;
+  }
+  std::printf("\n%s: %zu rows (%zu with CRN rates, %zu with accelerometer values)\n", out.c_str(), csv.rows(),
+              csv.withRates(), csv.withAcc());
+  if (csv.rows() && !csv.withRates())
     std::printf("  no rates: the CRN needs about %.0f s of data before and after an epoch; the input spans %.1f s\n",
-                pc.pipeline.crn_attitude.length_s / 2, toSeconds(in.sca.back().t - in.sca.front().t));
-  core::Health h = pipe->health();
+                pc.pipeline.crn_attitude.length_s / 2, toSeconds(engine.lastEpoch() - engine.firstEpoch()));
+  std::printf("inputs: %llu read = %llu used (%llu head samples in %llu epochs, %llu accelerometer) + %llu rejected\n",
+              static_cast<unsigned long long>(tot.read), static_cast<unsigned long long>(tot.used()),
+              static_cast<unsigned long long>(tot.used_heads), static_cast<unsigned long long>(engine.epochs()),
+              static_cast<unsigned long long>(tot.used_accel), static_cast<unsigned long long>(tot.rejectedTotal()));
+  core::Health h = engine.health();
   std::printf("core health (inputs by outcome):\n");
   for (int s = 0; s < core::kStatusCount; ++s)
     if (h.by_status[std::size_t(s)]) std::printf("  %-22s %llu\n", core::statusName(core::Status(s)),
                                                static_cast<unsigned long long>(h.by_status[std::size_t(s)]));
-  if (acc_no_ang) std::printf("  accelerometer records without angular acceleration: %zu (not used)\n", acc_no_ang);
-  if (heads_over) std::printf("  head samples beyond kMaxHeads in one epoch: %zu (dropped)\n", heads_over);
-  if (in.rejected_lines) std::printf("  input lines rejected by the readers: %zu\n", in.rejected_lines);
 
-  if (a.has("--compare-sca1b")) {
+  if (!compare.empty()) {
     ClockMap clk;
-    if (a.has("--clk1b")) {
-      auto c = io::readProduct<io::ClkRecord>(a.get("--clk1b"));
+    if (!clk1b.empty()) {
+      auto c = io::readProduct<io::ClkRecord>(clk1b);
       if (!c.ok) {
         std::fprintf(stderr, "boresight process: %s\n", c.error.c_str());
         return 1;
@@ -338,7 +370,7 @@ int runProcess(int argc, char** argv) {
       for (const auto& r : c.records)
         if (r.qualflg.value == 0) clk.r.push_back(r);
     }
-    compareSca1b(rows, a.get("--compare-sca1b"), clk);
+    compareSca1b(track.rows, compare, clk);
   }
   return 0;
 }

@@ -330,6 +330,17 @@ bool writeProduct(const std::string& path, const ProductFile<Rec>& f, std::strin
 template <typename Rec>
 ProductFile<Rec> makeProduct(Product product, char satellite);
 
+/// One record line (without its newline, not blank) into r; false with s.reason() when the line is
+/// malformed (every field is parsed and checked, and nothing may follow the last field). The
+/// building block of the streaming readers (boresight/io/product_stream.h).
+template <typename Rec>
+bool parseRecord(FieldScanner& s, Rec& r, Product product);
+
+/// Whether the record type reads that product (SCA1A for Sca1aRecord, ACC1A/ACT1A/AHK1A/AHK1B for
+/// FlaggedRecord, ...).
+template <typename Rec>
+bool recordAccepts(Product product);
+
 /// Declares the specialisations a record type provides (defined in src/io by BORESIGHT_IO_INSTANTIATE).
 #define BORESIGHT_IO_DECLARE(Rec)                                                                          \
   template <>                                                                                              \
@@ -341,7 +352,11 @@ ProductFile<Rec> makeProduct(Product product, char satellite);
   template <>                                                                                              \
   bool writeProduct<Rec>(const std::string& path, const ProductFile<Rec>& f, std::string* error);         \
   template <>                                                                                              \
-  ProductFile<Rec> makeProduct<Rec>(Product product, char satellite);
+  ProductFile<Rec> makeProduct<Rec>(Product product, char satellite);                                      \
+  template <>                                                                                              \
+  bool parseRecord<Rec>(FieldScanner & s, Rec & r, Product product);                                       \
+  template <>                                                                                              \
+  bool recordAccepts<Rec>(Product product);
 
 BORESIGHT_IO_DECLARE(Sca1aRecord)
 BORESIGHT_IO_DECLARE(FlaggedRecord)

@@ -1,0 +1,77 @@
+// Epoch assembler: merges the samples of several sources by time with a bounded look-ahead and
+// groups the head samples of one time tag into a core::HeadEpoch.
+//
+// Order handed out: by time tag; at equal tags heads before the accelerometer, then by source (in the
+// order they were added), then in the order each source gave them. That is the order of a stable
+// sort of all inputs concatenated, so within the look-ahead a stream gives what sorting all the data
+// would. A sample is handed out only when every unfinished source has read past its tag plus the
+// look-ahead (or the buffer is full), so samples up to `lookahead_us` out of order are sorted back
+// in. A sample older than what was already handed out (a head sample at or before it) is rejected as
+// Reject::kLate and counted; nothing is dropped silently. Memory: at most `max_buffered` samples.
+#pragma once
+
+#include <boresight/core/heads.h>
+#include <boresight/stream/source.h>
+
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+namespace boresight::stream {
+
+struct AssemblerConfig {
+  TimeUs lookahead_us = 2 * kUsPerSecond;  ///< how far out of order a sample may arrive and be sorted in
+  std::size_t max_buffered = 1u << 16;     ///< buffered samples at most (hand-out is forced beyond)
+};
+
+class EpochAssembler {
+ public:
+  enum class Out : std::uint8_t { kHeads, kAccel, kEnd, kPending, kError };
+
+  explicit EpochAssembler(const AssemblerConfig& cfg = {});
+  /// Sources are read in the order added (ties at equal tags too). Not owned.
+  void addSource(Source* s);
+  /// The next epoch (kHeads: `epoch`) or accelerometer sample (kAccel: `t`, `a_A`). kPending: a
+  /// source has nothing now (call again later); kError: a source failed (errorSource()).
+  Out next(core::HeadEpoch& epoch, TimeUs& t, Vec3& a_A);
+
+  /// Counters of all sources together, and of each (index = order added).
+  const Counters& counters() const { return total_; }
+  const Counters& counters(std::size_t source) const { return src_[source].c; }
+  std::size_t sourceCount() const { return src_.size(); }
+  int errorSource() const { return error_source_; }
+  std::size_t buffered() const { return heap_.size(); }
+  std::size_t maxBuffered() const { return max_seen_; }
+
+ private:
+  struct Item {
+    TimeUs t;
+    std::uint8_t kind;
+    std::uint32_t src;
+    std::uint64_t seq;
+    Sample s;
+  };
+  struct SourceState {
+    Source* s = nullptr;
+    bool done = false;
+    TimeUs frontier = std::numeric_limits<TimeUs>::min();
+    Counters c;
+  };
+  static bool later(const Item& a, const Item& b);
+  /// Reads one sample from source i into the buffer. False: pending or error (out says which).
+  bool pull(std::size_t i, Out& out);
+  void reject(std::size_t i, Reject why);
+  void pop(Item& it);
+
+  AssemblerConfig cfg_;
+  std::vector<SourceState> src_;
+  std::vector<Item> heap_;
+  Counters total_;
+  std::uint64_t seq_ = 0;
+  bool emitted_ = false;
+  TimeUs last_t_ = 0;
+  int error_source_ = -1;
+  std::size_t max_seen_ = 0;
+};
+
+}  // namespace boresight::stream

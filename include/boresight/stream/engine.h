@@ -1,0 +1,67 @@
+// The streaming replay engine: sources -> epoch assembler (bounded look-ahead) -> core::Pipeline ->
+// sinks. Memory does not depend on the span: the sources read in chunks, the assembler buffers at
+// most AssemblerConfig::max_buffered samples, the core is fixed-size and rows go straight to the
+// sinks. `boresight process` runs it over files; the node and the batch tools will run it too.
+//
+//   stream::Engine e;
+//   if (!e.configure(cfg, &err)) ...;
+//   e.addSource(std::move(sca_source));  e.addSink(&csv);
+//   auto r = e.run();                    // kDone, kPending (live source), kError (e.error())
+//   e.counters();                        // read == used + rejected, with reasons
+#pragma once
+
+#include <boresight/core/pipeline.h>
+#include <boresight/stream/assembler.h>
+#include <boresight/stream/sinks.h>
+#include <boresight/stream/source.h>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace boresight::stream {
+
+class Engine {
+ public:
+  enum class Result : std::uint8_t { kDone, kPending, kError };
+
+  explicit Engine(const AssemblerConfig& acfg = {});
+  ~Engine();
+  Engine(const Engine&) = delete;
+  Engine& operator=(const Engine&) = delete;
+
+  /// Configures the core. False with *error when the core rejects the configuration.
+  bool configure(const core::PipelineConfig& cfg, std::string* error);
+  void addSource(std::unique_ptr<Source> s);
+  void addSink(RowSink* sink);  ///< not owned; must outlive run()
+
+  /// Runs until every source is finished (then the core is flushed and the sinks end: kDone), a
+  /// source has nothing now (kPending: call run() again later), or a source or sink fails (kError).
+  Result run();
+
+  const std::string& error() const { return error_; }
+  const Counters& counters() const { return asm_.counters(); }
+  const Counters& counters(std::size_t source) const { return asm_.counters(source); }
+  const Source& source(std::size_t i) const { return *sources_[i]; }
+  std::size_t sourceCount() const { return sources_.size(); }
+  std::uint64_t rows() const { return rows_; }
+  TimeUs firstEpoch() const { return first_epoch_; }
+  TimeUs lastEpoch() const { return last_epoch_; }
+  std::uint64_t epochs() const { return epochs_; }
+  std::size_t maxBuffered() const { return asm_.maxBuffered(); }
+  core::Health health() const;
+  const core::Pipeline& pipeline() const { return *pipe_; }
+
+ private:
+  bool drain();
+  std::unique_ptr<core::Pipeline> pipe_;
+  EpochAssembler asm_;
+  std::vector<std::unique_ptr<Source>> sources_;
+  std::vector<RowSink*> sinks_;
+  std::string error_;
+  bool configured_ = false, begun_ = false, finished_ = false;
+  std::uint64_t rows_ = 0, epochs_ = 0;
+  TimeUs first_epoch_ = 0, last_epoch_ = 0;
+};
+
+}  // namespace boresight::stream

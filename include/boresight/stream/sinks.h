@@ -1,0 +1,69 @@
+// Sinks of the replay engine: where the core's output rows go. An LCM message sink (the node's
+// output) implements the same interface later.
+#pragma once
+
+#include <boresight/core/pipeline.h>
+
+#include <cstdio>
+#include <string>
+#include <vector>
+
+namespace boresight::stream {
+
+class RowSink {
+ public:
+  virtual ~RowSink() = default;
+  /// Before the first row, with the configuration the core runs (head ids for column names).
+  virtual bool begin(const core::PipelineConfig& /*cfg*/) { return true; }
+  virtual bool write(const core::PipelineRow& row) = 0;
+  /// After the last row (flush, close).
+  virtual bool end() { return true; }
+  /// Empty unless a call returned false.
+  virtual std::string error() const { return {}; }
+};
+
+/// The `boresight process` table: one CSV row per output epoch (columns in cmd_process --help).
+/// Numbers are formatted as printf's %.17g (quaternion), %.9e (rates, accelerations), %.9f (angles,
+/// deg) and %.3f (deviations, arcsec); a value that is not available is an empty field.
+class CsvRowSink final : public RowSink {
+ public:
+  explicit CsvRowSink(std::string path) : path_(std::move(path)) {}
+  ~CsvRowSink() override;
+  bool begin(const core::PipelineConfig& cfg) override;
+  bool write(const core::PipelineRow& row) override;
+  bool end() override;
+  std::string error() const override { return error_; }
+  std::size_t rows() const { return rows_; }
+  std::size_t withRates() const { return with_rates_; }
+  std::size_t withAcc() const { return with_acc_; }
+
+ private:
+  bool flushBuffer();
+  std::string path_, error_;
+  std::FILE* f_ = nullptr;
+  std::string buf_;
+  int n_heads_ = 0;
+  std::size_t rows_ = 0, with_rates_ = 0, with_acc_ = 0;
+};
+
+/// The last `capacity` rows in a ring (for a batch solver that works on a sliding span). Fixed
+/// memory after construction; rows beyond the capacity push the oldest out (counted).
+class BatchBufferSink final : public RowSink {
+ public:
+  explicit BatchBufferSink(std::size_t capacity);
+  bool write(const core::PipelineRow& row) override;
+  std::size_t size() const { return size_; }
+  std::size_t capacity() const { return ring_.size(); }
+  /// Row i of the buffer, 0 = oldest kept.
+  const core::PipelineRow& at(std::size_t i) const { return ring_[(head_ + i) % ring_.size()]; }
+  std::uint64_t written() const { return written_; }
+  std::uint64_t overwritten() const { return written_ - size_; }
+  void clear() { size_ = head_ = 0; }
+
+ private:
+  std::vector<core::PipelineRow> ring_;
+  std::size_t head_ = 0, size_ = 0;
+  std::uint64_t written_ = 0;
+};
+
+}  // namespace boresight::stream

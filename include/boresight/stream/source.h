@@ -1,0 +1,73 @@
+// The inputs of the streaming replay engine: samples, the reasons an input is not used, and the
+// interface every source implements (Level-1 files, an LCM log, later a live LCM subscription).
+//
+// Contract: every record or message a source reads is reported exactly once, either as a sample
+// (Next::kSample) or as rejected with a reason (Next::kRejected); the engine counts both, so
+// read == used + rejected holds for every run (EngineCounters).
+#pragma once
+
+#include <boresight/core/conventions.h>
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace boresight::stream {
+
+/// One input of the core: a star-head sample or an accelerometer angular acceleration.
+struct Sample {
+  enum class Kind : std::uint8_t { kHead = 0, kAccel = 1 };  ///< order at equal tags: heads first
+  Kind kind = Kind::kHead;
+  TimeUs t = 0;                 ///< sensor time tag, us past GPS J2000
+  int head_id = 0;              ///< kHead: telemetry id
+  Quat q_I_S = Quat::Identity();  ///< kHead: head attitude, R = C_I_S
+  Vec3 a_A = Vec3::Zero();      ///< kAccel: angular acceleration, rad/s^2, accelerometer frame
+};
+
+/// Why an input record or message was not handed to the core.
+enum class Reject : std::uint8_t {
+  kMalformed,       ///< the reader rejected the line (Level-1) or could not decode the message (LCM)
+  kInvalid,         ///< the message says it is not valid (head flags bit 0 clear)
+  kNoAngular,       ///< accelerometer record/message without (all three) angular accelerations
+  kOtherChannel,    ///< an LCM event on a channel the engine does not read
+  kLate,            ///< older than what was already handed to the core (beyond the look-ahead)
+  kTooManyHeads,    ///< more head samples in one epoch than core::kMaxHeads
+  kCount
+};
+constexpr int kRejectCount = static_cast<int>(Reject::kCount);
+const char* rejectName(Reject r);
+
+/// Counts of one source or of the whole run.
+struct Counters {
+  std::uint64_t read = 0;        ///< records / messages read
+  std::uint64_t used_heads = 0;  ///< head samples handed to the core
+  std::uint64_t used_accel = 0;  ///< accelerometer samples handed to the core
+  std::array<std::uint64_t, kRejectCount> rejected{};
+  std::uint64_t used() const { return used_heads + used_accel; }
+  std::uint64_t rejectedTotal() const {
+    std::uint64_t n = 0;
+    for (auto v : rejected) n += v;
+    return n;
+  }
+};
+
+class Source {
+ public:
+  enum class Next : std::uint8_t {
+    kSample,    ///< `out` holds the next sample
+    kRejected,  ///< one record/message was read and is not usable: `why` says why
+    kEnd,       ///< no more data, ever
+    kPending,   ///< nothing available now (a live source); ask again later
+    kError,     ///< the source cannot go on (read error, OnError::Stop): see error()
+  };
+  virtual ~Source() = default;
+  virtual Next next(Sample& out, Reject& why) = 0;
+  /// Name used in reports (the file name).
+  virtual const std::string& name() const = 0;
+  virtual std::string error() const { return {}; }
+  /// The first few rejected records with their place ("file:line: reason"), for reports.
+  virtual std::vector<std::string> issues() const { return {}; }
+};
+
+}  // namespace boresight::stream

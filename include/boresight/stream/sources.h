@@ -1,0 +1,86 @@
+// Sources of the replay engine: Level-1 files read as streams and LCM logs read straight into
+// samples; and the recognition of an input file by its content.
+#pragma once
+
+#include <boresight/io/level1.h>
+#include <boresight/io/product_stream.h>
+#include <boresight/stream/source.h>
+
+#include <memory>
+#include <string>
+
+namespace boresight::io {
+class LcmLogReader;
+}
+
+namespace boresight::stream {
+
+/// What an input file is, from its content: an LCM log by the LCM event sync word at byte 0, a
+/// Level-1 product by its header (and file name). Never reads more than the header.
+struct FileKind {
+  enum class Type : std::uint8_t { kLcmLog, kLevel1, kUnknown };
+  Type type = Type::kUnknown;
+  io::Product product = io::Product::Unknown;  ///< kLevel1
+  std::string product_name;                    ///< kLevel1: "SCA1A", ...
+  std::string reason;                          ///< kUnknown: "file:line: reason"
+};
+FileKind identifyFile(const std::string& path);
+
+/// True when the first four bytes are the LCM log event sync word (0xEDA1DA01, big-endian).
+bool hasLcmMagic(const std::string& path);
+
+/// SCA1A head samples from one file, in file order (the engine merges by time).
+class Sca1aSource final : public Source {
+ public:
+  bool open(const std::string& path, const io::ReadOptions& opt, std::string* error);
+  Next next(Sample& out, Reject& why) override;
+  const std::string& name() const override { return name_; }
+  std::string error() const override { return s_.error(); }
+  std::vector<std::string> issues() const override;
+  const io::Header& header() const { return s_.header(); }
+
+ private:
+  io::ProductStream<io::Sca1aRecord> s_;
+  std::string name_;
+  std::size_t reported_rejects_ = 0;
+  bool held_ = false, done_ = false;
+  io::Sca1aRecord rec_;
+};
+
+/// ACC1A (or ACT1A) angular accelerations from one file, in file order. Records without all three
+/// angular accelerations are rejected (Reject::kNoAngular).
+class Acc1aSource final : public Source {
+ public:
+  bool open(const std::string& path, const io::ReadOptions& opt, std::string* error);
+  Next next(Sample& out, Reject& why) override;
+  const std::string& name() const override { return name_; }
+  std::string error() const override { return s_.error(); }
+  std::vector<std::string> issues() const override;
+
+ private:
+  io::ProductStream<io::FlaggedRecord> s_;
+  std::string name_;
+  std::size_t reported_rejects_ = 0;
+  bool held_ = false, done_ = false;
+  io::FlaggedRecord rec_;
+};
+
+/// An LCM log (channels STAR_HEAD and ACCEL, see io/lcm_log.h) read message by message straight
+/// into samples. Head messages without the valid bit and accelerometer messages without valid
+/// angular acceleration are rejected with their reason; other channels and undecodable messages too.
+class LcmLogSource final : public Source {
+ public:
+  LcmLogSource();
+  ~LcmLogSource() override;
+  /// Refuses a file that does not start with the LCM sync word (with the file and the reason).
+  bool open(const std::string& path, std::string* error);
+  Next next(Sample& out, Reject& why) override;
+  const std::string& name() const override { return name_; }
+  std::string error() const override { return error_; }
+
+ private:
+  std::unique_ptr<io::LcmLogReader> r_;
+  std::string name_, error_;
+};
+
+}  // namespace boresight::stream

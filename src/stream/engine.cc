@@ -1,0 +1,88 @@
+// Engine: the replay loop (assembler -> core -> sinks).
+#include <boresight/stream/engine.h>
+
+namespace boresight::stream {
+
+Engine::Engine(const AssemblerConfig& acfg) : pipe_(std::make_unique<core::Pipeline>()), asm_(acfg) {}
+Engine::~Engine() = default;
+
+bool Engine::configure(const core::PipelineConfig& cfg, std::string* error) {
+  core::Status st = pipe_->configure(cfg);
+  configured_ = st == core::Status::kOk;
+  if (!configured_ && error) *error = std::string("the core rejected the configuration: ") + core::statusName(st);
+  return configured_;
+}
+
+void Engine::addSource(std::unique_ptr<Source> s) {
+  asm_.addSource(s.get());
+  sources_.push_back(std::move(s));
+}
+
+void Engine::addSink(RowSink* sink) { sinks_.push_back(sink); }
+
+core::Health Engine::health() const { return pipe_->health(); }
+
+bool Engine::drain() {
+  core::PipelineRow r;
+  while (pipe_->popRow(r)) {
+    ++rows_;
+    for (RowSink* s : sinks_)
+      if (!s->write(r)) {
+        error_ = s->error();
+        return false;
+      }
+  }
+  return true;
+}
+
+Engine::Result Engine::run() {
+  if (!configured_) {
+    error_ = "the engine is not configured";
+    return Result::kError;
+  }
+  if (finished_) return Result::kDone;
+  if (!begun_) {
+    for (RowSink* s : sinks_)
+      if (!s->begin(pipe_->config())) {
+        error_ = s->error();
+        return Result::kError;
+      }
+    begun_ = true;
+  }
+  core::HeadEpoch e;
+  TimeUs t = 0;
+  Vec3 a = Vec3::Zero();
+  for (;;) {
+    switch (asm_.next(e, t, a)) {
+      case EpochAssembler::Out::kHeads:
+        if (epochs_++ == 0) first_epoch_ = e.t;
+        last_epoch_ = e.t;
+        pipe_->stepHeads(e);
+        break;
+      case EpochAssembler::Out::kAccel:
+        pipe_->stepAcc(t, a);
+        break;
+      case EpochAssembler::Out::kPending:
+        return drain() ? Result::kPending : Result::kError;
+      case EpochAssembler::Out::kError: {
+        const Source& s = *sources_[static_cast<std::size_t>(asm_.errorSource())];
+        error_ = s.error().empty() ? s.name() + ": read failed" : s.error();
+        return Result::kError;
+      }
+      case EpochAssembler::Out::kEnd: {
+        pipe_->flush();
+        if (!drain()) return Result::kError;
+        for (RowSink* s : sinks_)
+          if (!s->end()) {
+            error_ = s->error();
+            return Result::kError;
+          }
+        finished_ = true;
+        return Result::kDone;
+      }
+    }
+    if (!drain()) return Result::kError;
+  }
+}
+
+}  // namespace boresight::stream

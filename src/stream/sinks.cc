@@ -1,0 +1,122 @@
+// CSV row sink (printf-identical numbers through std::to_chars) and the batch ring buffer.
+#include <boresight/stream/sinks.h>
+
+#include <charconv>
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+
+namespace boresight::stream {
+namespace {
+
+constexpr std::size_t kFlushBytes = 1u << 16;
+
+void putNum(std::string& b, double v, std::chars_format fmt, int prec) {
+  char tmp[64];
+  auto r = std::to_chars(tmp, tmp + sizeof tmp, v, fmt, prec);
+  b.append(tmp, static_cast<std::size_t>(r.ptr - tmp));
+}
+
+/// ",value" or "," when not finite (as the original fprintf code).
+void field(std::string& b, double v, std::chars_format fmt, int prec) {
+  b.push_back(',');
+  if (std::isfinite(v)) putNum(b, v, fmt, prec);
+}
+
+void putInt(std::string& b, long long v, int min_digits = 0) {
+  char tmp[32];
+  auto r = std::to_chars(tmp, tmp + sizeof tmp, v);
+  for (int k = static_cast<int>(r.ptr - tmp); k < min_digits; ++k) b.push_back('0');
+  b.append(tmp, static_cast<std::size_t>(r.ptr - tmp));
+}
+
+}  // namespace
+
+CsvRowSink::~CsvRowSink() {
+  if (f_) std::fclose(f_);
+}
+
+bool CsvRowSink::begin(const core::PipelineConfig& cfg) {
+  f_ = std::fopen(path_.c_str(), "w");
+  if (!f_) {
+    error_ = path_ + ": cannot write: " + std::strerror(errno);
+    return false;
+  }
+  const auto& hs = cfg.heads;
+  n_heads_ = hs.n_heads;
+  buf_.reserve(kFlushBytes + 4096);
+  buf_ = "time_s,q0,q1,q2,q3,w_x,w_y,w_z,a_sc_x,a_sc_y,a_sc_z,a_acc_x,a_acc_y,a_acc_z";
+  for (int s1 = 0; s1 < hs.n_heads; ++s1)
+    for (int s2 = s1 + 1; s2 < hs.n_heads; ++s2) {
+      const std::string p = std::to_string(hs.head[std::size_t(s1)].id) + std::to_string(hs.head[std::size_t(s2)].id);
+      buf_ += ",iba_" + p + "_deg,iba_" + p + "_dev_arcsec";
+    }
+  buf_ += ",heads_used\n";
+  return true;
+}
+
+bool CsvRowSink::write(const core::PipelineRow& r) {
+  if (!f_) return false;
+  std::int64_t sec = r.t / kUsPerSecond, us = r.t % kUsPerSecond;
+  if (us < 0) us += kUsPerSecond, --sec;
+  putInt(buf_, sec);
+  buf_.push_back('.');
+  putInt(buf_, us, 6);
+  double q[4];
+  quatToScalarFirst(r.q_I_B, q);
+  for (double v : q) field(buf_, v, std::chars_format::general, 17);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  for (int k = 0; k < 3; ++k) field(buf_, r.has_rates ? r.w_B[k] : nan, std::chars_format::scientific, 9);
+  for (int k = 0; k < 3; ++k) field(buf_, r.has_rates ? r.a_sc_B[k] : nan, std::chars_format::scientific, 9);
+  for (int k = 0; k < 3; ++k) field(buf_, r.has_acc ? r.a_acc_B[k] : nan, std::chars_format::scientific, 9);
+  for (int s1 = 0; s1 < n_heads_; ++s1)
+    for (int s2 = s1 + 1; s2 < n_heads_; ++s2) {
+      const auto p = static_cast<std::size_t>(core::pairIndex(s1, s2));
+      field(buf_, r.iba_rad[p] / kRadPerDeg, std::chars_format::fixed, 9);
+      field(buf_, r.iba_dev_rad[p] * kArcsecPerRad, std::chars_format::fixed, 3);
+    }
+  buf_.push_back(',');
+  putInt(buf_, r.heads_used);
+  buf_.push_back('\n');
+  ++rows_;
+  with_rates_ += r.has_rates;
+  with_acc_ += r.has_acc;
+  return buf_.size() < kFlushBytes || flushBuffer();
+}
+
+bool CsvRowSink::flushBuffer() {
+  if (std::fwrite(buf_.data(), 1, buf_.size(), f_) != buf_.size()) {
+    error_ = path_ + ": write failed: " + std::strerror(errno);
+    return false;
+  }
+  buf_.clear();
+  return true;
+}
+
+bool CsvRowSink::end() {
+  if (!f_) return false;
+  bool ok = flushBuffer();
+  if (std::fclose(f_) != 0 && ok) {
+    error_ = path_ + ": write failed";
+    ok = false;
+  }
+  f_ = nullptr;
+  return ok;
+}
+
+BatchBufferSink::BatchBufferSink(std::size_t capacity) : ring_(capacity < 1 ? 1 : capacity) {}
+
+bool BatchBufferSink::write(const core::PipelineRow& row) {
+  const std::size_t n = ring_.size();
+  if (size_ < n) {
+    ring_[(head_ + size_) % n] = row;
+    ++size_;
+  } else {
+    ring_[head_] = row;
+    head_ = (head_ + 1) % n;
+  }
+  ++written_;
+  return true;
+}
+
+}  // namespace boresight::stream

@@ -1,0 +1,176 @@
+// Level-1 and LCM log sources of the replay engine; input recognition by content.
+#include <boresight/io/lcm_log.h>
+#include <boresight/stream/sources.h>
+
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+
+namespace boresight::stream {
+
+const char* rejectName(Reject r) {
+  switch (r) {
+    case Reject::kMalformed: return "malformed (reader)";
+    case Reject::kInvalid: return "flagged invalid";
+    case Reject::kNoAngular: return "no angular acceleration";
+    case Reject::kOtherChannel: return "other LCM channel";
+    case Reject::kLate: return "late (beyond look-ahead)";
+    case Reject::kTooManyHeads: return "more heads than kMaxHeads";
+    case Reject::kCount: break;
+  }
+  return "?";
+}
+
+bool hasLcmMagic(const std::string& path) {
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  if (!f) return false;
+  unsigned char b[4] = {0, 0, 0, 0};
+  const bool got = std::fread(b, 1, 4, f) == 4;
+  std::fclose(f);
+  return got && b[0] == 0xED && b[1] == 0xA1 && b[2] == 0xDA && b[3] == 0x01;
+}
+
+FileKind identifyFile(const std::string& path) {
+  FileKind k;
+  if (std::FILE* f = std::fopen(path.c_str(), "rb")) {
+    std::fclose(f);
+  } else {
+    k.reason = path + ":0: cannot open: " + std::strerror(errno);
+    return k;
+  }
+  if (hasLcmMagic(path)) {
+    k.type = FileKind::Type::kLcmLog;
+    return k;
+  }
+  io::LineStream ls;
+  std::string err;
+  if (!ls.open(path, {}, &err, 4096)) {
+    k.reason = err + " (neither an LCM log nor a Level-1 product)";
+    return k;
+  }
+  k.type = FileKind::Type::kLevel1;
+  k.product = ls.header().product;
+  k.product_name = ls.header().product_name;
+  return k;
+}
+
+namespace {
+
+/// Shared by the Level-1 sources: rejected lines first (as the stream counted them), then the record.
+template <typename Stream, typename Rec>
+Source::Next level1Next(Stream& s, std::size_t& reported, bool& held, bool& done, Rec& rec, Reject& why) {
+  if (!held && !done) {
+    held = s.next(rec);
+    done = !held;
+  }
+  if (reported < s.rejectedCount()) {
+    ++reported;
+    why = Reject::kMalformed;
+    return Source::Next::kRejected;
+  }
+  if (held) {
+    held = false;
+    return Source::Next::kSample;
+  }
+  return s.ok() ? Source::Next::kEnd : Source::Next::kError;
+}
+
+template <typename Stream>
+std::vector<std::string> issuesOf(const Stream& s) {
+  std::vector<std::string> v;
+  for (const auto& i : s.rejected()) v.push_back(i.str());
+  return v;
+}
+
+}  // namespace
+
+bool Sca1aSource::open(const std::string& path, const io::ReadOptions& opt, std::string* error) {
+  name_ = path;
+  io::ReadOptions o = opt;
+  o.max_issues_kept = std::min<std::size_t>(o.max_issues_kept, 20);
+  return s_.open(path, o, error);
+}
+
+Source::Next Sca1aSource::next(Sample& out, Reject& why) {
+  Next n = level1Next(s_, reported_rejects_, held_, done_, rec_, why);
+  if (n == Next::kSample) {
+    out.kind = Sample::Kind::kHead;
+    out.t = rec_.t;
+    out.head_id = rec_.head;
+    out.q_I_S = quatFromScalarFirst(rec_.q);
+  }
+  return n;
+}
+
+std::vector<std::string> Sca1aSource::issues() const { return issuesOf(s_); }
+
+bool Acc1aSource::open(const std::string& path, const io::ReadOptions& opt, std::string* error) {
+  name_ = path;
+  io::ReadOptions o = opt;
+  o.max_issues_kept = std::min<std::size_t>(o.max_issues_kept, 20);
+  return s_.open(path, o, error);
+}
+
+Source::Next Acc1aSource::next(Sample& out, Reject& why) {
+  Next n = level1Next(s_, reported_rejects_, held_, done_, rec_, why);
+  if (n != Next::kSample) return n;
+  if (!(rec_.has(io::acc_bits::kAngX) && rec_.has(io::acc_bits::kAngY) && rec_.has(io::acc_bits::kAngZ))) {
+    why = Reject::kNoAngular;
+    return Next::kRejected;
+  }
+  out.kind = Sample::Kind::kAccel;
+  out.t = rec_.t;
+  out.a_A = Vec3(rec_.value[io::acc_bits::kAngX], rec_.value[io::acc_bits::kAngY], rec_.value[io::acc_bits::kAngZ]);
+  return n;
+}
+
+std::vector<std::string> Acc1aSource::issues() const { return issuesOf(s_); }
+
+LcmLogSource::LcmLogSource() = default;
+LcmLogSource::~LcmLogSource() = default;
+
+bool LcmLogSource::open(const std::string& path, std::string* error) {
+  name_ = path;
+  r_ = std::make_unique<io::LcmLogReader>();
+  if (!r_->open(path, error)) {
+    r_.reset();
+    return false;
+  }
+  return true;
+}
+
+Source::Next LcmLogSource::next(Sample& out, Reject& why) {
+  if (!r_) return Next::kEnd;
+  io::HeadSample h;
+  io::AccelSample a;
+  const std::uint64_t undecodable = r_->decodeFailures();
+  switch (r_->next(h, a)) {
+    case io::LcmLogReader::Kind::Head:
+      if (!(h.flags & 1)) {
+        why = Reject::kInvalid;
+        return Next::kRejected;
+      }
+      out.kind = Sample::Kind::kHead;
+      out.t = h.utime;
+      out.head_id = h.head_id;
+      out.q_I_S = quatFromScalarFirst(h.q);
+      return Next::kSample;
+    case io::LcmLogReader::Kind::Accel:
+      if (!(a.flags & 1)) {
+        why = Reject::kNoAngular;
+        return Next::kRejected;
+      }
+      out.kind = Sample::Kind::kAccel;
+      out.t = a.utime;
+      out.a_A = Vec3(a.ang_accel[0], a.ang_accel[1], a.ang_accel[2]);
+      return Next::kSample;
+    case io::LcmLogReader::Kind::Skipped:
+      why = r_->decodeFailures() != undecodable ? Reject::kMalformed : Reject::kOtherChannel;
+      return Next::kRejected;
+    case io::LcmLogReader::Kind::End:
+      break;
+  }
+  return Next::kEnd;
+}
+
+}  // namespace boresight::stream
