@@ -301,7 +301,7 @@ int runProcess(int argc, char** argv) {
       std::fprintf(stderr, "boresight process: %s\n", err.c_str());
       return false;
     }
-    engine.addSource(std::move(source));
+    engine.addSource(std::make_unique<stream::PrefetchSource>(std::move(source)));  // parse beside the core
     return true;
   };
   for (const auto& f : in.sca)
@@ -314,7 +314,7 @@ int runProcess(int argc, char** argv) {
       std::fprintf(stderr, "boresight process: %s\n", err.c_str());
       return 1;
     }
-    engine.addSource(std::move(s));
+    engine.addSource(std::make_unique<stream::PrefetchSource>(std::move(s)));
   }
   stream::CsvRowSink csv(out);
   AttitudeTrack track;

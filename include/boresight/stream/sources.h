@@ -84,3 +84,26 @@ class LcmLogSource final : public Source {
 };
 
 }  // namespace boresight::stream
+
+namespace boresight::stream {
+
+/// Runs another (file) source on its own thread and hands its results over in batches through a
+/// bounded queue, so parsing overlaps the core. Memory: at most `queue_batches` batches of
+/// `batch_size` results. Do not wrap a live source (kPending ends its batch and is passed on).
+class PrefetchSource final : public Source {
+ public:
+  explicit PrefetchSource(std::unique_ptr<Source> inner, std::size_t batch_size = 2048, std::size_t queue_batches = 4);
+  ~PrefetchSource() override;
+  Next next(Sample& out, Reject& why) override;
+  const std::string& name() const override { return inner_->name(); }
+  /// Valid once next() has returned kEnd or kError (the worker has finished then).
+  std::string error() const override;
+  std::vector<std::string> issues() const override;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Source> inner_;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace boresight::stream
