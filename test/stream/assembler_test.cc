@@ -1,0 +1,252 @@
+// Epoch assembler and sinks on hand-made sources: order, ties, grouping, look-ahead, rejects,
+// pending and failing sources, and the CSV number format against printf.
+#include <boresight/stream/assembler.h>
+#include <boresight/stream/sinks.h>
+#include <boresight/stream/sources.h>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <random>
+#include <sstream>
+#include <string>
+#include <vector>
+
+using namespace boresight;
+using stream::Sample;
+using stream::Source;
+
+namespace {
+
+std::string slurp(const std::string& path) {
+  std::string s;
+  if (std::FILE* f = std::fopen(path.c_str(), "rb")) {
+    char b[65536];
+    std::size_t n;
+    while ((n = std::fread(b, 1, sizeof b, f)) > 0) s.append(b, n);
+    std::fclose(f);
+  }
+  return s;
+}
+
+struct Step {
+  Source::Next n;
+  Sample s;
+  stream::Reject why = stream::Reject::kMalformed;
+};
+
+/// A source that replays a script.
+class ScriptSource final : public Source {
+ public:
+  explicit ScriptSource(std::vector<Step> steps, std::string name = "script") : steps_(std::move(steps)), name_(std::move(name)) {}
+  Next next(Sample& out, stream::Reject& why) override {
+    if (i_ >= steps_.size()) return Next::kEnd;
+    const Step& s = steps_[i_++];
+    out = s.s;
+    why = s.why;
+    return s.n;
+  }
+  const std::string& name() const override { return name_; }
+  std::string error() const override { return "script failed"; }
+
+ private:
+  std::vector<Step> steps_;
+  std::size_t i_ = 0;
+  std::string name_;
+};
+
+Step head(double t_s, int id) {
+  Step s{Source::Next::kSample, {}};
+  s.s.kind = Sample::Kind::kHead;
+  s.s.t = static_cast<TimeUs>(std::llround(t_s * 1e6));
+  s.s.head_id = id;
+  return s;
+}
+Step acc(double t_s, double v = 0) {
+  Step s{Source::Next::kSample, {}};
+  s.s.kind = Sample::Kind::kAccel;
+  s.s.t = static_cast<TimeUs>(std::llround(t_s * 1e6));
+  s.s.a_A = Vec3(v, 0, 0);
+  return s;
+}
+
+/// What the assembler handed out, as text: "H<t>:<ids>" or "A<t>".
+std::string drain(stream::EpochAssembler& a, stream::EpochAssembler::Out* last = nullptr) {
+  std::ostringstream o;
+  core::HeadEpoch e;
+  TimeUs t;
+  Vec3 v;
+  for (;;) {
+    auto r = a.next(e, t, v);
+    if (r == stream::EpochAssembler::Out::kHeads) {
+      o << "H" << e.t / 1000000.0 << ":";
+      for (int k = 0; k < e.n; ++k) o << e.sample[std::size_t(k)].head_id;
+      o << " ";
+    } else if (r == stream::EpochAssembler::Out::kAccel) {
+      o << "A" << t / 1000000.0 << " ";
+    } else {
+      if (last) *last = r;
+      break;
+    }
+  }
+  return o.str();
+}
+
+}  // namespace
+
+TEST(Assembler, MergesByTimeHeadsFirstThenSourceOrder) {
+  ScriptSource a({head(1, 1), head(1, 2), head(2, 1), head(3, 1)});
+  ScriptSource b({acc(0.5), acc(1), acc(2.5), acc(3)});
+  ScriptSource c({head(1, 3), head(3, 2)});
+  stream::EpochAssembler as;
+  as.addSource(&a);
+  as.addSource(&b);
+  as.addSource(&c);
+  EXPECT_EQ(drain(as), "A0.5 H1:123 A1 H2:1 A2.5 H3:12 A3 ");
+  EXPECT_EQ(as.counters().read, 10u);
+  EXPECT_EQ(as.counters().used_heads, 6u);
+  EXPECT_EQ(as.counters().used_accel, 4u);
+  EXPECT_EQ(as.counters(2).used_heads, 2u);
+}
+
+TEST(Assembler, SortsInsideTheLookAheadAndRejectsLateSamples) {
+  // 0.4 s out of order: sorted with a 1 s look-ahead. The head at 0.2 s comes after 3 s: late.
+  ScriptSource a({head(1, 1), head(0.6, 1), head(2, 1), head(3, 1), head(0.2, 2), head(3, 2), head(4, 1)});
+  stream::AssemblerConfig cfg;
+  cfg.lookahead_us = kUsPerSecond;
+  stream::EpochAssembler as(cfg);
+  as.addSource(&a);
+  EXPECT_EQ(drain(as), "H0.6:1 H1:1 H2:1 H3:12 H4:1 ");
+  EXPECT_EQ(as.counters().rejected[std::size_t(stream::Reject::kLate)], 1u);
+  EXPECT_EQ(as.counters().read, as.counters().used() + as.counters().rejectedTotal());
+}
+
+TEST(Assembler, AHeadAtAnEpochAlreadyHandedOutIsLate) {
+  // Look-ahead 1 us: the second head of t=1 arrives after t=1 went (and after a later sample).
+  ScriptSource a({head(1, 1), head(2, 1), head(1, 2)});
+  stream::AssemblerConfig cfg;
+  cfg.lookahead_us = 1;
+  stream::EpochAssembler as(cfg);
+  as.addSource(&a);
+  EXPECT_EQ(drain(as), "H1:1 H2:1 ");
+  EXPECT_EQ(as.counters().rejected[std::size_t(stream::Reject::kLate)], 1u);
+}
+
+TEST(Assembler, MoreHeadsThanTheCoreTakesAreCounted) {
+  std::vector<Step> s;
+  for (int id = 1; id <= core::kMaxHeads + 2; ++id) s.push_back(head(1, id));
+  ScriptSource a(s);
+  stream::EpochAssembler as;
+  as.addSource(&a);
+  drain(as);
+  EXPECT_EQ(as.counters().used_heads, std::uint64_t(core::kMaxHeads));
+  EXPECT_EQ(as.counters().rejected[std::size_t(stream::Reject::kTooManyHeads)], 2u);
+  EXPECT_EQ(as.counters().read, as.counters().used() + as.counters().rejectedTotal());
+}
+
+TEST(Assembler, RejectedRecordsPendingAndErrors) {
+  Step bad{Source::Next::kRejected, {}, stream::Reject::kNoAngular};
+  Step pending{Source::Next::kPending, {}};
+  ScriptSource a({head(1, 1), bad, pending, head(5, 1)});
+  stream::EpochAssembler as;
+  as.addSource(&a);
+  stream::EpochAssembler::Out last{};
+  // Pending before 1 s + look-ahead is reached: nothing can go out yet.
+  EXPECT_EQ(drain(as, &last), "");
+  EXPECT_EQ(last, stream::EpochAssembler::Out::kPending);
+  EXPECT_EQ(drain(as, &last), "H1:1 H5:1 ");
+  EXPECT_EQ(last, stream::EpochAssembler::Out::kEnd);
+  EXPECT_EQ(as.counters().rejected[std::size_t(stream::Reject::kNoAngular)], 1u);
+  EXPECT_EQ(as.counters().read, 3u);
+
+  ScriptSource b({head(1, 1), Step{Source::Next::kError, {}}});
+  stream::EpochAssembler as2;
+  as2.addSource(&b);
+  EXPECT_EQ(drain(as2, &last), "");
+  EXPECT_EQ(last, stream::EpochAssembler::Out::kError);
+  EXPECT_EQ(as2.errorSource(), 0);
+}
+
+TEST(Assembler, PrefetchHandsOverTheSameSequence) {
+  std::vector<Step> s;
+  for (int k = 0; k < 1000; ++k) {
+    s.push_back(head(k * 0.5, 1 + k % 3));
+    if (k % 7 == 0) s.push_back(Step{Source::Next::kRejected, {}, stream::Reject::kMalformed});
+  }
+  ScriptSource direct(s);
+  stream::PrefetchSource pre(std::make_unique<ScriptSource>(s), 16, 2);
+  stream::EpochAssembler a1, a2;
+  a1.addSource(&direct);
+  a2.addSource(&pre);
+  EXPECT_EQ(drain(a1), drain(a2));
+  EXPECT_EQ(a1.counters().rejectedTotal(), a2.counters().rejectedTotal());
+  EXPECT_EQ(a2.counters().rejectedTotal(), 143u);
+}
+
+TEST(CsvRowSink, NumbersAreFormattedAsPrintf) {
+  char tmpl[] = "/tmp/boresight_csv_XXXXXX";
+  const std::string dir = ::mkdtemp(tmpl);
+  const std::string path = dir + "/rows.csv";
+  core::PipelineConfig cfg;
+  cfg.heads.n_heads = 3;
+  for (int s = 0; s < 3; ++s) cfg.heads.head[std::size_t(s)].id = s + 1;
+  stream::CsvRowSink sink(path);
+  ASSERT_TRUE(sink.begin(cfg));
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> u(-1, 1);
+  std::vector<core::PipelineRow> rows;
+  for (int i = 0; i < 300; ++i) {
+    core::PipelineRow r;
+    r.t = 738849600LL * kUsPerSecond + i * 499999LL - (i == 5 ? 800000000000000LL : 0);
+    r.q_I_B = Quat(u(rng), u(rng), u(rng), u(rng)).normalized();
+    r.heads_used = i % 4;
+    r.has_rates = i % 5 != 0;
+    r.has_acc = i % 3 != 0;
+    const double scale = std::pow(10.0, -12 + i % 14);
+    r.w_B = Vec3(u(rng), u(rng), u(rng)) * scale;
+    r.a_sc_B = Vec3(u(rng), u(rng), u(rng)) * scale;
+    r.a_acc_B = Vec3(u(rng), 0.0, -0.0) * scale;
+    for (auto& v : r.iba_rad) v = i % 7 == 0 ? std::nan("") : u(rng) * 3;
+    for (auto& v : r.iba_dev_rad) v = u(rng) * 1e-4 * scale;
+    rows.push_back(r);
+    ASSERT_TRUE(sink.write(r));
+  }
+  ASSERT_TRUE(sink.end());
+  // The same rows through printf, as process wrote them before the engine.
+  std::string expect = "time_s,q0,q1,q2,q3,w_x,w_y,w_z,a_sc_x,a_sc_y,a_sc_z,a_acc_x,a_acc_y,a_acc_z,"
+                       "iba_12_deg,iba_12_dev_arcsec,iba_13_deg,iba_13_dev_arcsec,iba_23_deg,iba_23_dev_arcsec,heads_used\n";
+  char b[128];
+  auto num = [&](double v, const char* fmt) {
+    if (std::isfinite(v)) {
+      std::snprintf(b, sizeof b, fmt, v);
+      expect += b;
+    } else {
+      expect += ',';
+    }
+  };
+  for (const auto& r : rows) {
+    std::int64_t sec = r.t / kUsPerSecond, us = r.t % kUsPerSecond;
+    if (us < 0) us += kUsPerSecond, --sec;
+    std::snprintf(b, sizeof b, "%lld.%06lld", static_cast<long long>(sec), static_cast<long long>(us));
+    expect += b;
+    double q[4];
+    quatToScalarFirst(r.q_I_B, q);
+    for (double v : q) num(v, ",%.17g");
+    for (int k = 0; k < 3; ++k) num(r.has_rates ? r.w_B[k] : NAN, ",%.9e");
+    for (int k = 0; k < 3; ++k) num(r.has_rates ? r.a_sc_B[k] : NAN, ",%.9e");
+    for (int k = 0; k < 3; ++k) num(r.has_acc ? r.a_acc_B[k] : NAN, ",%.9e");
+    for (int s1 = 0; s1 < 3; ++s1)
+      for (int s2 = s1 + 1; s2 < 3; ++s2) {
+        const auto p = std::size_t(core::pairIndex(s1, s2));
+        num(r.iba_rad[p] / kRadPerDeg, ",%.9f");
+        num(r.iba_dev_rad[p] * kArcsecPerRad, ",%.3f");
+      }
+    std::snprintf(b, sizeof b, ",%d\n", r.heads_used);
+    expect += b;
+  }
+  std::string got = slurp(path);
+  EXPECT_EQ(got, expect);
+  EXPECT_EQ(sink.rows(), rows.size());
+}

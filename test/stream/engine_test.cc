@@ -1,0 +1,444 @@
+// The streaming replay engine on simulated spans, against a reference replay that loads everything,
+// sorts it and merges it (the replay `boresight process` used before the engine). Rows are compared
+// bit for bit; every input record must be used or rejected with a reason.
+#include <boresight/io/core_config.h>
+#include <boresight/io/level1.h>
+#include <boresight/sim/output.h>
+#include <boresight/sim/scenario.h>
+#include <boresight/sim/simulator.h>
+#include <boresight/stream/engine.h>
+#include <boresight/stream/sources.h>
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <unistd.h>
+#include <vector>
+
+using namespace boresight;
+
+namespace {
+
+std::string slurp(const std::string& path) {
+  std::string s;
+  if (std::FILE* f = std::fopen(path.c_str(), "rb")) {
+    char b[65536];
+    std::size_t n;
+    while ((n = std::fread(b, 1, sizeof b, f)) > 0) s.append(b, n);
+    std::fclose(f);
+  }
+  return s;
+}
+
+std::string sourceDir() { return BORESIGHT_SOURCE_DIR; }
+
+std::string tempDir() {
+  char tmpl[] = "/tmp/boresight_stream_XXXXXX";
+  const char* d = ::mkdtemp(tmpl);
+  return d ? d : "/tmp";
+}
+
+/// A simulated span written as `simulate` writes it: SCA1A, ACC1A, QSA1B and the LCM log.
+struct Span {
+  std::string dir, sca, acc, qsa, lcm;
+};
+
+Span simulate(double seconds, std::uint64_t seed = 11) {
+  Span s;
+  s.dir = tempDir();
+  sim::Scenario sc;
+  std::string err;
+  EXPECT_TRUE(sim::loadScenario(sourceDir() + "/config/sim_gracefo.yaml", sc, &err)) << err;
+  sim::Simulator simulator;
+  EXPECT_TRUE(simulator.init(sc, seed, seconds, &err)) << err;
+  sim::Level1Sink l1;
+  sim::LcmSink log;
+  s.lcm = s.dir + "/sim.lcmlog";
+  EXPECT_TRUE(l1.open(s.dir, sc, &err)) << err;
+  EXPECT_TRUE(log.open(s.lcm, &err)) << err;
+  sim::TeeSink tee;
+  tee.add(&l1);
+  tee.add(&log);
+  simulator.run(tee);
+  EXPECT_TRUE(l1.close(&err)) << err;
+  EXPECT_TRUE(log.close(&err)) << err;
+  s.sca = s.dir + "/" + sim::productFileName("SCA1A", sc);
+  s.acc = s.dir + "/" + sim::productFileName("ACC1A", sc);
+  s.qsa = s.dir + "/" + sim::productFileName("QSA1B", sc);
+  EXPECT_TRUE(sim::writeQsa1b(s.qsa, simulator, &err)) << err;
+  return s;
+}
+
+/// One simulated span shared by the tests (10 minutes: rates need ~35 s on each side).
+const Span& span() {
+  static const Span s = simulate(600.0);
+  return s;
+}
+
+core::PipelineConfig pipelineConfig(const std::vector<io::Sca1aRecord>& sca, bool with_acc = true) {
+  io::PlatformConfig pc;
+  std::string err;
+  EXPECT_TRUE(io::loadPlatformConfig(sourceDir() + "/config/gracefo.yaml", pc, &err)) << err;
+  auto q = io::readProduct<io::QsaRecord>(span().qsa);
+  EXPECT_TRUE(q.ok) << q.error;
+  TimeUs t0 = sca.empty() ? 0 : std::min_element(sca.begin(), sca.end(), [](auto& a, auto& b) { return a.t < b.t; })->t;
+  EXPECT_TRUE(io::applyQsa1bMounting(pc, q.records, t0, &err)) << err;
+  if (!with_acc) pc.pipeline.use_accelerometer = false;
+  return pc.pipeline;
+}
+
+/// The replay before the engine: everything loaded, stable-sorted by time, merged (heads first).
+std::vector<core::PipelineRow> referenceRows(std::vector<io::Sca1aRecord> sca, std::vector<io::FlaggedRecord> acc,
+                                             const core::PipelineConfig& cfg) {
+  std::stable_sort(sca.begin(), sca.end(), [](const auto& x, const auto& y) { return x.t < y.t; });
+  std::stable_sort(acc.begin(), acc.end(), [](const auto& x, const auto& y) { return x.t < y.t; });
+  auto pipe = std::make_unique<core::Pipeline>();
+  EXPECT_EQ(pipe->configure(cfg), core::Status::kOk);
+  std::vector<core::PipelineRow> rows;
+  auto drain = [&] {
+    core::PipelineRow r;
+    while (pipe->popRow(r)) rows.push_back(r);
+  };
+  std::size_t i = 0, j = 0;
+  while (i < sca.size() || j < acc.size()) {
+    if (j >= acc.size() || (i < sca.size() && sca[i].t <= acc[j].t)) {
+      core::HeadEpoch e;
+      e.t = sca[i].t;
+      while (i < sca.size() && sca[i].t == e.t) {
+        if (e.n < core::kMaxHeads) {
+          auto& s = e.sample[static_cast<std::size_t>(e.n++)];
+          s.head_id = sca[i].head;
+          s.q_I_Si = quatFromScalarFirst(sca[i].q);
+        }
+        ++i;
+      }
+      pipe->stepHeads(e);
+    } else {
+      const auto& r = acc[j++];
+      if (!(r.has(io::acc_bits::kAngX) && r.has(io::acc_bits::kAngY) && r.has(io::acc_bits::kAngZ))) continue;
+      pipe->stepAcc(r.t, Vec3(r.value[3], r.value[4], r.value[5]));
+    }
+    drain();
+  }
+  pipe->flush();
+  drain();
+  return rows;
+}
+
+struct VectorSink final : stream::RowSink {
+  std::vector<core::PipelineRow> rows;
+  bool write(const core::PipelineRow& r) override {
+    rows.push_back(r);
+    return true;
+  }
+};
+
+bool sameBits(double a, double b) { return (std::isnan(a) && std::isnan(b)) || a == b; }
+
+/// Rows identical field by field (NaN == NaN). Reports the first difference.
+::testing::AssertionResult sameRows(const std::vector<core::PipelineRow>& a, const std::vector<core::PipelineRow>& b) {
+  if (a.size() != b.size()) return ::testing::AssertionFailure() << "row counts " << a.size() << " vs " << b.size();
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    const auto& x = a[i];
+    const auto& y = b[i];
+    bool same = x.t == y.t && x.heads_used == y.heads_used && x.has_rates == y.has_rates && x.has_acc == y.has_acc &&
+                x.q_I_B.coeffs() == y.q_I_B.coeffs();
+    for (int k = 0; k < 3 && same; ++k)
+      same = sameBits(x.w_B[k], y.w_B[k]) && sameBits(x.a_sc_B[k], y.a_sc_B[k]) && sameBits(x.a_acc_B[k], y.a_acc_B[k]);
+    for (std::size_t p = 0; p < x.iba_rad.size() && same; ++p)
+      same = sameBits(x.iba_rad[p], y.iba_rad[p]) && sameBits(x.iba_dev_rad[p], y.iba_dev_rad[p]);
+    if (!same) return ::testing::AssertionFailure() << "row " << i << " (t " << x.t << " / " << y.t << ") differs";
+  }
+  return ::testing::AssertionSuccess();
+}
+
+struct EngineRun {
+  std::vector<core::PipelineRow> rows;
+  stream::Counters total;
+  std::vector<stream::Counters> per_source;
+  TimeUs first = 0, last = 0;
+  stream::Engine::Result result = stream::Engine::Result::kError;
+  std::string error;
+};
+
+EngineRun runEngine(const std::vector<std::string>& sca, const std::vector<std::string>& acc,
+                    const std::vector<std::string>& lcm, const core::PipelineConfig& cfg,
+                    stream::AssemblerConfig acfg = {}, bool prefetch = false) {
+  EngineRun out;
+  stream::Engine e(acfg);
+  std::string err;
+  EXPECT_TRUE(e.configure(cfg, &err)) << err;
+  auto add = [&](std::unique_ptr<stream::Source> s) {
+    if (prefetch) s = std::make_unique<stream::PrefetchSource>(std::move(s), 64, 2);
+    e.addSource(std::move(s));
+  };
+  for (const auto& f : sca) {
+    auto s = std::make_unique<stream::Sca1aSource>();
+    EXPECT_TRUE(s->open(f, {}, &err)) << err;
+    add(std::move(s));
+  }
+  for (const auto& f : acc) {
+    auto s = std::make_unique<stream::Acc1aSource>();
+    EXPECT_TRUE(s->open(f, {}, &err)) << err;
+    add(std::move(s));
+  }
+  for (const auto& f : lcm) {
+    auto s = std::make_unique<stream::LcmLogSource>();
+    EXPECT_TRUE(s->open(f, &err)) << err;
+    add(std::move(s));
+  }
+  VectorSink sink;
+  e.addSink(&sink);
+  out.result = e.run();
+  out.error = e.error();
+  out.rows = std::move(sink.rows);
+  out.total = e.counters();
+  for (std::size_t i = 0; i < e.sourceCount(); ++i) out.per_source.push_back(e.counters(i));
+  out.first = e.firstEpoch();
+  out.last = e.lastEpoch();
+  return out;
+}
+
+std::vector<io::Sca1aRecord> readSca(const std::string& f) {
+  auto p = io::readProduct<io::Sca1aRecord>(f);
+  EXPECT_TRUE(p.ok) << p.error;
+  return p.records;
+}
+std::vector<io::FlaggedRecord> readAcc(const std::string& f) {
+  auto p = io::readProduct<io::FlaggedRecord>(f);
+  EXPECT_TRUE(p.ok) << p.error;
+  return p.records;
+}
+
+template <typename Rec>
+std::string writeRecords(const std::string& path, io::Product product, const std::vector<Rec>& recs) {
+  auto f = io::makeProduct<Rec>(product, 'C');
+  f.records = recs;
+  std::string err;
+  EXPECT_TRUE(io::writeProduct(path, f, &err)) << err;
+  return path;
+}
+
+void expectCountersAddUp(const EngineRun& r) {
+  EXPECT_EQ(r.total.read, r.total.used() + r.total.rejectedTotal());
+  stream::Counters sum;
+  for (const auto& c : r.per_source) {
+    EXPECT_EQ(c.read, c.used() + c.rejectedTotal());
+    sum.read += c.read;
+  }
+  EXPECT_EQ(sum.read, r.total.read);
+}
+
+}  // namespace
+
+TEST(StreamEngine, Level1RowsEqualTheLoadSortMergeReplay) {
+  const auto sca = readSca(span().sca);
+  const auto acc = readAcc(span().acc);
+  ASSERT_GT(sca.size(), 1000u);
+  const auto cfg = pipelineConfig(sca);
+  const auto ref = referenceRows(sca, acc, cfg);
+  ASSERT_GT(ref.size(), 500u);
+  ASSERT_TRUE(std::any_of(ref.begin(), ref.end(), [](const auto& r) { return r.has_rates && r.has_acc; }));
+  for (bool prefetch : {false, true}) {
+    EngineRun r = runEngine({span().sca}, {span().acc}, {}, cfg, {}, prefetch);
+    ASSERT_EQ(r.result, stream::Engine::Result::kDone) << r.error;
+    EXPECT_TRUE(sameRows(r.rows, ref)) << "prefetch " << prefetch;
+    EXPECT_EQ(r.total.read, sca.size() + acc.size());
+    EXPECT_EQ(r.total.used_heads, sca.size());
+    EXPECT_EQ(r.total.rejectedTotal(), 0u);
+    expectCountersAddUp(r);
+    // First and last epochs: the first and last head tags, and rows cover them.
+    EXPECT_EQ(r.first, sca.front().t);
+    EXPECT_EQ(r.last, sca.back().t);
+    EXPECT_EQ(r.rows.front().t, sca.front().t);
+    // Rows come at the output rate (every other epoch here): the last is within one second of the end.
+    EXPECT_LE(r.rows.back().t, sca.back().t);
+    EXPECT_GT(r.rows.back().t, sca.back().t - kUsPerSecond);
+    EXPECT_EQ(r.rows.back().t, ref.back().t);
+  }
+}
+
+TEST(StreamEngine, LcmLogGivesTheSameRowsAsLevel1) {
+  const auto sca = readSca(span().sca);
+  const auto cfg = pipelineConfig(sca);
+  EngineRun l1 = runEngine({span().sca}, {span().acc}, {}, cfg);
+  EngineRun lcm = runEngine({}, {}, {span().lcm}, cfg);
+  ASSERT_EQ(lcm.result, stream::Engine::Result::kDone) << lcm.error;
+  EXPECT_TRUE(sameRows(lcm.rows, l1.rows));
+  EXPECT_EQ(lcm.total.used(), l1.total.used());
+  expectCountersAddUp(lcm);
+}
+
+TEST(StreamEngine, SeveralFilesOfOneProductAreMergedByTime) {
+  const auto sca = readSca(span().sca);
+  const auto acc = readAcc(span().acc);
+  const auto cfg = pipelineConfig(sca);
+  const std::string d = tempDir();
+  // SCA1A split in two halves given in reverse order; ACC1A split into even and odd records.
+  std::vector<io::Sca1aRecord> a(sca.begin(), sca.begin() + long(sca.size() / 2)), b(sca.begin() + long(sca.size() / 2), sca.end());
+  std::vector<io::FlaggedRecord> even, odd;
+  for (std::size_t i = 0; i < acc.size(); ++i) (i % 2 ? odd : even).push_back(acc[i]);
+  const auto fa = writeRecords(d + "/SCA1A_a.txt", io::Product::SCA1A, a);
+  const auto fb = writeRecords(d + "/SCA1A_b.txt", io::Product::SCA1A, b);
+  const auto fe = writeRecords(d + "/ACC1A_e.txt", io::Product::ACC1A, even);
+  const auto fo = writeRecords(d + "/ACC1A_o.txt", io::Product::ACC1A, odd);
+  EngineRun whole = runEngine({span().sca}, {span().acc}, {}, cfg);
+  EngineRun split = runEngine({fb, fa}, {fo, fe}, {}, cfg);
+  ASSERT_EQ(split.result, stream::Engine::Result::kDone) << split.error;
+  EXPECT_TRUE(sameRows(split.rows, whole.rows));
+  EXPECT_EQ(split.total.rejectedTotal(), 0u);
+  expectCountersAddUp(split);
+}
+
+TEST(StreamEngine, OutOfOrderInsideTheLookAheadIsSortedBeyondItRejectedAsLate) {
+  auto sca = readSca(span().sca);
+  auto acc = readAcc(span().acc);
+  const auto cfg = pipelineConfig(sca);
+  const std::string d = tempDir();
+  // Inside: swap neighbouring epochs' records (0.5-1 s apart) and reverse runs of 10 ACC records (1 s).
+  auto sca_in = sca;
+  for (std::size_t i = 200; i + 3 < 260; i += 6) std::swap(sca_in[i], sca_in[i + 3]);
+  auto acc_in = acc;
+  for (std::size_t i = 1000; i + 10 < 1200; i += 10) std::reverse(acc_in.begin() + long(i), acc_in.begin() + long(i + 10));
+  const auto f1 = writeRecords(d + "/SCA1A_in.txt", io::Product::SCA1A, sca_in);
+  const auto f2 = writeRecords(d + "/ACC1A_in.txt", io::Product::ACC1A, acc_in);
+  EngineRun in = runEngine({f1}, {f2}, {}, cfg);
+  ASSERT_EQ(in.result, stream::Engine::Result::kDone) << in.error;
+  EXPECT_TRUE(sameRows(in.rows, referenceRows(sca, acc, cfg)));
+  EXPECT_EQ(in.total.rejectedTotal(), 0u);
+
+  // Beyond: one head record moved 30 s later in the file, one ACC record 60 s later. Both arrive when
+  // their time is long gone: rejected as late, and the rows are those of the data without them.
+  auto sca_late = sca;
+  const io::Sca1aRecord moved_head = sca_late[300];
+  sca_late.erase(sca_late.begin() + 300);
+  sca_late.insert(sca_late.begin() + 300 + 30 * 6, moved_head);
+  auto acc_late = acc;
+  const io::FlaggedRecord moved_acc = acc_late[2000];
+  acc_late.erase(acc_late.begin() + 2000);
+  acc_late.insert(acc_late.begin() + 2000 + 600, moved_acc);
+  const auto f3 = writeRecords(d + "/SCA1A_late.txt", io::Product::SCA1A, sca_late);
+  const auto f4 = writeRecords(d + "/ACC1A_late.txt", io::Product::ACC1A, acc_late);
+  EngineRun late = runEngine({f3}, {f4}, {}, cfg);
+  ASSERT_EQ(late.result, stream::Engine::Result::kDone) << late.error;
+  EXPECT_EQ(late.total.rejected[std::size_t(stream::Reject::kLate)], 2u);
+  EXPECT_EQ(late.total.rejectedTotal(), 2u);
+  expectCountersAddUp(late);
+  auto sca_without = sca;
+  sca_without.erase(sca_without.begin() + 300);
+  auto acc_without = acc;
+  acc_without.erase(acc_without.begin() + 2000);
+  EXPECT_TRUE(sameRows(late.rows, referenceRows(sca_without, acc_without, cfg)));
+
+  // A longer look-ahead takes the 30 s and 60 s displacements in: nothing late, rows as sorted data.
+  stream::AssemblerConfig wide;
+  wide.lookahead_us = 90 * kUsPerSecond;
+  EngineRun w = runEngine({f3}, {f4}, {}, cfg, wide);
+  EXPECT_EQ(w.total.rejectedTotal(), 0u);
+  EXPECT_TRUE(sameRows(w.rows, referenceRows(sca, acc, cfg)));
+}
+
+TEST(StreamEngine, GapsAndATruncatedLastLine) {
+  auto sca = readSca(span().sca);
+  auto acc = readAcc(span().acc);
+  const auto cfg = pipelineConfig(sca);
+  const std::string d = tempDir();
+  // A 20 s gap in all heads and a 7 s gap in the accelerometer.
+  auto in_gap = [](TimeUs t, TimeUs t0, double s) { return t >= t0 && t < t0 + static_cast<TimeUs>(s * 1e6); };
+  const TimeUs t0 = sca.front().t;
+  std::vector<io::Sca1aRecord> sg;
+  for (const auto& r : sca)
+    if (!in_gap(r.t, t0 + 200 * kUsPerSecond, 20)) sg.push_back(r);
+  std::vector<io::FlaggedRecord> ag;
+  for (const auto& r : acc)
+    if (!in_gap(r.t, t0 + 400 * kUsPerSecond, 7)) ag.push_back(r);
+  ASSERT_LT(sg.size(), sca.size());
+  ASSERT_LT(ag.size(), acc.size());
+  const auto fs = writeRecords(d + "/SCA1A_gap.txt", io::Product::SCA1A, sg);
+  std::string fa = writeRecords(d + "/ACC1A_gap.txt", io::Product::ACC1A, ag);
+  // Truncate the last ACC1A line in the middle (no newline at the end).
+  {
+    std::string text = slurp(fa);
+    ASSERT_EQ(text.back(), '\n');
+    const std::size_t last = text.rfind('\n', text.size() - 2);
+    text.resize(last + 1 + (text.size() - last - 1) / 2);
+    std::ofstream(fa, std::ios::binary | std::ios::trunc) << text;
+  }
+  EngineRun r = runEngine({fs}, {fa}, {}, cfg);
+  ASSERT_EQ(r.result, stream::Engine::Result::kDone) << r.error;
+  EXPECT_EQ(r.total.rejected[std::size_t(stream::Reject::kMalformed)], 1u);
+  EXPECT_EQ(r.total.read, sg.size() + ag.size());
+  expectCountersAddUp(r);
+  ag.pop_back();
+  EXPECT_TRUE(sameRows(r.rows, referenceRows(sg, ag, cfg)));
+}
+
+TEST(StreamEngine, EmptyInputs) {
+  const std::string d = tempDir();
+  // An empty file is neither a Level-1 product nor an LCM log: recognised as such, with a reason.
+  const std::string empty = d + "/SCA1A_empty.txt";
+  std::ofstream(empty).close();
+  stream::FileKind k = stream::identifyFile(empty);
+  EXPECT_EQ(k.type, stream::FileKind::Type::kUnknown);
+  EXPECT_NE(k.reason.find(empty + ":"), std::string::npos) << k.reason;
+  // A product with a header and no records: a source that ends at once; no rows, nothing read.
+  const auto none = writeRecords(d + "/SCA1A_none.txt", io::Product::SCA1A, std::vector<io::Sca1aRecord>{});
+  const auto cfg = pipelineConfig(readSca(span().sca), false);
+  EngineRun r = runEngine({none}, {}, {}, cfg);
+  EXPECT_EQ(r.result, stream::Engine::Result::kDone);
+  EXPECT_TRUE(r.rows.empty());
+  EXPECT_EQ(r.total.read, 0u);
+}
+
+TEST(StreamEngine, FilesAreRecognisedByContent) {
+  const std::string d = tempDir();
+  // The simulator's log is "sim.lcmlog"; copy it under a Level-1 looking name and a plain one.
+  std::string bytes = slurp(span().lcm);
+  std::ofstream(d + "/SCA1A_not_really.txt", std::ios::binary) << bytes;
+  EXPECT_EQ(stream::identifyFile(span().lcm).type, stream::FileKind::Type::kLcmLog);
+  EXPECT_EQ(stream::identifyFile(d + "/SCA1A_not_really.txt").type, stream::FileKind::Type::kLcmLog);
+  auto sca = stream::identifyFile(span().sca);
+  EXPECT_EQ(sca.type, stream::FileKind::Type::kLevel1);
+  EXPECT_EQ(sca.product, io::Product::SCA1A);
+  // Garbage: refused by the LCM source with the file and the reason.
+  std::ofstream(d + "/garbage.lcm") << "this is not an LCM log at all\n";
+  EXPECT_EQ(stream::identifyFile(d + "/garbage.lcm").type, stream::FileKind::Type::kUnknown);
+  stream::LcmLogSource s;
+  std::string err;
+  EXPECT_FALSE(s.open(d + "/garbage.lcm", &err));
+  EXPECT_NE(err.find(d + "/garbage.lcm: not an LCM log"), std::string::npos) << err;
+}
+
+TEST(StreamEngine, MemoryIsBoundedByTheLookAheadNotTheSpan) {
+  const auto sca = readSca(span().sca);
+  const auto cfg = pipelineConfig(sca);
+  stream::Engine e;
+  std::string err;
+  ASSERT_TRUE(e.configure(cfg, &err));
+  auto s1 = std::make_unique<stream::Sca1aSource>();
+  auto s2 = std::make_unique<stream::Acc1aSource>();
+  ASSERT_TRUE(s1->open(span().sca, {}, &err));
+  ASSERT_TRUE(s2->open(span().acc, {}, &err));
+  e.addSource(std::move(s1));
+  e.addSource(std::move(s2));
+  stream::BatchBufferSink ring(100);
+  e.addSink(&ring);
+  ASSERT_EQ(e.run(), stream::Engine::Result::kDone);
+  // 2 s look-ahead at 6 head samples and 10 accelerometer samples a second, both ends of the window
+  // included, plus the sample of each source that is past it.
+  EXPECT_LE(e.maxBuffered(), 2u * (6 + 10) + 8);
+  EXPECT_GT(e.maxBuffered(), 10u);
+  // The ring keeps the last 100 rows, in order.
+  EXPECT_EQ(ring.size(), 100u);
+  EXPECT_EQ(ring.written(), e.rows());
+  EXPECT_EQ(ring.overwritten(), e.rows() - 100);
+  EXPECT_LE(ring.at(99).t, e.lastEpoch());
+  EXPECT_GT(ring.at(99).t, e.lastEpoch() - kUsPerSecond);
+  for (std::size_t i = 1; i < ring.size(); ++i) EXPECT_LT(ring.at(i - 1).t, ring.at(i).t);
+}
