@@ -1,7 +1,16 @@
 // summarizeProduct: identify any Level-1 file (ASCII, GRACE binary, .rpt report) and summarise it.
 #include <boresight/io/any_product.h>
 
+#include <boresight/io/product_stream.h>
+
 #include "product_io.h"
+
+#include <atomic>
+#include <cerrno>
+#include <cstring>
+#include <fcntl.h>
+#include <thread>
+#include <unistd.h>
 
 namespace boresight::io {
 namespace {
@@ -90,6 +99,206 @@ void summarizeReport(std::string_view text, ProductSummary& s) {
     s.satellite = tok[b + 1];
 }
 
+/// What one block of lines gave.
+struct BlockResult {
+  std::size_t lines = 0, records = 0, rejected = 0;
+  std::vector<ParseIssue> issues;  ///< line numbers relative to the block (1 = its first line)
+  bool has_time = false;
+  TimeUs first = 0, last = 0;
+  char satellite = '?';
+  bool read_error = false;
+};
+
+/// Reads [from, to) of the file at fd into buf (appending). False on a read error.
+bool preadAll(int fd, std::uint64_t from, std::uint64_t to, std::vector<char>& buf) {
+  const std::size_t start = buf.size();
+  buf.resize(start + static_cast<std::size_t>(to - from));
+  std::size_t got = 0;
+  while (got < to - from) {
+    const ssize_t n = ::pread(fd, buf.data() + start + got, static_cast<std::size_t>(to - from) - got,
+                              static_cast<off_t>(from + got));
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) {
+      buf.resize(start + got);
+      return false;
+    }
+    got += static_cast<std::size_t>(n);
+  }
+  return true;
+}
+
+/// The lines that START in body bytes [b, e) (file offsets), parsed as Rec and summarised. A line
+/// that runs past e is read to its end. Memory: one block plus the longest line.
+template <typename Rec>
+void scanBlock(int fd, std::uint64_t body_begin, std::uint64_t body_end, std::uint64_t b, std::uint64_t e,
+               Product product, const std::string& file, const ReadOptions& opt, std::vector<char>& buf,
+               BlockResult& res) {
+  buf.clear();
+  const std::uint64_t from = b > body_begin ? b - 1 : b;  // one byte before: does a line start at b?
+  if (!preadAll(fd, from, e, buf)) {
+    res.read_error = true;
+    return;
+  }
+  std::size_t p = 0;
+  if (b > body_begin) {
+    // A line starts at b only when the byte before is a newline; else skip the rest of that line.
+    const void* nl = std::memchr(buf.data(), '\n', buf.size());
+    if (!nl) return;  // no line starts in this block
+    p = static_cast<std::size_t>(static_cast<const char*>(nl) - buf.data()) + 1;
+  }
+  const std::size_t block_end = buf.size();  // lines starting before here are ours
+  if (p >= block_end) return;
+  // Complete the last line.
+  if (buf.back() != '\n' && e < body_end) {
+    std::uint64_t at = e;
+    while (at < body_end) {
+      const std::uint64_t to = std::min<std::uint64_t>(at + (64u << 10), body_end);
+      const std::size_t before = buf.size();
+      if (!preadAll(fd, at, to, buf)) {
+        res.read_error = true;
+        return;
+      }
+      if (std::memchr(buf.data() + before, '\n', buf.size() - before)) break;
+      at = to;
+    }
+  }
+  const char* base = buf.data();
+  const char* end = base + buf.size();
+  Rec r{};
+  while (p < block_end) {
+    const char* ls = base + p;
+    const char* nl = static_cast<const char*>(std::memchr(ls, '\n', static_cast<std::size_t>(end - ls)));
+    const char* le = nl ? nl : end;
+    p = nl ? static_cast<std::size_t>(nl - base) + 1 : buf.size();
+    ++res.lines;
+    FieldScanner s(ls, le);
+    if (s.atEnd()) continue;
+    r = Rec{};
+    if (parseRecord<Rec>(s, r, product)) {
+      if (!res.has_time) {
+        res.has_time = true;
+        res.first = r.t;
+        res.satellite = r.satellite;
+      }
+      res.last = r.t;
+      ++res.records;
+      continue;
+    }
+    ++res.rejected;
+    if (res.issues.size() < opt.max_issues_kept) res.issues.push_back(ParseIssue{file, res.lines, s.reason()});
+    if (opt.on_error == OnError::Stop) return;
+  }
+}
+
+/// Summary of an ASCII product read in blocks on several threads, in constant memory.
+template <typename Rec>
+void summarizeBlocks(int fd, std::uint64_t body_begin, std::uint64_t body_end, const Header& h, const ReadOptions& opt,
+                     ProductSummary& s) {
+  constexpr std::uint64_t kBlock = 4u << 20;
+  const std::uint64_t body = body_end - body_begin;
+  const std::size_t nblocks = static_cast<std::size_t>((body + kBlock - 1) / kBlock);
+  unsigned threads = opt.threads > 0 ? static_cast<unsigned>(opt.threads) : std::thread::hardware_concurrency();
+  if (opt.threads == 0 && body < detail::kParallelMinBytes) threads = 1;
+  if (opt.on_error == OnError::Stop) threads = 1;
+  threads = std::max(1u, std::min<unsigned>({threads, 8u, static_cast<unsigned>(std::max<std::size_t>(1, nblocks))}));
+  std::vector<BlockResult> res(nblocks);
+  std::atomic<std::size_t> next{0};
+  std::atomic<bool> stop{false};
+  auto work = [&] {
+    std::vector<char> buf;
+    buf.reserve(static_cast<std::size_t>(kBlock) + (64u << 10) + 1);
+    for (;;) {
+      const std::size_t k = next.fetch_add(1);
+      if (k >= nblocks || stop.load()) return;
+      const std::uint64_t b = body_begin + k * kBlock, e = std::min(body_end, b + kBlock);
+      scanBlock<Rec>(fd, body_begin, body_end, b, e, h.product, s.file, opt, buf, res[k]);
+      if (opt.on_error == OnError::Stop && (res[k].rejected || res[k].read_error)) stop = true;
+    }
+  };
+  std::vector<std::thread> pool;
+  for (unsigned t = 1; t < threads; ++t) pool.emplace_back(work);
+  work();
+  for (auto& t : pool) t.join();
+  // Merge in file order; line numbers become absolute.
+  std::size_t line_base = h.line_count;
+  s.product = h.product_name;
+  s.declared_records = h.declared_records;
+  s.satellite = h.satellite;
+  for (auto& r : res) {
+    if (r.read_error) {
+      s.ok = false;
+      s.error = s.file + ":" + std::to_string(line_base + r.lines + 1) + ": read error";
+      return;
+    }
+    s.records += r.records;
+    s.rejected_count += r.rejected;
+    for (auto& i : r.issues) {
+      if (s.rejected.size() >= opt.max_issues_kept) break;
+      i.line += line_base;
+      s.rejected.push_back(std::move(i));
+    }
+    if (r.has_time) {
+      if (!s.has_time) {
+        s.has_time = true;
+        s.first_time = r.first;
+        if (r.satellite != '?') s.satellite = r.satellite;
+      }
+      s.last_time = r.last;
+    }
+    if (opt.on_error == OnError::Stop && r.rejected) {
+      s.ok = false;
+      s.error = s.rejected.empty() ? s.file + ": rejected line" : s.rejected.front().str();
+      return;
+    }
+    line_base += r.lines;
+  }
+}
+
+/// summarizeProduct for typed ASCII products without loading the file; false when the file needs
+/// the whole-file path (binary, report, generic products, unreadable header: that path explains).
+bool summarizeStreaming(const std::string& path, const ReadOptions& opt, ProductSummary& s) {
+  if (endsWith(path, ".rpt")) return false;
+  LineStream ls;
+  std::string err;
+  if (!ls.open(path, opt, &err, 4096)) return false;
+  const Header& h = ls.header();
+  if (h.binary) return false;
+  const int fd = ::open(path.c_str(), O_RDONLY);
+  if (fd < 0) return false;
+  s = ProductSummary{};
+  s.file = path;
+  const std::uint64_t b = ls.dataOffset(), e = ls.fileSize();
+  bool done = true;
+  switch (h.product) {
+    case Product::SCA1A: summarizeBlocks<Sca1aRecord>(fd, b, e, h, opt, s); break;
+    case Product::ACC1A:
+    case Product::ACT1A:
+    case Product::AHK1A:
+    case Product::AHK1B: summarizeBlocks<FlaggedRecord>(fd, b, e, h, opt, s); break;
+    case Product::SCA1B: summarizeBlocks<Sca1bRecord>(fd, b, e, h, opt, s); break;
+    case Product::ACC1B:
+    case Product::ACT1B: summarizeBlocks<Acc1bRecord>(fd, b, e, h, opt, s); break;
+    case Product::QSA1B:
+    case Product::QKS1B: summarizeBlocks<QsaRecord>(fd, b, e, h, opt, s); break;
+    case Product::GNV1B:
+    case Product::GNI1B: summarizeBlocks<GnvRecord>(fd, b, e, h, opt, s); break;
+    case Product::IMU1A:
+    case Product::IMU1B: summarizeBlocks<ImuRecord>(fd, b, e, h, opt, s); break;
+    case Product::THR1A:
+    case Product::THR1B: summarizeBlocks<ThrRecord>(fd, b, e, h, opt, s); break;
+    case Product::IHK1A:
+    case Product::IHK1B: summarizeBlocks<IhkRecord>(fd, b, e, h, opt, s); break;
+    case Product::HRT1A:
+    case Product::HRT1B: summarizeBlocks<HrtRecord>(fd, b, e, h, opt, s); break;
+    case Product::TIM1B: summarizeBlocks<TimRecord>(fd, b, e, h, opt, s); break;
+    case Product::CLK1A:
+    case Product::CLK1B: summarizeBlocks<ClkRecord>(fd, b, e, h, opt, s); break;
+    default: done = false; break;
+  }
+  ::close(fd);
+  return done;
+}
+
 }  // namespace
 
 ProductSummary summarizeText(std::string_view text, const std::string& file, const ReadOptions& opt) {
@@ -146,6 +355,11 @@ ProductSummary summarizeText(std::string_view text, const std::string& file, con
 }
 
 ProductSummary summarizeProduct(const std::string& path, const ReadOptions& opt) {
+  // Typed ASCII products are read in blocks (constant memory, several threads); the rest whole.
+  {
+    ProductSummary s;
+    if (summarizeStreaming(path, opt, s)) return s;
+  }
   std::string text, err;
   if (!readFileToString(path, text, &err)) {
     ProductSummary s;
