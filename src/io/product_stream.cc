@@ -91,8 +91,10 @@ bool LineStream::next(std::string_view& line, std::size_t& line_no) {
   for (;;) {
     const char* b = buf_.data() + begin_;
     const void* nl = std::memchr(b, '\n', end_ - begin_);
-    if (!nl && !eof_ && refill()) continue;
-    if (!nl && !eof_) continue;  // refill() hit the end: eof_ is set now
+    if (!nl && !eof_) {
+      refill();  // moves the unread bytes to the front (or sets eof_): look again
+      continue;
+    }
     if (!nl && begin_ == end_) return false;
     const char* e = nl ? static_cast<const char*>(nl) : buf_.data() + end_;
     ++line_no_;

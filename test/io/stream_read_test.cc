@@ -1,0 +1,160 @@
+// The streaming readers against the whole-file readers on the same bytes: ProductStream (records,
+// rejected lines and their numbers, with buffers far smaller than the file) and the block-parallel
+// summarizeProduct (counts, times, issues across block boundaries, any thread count).
+#include <boresight/io/any_product.h>
+#include <boresight/io/level1.h>
+#include <boresight/io/product_stream.h>
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <random>
+#include <string>
+#include <unistd.h>
+#include <vector>
+
+using namespace boresight;
+using namespace boresight::io;
+
+namespace {
+
+std::string tempDir() {
+  char tmpl[] = "/tmp/boresight_streamio_XXXXXX";
+  const char* d = ::mkdtemp(tmpl);
+  return d ? d : "/tmp";
+}
+
+void writeFile(const std::string& path, const std::string& text) {
+  std::FILE* f = std::fopen(path.c_str(), "wb");
+  ASSERT_NE(f, nullptr);
+  std::fwrite(text.data(), 1, text.size(), f);
+  std::fclose(f);
+}
+
+/// An ACC1A text of n records with malformed, blank and long lines sprinkled in (and optionally a
+/// last line cut in half without its newline).
+std::string acc1aText(int n, bool cut_last, std::vector<std::size_t>* bad_lines = nullptr) {
+  auto f = makeProduct<FlaggedRecord>(Product::ACC1A, 'C');
+  std::string header = formatProduct(f);
+  std::size_t line = 0;
+  for (char c : header) line += c == '\n';
+  std::mt19937 rng(5);
+  std::string body;
+  char buf[512];
+  for (int k = 0; k < n; ++k) {
+    ++line;
+    if (k % 9973 == 17) {
+      body += "738849600 12 R C 00000000 00000000000000000000000000111111 1e-5 abc 1 2 3 4\n";
+      if (bad_lines) bad_lines->push_back(line);
+      continue;
+    }
+    if (k % 7919 == 3) {
+      body += "   \n";
+      continue;
+    }
+    std::snprintf(buf, sizeof buf,
+                  "%d %d R C 00000000 00000100000000000000000000111111 %.15e %.15e %.15e %.15e %.15e %.15e 0\n",
+                  738849600 + k / 10, (k % 10) * 100000 + 7739, -1.06e-5 + 1e-9 * (rng() % 1000),
+                  -1.8e-7, 2.8e-7, 1.3e-5, 1.192e-4, -7.813e-4);
+    body += buf;
+  }
+  if (cut_last) {
+    const std::size_t last = body.rfind('\n', body.size() - 2);
+    body.resize(last + 1 + (body.size() - last - 1) / 2);
+    if (bad_lines) bad_lines->push_back(line);
+  }
+  return header + body;
+}
+
+}  // namespace
+
+TEST(ProductStream, SameRecordsAndIssuesAsTheWholeFileReader) {
+  const std::string d = tempDir();
+  const std::string path = d + "/ACC1A_2023-06-01_C_04.txt";
+  std::vector<std::size_t> bad;
+  const std::string text = acc1aText(60000, true, &bad);
+  writeFile(path, text);
+  auto whole = parseProduct<FlaggedRecord>(text, path);
+  ASSERT_TRUE(whole.ok);
+  ASSERT_EQ(whole.rejected_count, bad.size());
+  for (std::size_t chunk : {std::size_t(4096), std::size_t(100000), LineStream::kDefaultChunk}) {
+    ProductStream<FlaggedRecord> s;
+    std::string err;
+    ASSERT_TRUE(s.open(path, {}, &err, chunk)) << err;
+    FlaggedRecord r;
+    std::size_t i = 0;
+    while (s.next(r)) {
+      ASSERT_LT(i, whole.records.size()) << "extra record t=" << r.t << " chunk " << chunk << " rejected so far " << s.rejectedCount();
+      ASSERT_TRUE(r == whole.records[i]) << "record " << i << " chunk " << chunk;
+      ++i;
+    }
+    EXPECT_TRUE(s.ok()) << s.error();
+    EXPECT_EQ(i, whole.records.size());
+    EXPECT_EQ(s.rejectedCount(), whole.rejected_count);
+    ASSERT_EQ(s.rejected().size(), whole.rejected.size());
+    for (std::size_t k = 0; k < whole.rejected.size(); ++k) EXPECT_EQ(s.rejected()[k].str(), whole.rejected[k].str());
+  }
+}
+
+TEST(ProductStream, StrictStopsAtTheFirstBadLineWithItsPlace) {
+  const std::string d = tempDir();
+  const std::string path = d + "/ACC1A_2023-06-01_C_04.txt";
+  std::vector<std::size_t> bad;
+  writeFile(path, acc1aText(200, false, &bad));
+  ReadOptions o;
+  o.on_error = OnError::Stop;
+  ProductStream<FlaggedRecord> s;
+  std::string err;
+  ASSERT_TRUE(s.open(path, o, &err, 4096));
+  FlaggedRecord r;
+  std::size_t n = 0;
+  while (s.next(r)) ++n;
+  EXPECT_FALSE(s.ok());
+  EXPECT_EQ(n, 16u);
+  EXPECT_EQ(s.error().rfind(path + ":" + std::to_string(bad.front()) + ": ", 0), 0u) << s.error();
+}
+
+TEST(ProductStream, RefusesWhatItCannotRead) {
+  const std::string d = tempDir();
+  std::string err;
+  ProductStream<Sca1aRecord> s;
+  writeFile(d + "/SCA1A_empty.txt", "");
+  EXPECT_FALSE(s.open(d + "/SCA1A_empty.txt", {}, &err));
+  EXPECT_NE(err.find("SCA1A_empty.txt:1: empty file"), std::string::npos) << err;
+  writeFile(d + "/ACC1A_x.txt", acc1aText(10, false));
+  EXPECT_FALSE(s.open(d + "/ACC1A_x.txt", {}, &err));  // an ACC1A is not read as SCA1A
+  EXPECT_NE(err.find("ACC1A"), std::string::npos) << err;
+  EXPECT_FALSE(s.open(d + "/missing.txt", {}, &err));
+  EXPECT_NE(err.find("missing.txt:0: cannot open"), std::string::npos) << err;
+}
+
+TEST(SummarizeProduct, BlocksAndThreadsGiveTheWholeFileSummary) {
+  const std::string d = tempDir();
+  const std::string path = d + "/ACC1A_2023-06-01_C_04.txt";
+  // About 14 MB: several 4 MB blocks, bad lines in each, a cut last line.
+  std::vector<std::size_t> bad;
+  const std::string text = acc1aText(90000, true, &bad);
+  ASSERT_GT(text.size(), 12u << 20);
+  writeFile(path, text);
+  const ProductSummary ref = summarizeText(text, path);
+  ASSERT_TRUE(ref.ok);
+  ASSERT_EQ(ref.rejected_count, bad.size());
+  for (int threads : {1, 2, 3, 0}) {
+    ReadOptions o;
+    o.threads = threads;
+    const ProductSummary s = summarizeProduct(path, o);
+    EXPECT_TRUE(s.ok) << s.error;
+    EXPECT_EQ(s.product, ref.product);
+    EXPECT_EQ(s.satellite, ref.satellite);
+    EXPECT_EQ(s.records, ref.records) << threads;
+    EXPECT_EQ(s.declared_records, ref.declared_records);
+    EXPECT_EQ(s.first_time, ref.first_time);
+    EXPECT_EQ(s.last_time, ref.last_time);
+    EXPECT_EQ(s.rejected_count, ref.rejected_count);
+    ASSERT_EQ(s.rejected.size(), ref.rejected.size());
+    for (std::size_t k = 0; k < ref.rejected.size(); ++k) {
+      EXPECT_EQ(s.rejected[k].str(), ref.rejected[k].str()) << threads;
+      EXPECT_EQ(s.rejected[k].line, bad[k]);
+    }
+  }
+}
