@@ -9,6 +9,18 @@
 
 namespace boresight::cli {
 
+/// A validator for options that take a value: a value that looks like an option ("--out") is an
+/// error, so `--config --out x.csv` does not take "--out" as the configuration path.
+inline CLI::Validator notAnOption() {
+  return CLI::Validator(
+      [](std::string& v) -> std::string {
+        if (v.size() > 1 && v[0] == '-' && !(v[1] >= '0' && v[1] <= '9') && v[1] != '.')
+          return "value '" + v + "' looks like an option (is the value missing?)";
+        return {};
+      },
+      "VALUE", "not an option");
+}
+
 /// Parses argv (argv[0] is the command name). Returns -1 to go on, else the exit status to return
 /// (0 after --help, 2 on a usage error, with the message and the usage on stderr).
 inline int parseCommandLine(CLI::App& app, int argc, char** argv, const char* cmd, const char* usage) {
@@ -16,6 +28,8 @@ inline int parseCommandLine(CLI::App& app, int argc, char** argv, const char* cm
   app.set_help_flag();
   app.add_flag("-h,--help", help, "this help");
   app.allow_extras();
+  for (CLI::Option* o : app.get_options())
+    if (o->get_expected_min() > 0 && o->get_name() != "--help") o->check(notAnOption());
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -31,7 +45,7 @@ inline int parseCommandLine(CLI::App& app, int argc, char** argv, const char* cm
     return 0;
   }
   if (!app.remaining().empty()) {
-    const std::string& x = app.remaining().front();
+    const std::string x = app.remaining().front();
     std::fprintf(stderr, "boresight %s: %s%s\n\n%s", cmd, x.size() > 1 && x[0] == '-' ? "unknown option " : "unexpected argument ",
                  x.c_str(), usage);
     return 2;

@@ -4,7 +4,9 @@
 #include <boresight/io/level1.h>
 #include <boresight/io/time_format.h>
 
-#include "args.h"
+#include <boresight/stream/sources.h>
+
+#include "cli_parse.h"
 #include "commands.h"
 
 #include <algorithm>
@@ -18,7 +20,7 @@ namespace boresight::cli {
 namespace {
 
 const char* kUsage =
-    "usage: boresight convert INPUT... --out LOG.lcm\n"
+    "usage: boresight convert INPUT... --out LOG.lcm [--strict]\n"
     "       boresight convert LOG.lcm --to-level1 DIR [--satellite C]\n"
     "\n"
     "Level-1 to LCM: SCA1A records become star_head_sample_t messages on channel STAR_HEAD and ACC1A\n"
@@ -33,7 +35,10 @@ const char* kUsage =
     "  --out LOG.lcm       LCM log to write\n"
     "  --to-level1 DIR     convert an LCM log back to Level-1 files in DIR (created if missing)\n"
     "  --satellite C       satellite letter for the Level-1 files written back (default C)\n"
-    "  --strict            stop at the first malformed line instead of skipping it\n";
+    "  --strict            stop at the first malformed line instead of skipping it\n"
+    "\n"
+    "Inputs are recognised by their content (Level-1 header, LCM log sync word), not their names. A file\n"
+    "that is neither, or a log that cannot be read, is an error (exit status 1) naming the file and why.\n";
 
 struct Event {
   TimeUs t;
@@ -42,16 +47,31 @@ struct Event {
   std::size_t index;
 };
 
-int toLcm(const Args& a) {
+struct Options {
+  std::vector<std::string> inputs;
+  std::string out, to_level1, satellite = "C";
+  bool strict = false;
+};
+
+int toLcm(const Options& a) {
   std::vector<io::HeadSample> heads;
   std::vector<io::AccelSample> accels;
   io::ReadOptions opt;
-  if (a.has("--strict")) opt.on_error = io::OnError::Stop;
+  if (a.strict) opt.on_error = io::OnError::Stop;
   int status = 0;
   std::map<int, std::int32_t> head_seq;
   std::int32_t acc_seq = 0;
-  for (const auto& f : a.positional()) {
-    std::string name = io::productNameFromPath(f);
+  for (const auto& f : a.inputs) {
+    stream::FileKind kind = stream::identifyFile(f);
+    if (kind.type == stream::FileKind::Type::kUnknown) {
+      std::fprintf(stderr, "boresight convert: %s\n", kind.reason.c_str());
+      return 1;
+    }
+    if (kind.type == stream::FileKind::Type::kLcmLog) {
+      std::fprintf(stderr, "boresight convert: %s is an LCM log: convert it with --to-level1 DIR\n", f.c_str());
+      return 1;
+    }
+    std::string name = kind.product_name;
     if (name == "SCA1A") {
       auto p = io::readProduct<io::Sca1aRecord>(f, opt);
       if (!p.ok) {
@@ -61,7 +81,7 @@ int toLcm(const Args& a) {
       for (const auto& r : p.records) heads.push_back(io::headFromSca1a(r, head_seq[r.head]++));
       std::printf("%s: %zu SCA1A records, %zu rejected\n", f.c_str(), p.records.size(), p.rejected_count);
       for (std::size_t i = 0; i < p.rejected.size() && i < 5; ++i) std::printf("    rejected %s\n", p.rejected[i].str().c_str());
-    } else if (name == "ACC1A") {
+    } else if (name == "ACC1A" || name == "ACT1A") {
       auto p = io::readProduct<io::FlaggedRecord>(f, opt);
       if (!p.ok) {
         std::fprintf(stderr, "%s\n", p.error.c_str());
@@ -76,8 +96,7 @@ int toLcm(const Args& a) {
                   f.c_str(), p.records.size(), without_ang, p.rejected_count);
       for (std::size_t i = 0; i < p.rejected.size() && i < 5; ++i) std::printf("    rejected %s\n", p.rejected[i].str().c_str());
     } else {
-      std::printf("%s: %s is not a node input (SCA1A, ACC1A): skipped\n", f.c_str(), name.empty() ? "unknown product" : name.c_str());
-      if (name.empty()) status = 1;
+      std::printf("%s: %s is not a node input (SCA1A, ACC1A): ignored\n", f.c_str(), name.c_str());
     }
   }
   std::vector<Event> ev;
@@ -89,7 +108,7 @@ int toLcm(const Args& a) {
   });
   io::LcmLogWriter w;
   std::string err;
-  const std::string out = a.get("--out");
+  const std::string out = a.out;
   if (!w.open(out, &err)) {
     std::fprintf(stderr, "boresight convert: %s\n", err.c_str());
     return 1;
@@ -108,13 +127,13 @@ int toLcm(const Args& a) {
   return status;
 }
 
-int toLevel1(const Args& a) {
-  if (a.positional().size() != 1) {
+int toLevel1(const Options& a) {
+  if (a.inputs.size() != 1) {
     std::fprintf(stderr, "boresight convert: --to-level1 takes exactly one LCM log\n");
     return 2;
   }
-  const std::string log = a.positional()[0], dir = a.get("--to-level1");
-  std::string sat_s = a.get("--satellite", "C");
+  const std::string log = a.inputs[0], dir = a.to_level1;
+  const std::string& sat_s = a.satellite;
   if (sat_s.size() != 1 || sat_s[0] < 'A' || sat_s[0] > 'Z') {
     std::fprintf(stderr, "boresight convert: --satellite wants one capital letter, not '%s'\n", sat_s.c_str());
     return 2;
@@ -124,6 +143,14 @@ int toLevel1(const Args& a) {
   std::string err;
   if (!io::readLcmAsLevel1(log, sat, false, in, &err)) {
     std::fprintf(stderr, "boresight convert: %s\n", err.c_str());
+    return 1;
+  }
+  if (in.sca.empty() && in.acc.empty()) {
+    std::fprintf(stderr,
+                 "boresight convert: %s: no %s or %s messages in the log (%llu events on other channels, %llu "
+                 "undecodable): nothing to write\n",
+                 log.c_str(), io::kStarHeadChannel, io::kAccelChannel, static_cast<unsigned long long>(in.unknown_channel),
+                 static_cast<unsigned long long>(in.decode_failures));
     return 1;
   }
   auto sca = io::makeProduct<io::Sca1aRecord>(io::Product::SCA1A, sat);
@@ -159,19 +186,20 @@ int toLevel1(const Args& a) {
 }  // namespace
 
 int runConvert(int argc, char** argv) {
-  Args a(argc, argv, {"--out", "--to-level1", "--satellite"}, {"--help", "-h", "--strict"});
-  if (a.help()) {
-    std::fputs(kUsage, stdout);
-    return 0;
-  }
-  if (!a.ok() || a.positional().empty() || (a.has("--out") == a.has("--to-level1"))) {
-    std::fprintf(stderr, "boresight convert: %s\n\n%s",
-                 !a.ok() ? a.error().c_str()
-                         : a.positional().empty() ? "no INPUT given" : "give exactly one of --out and --to-level1",
-                 kUsage);
+  CLI::App app{"boresight convert"};
+  Options o;
+  app.add_option("inputs", o.inputs)->required();
+  auto* out = app.add_option("--out", o.out);
+  auto* back = app.add_option("--to-level1", o.to_level1);
+  out->excludes(back);
+  app.add_option("--satellite", o.satellite);
+  app.add_flag("--strict", o.strict);
+  if (int st = parseCommandLine(app, argc, argv, "convert", kUsage); st >= 0) return st;
+  if (o.out.empty() == o.to_level1.empty()) {
+    std::fprintf(stderr, "boresight convert: give exactly one of --out and --to-level1\n\n%s", kUsage);
     return 2;
   }
-  return a.has("--out") ? toLcm(a) : toLevel1(a);
+  return !o.out.empty() ? toLcm(o) : toLevel1(o);
 }
 
 }  // namespace boresight::cli

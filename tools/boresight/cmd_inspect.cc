@@ -4,9 +4,13 @@
 #include <boresight/io/sca_geometry.h>
 #include <boresight/io/time_format.h>
 
-#include "args.h"
+#include <boresight/io/lcm_log.h>
+#include <boresight/stream/sources.h>
+
+#include <nlohmann/json.hpp>
+
+#include "cli_parse.h"
 #include "commands.h"
-#include "json.h"
 
 #include <algorithm>
 #include <cstdio>
@@ -19,10 +23,13 @@ namespace boresight::cli {
 namespace {
 
 const char* kUsage =
-    "usage: boresight inspect PATH... [--json FILE] [--boresight X,Y,Z] [--max-rejected N]\n"
+    "usage: boresight inspect PATH... [--json FILE] [--boresight X,Y,Z] [--max-rejected N] [--threads N]\n"
     "\n"
     "For each Level-1 product file (a directory is read recursively): product, satellite, record count\n"
     "(counted, not taken from the header), first and last time tag, and rejected lines with reasons.\n"
+    "Files are read in blocks, in constant memory, on several threads. An LCM log (recognised by its\n"
+    "content) is summarised too: messages, first and last sensor time, messages not read (other\n"
+    "channels, undecodable).\n"
     "Where SCA1A files with two or more heads are given: samples per head and, per head pair, the mean\n"
     "inter-boresight angle (deg) and its standard deviation (arcsec); with a QSA1B file, the angle implied\n"
     "by the QSA1B alignment (deg) and the offset (arcsec).\n"
@@ -30,6 +37,7 @@ const char* kUsage =
     "  --json FILE        also write the results as JSON (keys: files[], pairs[])\n"
     "  --boresight X,Y,Z  boresight axis in the head frame (default 0,0,1, GRACE-FO)\n"
     "  --max-rejected N   rejected lines listed per file (default 5; all are counted)\n"
+    "  --threads N        parser threads per file (default 0: every hardware thread for large files)\n"
     "\n"
     "Times are GPS seconds past 2000-01-01 12:00:00 (receiver time for Level-1A) and the GPS calendar.\n"
     "Exit status: 0 when every file was read, 1 when a file could not be read, 2 on usage errors.\n";
@@ -62,36 +70,73 @@ void listFiles(const std::string& path, std::vector<std::string>& out) {
 
 double seconds(TimeUs t) { return toSeconds(t); }
 
+/// An LCM log as a summary: events by kind, sensor time span, what was not read.
+io::ProductSummary summarizeLcm(const std::string& path) {
+  io::ProductSummary s;
+  s.file = path;
+  s.product = "LCM log";
+  io::LcmLogReader r;
+  std::string err;
+  if (!r.open(path, &err)) {
+    s.ok = false;
+    s.error = err;
+    return s;
+  }
+  io::HeadSample h;
+  io::AccelSample a;
+  for (;;) {
+    auto k = r.next(h, a);
+    if (k == io::LcmLogReader::Kind::End) break;
+    if (k == io::LcmLogReader::Kind::Skipped) continue;
+    const TimeUs t = k == io::LcmLogReader::Kind::Head ? h.utime : a.utime;
+    if (!s.has_time) s.first_time = t;
+    s.has_time = true;
+    s.last_time = t;
+    ++s.records;
+  }
+  s.rejected_count = static_cast<std::size_t>(r.unknownChannel() + r.decodeFailures());
+  if (r.unknownChannel())
+    s.rejected.push_back(io::ParseIssue{path, 0, std::to_string(r.unknownChannel()) + " events on other channels"});
+  if (r.decodeFailures())
+    s.rejected.push_back(io::ParseIssue{path, 0, std::to_string(r.decodeFailures()) + " undecodable messages"});
+  return s;
+}
+
 }  // namespace
 
 int runInspect(int argc, char** argv) {
-  Args a(argc, argv, {"--json", "--boresight", "--max-rejected"}, {"--help", "-h"});
-  if (a.help()) {
-    std::fputs(kUsage, stdout);
-    return 0;
-  }
-  if (!a.ok() || a.positional().empty()) {
-    std::fprintf(stderr, "boresight inspect: %s\n\n%s", a.ok() ? "no PATH given" : a.error().c_str(), kUsage);
+  CLI::App app{"boresight inspect"};
+  std::vector<std::string> paths;
+  std::string json_path, boresight_s;
+  int max_rej = 5, threads = 0;
+  app.add_option("paths", paths)->required();
+  app.add_option("--json", json_path);
+  app.add_option("--boresight", boresight_s);
+  app.add_option("--max-rejected", max_rej);
+  app.add_option("--threads", threads)->check(CLI::Range(0, 64));
+  if (int st = parseCommandLine(app, argc, argv, "inspect", kUsage); st >= 0) return st;
+  if (max_rej < 0) {
+    std::fprintf(stderr, "boresight inspect: --max-rejected wants a count >= 0, not %d\n", max_rej);
     return 2;
   }
   Vec3 axis = boresightDefault();
-  if (a.has("--boresight")) {
+  if (!boresight_s.empty()) {
     double v[3];
-    if (std::sscanf(a.get("--boresight").c_str(), "%lf,%lf,%lf", &v[0], &v[1], &v[2]) != 3 ||
-        Vec3(v[0], v[1], v[2]).norm() < 1e-9) {
-      std::fprintf(stderr, "boresight inspect: --boresight wants three numbers X,Y,Z, not '%s'\n",
-                   a.get("--boresight").c_str());
+    char tail = 0;
+    if (std::sscanf(boresight_s.c_str(), "%lf,%lf,%lf%c", &v[0], &v[1], &v[2], &tail) != 3 ||
+        !Vec3(v[0], v[1], v[2]).allFinite() || Vec3(v[0], v[1], v[2]).norm() < 1e-9) {
+      std::fprintf(stderr, "boresight inspect: --boresight wants three numbers X,Y,Z, not '%s'\n", boresight_s.c_str());
       return 2;
     }
     axis = Vec3(v[0], v[1], v[2]).normalized();
   }
-  const int max_rej = std::atoi(a.get("--max-rejected", "5").c_str());
+  io::ReadOptions ropt;
+  ropt.threads = threads;
 
   std::vector<std::string> files;
-  for (const auto& p : a.positional()) listFiles(p, files);
+  for (const auto& p : paths) listFiles(p, files);
 
-  JsonWriter js;
-  js.beginObject().key("files").beginArray();
+  nlohmann::json js_files = nlohmann::json::array();
   int status = 0;
   std::vector<io::Sca1aRecord> sca;
   std::vector<io::QsaRecord> qsa;
@@ -101,23 +146,23 @@ int runInspect(int argc, char** argv) {
   std::printf("%-44s %-8s %-3s %9s %9s  %-26s %-26s %s\n", "file", "product", "sat", "records", "header",
               "first time (GPS)", "last time (GPS)", "rejected");
   for (const auto& f : files) {
-    io::ProductSummary s = io::summarizeProduct(f);
+    io::ProductSummary s = stream::hasLcmMagic(f) ? summarizeLcm(f) : io::summarizeProduct(f, ropt);
     std::string shown = f.size() > 44 ? "..." + f.substr(f.size() - 41) : f;
-    js.beginObject().key("file").value(f).key("product").value(s.product);
-    js.key("satellite").value(std::string(1, s.satellite));
-    js.key("records").value(s.records);
-    if (s.declared_records) js.key("header_records").value(static_cast<long long>(*s.declared_records));
-    else js.key("header_records").null();
-    if (s.has_time) {
-      js.key("first_time").value(seconds(s.first_time)).key("last_time").value(seconds(s.last_time));
-    } else {
-      js.key("first_time").null().key("last_time").null();
-    }
-    js.key("ok").value(s.ok);
-    if (!s.ok) js.key("error").value(s.error);
-    js.key("rejected").beginArray();
-    for (const auto& r : s.rejected) js.beginObject().key("line").value(r.line).key("reason").value(r.reason).endObject();
-    js.endArray().key("rejected_count").value(s.rejected_count).endObject();
+    nlohmann::json j;
+    j["file"] = f;
+    j["product"] = s.product;
+    j["satellite"] = std::string(1, s.satellite);
+    j["records"] = s.records;
+    j["header_records"] = s.declared_records ? nlohmann::json(*s.declared_records) : nlohmann::json(nullptr);
+    j["first_time"] = s.has_time ? nlohmann::json(seconds(s.first_time)) : nlohmann::json(nullptr);
+    j["last_time"] = s.has_time ? nlohmann::json(seconds(s.last_time)) : nlohmann::json(nullptr);
+    j["ok"] = s.ok;
+    if (!s.ok) j["error"] = s.error;
+    nlohmann::json rej = nlohmann::json::array();
+    for (const auto& r : s.rejected) rej.push_back({{"line", r.line}, {"reason", r.reason}});
+    j["rejected"] = std::move(rej);
+    j["rejected_count"] = s.rejected_count;
+    js_files.push_back(std::move(j));
 
     if (!s.ok) {
       std::printf("%-44s %-8s  error: %s\n", shown.c_str(), s.product.empty() ? "?" : s.product.c_str(), s.error.c_str());
@@ -133,11 +178,11 @@ int runInspect(int argc, char** argv) {
       if (shown_rej++ >= max_rej) break;
       std::printf("    rejected %s\n", r.str().c_str());
     }
-    if (s.rejected_count > static_cast<std::size_t>(std::max(0, max_rej)) && max_rej >= 0)
+    if (s.rejected_count > static_cast<std::size_t>(max_rej))
       std::printf("    ... %zu rejected lines in all\n", s.rejected_count);
 
     if (s.product == "SCA1A") {
-      auto sf = io::readProduct<io::Sca1aRecord>(f);
+      auto sf = io::readProduct<io::Sca1aRecord>(f, ropt);
       if (sf.ok) {
         sca.insert(sca.end(), sf.records.begin(), sf.records.end());
         if (std::find(sca_sats.begin(), sca_sats.end(), s.satellite) == sca_sats.end()) sca_sats.push_back(s.satellite);
@@ -150,9 +195,8 @@ int runInspect(int argc, char** argv) {
       }
     }
   }
-  js.endArray();
 
-  js.key("pairs").beginArray();
+  nlohmann::json js_pairs = nlohmann::json::array();
   if (sca_sats.size() > 1) {
     std::printf("\nSCA1A files of several satellites were given: inter-boresight angles need one satellite.\n");
   } else if (!sca.empty()) {
@@ -175,29 +219,28 @@ int runInspect(int argc, char** argv) {
       else std::printf(" %18s", "-");
       if (p.offset_arcsec) std::printf(" %18.1f\n", *p.offset_arcsec);
       else std::printf(" %18s\n", "-");
-      js.beginObject().key("heads").beginArray().value(p.head_a).value(p.head_b).endArray();
-      js.key("epochs").value(p.epochs).key("iba_mean_deg").value(p.mean_deg).key("iba_std_arcsec").value(p.std_arcsec);
-      js.key("iba_nominal_deg");
-      if (p.nominal_deg) js.value(*p.nominal_deg); else js.null();
-      js.key("iba_offset_arcsec");
-      if (p.offset_arcsec) js.value(*p.offset_arcsec); else js.null();
-      js.endObject();
+      js_pairs.push_back({{"heads", {p.head_a, p.head_b}},
+                          {"epochs", p.epochs},
+                          {"iba_mean_deg", p.mean_deg},
+                          {"iba_std_arcsec", p.std_arcsec},
+                          {"iba_nominal_deg", p.nominal_deg ? nlohmann::json(*p.nominal_deg) : nlohmann::json(nullptr)},
+                          {"iba_offset_arcsec", p.offset_arcsec ? nlohmann::json(*p.offset_arcsec) : nlohmann::json(nullptr)}});
     }
     if (!pairs.empty() && !have_qsa) std::printf("(give a QSA1B file to compare with the nominal alignment)\n");
   }
-  js.endArray().endObject();
 
-  if (a.has("--json")) {
-    std::string path = a.get("--json");
-    std::FILE* out = std::fopen(path.c_str(), "w");
+  if (!json_path.empty()) {
+    nlohmann::json js = {{"files", std::move(js_files)}, {"pairs", std::move(js_pairs)}};
+    std::FILE* out = std::fopen(json_path.c_str(), "w");
     if (!out) {
-      std::fprintf(stderr, "boresight inspect: cannot write %s\n", path.c_str());
+      std::fprintf(stderr, "boresight inspect: cannot write %s\n", json_path.c_str());
       return 1;
     }
-    std::fputs(js.str().c_str(), out);
+    const std::string text = js.dump(2, ' ', false, nlohmann::json::error_handler_t::replace);
+    std::fputs(text.c_str(), out);
     std::fputc('\n', out);
     std::fclose(out);
-    std::printf("\nJSON written to %s\n", path.c_str());
+    std::printf("\nJSON written to %s\n", json_path.c_str());
   }
   return status;
 }
