@@ -226,3 +226,74 @@ TEST(Cli, PlotDrawsColumnsAndNamesMissingOnes) {
   EXPECT_EQ(bad.status, 1);
   EXPECT_NE(bad.out.find("no column 'nope'"), std::string::npos) << bad.out;
 }
+
+// ---- issue 7: CLI11 parsing, content recognition, streaming process ----
+
+TEST(Cli, ValuesThatLookLikeOptionsAndBadNumbersAreErrors) {
+  // "--config --out x.csv": --config has no value; it must not take "--out" as the path.
+  CliRun r = run("process --config --out x.csv a.txt");
+  EXPECT_EQ(r.status, 2) << r.out;
+  EXPECT_NE(r.out.find("--config: value '--out' looks like an option"), std::string::npos) << r.out;
+  CliRun n = run("inspect --max-rejected abc x.txt");
+  EXPECT_EQ(n.status, 2) << n.out;
+  EXPECT_NE(n.out.find("--max-rejected = abc"), std::string::npos) << n.out;
+  CliRun neg = run("inspect --max-rejected -3 x.txt");
+  EXPECT_EQ(neg.status, 2) << neg.out;
+  CliRun c = run("convert a.txt --out");
+  EXPECT_EQ(c.status, 2) << c.out;
+  CliRun both = run("convert a.txt --out x.lcm --to-level1 d");
+  EXPECT_EQ(both.status, 2) << both.out;
+  CliRun la = run("process --config c.yaml --out o.csv --lookahead soon a.txt");
+  EXPECT_EQ(la.status, 2) << la.out;
+}
+
+TEST(Cli, ConvertOfAGarbageLogFailsWithFileAndReason) {
+  std::string dir = tempDir();
+  { std::ofstream(dir + "/g.lcm") << "this is not an LCM log\n"; }
+  CliRun r = run("convert " + dir + "/g.lcm --to-level1 " + dir + "/out");
+  EXPECT_EQ(r.status, 1) << r.out;
+  EXPECT_NE(r.out.find(dir + "/g.lcm: not an LCM log"), std::string::npos) << r.out;
+  // An empty log has nothing to convert: an error too, not a silent success.
+  { std::ofstream(dir + "/empty.lcm").close(); }
+  CliRun e = run("convert " + dir + "/empty.lcm --to-level1 " + dir + "/out");
+  EXPECT_EQ(e.status, 1) << e.out;
+  EXPECT_NE(e.out.find(dir + "/empty.lcm: no STAR_HEAD or ACCEL messages"), std::string::npos) << e.out;
+  // Level-1 direction: garbage is named with its reason.
+  CliRun l = run("convert " + dir + "/g.lcm --out " + dir + "/x.lcm");
+  EXPECT_EQ(l.status, 1) << l.out;
+  EXPECT_NE(l.out.find(dir + "/g.lcm:1: wrong header"), std::string::npos) << l.out;
+}
+
+TEST(Cli, ProcessStreamsTheSimulatorsOutputWhateverTheLogIsCalled) {
+  std::string dir = tempDir();
+  CliRun sim = run("simulate --scenario " BORESIGHT_SOURCE_DIR "/config/sim_gracefo.yaml --seed 3 --duration 150 --out " +
+                   dir + " --quiet");
+  ASSERT_EQ(sim.status, 0) << sim.out;
+  const std::string cfg = " --config " BORESIGHT_SOURCE_DIR "/config/gracefo.yaml ";
+  const std::string d = dir + "/";
+  const std::string qsa = d + "QSA1B_2023-06-01_C_04.txt", gnv = d + "GNV1B_2023-06-01_C_04.txt";
+  // Level-1, with an orbit file process does not need: listed as ignored, not an error.
+  CliRun a = run("process" + cfg + d + "SCA1A_2023-06-01_C_04.txt " + d + "ACC1A_2023-06-01_C_04.txt " + qsa + " " + gnv +
+                 " --out " + d + "a.csv");
+  ASSERT_EQ(a.status, 0) << a.out;
+  EXPECT_NE(a.out.find(gnv + ": GNV1B is not an input of process"), std::string::npos) << a.out;
+  EXPECT_NE(a.out.find("ignored"), std::string::npos) << a.out;
+  EXPECT_NE(a.out.find("+ 0 rejected"), std::string::npos) << a.out;
+  // The simulator's sim.lcmlog (not ".lcm"): recognised by content; the same rows.
+  CliRun b = run("process" + cfg + d + "sim.lcmlog " + qsa + " --out " + d + "b.csv");
+  ASSERT_EQ(b.status, 0) << b.out;
+  std::ifstream fa(d + "a.csv"), fb(d + "b.csv");
+  std::stringstream sa, sb;
+  sa << fa.rdbuf();
+  sb << fb.rdbuf();
+  EXPECT_GT(sa.str().size(), 10000u);
+  EXPECT_EQ(sa.str(), sb.str());
+  // Level-1 and LCM together would feed the core twice: refused with both names.
+  CliRun mixed = run("process" + cfg + d + "sim.lcmlog " + d + "SCA1A_2023-06-01_C_04.txt " + qsa + " --out " + d + "c.csv");
+  EXPECT_EQ(mixed.status, 1) << mixed.out;
+  EXPECT_NE(mixed.out.find("sim.lcmlog is an LCM log and"), std::string::npos) << mixed.out;
+  // inspect summarises the log too.
+  CliRun i = run("inspect " + d + "sim.lcmlog");
+  EXPECT_EQ(i.status, 0) << i.out;
+  EXPECT_NE(i.out.find("LCM log"), std::string::npos) << i.out;
+}
