@@ -3,6 +3,7 @@
 #include <boresight/io/core_config.h>
 #include <boresight/io/lcm_log.h>
 #include <boresight/io/level1.h>
+#include <boresight/io/product_stream.h>
 #include <boresight/io/time_format.h>
 #include <boresight/stream/engine.h>
 #include <boresight/stream/sources.h>
@@ -59,12 +60,13 @@ struct ClockMap {
   double epsAt(TimeUs t) const {
     if (r.empty()) return 0.0;
     if (t <= r.front().t) return r.front().eps_time;
-    for (std::size_t i = 1; i < r.size(); ++i)
-      if (t <= r[i].t) {
-        double f = double(t - r[i - 1].t) / double(std::max<TimeUs>(1, r[i].t - r[i - 1].t));
-        return r[i - 1].eps_time + f * (r[i].eps_time - r[i - 1].eps_time);
-      }
-    return r.back().eps_time;
+    // First record at or after t (records in time order, as CLK1B files are).
+    auto it = std::lower_bound(r.begin(), r.end(), t, [](const io::ClkRecord& c, TimeUs v) { return c.t < v; });
+    if (it == r.end()) return r.back().eps_time;
+    const auto& a = *(it - 1);
+    const auto& b = *it;
+    double f = double(t - a.t) / double(std::max<TimeUs>(1, b.t - a.t));
+    return a.eps_time + f * (b.eps_time - a.eps_time);
   }
 };
 
@@ -114,7 +116,23 @@ class AttitudeTrack final : public stream::RowSink {
 };
 
 void compareSca1b(const std::vector<std::pair<TimeUs, Quat>>& rows, const std::string& path, const ClockMap& clk) {
-  auto p = io::readProduct<io::Sca1bRecord>(path);
+  // Streamed into the record vector (the text is not held); GRACE binary SCA1B is read whole.
+  io::ProductFile<io::Sca1bRecord> p;
+  {
+    io::ProductStream<io::Sca1bRecord> st;
+    std::string err;
+    io::LineStream probe;
+    if (probe.open(path, {}, &err, 4096) && probe.header().binary) {
+      p = io::readProduct<io::Sca1bRecord>(path);
+    } else if (st.open(path, {}, &err)) {
+      io::Sca1bRecord rec;
+      while (st.next(rec)) p.records.push_back(rec);
+      if (!st.ok()) p.ok = false, p.error = st.error();
+    } else {
+      p.ok = false;
+      p.error = err;
+    }
+  }
   if (!p.ok) {
     std::fprintf(stderr, "boresight process: %s\n", p.error.c_str());
     return;
