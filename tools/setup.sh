@@ -7,7 +7,6 @@ set -euo pipefail
 pkgs=(
   build-essential cmake ninja-build pkg-config git ca-certificates
   libeigen3-dev libceres-dev libyaml-cpp-dev
-  libcli11-dev nlohmann-json3-dev
   liblcm-dev liblcm-bin libglib2.0-dev
   libgtest-dev libgmock-dev googletest libbenchmark-dev
   libcli11-dev nlohmann-json3-dev

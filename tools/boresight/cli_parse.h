@@ -1,8 +1,10 @@
-// Command-line parsing of the subcommands on CLI11: our own --help text (kept in each cmd_*.cc),
-// usage errors as "boresight CMD: reason" and exit status 2, unknown options named.
+// Command-line parsing for the subcommands that keep their own --help text (process, convert,
+// inspect: the column and format descriptions do not fit CLI11's generated help). Same convention as
+// cli_common.h: 0 after --help, 2 with "boresight NAME: reason" on usage errors; in addition a value
+// that looks like an option is an error and unknown options are named.
 #pragma once
 
-#include <CLI/CLI.hpp>
+#include "cli_common.h"
 
 #include <cstdio>
 #include <string>
@@ -22,7 +24,7 @@ inline CLI::Validator notAnOption() {
 }
 
 /// Parses argv (argv[0] is the command name). Returns -1 to go on, else the exit status to return
-/// (0 after --help, 2 on a usage error, with the message and the usage on stderr).
+/// (0 after --help with `usage` on stdout, 2 on a usage error with the reason on stderr).
 inline int parseCommandLine(CLI::App& app, int argc, char** argv, const char* cmd, const char* usage) {
   bool help = false;
   app.set_help_flag();
@@ -37,7 +39,7 @@ inline int parseCommandLine(CLI::App& app, int argc, char** argv, const char* cm
       std::fputs(usage, stdout);
       return 0;
     }
-    std::fprintf(stderr, "boresight %s: %s\n\n%s", cmd, e.what(), usage);
+    std::fprintf(stderr, "boresight %s: %s\n(boresight %s --help lists the options)\n", cmd, e.what(), cmd);
     return 2;
   }
   if (help) {
@@ -46,8 +48,8 @@ inline int parseCommandLine(CLI::App& app, int argc, char** argv, const char* cm
   }
   if (!app.remaining().empty()) {
     const std::string x = app.remaining().front();
-    std::fprintf(stderr, "boresight %s: %s%s\n\n%s", cmd, x.size() > 1 && x[0] == '-' ? "unknown option " : "unexpected argument ",
-                 x.c_str(), usage);
+    std::fprintf(stderr, "boresight %s: %s%s\n(boresight %s --help lists the options)\n", cmd,
+                 x.size() > 1 && x[0] == '-' ? "unknown option " : "unexpected argument ", x.c_str(), cmd);
     return 2;
   }
   return -1;
