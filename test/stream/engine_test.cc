@@ -7,6 +7,7 @@
 #include <boresight/sim/scenario.h>
 #include <boresight/sim/simulator.h>
 #include <boresight/stream/engine.h>
+#include <boresight/stream/replay.h>
 #include <boresight/stream/sources.h>
 
 #include <gtest/gtest.h>
@@ -441,4 +442,34 @@ TEST(StreamEngine, MemoryIsBoundedByTheLookAheadNotTheSpan) {
   EXPECT_LE(ring.at(99).t, e.lastEpoch());
   EXPECT_GT(ring.at(99).t, e.lastEpoch() - kUsPerSecond);
   for (std::size_t i = 1; i < ring.size(); ++i) EXPECT_LT(ring.at(i - 1).t, ring.at(i).t);
+}
+
+TEST(StreamReplay, InputsByContentIgnoredListedMixedRefused) {
+  const std::string d = tempDir();
+  const std::string gnv = writeRecords(d + "/GNV1B_x.txt", io::Product::GNV1B, std::vector<io::GnvRecord>(3));
+  stream::ReplayInputs in;
+  std::string err;
+  ASSERT_TRUE(stream::classifyInputs({span().sca, span().acc, span().qsa, gnv}, in, &err)) << err;
+  EXPECT_EQ(in.sca.size(), 1u);
+  EXPECT_EQ(in.acc.size(), 1u);
+  EXPECT_EQ(in.qsa_records.size(), 3u);
+  ASSERT_EQ(in.ignored.size(), 1u);
+  EXPECT_EQ(in.ignored[0].second, "GNV1B");
+  EXPECT_FALSE(stream::classifyInputs({span().lcm, span().sca}, in, &err));
+  EXPECT_NE(err.find("is an LCM log and"), std::string::npos) << err;
+  // Configuration for the inputs: mountings from QSA1B at the first head tag; no accelerometer
+  // input switches its path off.
+  io::PlatformConfig pc;
+  ASSERT_TRUE(io::loadPlatformConfig(sourceDir() + "/config/gracefo.yaml", pc, &err)) << err;
+  ASSERT_TRUE(stream::classifyInputs({span().sca, span().qsa}, in, &err)) << err;
+  ASSERT_TRUE(stream::prepareConfig(in, {}, pc, &err)) << err;
+  EXPECT_FALSE(pc.pipeline.use_accelerometer);
+  const auto cfg = pipelineConfig(readSca(span().sca));
+  for (int s = 0; s < cfg.heads.n_heads; ++s)
+    EXPECT_EQ(pc.pipeline.heads.head[std::size_t(s)].q_Si_B.coeffs(), cfg.heads.head[std::size_t(s)].q_Si_B.coeffs());
+  ASSERT_TRUE(stream::classifyInputs({span().sca}, in, &err));
+  io::PlatformConfig pc2;
+  ASSERT_TRUE(io::loadPlatformConfig(sourceDir() + "/config/gracefo.yaml", pc2, &err)) << err;
+  EXPECT_FALSE(stream::prepareConfig(in, {}, pc2, &err));
+  EXPECT_NE(err.find("give a QSA1B file"), std::string::npos) << err;
 }

@@ -6,6 +6,7 @@
 #include <boresight/io/product_stream.h>
 #include <boresight/io/time_format.h>
 #include <boresight/stream/engine.h>
+#include <boresight/stream/replay.h>
 #include <boresight/stream/sources.h>
 
 #include "cli_parse.h"
@@ -166,93 +167,6 @@ void compareSca1b(const std::vector<std::pair<TimeUs, Quat>>& rows, const std::s
   for (int i = 0; i < 3; ++i) std::printf("  %c      %12.2f   %12.2f\n", ax[i], cb.mean[i], cb.sd[i]);
 }
 
-struct Inputs {
-  std::vector<std::string> sca, acc, lcm, qsa_files;
-  std::vector<std::pair<std::string, std::string>> ignored;  // file, product
-  std::vector<io::QsaRecord> qsa;
-};
-
-/// Sorts the inputs by what their content says they are. False (message printed) on a file that is
-/// neither a Level-1 product nor an LCM log, or on a mix of the two kinds.
-bool classify(const std::vector<std::string>& files, Inputs& in) {
-  for (const auto& f : files) {
-    stream::FileKind k = stream::identifyFile(f);
-    if (k.type == stream::FileKind::Type::kUnknown) {
-      std::fprintf(stderr, "boresight process: %s\n", k.reason.c_str());
-      return false;
-    }
-    if (k.type == stream::FileKind::Type::kLcmLog) {
-      in.lcm.push_back(f);
-      continue;
-    }
-    switch (k.product) {
-      case io::Product::SCA1A: in.sca.push_back(f); break;
-      case io::Product::ACC1A:
-      case io::Product::ACT1A: in.acc.push_back(f); break;
-      case io::Product::QSA1B: in.qsa_files.push_back(f); break;
-      default: in.ignored.emplace_back(f, k.product_name); break;
-    }
-  }
-  if (!in.lcm.empty() && !(in.sca.empty() && in.acc.empty())) {
-    std::fprintf(stderr,
-                 "boresight process: %s is an LCM log and %s is a Level-1 %s file: give either Level-1 files or LCM "
-                 "logs (they carry the same samples; mixing them would feed the core twice)\n",
-                 in.lcm.front().c_str(), (in.sca.empty() ? in.acc : in.sca).front().c_str(),
-                 in.sca.empty() ? "ACC1A" : "SCA1A");
-    return false;
-  }
-  for (const auto& f : in.qsa_files) {
-    auto p = io::readProduct<io::QsaRecord>(f);
-    if (!p.ok) {
-      std::fprintf(stderr, "boresight process: %s\n", p.error.c_str());
-      return false;
-    }
-    in.qsa.insert(in.qsa.end(), p.records.begin(), p.records.end());
-  }
-  return true;
-}
-
-/// The earliest head tag among the first head samples of the inputs (the QSA1B reference time).
-bool firstHeadTag(const Inputs& in, const io::ReadOptions& opt, TimeUs& t) {
-  bool found = false;
-  auto take = [&](stream::Source& s) {
-    stream::Sample x;
-    stream::Reject why;
-    for (int k = 0; k < 100000; ++k) {
-      auto n = s.next(x, why);
-      if (n == stream::Source::Next::kSample && x.kind == stream::Sample::Kind::kHead) {
-        if (!found || x.t < t) t = x.t;
-        found = true;
-        return;
-      }
-      if (n != stream::Source::Next::kSample && n != stream::Source::Next::kRejected) return;
-    }
-  };
-  for (const auto& f : in.sca) {
-    stream::Sca1aSource s;
-    if (s.open(f, opt, nullptr)) take(s);
-  }
-  for (const auto& f : in.lcm) {
-    stream::LcmLogSource s;
-    if (s.open(f, nullptr)) take(s);
-  }
-  return found;
-}
-
-/// Whether an LCM log carries accelerometer messages (looked for in its first 100 000 events).
-bool lcmHasAccel(const std::string& f) {
-  stream::LcmLogSource s;
-  if (!s.open(f, nullptr)) return false;
-  stream::Sample x;
-  stream::Reject why;
-  for (int k = 0; k < 100000; ++k) {
-    auto n = s.next(x, why);
-    if (n == stream::Source::Next::kSample && x.kind == stream::Sample::Kind::kAccel) return true;
-    if (n != stream::Source::Next::kSample && n != stream::Source::Next::kRejected) return false;
-  }
-  return false;
-}
-
 }  // namespace
 
 int runProcess(int argc, char** argv) {
@@ -276,63 +190,26 @@ int runProcess(int argc, char** argv) {
     std::fprintf(stderr, "boresight process: %s\n", err.c_str());
     return 1;
   }
-  Inputs in;
-  if (!classify(files, in)) return 1;
-  for (const auto& [f, product] : in.ignored)
-    std::printf("%s: %s is not an input of process (SCA1A, ACC1A, QSA1B, LCM log): ignored\n", f.c_str(),
-                product.c_str());
-  if (in.sca.empty() && in.lcm.empty()) {
-    std::fprintf(stderr, "boresight process: no star sensor input (SCA1A file or LCM log) among the inputs\n");
-    return 1;
-  }
-  io::ReadOptions opt;
-  if (strict) opt.on_error = io::OnError::Stop;
-  if (pc.mounting_from_qsa1b) {
-    if (in.qsa.empty()) {
-      std::fprintf(stderr, "boresight process: %s takes the mountings from QSA1B (heads.mounting: qsa1b): give a QSA1B file\n",
-                   config.c_str());
-      return 1;
-    }
-    TimeUs t0 = 0;
-    if (!firstHeadTag(in, opt, t0)) {
-      std::fprintf(stderr, "boresight process: no star sensor samples in the inputs\n");
-      return 1;
-    }
-    if (!io::applyQsa1bMounting(pc, in.qsa, t0, &err)) {
-      std::fprintf(stderr, "boresight process: %s\n", err.c_str());
-      return 1;
-    }
-  }
-  bool have_acc = !in.acc.empty();
-  for (const auto& f : in.lcm) have_acc = have_acc || lcmHasAccel(f);
-  if (!have_acc) pc.pipeline.use_accelerometer = false;
-
-  stream::AssemblerConfig acfg;
-  acfg.lookahead_us = static_cast<TimeUs>(std::llround(lookahead_s * 1e6));
-  stream::Engine engine(acfg);
-  if (!engine.configure(pc.pipeline, &err)) {
+  stream::ReplayInputs in;
+  if (!stream::classifyInputs(files, in, &err)) {
     std::fprintf(stderr, "boresight process: %s\n", err.c_str());
     return 1;
   }
-  auto addLevel1 = [&](auto source, const std::string& f) {
-    if (!source->open(f, opt, &err)) {
-      std::fprintf(stderr, "boresight process: %s\n", err.c_str());
-      return false;
-    }
-    engine.addSource(std::make_unique<stream::PrefetchSource>(std::move(source)));  // parse beside the core
-    return true;
-  };
-  for (const auto& f : in.sca)
-    if (!addLevel1(std::make_unique<stream::Sca1aSource>(), f)) return 1;
-  for (const auto& f : in.acc)
-    if (!addLevel1(std::make_unique<stream::Acc1aSource>(), f)) return 1;
-  for (const auto& f : in.lcm) {
-    auto s = std::make_unique<stream::LcmLogSource>();
-    if (!s->open(f, &err)) {
-      std::fprintf(stderr, "boresight process: %s\n", err.c_str());
-      return 1;
-    }
-    engine.addSource(std::make_unique<stream::PrefetchSource>(std::move(s)));
+  for (const auto& [f, product] : in.ignored)
+    std::printf("%s: %s is not an input of process (SCA1A, ACC1A, QSA1B, LCM log): ignored\n", f.c_str(),
+                product.c_str());
+  io::ReadOptions opt;
+  if (strict) opt.on_error = io::OnError::Stop;
+  if (!stream::prepareConfig(in, opt, pc, &err)) {
+    std::fprintf(stderr, "boresight process: %s\n", err.c_str());
+    return 1;
+  }
+  stream::AssemblerConfig acfg;
+  acfg.lookahead_us = static_cast<TimeUs>(std::llround(lookahead_s * 1e6));
+  stream::Engine engine(acfg);
+  if (!engine.configure(pc.pipeline, &err) || !stream::addSources(in, opt, true, engine, &err)) {
+    std::fprintf(stderr, "boresight process: %s\n", err.c_str());
+    return 1;
   }
   stream::CsvRowSink csv(out);
   AttitudeTrack track;

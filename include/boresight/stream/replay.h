@@ -1,0 +1,45 @@
+// Replaying recorded telemetry through the engine: input files sorted by content, the core
+// configuration completed for them, one source per file. `boresight process` is these three calls
+// plus a CSV sink; calibrate and audit are the same with other sinks.
+//
+//   stream::ReplayInputs in;
+//   if (!stream::classifyInputs(files, in, &err)) ...;          // in.ignored: listed, not errors
+//   if (!stream::prepareConfig(in, opt, platform, &err)) ...;    // QSA1B mountings, accelerometer
+//   stream::Engine e;  e.configure(platform.pipeline, &err);
+//   if (!stream::addSources(in, opt, true, e, &err)) ...;
+#pragma once
+
+#include <boresight/io/core_config.h>
+#include <boresight/io/level1.h>
+#include <boresight/stream/engine.h>
+
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace boresight::stream {
+
+struct ReplayInputs {
+  std::vector<std::string> sca, acc, lcm;  ///< SCA1A, ACC1A/ACT1A files; LCM logs
+  std::vector<std::string> qsa;            ///< QSA1B files (read up front: mountings)
+  std::vector<io::QsaRecord> qsa_records;
+  std::vector<std::pair<std::string, std::string>> ignored;  ///< (file, product): not a replay input
+};
+
+/// Sorts the files by their content (LCM sync word, Level-1 header). Other Level-1 products (GNV1B,
+/// SCA1B, CLK1B, ...) go to `ignored`. False with *error for a file that is neither (file:line:
+/// reason), an unreadable QSA1B, or Level-1 star/accelerometer files mixed with LCM logs (the same
+/// samples twice).
+bool classifyInputs(const std::vector<std::string>& files, ReplayInputs& in, std::string* error);
+
+/// Completes the platform configuration for these inputs: the heads' mountings from QSA1B at the
+/// first head tag when the platform asks for them (heads.mounting: qsa1b), and the accelerometer
+/// path off when no input carries accelerometer samples. False with *error (no star input, no QSA1B
+/// where one is needed, a head without a QSA1B record).
+bool prepareConfig(const ReplayInputs& in, const io::ReadOptions& opt, io::PlatformConfig& pc, std::string* error);
+
+/// One source per input file, in the order SCA1A files, ACC1A files, LCM logs (that order also
+/// breaks ties at equal time tags). `prefetch`: each is read on its own worker thread.
+bool addSources(const ReplayInputs& in, const io::ReadOptions& opt, bool prefetch, Engine& engine, std::string* error);
+
+}  // namespace boresight::stream
