@@ -19,9 +19,9 @@ using namespace boresight::io;
 namespace {
 
 std::string tempDir() {
-  char tmpl[] = "/tmp/boresight_streamio_XXXXXX";
-  const char* d = ::mkdtemp(tmpl);
-  return d ? d : "/tmp";
+  std::string tmpl = ::testing::TempDir() + "boresight_streamio_XXXXXX";
+  const char* d = ::mkdtemp(tmpl.data());
+  return d ? std::string(d) : ::testing::TempDir();
 }
 
 void writeFile(const std::string& path, const std::string& text) {

@@ -186,8 +186,10 @@ TEST(Assembler, PrefetchHandsOverTheSameSequence) {
 }
 
 TEST(CsvRowSink, NumbersAreFormattedAsPrintf) {
-  char tmpl[] = "/tmp/boresight_csv_XXXXXX";
-  const std::string dir = ::mkdtemp(tmpl);
+  std::string tmpl = ::testing::TempDir() + "boresight_csv_XXXXXX";
+  const char* made = ::mkdtemp(tmpl.data());
+  ASSERT_NE(made, nullptr);
+  const std::string dir = made;
   const std::string path = dir + "/rows.csv";
   core::PipelineConfig cfg;
   cfg.heads.n_heads = 3;

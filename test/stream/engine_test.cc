@@ -40,9 +40,9 @@ std::string slurp(const std::string& path) {
 std::string sourceDir() { return BORESIGHT_SOURCE_DIR; }
 
 std::string tempDir() {
-  char tmpl[] = "/tmp/boresight_stream_XXXXXX";
-  const char* d = ::mkdtemp(tmpl);
-  return d ? d : "/tmp";
+  std::string tmpl = ::testing::TempDir() + "boresight_stream_XXXXXX";
+  const char* d = ::mkdtemp(tmpl.data());
+  return d ? std::string(d) : ::testing::TempDir();
 }
 
 /// A simulated span written as `simulate` writes it: SCA1A, ACC1A, QSA1B and the LCM log.

@@ -38,9 +38,9 @@ CliRun run(const std::string& args) {
 }
 
 std::string tempDir() {
-  char tmpl[] = "/tmp/boresight_cli_XXXXXX";
-  const char* d = ::mkdtemp(tmpl);
-  return d ? d : "/tmp";
+  std::string tmpl = ::testing::TempDir() + "boresight_cli_XXXXXX";
+  const char* d = ::mkdtemp(tmpl.data());
+  return d ? std::string(d) : ::testing::TempDir();
 }
 
 }  // namespace
