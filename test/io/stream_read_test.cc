@@ -158,3 +158,48 @@ TEST(SummarizeProduct, BlocksAndThreadsGiveTheWholeFileSummary) {
     }
   }
 }
+
+TEST(ProductStream, MutatedFilesReadAsTheWholeFileReaderReadsThem) {
+  // Random byte damage (digits, separators, newlines, NUL, CR) in a file several buffers long:
+  // the stream gives the same records and the same rejected lines as parseProduct, whatever the
+  // buffer size, and summarizeProduct the same summary as summarizeText.
+  const std::string d = tempDir();
+  const std::string clean = acc1aText(1500, false);  // ~300 kB: beyond the 64 kB header read
+  std::mt19937 rng(17);
+  const char junk[] = {'x', ' ', '\n', '\0', '\r', '-', '.', 'e', '9', '\t'};
+  for (int trial = 0; trial < 60; ++trial) {
+    std::string text = clean;
+    const int hits = 1 + static_cast<int>(rng() % 40);
+    const std::size_t header_end = text.find("# End of YAML header\n") + 21;
+    for (int h = 0; h < hits; ++h) {
+      const std::size_t at = header_end + rng() % (text.size() - header_end);
+      text[at] = junk[rng() % sizeof junk];
+    }
+    if (trial % 3 == 0) text.resize(text.size() - rng() % 300);
+    const std::string path = d + "/ACC1A_m" + std::to_string(trial) + ".txt";
+    writeFile(path, text);
+    const auto whole = parseProduct<FlaggedRecord>(text, path);
+    ASSERT_TRUE(whole.ok) << whole.error;
+    for (std::size_t chunk : {std::size_t(4096), std::size_t(5000)}) {
+      ProductStream<FlaggedRecord> s;
+      std::string err;
+      ASSERT_TRUE(s.open(path, {}, &err, chunk)) << err;
+      FlaggedRecord r;
+      std::size_t i = 0;
+      while (s.next(r)) {
+        ASSERT_LT(i, whole.records.size()) << "trial " << trial;
+        ASSERT_TRUE(r == whole.records[i]) << "trial " << trial << " record " << i;
+        ++i;
+      }
+      EXPECT_EQ(i, whole.records.size()) << "trial " << trial;
+      ASSERT_EQ(s.rejected().size(), whole.rejected.size()) << "trial " << trial;
+      for (std::size_t k = 0; k < whole.rejected.size(); ++k)
+        EXPECT_EQ(s.rejected()[k].str(), whole.rejected[k].str()) << "trial " << trial;
+    }
+    const ProductSummary a = summarizeProduct(path), b = summarizeText(text, path);
+    EXPECT_EQ(a.records, b.records) << "trial " << trial;
+    EXPECT_EQ(a.rejected_count, b.rejected_count) << "trial " << trial;
+    EXPECT_EQ(a.first_time, b.first_time) << "trial " << trial;
+    EXPECT_EQ(a.last_time, b.last_time) << "trial " << trial;
+  }
+}
