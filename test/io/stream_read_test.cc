@@ -4,6 +4,7 @@
 #include <boresight/io/any_product.h>
 #include <boresight/io/level1.h>
 #include <boresight/io/product_stream.h>
+#include <boresight/io/sca_geometry.h>
 
 #include <gtest/gtest.h>
 
@@ -202,4 +203,50 @@ TEST(ProductStream, MutatedFilesReadAsTheWholeFileReaderReadsThem) {
     EXPECT_EQ(a.first_time, b.first_time) << "trial " << trial;
     EXPECT_EQ(a.last_time, b.last_time) << "trial " << trial;
   }
+}
+
+TEST(IbaAccumulator, SameResultsAsTheWholeFileFunctionAndRefusesGoingBack) {
+  std::mt19937 rng(9);
+  std::normal_distribution<double> n01;
+  std::vector<Sca1aRecord> recs;
+  for (int k = 0; k < 3000; ++k) {
+    for (int h = 1; h <= 3; ++h) {
+      if (h == 3 && k % 11 < 3) continue;  // head 3 blind now and then
+      Sca1aRecord r;
+      r.t = 738849600LL * kUsPerSecond + k * 500000LL;
+      r.head = static_cast<std::uint8_t>(h);
+      Quat q(Eigen::AngleAxisd(0.001 * k + h, Vec3(0.3 * h, 1, 0.2).normalized()));
+      q.coeffs() += 2e-5 * Eigen::Vector4d(n01(rng), n01(rng), n01(rng), n01(rng));
+      quatToScalarFirst(q.normalized(), r.q);
+      recs.push_back(r);
+      if (k == 100 && h == 2) {  // a repeated head in one epoch: the last one counts
+        quatToScalarFirst(Quat(Eigen::AngleAxisd(0.3, Vec3::UnitX())), r.q);
+        recs.push_back(r);
+      }
+    }
+  }
+  std::vector<QsaRecord> qsa(3);
+  for (int h = 0; h < 3; ++h) {
+    qsa[std::size_t(h)].sensor = h + 1;
+    quatToScalarFirst(Quat(Eigen::AngleAxisd(0.8 * h, Vec3::UnitY())), qsa[std::size_t(h)].q);
+  }
+  const auto ref = interBoresightAngles(recs, &qsa);
+  IbaAccumulator acc;
+  for (const auto& r : recs) ASSERT_TRUE(acc.add(r));
+  const auto got = acc.finish(&qsa);
+  ASSERT_EQ(got.size(), 3u);
+  ASSERT_EQ(got.size(), ref.size());
+  for (std::size_t i = 0; i < ref.size(); ++i) {
+    EXPECT_EQ(got[i].head_a, ref[i].head_a);
+    EXPECT_EQ(got[i].head_b, ref[i].head_b);
+    EXPECT_EQ(got[i].epochs, ref[i].epochs);
+    EXPECT_EQ(got[i].mean_deg, ref[i].mean_deg);
+    EXPECT_EQ(got[i].std_arcsec, ref[i].std_arcsec);
+    EXPECT_EQ(got[i].nominal_deg, ref[i].nominal_deg);
+    EXPECT_EQ(got[i].offset_arcsec, ref[i].offset_arcsec);
+  }
+  EXPECT_EQ(got[1].epochs, 3000u - 3000u / 11 * 3 - std::min(3u, 3000u % 11));  // pair 1-3
+  IbaAccumulator back;
+  EXPECT_TRUE(back.add(recs[10]));
+  EXPECT_FALSE(back.add(recs[0]));
 }

@@ -1,6 +1,7 @@
 // boresight inspect PATH... [--json FILE]: what is in a set of Level-1 files.
 #include <boresight/io/any_product.h>
 #include <boresight/io/level1.h>
+#include <boresight/io/product_stream.h>
 #include <boresight/io/sca_geometry.h>
 #include <boresight/io/time_format.h>
 
@@ -138,7 +139,7 @@ int runInspect(int argc, char** argv) {
 
   nlohmann::json js_files = nlohmann::json::array();
   int status = 0;
-  std::vector<io::Sca1aRecord> sca;
+  std::vector<std::string> sca_files;
   std::vector<io::QsaRecord> qsa;
   bool have_qsa = false;
   std::vector<char> sca_sats;
@@ -182,11 +183,8 @@ int runInspect(int argc, char** argv) {
       std::printf("    ... %zu rejected lines in all\n", s.rejected_count);
 
     if (s.product == "SCA1A") {
-      auto sf = io::readProduct<io::Sca1aRecord>(f, ropt);
-      if (sf.ok) {
-        sca.insert(sca.end(), sf.records.begin(), sf.records.end());
-        if (std::find(sca_sats.begin(), sca_sats.end(), s.satellite) == sca_sats.end()) sca_sats.push_back(s.satellite);
-      }
+      if (std::find(sca_sats.begin(), sca_sats.end(), s.satellite) == sca_sats.end()) sca_sats.push_back(s.satellite);
+      sca_files.push_back(f);
     } else if (s.product == "QSA1B") {
       auto qf = io::readProduct<io::QsaRecord>(f);
       if (qf.ok) {
@@ -199,14 +197,39 @@ int runInspect(int argc, char** argv) {
   nlohmann::json js_pairs = nlohmann::json::array();
   if (sca_sats.size() > 1) {
     std::printf("\nSCA1A files of several satellites were given: inter-boresight angles need one satellite.\n");
-  } else if (!sca.empty()) {
+  } else if (!sca_files.empty()) {
+    // Streamed, in constant memory, when the records are in time order across the files as given;
+    // otherwise everything is loaded and sorted by the whole-file function.
+    io::IbaAccumulator acc(axis);
     int count[10] = {0};
-    for (const auto& r : sca) count[r.head < 10 ? r.head : 0]++;
+    bool in_order = true;
+    for (const auto& f : sca_files) {
+      io::ProductStream<io::Sca1aRecord> st;
+      std::string err;
+      if (!st.open(f, ropt, &err)) continue;
+      io::Sca1aRecord r;
+      while (in_order && st.next(r)) {
+        in_order = acc.add(r);
+        if (in_order) count[r.head < 10 ? r.head : 0]++;
+      }
+    }
+    std::vector<io::PairIba> pairs;
+    if (in_order) {
+      pairs = acc.finish(have_qsa ? &qsa : nullptr);
+    } else {
+      std::vector<io::Sca1aRecord> sca;
+      for (const auto& f : sca_files) {
+        auto sf = io::readProduct<io::Sca1aRecord>(f, ropt);
+        if (sf.ok) sca.insert(sca.end(), sf.records.begin(), sf.records.end());
+      }
+      for (auto& c : count) c = 0;
+      for (const auto& r : sca) count[r.head < 10 ? r.head : 0]++;
+      pairs = io::interBoresightAngles(sca, have_qsa ? &qsa : nullptr, axis);
+    }
     std::printf("\nSCA1A samples per head:");
     for (int h = 1; h < 10; ++h)
       if (count[h]) std::printf("  head %d: %d", h, count[h]);
     std::printf("\n");
-    auto pairs = io::interBoresightAngles(sca, have_qsa ? &qsa : nullptr, axis);
     if (!pairs.empty()) {
       std::printf("\n%-6s %7s %16s %16s %18s %18s\n", "heads", "epochs", "iba_mean_deg", "iba_std_arcsec",
                   "iba_nominal_deg", "iba_offset_arcsec");
