@@ -185,6 +185,33 @@ AccelSample accelFromAcc1a(const FlaggedRecord& r, std::int32_t seq) {
   return s;
 }
 
+Sca1aRecord sca1aFromHead(const HeadSample& h, char satellite) {
+  Sca1aRecord rec;
+  rec.t = h.utime;
+  rec.satellite = satellite;
+  rec.head = static_cast<std::uint8_t>(h.head_id);
+  for (int i = 0; i < 4; ++i) rec.q[i] = h.q[i];
+  rec.nstars = h.star_count;
+  return rec;
+}
+
+FlaggedRecord acc1aFromAccel(const AccelSample& s, char satellite) {
+  FlaggedRecord rec;
+  rec.t = s.utime;
+  rec.time_ref = 'R';
+  rec.satellite = satellite;
+  rec.prod_flag = Bits{0, 32};
+  if (s.flags & 2) {
+    rec.prod_flag.value |= 0x7u;
+    for (int i = 0; i < 3; ++i) rec.value[static_cast<std::size_t>(acc_bits::kLinX + i)] = s.lin_accel[i];
+  }
+  if (s.flags & 1) {
+    rec.prod_flag.value |= 0x38u;
+    for (int i = 0; i < 3; ++i) rec.value[static_cast<std::size_t>(acc_bits::kAngX + i)] = s.ang_accel[i];
+  }
+  return rec;
+}
+
 bool readLcmAsLevel1(const std::string& path, char satellite, bool drop_invalid, LcmAsLevel1& out,
                      std::string* error) {
   out = LcmAsLevel1{};
@@ -200,31 +227,13 @@ bool readLcmAsLevel1(const std::string& path, char satellite, bool drop_invalid,
         ++out.invalid_heads;
         if (drop_invalid) continue;
       }
-      Sca1aRecord rec;
-      rec.t = h.utime;
-      rec.satellite = satellite;
-      rec.head = static_cast<std::uint8_t>(h.head_id);
-      for (int i = 0; i < 4; ++i) rec.q[i] = h.q[i];
-      rec.nstars = h.star_count;
-      out.sca.push_back(rec);
+      out.sca.push_back(sca1aFromHead(h, satellite));
     } else if (k == LcmLogReader::Kind::Accel) {
-      if (!(s.flags & 1)) ++out.invalid_accel;
-      FlaggedRecord rec;
-      rec.t = s.utime;
-      rec.time_ref = 'R';
-      rec.satellite = satellite;
-      rec.prod_flag = Bits{0, 32};
-      if (s.flags & 2) {
-        rec.prod_flag.value |= 0x7u;
-        for (int i = 0; i < 3; ++i) rec.value[static_cast<std::size_t>(acc_bits::kLinX + i)] = s.lin_accel[i];
+      if (!(s.flags & 1)) {
+        ++out.invalid_accel;
+        if (drop_invalid) continue;
       }
-      if (s.flags & 1) {
-        rec.prod_flag.value |= 0x38u;
-        for (int i = 0; i < 3; ++i) rec.value[static_cast<std::size_t>(acc_bits::kAngX + i)] = s.ang_accel[i];
-      } else if (drop_invalid) {
-        continue;
-      }
-      out.acc.push_back(rec);
+      out.acc.push_back(acc1aFromAccel(s, satellite));
     }
   }
   out.unknown_channel = r.unknownChannel();

@@ -3,6 +3,7 @@
 #include <boresight/io/lcm_log.h>
 #include <boresight/io/level1.h>
 #include <boresight/io/time_format.h>
+#include <boresight/sim/output.h>
 
 #include <boresight/stream/sources.h>
 
@@ -139,47 +140,81 @@ int toLevel1(const Options& a) {
     return 2;
   }
   const char sat = sat_s[0];
-  io::LcmAsLevel1 in;
+  // Event by event into chunked writers: memory does not grow with the log.
+  io::LcmLogReader reader;
   std::string err;
-  if (!io::readLcmAsLevel1(log, sat, false, in, &err)) {
+  if (!reader.open(log, &err)) {
     std::fprintf(stderr, "boresight convert: %s\n", err.c_str());
     return 1;
   }
-  if (in.sca.empty() && in.acc.empty()) {
+  sim::ChunkedProductWriter<io::Sca1aRecord> sca;
+  sim::ChunkedProductWriter<io::FlaggedRecord> acc;
+  std::string sca_path, acc_path;
+  std::uint64_t invalid_heads = 0, invalid_accel = 0;
+  bool dir_made = false;
+  auto pathFor = [&](const char* name, TimeUs t) {
+    if (!dir_made) ::mkdir(dir.c_str(), 0777);
+    dir_made = true;
+    return dir + "/" + name + "_" + io::formatDate(t) + "_" + sat + "_04.txt";
+  };
+  io::HeadSample h;
+  io::AccelSample m;
+  for (;;) {
+    const auto k = reader.next(h, m);
+    if (k == io::LcmLogReader::Kind::End) break;
+    if (k == io::LcmLogReader::Kind::Head) {
+      invalid_heads += (h.flags & 1) ? 0 : 1;
+      if (sca_path.empty()) {
+        sca_path = pathFor("SCA1A", h.utime);
+        if (!sca.open(sca_path, io::makeProduct<io::Sca1aRecord>(io::Product::SCA1A, sat), &err)) {
+          std::fprintf(stderr, "boresight convert: %s\n", err.c_str());
+          return 1;
+        }
+      }
+      sca.add(io::sca1aFromHead(h, sat));
+    } else if (k == io::LcmLogReader::Kind::Accel) {
+      invalid_accel += (m.flags & 1) ? 0 : 1;
+      if (acc_path.empty()) {
+        acc_path = pathFor("ACC1A", m.utime);
+        if (!acc.open(acc_path, io::makeProduct<io::FlaggedRecord>(io::Product::ACC1A, sat), &err)) {
+          std::fprintf(stderr, "boresight convert: %s\n", err.c_str());
+          return 1;
+        }
+      }
+      acc.add(io::acc1aFromAccel(m, sat));
+    }
+  }
+  if (sca_path.empty() && acc_path.empty()) {
     std::fprintf(stderr,
                  "boresight convert: %s: no %s or %s messages in the log (%llu events on other channels, %llu "
                  "undecodable): nothing to write\n",
-                 log.c_str(), io::kStarHeadChannel, io::kAccelChannel, static_cast<unsigned long long>(in.unknown_channel),
-                 static_cast<unsigned long long>(in.decode_failures));
+                 log.c_str(), io::kStarHeadChannel, io::kAccelChannel,
+                 static_cast<unsigned long long>(reader.unknownChannel()),
+                 static_cast<unsigned long long>(reader.decodeFailures()));
     return 1;
   }
-  auto sca = io::makeProduct<io::Sca1aRecord>(io::Product::SCA1A, sat);
-  auto acc = io::makeProduct<io::FlaggedRecord>(io::Product::ACC1A, sat);
-  sca.records = std::move(in.sca);
-  acc.records = std::move(in.acc);
-  ::mkdir(dir.c_str(), 0777);
   int status = 0;
-  auto write = [&](const auto& prod, const char* name) {
-    if (prod.records.empty()) return;
-    std::string path = dir + "/" + name + "_" + io::formatDate(prod.records.front().t) + "_" + sat + "_04.txt";
+  auto finish = [&](auto& w, const std::string& path) {
+    if (path.empty()) return;
     std::string e;
-    if (!io::writeProduct(path, prod, &e)) {
+    if (!w.close(&e)) {
       std::fprintf(stderr, "boresight convert: %s\n", e.c_str());
       status = 1;
       return;
     }
-    std::printf("%s: %zu records\n", path.c_str(), prod.records.size());
+    std::printf("%s: %llu records\n", path.c_str(), static_cast<unsigned long long>(w.count()));
   };
-  write(sca, "SCA1A");
-  write(acc, "ACC1A");
-  if (in.unknown_channel || in.decode_failures)
+  finish(sca, sca_path);
+  finish(acc, acc_path);
+  if (reader.unknownChannel() || reader.decodeFailures())
     std::printf("%s: %llu events on other channels and %llu undecodable messages skipped\n", log.c_str(),
-                static_cast<unsigned long long>(in.unknown_channel), static_cast<unsigned long long>(in.decode_failures));
-  if (in.invalid_accel)
+                static_cast<unsigned long long>(reader.unknownChannel()),
+                static_cast<unsigned long long>(reader.decodeFailures()));
+  if (invalid_accel)
     std::printf("%llu accelerometer samples had no valid angular acceleration\n",
-                static_cast<unsigned long long>(in.invalid_accel));
-  if (in.invalid_heads)
-    std::printf("%llu head samples were flagged invalid (kept)\n", static_cast<unsigned long long>(in.invalid_heads));
+                static_cast<unsigned long long>(invalid_accel));
+  if (invalid_heads)
+    std::printf("%llu head samples were flagged invalid (kept)\n", static_cast<unsigned long long>(invalid_heads));
   return status;
 }
 

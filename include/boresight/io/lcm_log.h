@@ -81,6 +81,11 @@ HeadSample headFromSca1a(const Sca1aRecord& r, std::int32_t seq);
 /// An ACC1A record as an accelerometer message; the validity bits say which triples were present.
 AccelSample accelFromAcc1a(const FlaggedRecord& r, std::int32_t seq);
 
+/// A head message as an SCA1A record (the fields the message does not carry are 0).
+Sca1aRecord sca1aFromHead(const HeadSample& h, char satellite);
+/// An accelerometer message as an ACC1A record: the valid triples become prod_flag bits.
+FlaggedRecord acc1aFromAccel(const AccelSample& a, char satellite);
+
 /// The contents of a log as Level-1 records. The fields the messages do not carry (SCA1A nlocks,
 /// sca_confid, sca_mode, qualflg; ACC1A ICU block number) are 0; absent triples are absent bits.
 struct LcmAsLevel1 {
