@@ -6,9 +6,11 @@
 
 #include <lcm/lcm-cpp.hpp>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <string>
 #include <vector>
 
 namespace boresight::io {
@@ -83,8 +85,86 @@ bool LcmLogWriter::write(const AccelSample& s) {
 
 void LcmLogWriter::close() { impl_->log.reset(); }
 
+// The reader parses the log format itself (with a 1 MB buffer) instead of lcm::LogFile, which reads
+// field by field with a seek per event. An event: sync word 0xEDA1DA01, int64 event number, int64
+// timestamp, int32 channel length, int32 data length, channel bytes, data bytes (big-endian).
 struct LcmLogReader::Impl {
-  std::unique_ptr<lcm::LogFile> log;
+  struct Event {
+    std::string channel;
+    const void* data = nullptr;
+    std::int32_t datalen = 0;  ///< -1: a stretch of bytes that is not an event (skipped up to the next sync word)
+    std::int64_t timestamp = 0;
+  };
+  std::FILE* f = nullptr;
+  std::vector<char> buf;
+  std::size_t begin = 0, end = 0;
+  bool eof = false;
+  Event ev;
+
+  ~Impl() { close(); }
+  void close() {
+    if (f) std::fclose(f);
+    f = nullptr;
+  }
+  static std::uint32_t be32(const unsigned char* p) {
+    return (std::uint32_t{p[0]} << 24) | (std::uint32_t{p[1]} << 16) | (std::uint32_t{p[2]} << 8) | std::uint32_t{p[3]};
+  }
+  /// At least n unread bytes in buf (false: the file ends before).
+  bool need(std::size_t n) {
+    while (end - begin < n) {
+      if (eof || !f) return false;
+      if (begin > 0) {
+        std::memmove(buf.data(), buf.data() + begin, end - begin);
+        end -= begin;
+        begin = 0;
+      }
+      if (buf.size() < std::max<std::size_t>(n, 1u << 20)) buf.resize(std::max<std::size_t>(n, 1u << 20));
+      const std::size_t got = std::fread(buf.data() + end, 1, buf.size() - end, f);
+      end += got;
+      if (got == 0) eof = true;
+    }
+    return true;
+  }
+  const Event* readNextEvent() {
+    constexpr std::size_t kHeader = 28;
+    constexpr std::uint32_t kSync = 0xEDA1DA01u, kMaxChannel = 1024, kMaxData = 64u << 20;
+    bool skipped = false;
+    auto notAnEvent = [&] {
+      ev.channel.clear();
+      ev.data = nullptr;
+      ev.datalen = -1;
+      return &ev;
+    };
+    for (;;) {
+      if (!need(kHeader)) {
+        // The end. Bytes left over (a cut last event, trailing junk) are reported once, not dropped.
+        if (end > begin || skipped) {
+          begin = end;
+          return notAnEvent();
+        }
+        return nullptr;
+      }
+      const auto* p = reinterpret_cast<const unsigned char*>(buf.data() + begin);
+      const std::uint32_t clen = be32(p + 20), dlen = be32(p + 24);
+      if (be32(p) != kSync || clen > kMaxChannel || dlen > kMaxData) {
+        ++begin;  // not an event here: look for the next sync word
+        skipped = true;
+        continue;
+      }
+      if (skipped) return notAnEvent();
+      if (!need(kHeader + clen + dlen)) {
+        begin = end;  // a cut last event
+        return notAnEvent();
+      }
+      p = reinterpret_cast<const unsigned char*>(buf.data() + begin);
+      ev.timestamp = static_cast<std::int64_t>((std::uint64_t{be32(p + 12)} << 32) | be32(p + 16));
+      ev.channel.assign(reinterpret_cast<const char*>(p + kHeader), clen);
+      ev.data = p + kHeader + clen;
+      ev.datalen = static_cast<std::int32_t>(dlen);
+      begin += kHeader + clen + dlen;
+      return &ev;
+    }
+  }
 };
 
 LcmLogReader::LcmLogReader() : impl_(new Impl) {}
@@ -112,19 +192,24 @@ bool LcmLogReader::open(const std::string& path, std::string* error) {
       return false;
     }
   }
-  impl_->log.reset(new lcm::LogFile(path, "r"));
-  if (!impl_->log->good()) {
-    impl_->log.reset();
+  impl_->close();
+  impl_->f = std::fopen(path.c_str(), "rb");
+  if (!impl_->f) {
     if (error) *error = path + ": cannot open LCM log: " + std::strerror(errno);
     return false;
   }
+  impl_->begin = impl_->end = 0;
+  impl_->eof = false;
   return true;
 }
 
 LcmLogReader::Kind LcmLogReader::next(HeadSample& head, AccelSample& accel) {
-  if (!impl_->log) return Kind::End;
-  const lcm::LogEvent* ev = impl_->log->readNextEvent();
+  const Impl::Event* ev = impl_->readNextEvent();
   if (!ev) return Kind::End;
+  if (ev->datalen < 0) {  // bytes that are no event, up to the next sync word
+    ++decode_failures_;
+    return Kind::Skipped;
+  }
   if (ev->channel == kStarHeadChannel) {
     boresight_lcm::star_head_sample_t m;
     if (m.decode(ev->data, 0, ev->datalen) != ev->datalen) {

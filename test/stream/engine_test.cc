@@ -473,3 +473,31 @@ TEST(StreamReplay, InputsByContentIgnoredListedMixedRefused) {
   EXPECT_FALSE(stream::prepareConfig(in, {}, pc2, &err));
   EXPECT_NE(err.find("give a QSA1B file"), std::string::npos) << err;
 }
+
+TEST(StreamEngine, DamagedLcmLogCountsWhatItCannotRead) {
+  // Junk between events and a cut last event: each damaged stretch is one malformed message, the
+  // events around them are read, and read == used + rejected still holds.
+  const std::string bytes = slurp(span().lcm);
+  ASSERT_GT(bytes.size(), 100000u);
+  // Event boundaries: find sync words after a few thousand bytes.
+  const std::string sync = "\xED\xA1\xDA\x01";
+  const std::size_t e1 = bytes.find(sync, 5000), e2 = bytes.find(sync, 60000);
+  ASSERT_NE(e1, std::string::npos);
+  ASSERT_NE(e2, std::string::npos);
+  std::string damaged = bytes.substr(0, e1) + "some junk that is not an event" + bytes.substr(e1, e2 - e1) +
+                        std::string(1000, '\x01') + bytes.substr(e2);
+  damaged.resize(damaged.size() - 20);  // cut the last event
+  const std::string d = tempDir();
+  const std::string path = d + "/damaged.log";
+  std::FILE* f = std::fopen(path.c_str(), "wb");
+  ASSERT_NE(f, nullptr);
+  std::fwrite(damaged.data(), 1, damaged.size(), f);
+  std::fclose(f);
+  const auto cfg = pipelineConfig(readSca(span().sca));
+  EngineRun clean = runEngine({}, {}, {span().lcm}, cfg);
+  EngineRun r = runEngine({}, {}, {path}, cfg);
+  ASSERT_EQ(r.result, stream::Engine::Result::kDone) << r.error;
+  EXPECT_EQ(r.total.rejected[std::size_t(stream::Reject::kMalformed)], 3u);
+  EXPECT_EQ(r.total.used(), clean.total.used() - 1);  // only the cut event is lost
+  expectCountersAddUp(r);
+}
