@@ -7,7 +7,7 @@
 
 #include <boresight/stream/sources.h>
 
-#include "cli_parse.h"
+#include "cli_common.h"
 #include "commands.h"
 
 #include <algorithm>

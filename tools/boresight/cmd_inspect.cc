@@ -10,7 +10,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "cli_parse.h"
+#include "cli_common.h"
 #include "commands.h"
 
 #include <algorithm>

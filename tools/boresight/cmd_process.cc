@@ -9,7 +9,7 @@
 #include <boresight/stream/replay.h>
 #include <boresight/stream/sources.h>
 
-#include "cli_parse.h"
+#include "cli_common.h"
 #include "commands.h"
 
 #include <algorithm>
