@@ -14,7 +14,7 @@ Status Pipeline::configure(const PipelineConfig& cfg) {
   Status s = validator_.configure(cfg.heads);
   if (s == Status::kOk) s = fusion_.configure(cfg.heads);
   if (s == Status::kOk) s = means_.configure(cfg.heads);
-  if (s == Status::kOk && cfg.heads.n_heads >= 2) s = monitor_.configure(cfg.heads);
+  if (s == Status::kOk && cfg.heads.n_heads >= 2) s = monitor_.configure(cfg.heads, cfg.deformation);
   if (s == Status::kOk) s = rates_.configure(cfg.crn_attitude);
   if (s == Status::kOk && cfg.use_accelerometer) {
     CrnConfig c = cfg.crn_acc;
@@ -191,8 +191,11 @@ Status Pipeline::stepStars(const StarEpoch& in) {
   }
   if (cfg_.heads.n_heads >= 2) {
     const int R = cfg_.wahba_reference_slot;
-    for (int k = 0; k < cfg_.heads.n_heads; ++k)
-      if (k != R) wahba_.setRelative(k, monitor_.correctedRelative(R, k));
+    for (int k = 0; k < cfg_.heads.n_heads; ++k) {
+      if (k == R) continue;
+      Mat3 C, Q;
+      if (monitor_.relativeFor(R, k, cfg_.wahba_correction, in.t, C, Q) == Status::kOk) wahba_.setRelative(k, C, Q);
+    }
   }
   return wahba_.step(in);
 }

@@ -2,6 +2,8 @@
 
 #include "boresight/core/rotation.h"
 
+#include <Eigen/Cholesky>
+
 #include <cmath>
 
 namespace boresight::core {
@@ -10,10 +12,14 @@ namespace {
 double angle(const Vec3& a, const Vec3& b) { return std::atan2(a.cross(b).norm(), a.dot(b)); }
 }  // namespace
 
-Status BoresightMonitor::configure(const HeadSetConfig& cfg) {
+Status BoresightMonitor::configure(const HeadSetConfig& cfg, const DeformationFilterConfig& filter) {
   configured_ = false;
   const Status s = validate(cfg);
   if (s != Status::kOk) return s;
+  if (!(filter.tau_s > 0) || !std::isfinite(filter.tau_s) || !(filter.hold_drift_rad_per_s >= 0) ||
+      !std::isfinite(filter.hold_drift_rad_per_s))
+    return Status::kInvalidConfig;
+  fcfg_ = filter;
   cfg_ = cfg;
   for (int a = 0; a < cfg.n_heads; ++a)
     for (int b = a + 1; b < cfg.n_heads; ++b) {
@@ -40,9 +46,67 @@ void BoresightMonitor::reset() {
   for (auto& T : T_last_) T.setIdentity();
   cur_.fill(PairDeformation{});
   acc_.fill(Acc{});
+  filt_.fill(Filt{});
+  sigma_iba2_.fill(0.0);
   have_last_ = false;
   last_t_ = 0;
   health_.clear();
+}
+
+void BoresightMonitor::updateFilter(Filt& F, TimeUs t, const Mat3& W, const Vec3& delta) {
+  if (F.seen) {
+    const double dt = toSeconds(t - F.t);
+    const double f = std::exp(-dt / fcfg_.tau_s);
+    const double f2 = f * f;
+    // move the time origin to t (s -> s - dt), then forget
+    F.S2 = f * (F.S2 - 2.0 * dt * F.S1 + dt * dt * F.S0);
+    F.S1 = f * (F.S1 - dt * F.S0);
+    F.S0 = f * F.S0;
+    F.N2 = f2 * (F.N2 - 2.0 * dt * F.N1 + dt * dt * F.N0);
+    F.N1 = f2 * (F.N1 - dt * F.N0);
+    F.N0 = f2 * F.N0;
+    F.y1 = f * (F.y1 - dt * F.y0);
+    F.y0 = f * F.y0;
+    F.wsum *= f;
+    F.w2sum *= f2;
+  }
+  F.S0 += W;
+  F.N0 += W;
+  F.y0 += W * delta;
+  F.wsum += 1.0;
+  F.w2sum += 1.0;
+  F.seen = true;
+  F.t = t;
+  F.predicted = false;
+  bool ok = false;
+  if (fcfg_.model == DeformationModel::kLinear && F.wsum * F.wsum / F.w2sum > 8.0) {
+    // [S0 S1; S1 S2] [level; rate] = [y0; y1], covariance M^-1 N M^-1 (top-left block: the level)
+    Mat6 M, N;
+    M << F.S0, F.S1, F.S1, F.S2;
+    N << F.N0, F.N1, F.N1, F.N2;
+    const Eigen::LDLT<Mat6> ldlt(M);
+    if (ldlt.info() == Eigen::Success && ldlt.isPositive()) {
+      Vec6 y;
+      y << F.y0, F.y1;
+      const Vec6 x = ldlt.solve(y);
+      const Mat6 Minv = ldlt.solve(Mat6::Identity());
+      const Mat6 C = Minv * N * Minv;
+      if (x.allFinite() && C.allFinite()) {
+        F.delta = x.head<3>();
+        F.cov = 0.5 * (C.topLeftCorner<3, 3>() + C.topLeftCorner<3, 3>().transpose());
+        ok = true;
+      }
+    }
+  } else {
+    Mat3 P;
+    if (invertSpd3(F.S0, P)) {
+      F.delta = P * F.y0;
+      F.cov = P * F.N0 * P;
+      F.cov = 0.5 * (F.cov + F.cov.transpose()).eval();
+      ok = true;
+    }
+  }
+  if (!ok) health_.record(Status::kNumericalFailure);
 }
 
 Status BoresightMonitor::step(const ValidHeads& in) {
@@ -85,6 +149,9 @@ Status BoresightMonitor::step(const ValidHeads& in) {
       A.W_sum += W;
       A.W_delta += W * r.delta_Si;
       A.dev_sum += r.iba_dev_rad;
+      sigma_iba2_[p] = n_[p].dot(r.cov_delta_Si * n_[p]);
+      // filtered deformation: information-weighted fit with exponential forgetting
+      updateFilter(filt_[p], in.t, W, r.delta_Si);
     }
   health_.record(Status::kOk);
   return Status::kOk;
@@ -103,6 +170,83 @@ DeformationMean BoresightMonitor::mean(int a, int b) const {
   m.delta_Si = P * A.W_delta;
   m.iba_dev_mean_rad = A.dev_sum / static_cast<double>(A.n);
   return m;
+}
+
+FilteredDeformation BoresightMonitor::filtered(int a, int b) const {
+  FilteredDeformation d;
+  if (!configured_ || a < 0 || b <= a || b >= cfg_.n_heads) return d;
+  const Filt& F = filt_[static_cast<std::size_t>(pairIndex(a, b))];
+  if (F.predicted) {
+    d.valid = true;
+    d.predicted = true;
+    d.t = F.t_pred;
+    d.delta_Si = F.delta_pred;
+    d.cov_Si = F.cov_pred;
+    return d;
+  }
+  if (!F.seen) return d;
+  d.valid = true;
+  d.t = F.t;
+  d.delta_Si = F.delta;
+  d.cov_Si = F.cov;
+  d.n_eff = F.w2sum > 0 ? F.wsum * F.wsum / F.w2sum : 0;
+  return d;
+}
+
+Status BoresightMonitor::setPredictedDeformation(int a, int b, TimeUs t, const Vec3& delta_Si, const Mat3& cov_Si) {
+  if (!configured_) return Status::kNotConfigured;
+  if (a < 0 || b <= a || b >= cfg_.n_heads) return Status::kInvalidConfig;
+  if (!allFinite(delta_Si) || !cov_Si.allFinite()) return Status::kNonFinite;
+  Filt& F = filt_[static_cast<std::size_t>(pairIndex(a, b))];
+  F.predicted = true;
+  F.t_pred = t;
+  F.delta_pred = delta_Si;
+  F.cov_pred = 0.5 * (cov_Si + cov_Si.transpose());
+  return Status::kOk;
+}
+
+Status BoresightMonitor::relativeFor(int a, int b, RelativeCorrection mode, TimeUs t, Mat3& C, Mat3& cov) const {
+  cov.setZero();
+  if (!configured_ || a < 0 || b < 0 || a >= cfg_.n_heads || b >= cfg_.n_heads) return Status::kInvalidConfig;
+  if (a == b) {
+    C.setIdentity();
+    return Status::kOk;
+  }
+  const int lo = a < b ? a : b, hi = a < b ? b : a;
+  const auto p = static_cast<std::size_t>(pairIndex(lo, hi));
+  // C_lo_hi and the covariance of its error in S_lo
+  Mat3 C_lh = C0_[p];
+  Mat3 P = Mat3::Zero();
+  switch (mode) {
+    case RelativeCorrection::kNone:
+      break;
+    case RelativeCorrection::kIbaOneAxis:
+      C_lh = T_last_[p] * C0_[p];
+      if (filt_[p].seen) P = sigma_iba2_[p] * n_[p] * n_[p].transpose();
+      break;
+    case RelativeCorrection::kFilteredThreeAxis: {
+      const Filt& F = filt_[p];
+      if (F.predicted) {
+        C_lh = so3Exp(F.delta_pred) * C0_[p];
+        P = F.cov_pred;
+      } else if (F.seen) {
+        C_lh = so3Exp(F.delta) * C0_[p];
+        P = F.cov;
+        const double age = t > F.t ? toSeconds(t - F.t) : 0.0;
+        const double g = fcfg_.hold_drift_rad_per_s * age;
+        P.diagonal().array() += g * g;
+      }
+      break;
+    }
+  }
+  if (a < b) {
+    C = C_lh;
+    cov = P;
+  } else {  // C_hi_lo = C_lh^T: its error e_hi = -C_lh^T e_lo
+    C = C_lh.transpose();
+    cov = C_lh.transpose() * P * C_lh;
+  }
+  return Status::kOk;
 }
 
 Mat3 BoresightMonitor::groundRelative(int a, int b) const {

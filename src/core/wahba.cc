@@ -29,18 +29,23 @@ Status MultiHeadWahba::configure(const WahbaConfig& cfg) {
 
 void MultiHeadWahba::reset() {
   C_SR_Sk_ = C_SR_Sk0_;
+  Q_SR_.fill(Mat3::Zero());
   have_last_ = false;
   last_t_ = 0;
   out_ = WahbaSolution{};
   health_.clear();
 }
 
-Status MultiHeadWahba::setRelative(int slot, const Mat3& C_SR_Sk) {
+Status MultiHeadWahba::setRelative(int slot, const Mat3& C_SR_Sk) { return setRelative(slot, C_SR_Sk, Mat3::Zero()); }
+
+Status MultiHeadWahba::setRelative(int slot, const Mat3& C_SR_Sk, const Mat3& cov_SR) {
   if (!configured_) return Status::kNotConfigured;
   if (slot < 0 || slot >= cfg_.heads.n_heads) return Status::kUnknownHead;
   if (!C_SR_Sk.allFinite() || !(C_SR_Sk * C_SR_Sk.transpose()).isApprox(Mat3::Identity(), 1e-6))
     return Status::kNonFinite;
+  if (!cov_SR.allFinite() || cov_SR.diagonal().minCoeff() < 0) return Status::kNonFinite;
   C_SR_Sk_[static_cast<std::size_t>(slot)] = C_SR_Sk;
+  Q_SR_[static_cast<std::size_t>(slot)] = 0.5 * (cov_SR + cov_SR.transpose());
   return Status::kOk;
 }
 
@@ -74,6 +79,7 @@ Status MultiHeadWahba::step(const StarEpoch& in) {
     u_[um] = C_SR_Sk_[us] * so.s_Sk.normalized();
     w_[um] = 1.0 / (sig * sig);
     idx_[um] = static_cast<std::int16_t>(j);
+    slot_[um] = static_cast<std::int8_t>(slot);
     ++m;
   }
   if (m < 2) {
@@ -108,6 +114,7 @@ Status MultiHeadWahba::step(const StarEpoch& in) {
       std::swap(u_[up], u_[ub]);
       std::swap(w_[up], w_[ub]);
       std::swap(idx_[up], idx_[ub]);
+      std::swap(slot_[up], slot_[ub]);
       info += w_[up] * (Mat3::Identity() - u_[up] * u_[up].transpose());
     }
   } else {
@@ -143,12 +150,27 @@ Status MultiHeadWahba::step(const StarEpoch& in) {
     health_.record(Status::kNumericalFailure);
     return Status::kNumericalFailure;
   }
+  // relative-matrix uncertainty: common to all stars of a head (see the header)
+  Mat3 P_total = P;
+  for (int k = 0; k < cfg_.heads.n_heads; ++k) {
+    const Mat3& Q = Q_SR_[static_cast<std::size_t>(k)];
+    if (Q.isZero(0.0)) continue;
+    Mat3 A = Mat3::Zero();
+    for (int j = 0; j < k_max; ++j) {
+      const auto uj = static_cast<std::size_t>(j);
+      if (slot_[uj] == k) A += w_[uj] * (Mat3::Identity() - u_[uj] * u_[uj].transpose());
+    }
+    const Mat3 G = P * A;
+    P_total += G * Q * G.transpose();
+  }
+  P_total = 0.5 * (P_total + P_total.transpose()).eval();
   WahbaSolution s;
   s.t = in.t;
   s.q_I_SR = Quat(C_I_SR).normalized();
   if (have_last_) s.q_I_SR = continuous(s.q_I_SR, out_.q_I_SR);
   s.q_I_B = (s.q_I_SR * q_SR_B_).normalized();
-  s.P_SR = P;
+  s.P_SR = P_total;
+  s.P_stars_SR = P;
   s.stars_in = m;
   s.stars_used = k_max;
   double ss = 0;

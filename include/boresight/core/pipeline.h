@@ -3,7 +3,8 @@
 //   stepHeads(HeadEpoch)  -> validator -> HeadFusion -> AttitudeRates (CRN on q_I_B)
 //                                     \-> RelativeAttitudeMeans, BoresightMonitor (IBA, corrections)
 //   stepAcc(t, a_A)       -> AccAngularFilter (C_B_A, CRN low-pass), evaluated on the rows' tags
-//   stepStars(StarEpoch)  -> MultiHeadWahba with the monitor's current corrections
+//   stepStars(StarEpoch)  -> MultiHeadWahba with the monitor's relative matrices C_SR_Sk (wahba_correction:
+//                            by default the filtered three-axis deformation) and their covariances
 //
 // Rows: one per output epoch = a head epoch whose tag is within half a head interval of a multiple of
 // crn_attitude.output_period_us (the same rule the rate filter uses for its centre taps, so the tags
@@ -34,6 +35,9 @@ struct PipelineConfig {
   Mat3 C_B_A = accToBodyDefault();  ///< accelerometer frame A to body B
   bool use_accelerometer = true;    ///< false: rows do not wait for accelerometer values
   int wahba_reference_slot = 0;     ///< frame of the star-vector solution
+  /// Relative matrices for the star-vector solution and the deformation filter behind them (thermal.h).
+  RelativeCorrection wahba_correction = RelativeCorrection::kFilteredThreeAxis;
+  DeformationFilterConfig deformation{};
 };
 
 struct PipelineRow {

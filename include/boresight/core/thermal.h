@@ -11,11 +11,33 @@
 // well known across both boresights, poorly about them. The IBA sees only n . delta (to first order);
 // the other two components are what the three-axis estimate adds. A running information-weighted
 // mean of delta gives the slowly varying deformation with the covariance of the mean.
+//
+// Filtered deformation (what Wahba uses): the deformation follows the orbit's thermal cycle (~5400 s),
+// so the all-time mean cannot serve as a correction. Per pair, an information-weighted mean with
+// exponential forgetting of time constant tau:
+//   Wf <- f Wf + W_k,  yf <- f yf + W_k delta_k,  Vf <- f^2 Vf + W_k,   f = exp(-(t_k - t_prev)/tau)
+//   delta_f = Wf^-1 yf,   cov(delta_f) = Wf^-1 Vf Wf^-1   (exact for independent epochs: the noise part)
+// The covariance does not contain the lag of the filter behind a changing deformation (about
+// tau * d(delta)/dt; for a sinusoid of amplitude A and period T the lag error has amplitude
+// A w tau / sqrt(1 + (w tau)^2), w = 2 pi / T): tau trades noise (~ sigma sqrt(dt / 2 tau)) against
+// lag; DeformationFilterConfig documents the default and test/core/thermal_test measures the trade.
+// While the pair is not seen the estimate is held and its covariance grows by (hold_drift * age)^2
+// per axis; setPredictedDeformation() replaces the held value by an external prediction (the batch
+// solver's harmonic model) until the pair is seen again.
+//
+// Corrections handed to Wahba (relativeFor):
+//   kNone               C0, covariance 0
+//   kIbaOneAxis         T C0 of the last epoch that saw the pair (the seed's METHODS 2.3 correction),
+//                       covariance sigma_iba^2 n n^T (its own noise; the two other axes are unmodelled)
+//   kFilteredThreeAxis  Exp(delta_f) C0 with cov(delta_f) (+ hold growth)
 #pragma once
 
 #include "boresight/core/heads.h"
 
 namespace boresight::core {
+
+using Mat6 = Eigen::Matrix<double, 6, 6>;
+using Vec6 = Eigen::Matrix<double, 6, 1>;
 
 struct PairDeformation {
   bool valid = false;            ///< both heads present at this epoch
@@ -36,9 +58,50 @@ struct DeformationMean {
   double iba_dev_mean_rad = 0;   ///< mean IBA deviation, rad
 };
 
+/// Which relative matrix the star-vector solution uses for a head (see relativeFor).
+enum class RelativeCorrection : std::uint8_t {
+  kNone = 0,               ///< ground matrices only
+  kIbaOneAxis = 1,         ///< rotation by the last epoch's IBA deviation about the IBA axis (seed)
+  kFilteredThreeAxis = 2,  ///< filtered three-axis deformation with its covariance (default)
+};
+
+/// The deformation model inside the forgetting window.
+enum class DeformationModel : std::uint8_t {
+  kLevel = 0,   ///< constant: lags a changing deformation by about tau d(delta)/dt
+  kLinear = 1,  ///< level and rate at the current epoch (exponentially weighted local line): no
+                ///< first-order lag; the residual for a sinusoid is about A (w tau)^2; noisier than kLevel
+};
+
+struct DeformationFilterConfig {
+  DeformationModel model = DeformationModel::kLinear;
+  /// Forgetting time constant, s. Default 150 s with kLinear. Measured (thermal_test,
+  /// FilterTimeConstantTradeOff: GRACE-like geometry, sigma 6"/48", 2 Hz, deformation 20/15/25"
+  /// sinusoids of 5400 s; 3-D RMS error of the filtered deformation against the injected truth):
+  ///   level : tau 30/60/100/150/300 s -> 6.4/5.0/4.8/5.5/8.9", mean NEES 3.2/5.0/12.9/37/256
+  ///   linear: tau 30/60/100/150/300 s -> 9.8/7.0/5.5/4.7/4.7", mean NEES 3.0/3.0/3.0/3.5/13
+  /// The linear model at 150 s is as accurate as the best level filter and its covariance stays
+  /// honest (NEES ~3: the lag it leaves is small against its noise), which Wahba's covariance needs;
+  /// the level filter's best error comes with a covariance 4x too small (lag-dominated).
+  double tau_s = 150.0;
+  /// Growth of the held estimate's 1-sigma per axis while the pair is not seen, rad/s. Default: the
+  /// largest rate of a 20" sinusoid of 5400 s period (2 pi 20" / 5400 s = 0.023"/s).
+  double hold_drift_rad_per_s = 0.023 * kRadPerArcsec;
+};
+
+/// The filtered deformation of a pair at the latest epoch.
+struct FilteredDeformation {
+  bool valid = false;             ///< the pair has been seen (or a prediction was set)
+  bool predicted = false;         ///< the value is an external prediction, not the filter's
+  TimeUs t = 0;                   ///< last epoch that updated it
+  Vec3 delta_Si = Vec3::Zero();   ///< rad, in Si (C_Si_Sj = Exp(delta) C0)
+  Mat3 cov_Si = Mat3::Zero();     ///< rad^2 (noise part, without the hold growth)
+  double n_eff = 0;               ///< effective number of epochs in the filter
+};
+
 class BoresightMonitor {
  public:
-  Status configure(const HeadSetConfig& cfg);
+  Status configure(const HeadSetConfig& cfg) { return configure(cfg, DeformationFilterConfig{}); }
+  Status configure(const HeadSetConfig& cfg, const DeformationFilterConfig& filter);
   void reset();
   Status step(const ValidHeads& in);
   /// This epoch's result of the pair a < b (valid false when a head is missing).
@@ -48,6 +111,16 @@ class BoresightMonitor {
   /// the ground matrix until the pair has been seen. Identity for a == b.
   Mat3 correctedRelative(int a, int b) const;
   Mat3 groundRelative(int a, int b) const;
+  /// Filtered deformation of the pair a < b (invalid otherwise or before the pair was seen).
+  FilteredDeformation filtered(int a, int b) const;
+  /// Relative matrix C_Sa_Sb for the chosen correction at time t (>= the last head epoch) and the
+  /// covariance of its error e in Sa (C_true = Exp(e) C), rad^2. Any order of a and b.
+  /// kInvalidConfig for bad slots; kOk otherwise (the ground matrix before the pair has been seen).
+  Status relativeFor(int a, int b, RelativeCorrection mode, TimeUs t, Mat3& C_Sa_Sb, Mat3& cov_Sa) const;
+  /// Seam for the batch solver: a predicted deformation of the pair a < b (e.g. from a harmonic
+  /// model) used instead of the held filter value while the pair is not seen; the next epoch that
+  /// sees the pair clears it. kNonFinite / kInvalidConfig on bad input.
+  Status setPredictedDeformation(int a, int b, TimeUs t, const Vec3& delta_Si, const Mat3& cov_Si);
   const Health& health() const { return health_; }
 
  private:
@@ -68,6 +141,26 @@ class BoresightMonitor {
     double dev_sum = 0;
   };
   std::array<Acc, kMaxPairs> acc_{};
+  struct Filt {
+    bool seen = false;
+    TimeUs t = 0;
+    // sums over the epochs k with forgetting weights f_k, s_k = t_k - t (s, <= 0):
+    //   S_m = sum f_k s_k^m W_k, N_m = sum f_k^2 s_k^m W_k (m = 0..2), y_m = sum f_k s_k^m W_k delta_k
+    Mat3 S0 = Mat3::Zero(), S1 = Mat3::Zero(), S2 = Mat3::Zero();
+    Mat3 N0 = Mat3::Zero(), N1 = Mat3::Zero(), N2 = Mat3::Zero();
+    Vec3 y0 = Vec3::Zero(), y1 = Vec3::Zero();
+    double wsum = 0, w2sum = 0;  ///< scalar weights, for the effective count
+    Vec3 delta = Vec3::Zero();
+    Mat3 cov = Mat3::Zero();
+    bool predicted = false;
+    TimeUs t_pred = 0;
+    Vec3 delta_pred = Vec3::Zero();
+    Mat3 cov_pred = Mat3::Zero();
+  };
+  std::array<Filt, kMaxPairs> filt_{};
+  void updateFilter(Filt& F, TimeUs t, const Mat3& W, const Vec3& delta);
+  std::array<double, kMaxPairs> sigma_iba2_{};  ///< n^T cov n, rad^2 (last epoch)
+  DeformationFilterConfig fcfg_{};
   bool have_last_ = false;
   TimeUs last_t_ = 0;
   Health health_{};
