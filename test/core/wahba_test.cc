@@ -7,6 +7,10 @@
 #include <Eigen/Eigenvalues>
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
+#include <cstdio>
+
 namespace boresight::core {
 namespace {
 
@@ -64,6 +68,8 @@ TEST(Wahba, SelectsAtMostKMaxStarsWellDistributed) {
   MultiHeadWahba w;
   ASSERT_EQ(w.configure(cfg), Status::kOk);
   double ratio_sum = 0;
+  int wins = 0;
+  Rng pick_rng(142);  // the random subsets
   for (int r = 0; r < kRuns; ++r) {
     const StarEpoch e = makeStars(rng, cfg.heads, test::randomQuat(rng), kMaxStarsPerHead, 1000 + static_cast<TimeUs>(r) * 500000);
     ASSERT_EQ(e.n, 3 * kMaxStarsPerHead);
@@ -75,22 +81,32 @@ TEST(Wahba, SelectsAtMostKMaxStarsWellDistributed) {
     int per_head[3] = {0, 0, 0};
     for (int j = 0; j < s.stars_used; ++j) ++per_head[e.star[static_cast<std::size_t>(s.used[static_cast<std::size_t>(j)])].head_id - 1];
     for (int k = 0; k < 3; ++k) EXPECT_GE(per_head[k], 3) << "run " << r;
-    // the selected subset keeps the weakest direction as well as a random subset of the same size
+    // against a random subset of the same size (seeded shuffle of all inputs; it holds stars of every
+    // head, checked): the greedy selection keeps more information in the weakest direction
+    std::array<int, 3 * kMaxStarsPerHead> perm{};
+    for (std::size_t j = 0; j < perm.size(); ++j) perm[j] = static_cast<int>(j);
+    std::shuffle(perm.begin(), perm.end(), pick_rng);
+    int rnd_heads[3] = {0, 0, 0};
     Mat3 sel = Mat3::Zero(), rnd = Mat3::Zero();
     for (int j = 0; j < kMaxStars; ++j) {
       const auto u = static_cast<std::size_t>(s.used[static_cast<std::size_t>(j)]);
       const Vec3 v = w.output().q_I_SR.conjugate() * e.star[u].r_I;
       sel += Mat3::Identity() - v * v.transpose();
-      const Vec3 v2 = w.output().q_I_SR.conjugate() * e.star[static_cast<std::size_t>(j)].r_I;  // the first 24 (heads 1-2)
+      const auto ur = static_cast<std::size_t>(perm[static_cast<std::size_t>(j)]);
+      ++rnd_heads[e.star[ur].head_id - 1];
+      const Vec3 v2 = w.output().q_I_SR.conjugate() * e.star[ur].r_I;
       rnd += Mat3::Identity() - v2 * v2.transpose();
     }
+    for (int k = 0; k < 3; ++k) ASSERT_GE(rnd_heads[k], 1) << "run " << r << ": the random subset misses head " << k + 1;
     const double lmin_sel = Eigen::SelfAdjointEigenSolver<Mat3>(sel).eigenvalues()(0);
     const double lmin_rnd = Eigen::SelfAdjointEigenSolver<Mat3>(rnd).eigenvalues()(0);
-    EXPECT_GT(lmin_sel, lmin_rnd);
+    wins += lmin_sel > lmin_rnd ? 1 : 0;
     ratio_sum += lmin_sel / lmin_rnd;
   }
-  std::printf("selection: smallest information eigenvalue %.2fx that of the first %d inputs (mean of %d)\n",
-              ratio_sum / kRuns, kMaxStars, kRuns);
+  std::printf("selection: smallest information eigenvalue %.2fx that of a random subset of %d (mean of %d), larger in %d runs\n",
+              ratio_sum / kRuns, kMaxStars, kRuns, wins);
+  EXPECT_GT(ratio_sum / kRuns, 1.1);  // measured 1.19 (seed 142, 200 runs); one run's ratio scatters by ~0.1
+  EXPECT_GE(wins, kRuns * 95 / 100);
 }
 
 TEST(Wahba, CorrectedRelativeMatrixRemovesAHeadDeformation) {
