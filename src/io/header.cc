@@ -20,7 +20,7 @@ constexpr NameEntry kNames[] = {
     {"IMU1A", Product::IMU1A}, {"IMU1B", Product::IMU1B}, {"THR1A", Product::THR1A},
     {"THR1B", Product::THR1B}, {"IHK1A", Product::IHK1A}, {"IHK1B", Product::IHK1B},
     {"HRT1A", Product::HRT1A}, {"HRT1B", Product::HRT1B}, {"TIM1B", Product::TIM1B},
-    {"CLK1A", Product::CLK1A}, {"CLK1B", Product::CLK1B},
+    {"CLK1A", Product::CLK1A}, {"CLK1B", Product::CLK1B}, {"SCV1A", Product::SCV1A},
 };
 
 std::string_view trimRight(std::string_view s) {

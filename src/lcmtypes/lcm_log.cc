@@ -3,6 +3,7 @@
 
 #include "boresight_lcm/accel_sample_t.hpp"
 #include "boresight_lcm/star_head_sample_t.hpp"
+#include "boresight_lcm/star_vectors_t.hpp"
 
 #include <lcm/lcm-cpp.hpp>
 
@@ -81,6 +82,50 @@ bool LcmLogWriter::write(const AccelSample& s) {
   bool ok = writeMsg(*impl_->log, kAccelChannel, s.utime, m, impl_->buf);
   written_ += ok ? 1 : 0;
   return ok;
+}
+
+bool LcmLogWriter::write(const StarVectors& s) {
+  if (!impl_->log || s.n_stars < 0 || s.n_stars > StarVectors::kCapacity) return false;
+  boresight_lcm::star_vectors_t m{};
+  m.utime = s.utime;
+  m.head_id = static_cast<int8_t>(s.head_id);
+  m.seq = s.seq;
+  m.n_stars = static_cast<int16_t>(s.n_stars);
+  for (int i = 0; i < StarVectors::kCapacity; ++i) {
+    const bool used = i < s.n_stars;
+    m.star_id[i] = used ? s.star_id[i] : 0;
+    for (int k = 0; k < 3; ++k) {
+      m.s_head[i][k] = used ? s.s_head[i][k] : 0.0;
+      m.r_inertial[i][k] = used ? s.r_inertial[i][k] : 0.0;
+    }
+    m.sigma_rad[i] = used ? s.sigma_rad[i] : 0.0f;
+    m.magnitude[i] = used ? s.magnitude[i] : 0.0f;
+  }
+  m.flags = s.flags;
+  bool ok = writeMsg(*impl_->log, kStarVectorsChannel, s.utime, m, impl_->buf);
+  written_ += ok ? 1 : 0;
+  return ok;
+}
+
+bool decodeStarVectors(const void* data, int size, StarVectors& out) {
+  boresight_lcm::star_vectors_t m{};
+  if (m.decode(data, 0, size) != size) return false;
+  if (m.n_stars < 0 || m.n_stars > StarVectors::kCapacity) return false;
+  out.utime = m.utime;
+  out.head_id = m.head_id;
+  out.seq = m.seq;
+  out.n_stars = m.n_stars;
+  for (int i = 0; i < StarVectors::kCapacity; ++i) {
+    out.star_id[i] = m.star_id[i];
+    for (int k = 0; k < 3; ++k) {
+      out.s_head[i][k] = m.s_head[i][k];
+      out.r_inertial[i][k] = m.r_inertial[i][k];
+    }
+    out.sigma_rad[i] = m.sigma_rad[i];
+    out.magnitude[i] = m.magnitude[i];
+  }
+  out.flags = m.flags;
+  return true;
 }
 
 void LcmLogWriter::close() { impl_->log.reset(); }
@@ -238,6 +283,13 @@ LcmLogReader::Kind LcmLogReader::next(HeadSample& head, AccelSample& accel) {
     accel.flags = m.flags;
     accel.seq = m.seq;
     return Kind::Accel;
+  }
+  if (ev->channel == kStarVectorsChannel) {
+    if (!decodeStarVectors(ev->data, ev->datalen, stars_)) {
+      ++decode_failures_;
+      return Kind::Skipped;
+    }
+    return Kind::Stars;
   }
   ++unknown_channel_;
   return Kind::Skipped;

@@ -4,7 +4,7 @@
 namespace boresight::model {
 
 HeadModel::HeadModel(const HeadConfig& cfg, const HeadEffects& eff) : cfg_(cfg), eff_(eff) {
-  q_Si_B_true_ = (quatExp(cfg_.mounting_error_rad) * cfg_.q_Si_B_nominal).normalized();
+  q_Si_B_true_ = (quatExp(cfg_.mounting_error_rad) * cfg_.q_Si_B).normalized();
   boresightBasis(cfg_.boresight_Si, e1_, e2_, b_);
 }
 
@@ -33,6 +33,15 @@ Vec3 HeadModel::noiseRotVec(const CounterRng& rng, std::uint64_t n) const {
   double n0, n1;
   rng.normal2(n, 0, n0, n1);
   return sigmaCross() * (n0 * e1_ + n1 * e2_) + sigmaAbout() * rng.normal(n, 2) * b_;
+}
+
+Vec3 HeadModel::noisyStar(const Vec3& s_true, const CounterRng& rng, std::uint64_t n, std::uint64_t k) const {
+  if (sigmaStar() <= 0) return s_true;
+  const Vec3 e1 = s_true.unitOrthogonal();
+  const Vec3 e2 = s_true.cross(e1);
+  double n0, n1;
+  rng.normal2(n, k, n0, n1);
+  return (s_true + sigmaStar() * (n0 * e1 + n1 * e2)).normalized();
 }
 
 AccelModel::AccelModel(const AccelConfig& cfg, const AccEffects& eff) : cfg_(cfg), eff_(eff) {

@@ -2,12 +2,15 @@
 #include <boresight/io/lcm_log.h>
 #include <boresight/sim/output.h>
 
+#include <algorithm>
+
 namespace boresight::sim {
 
 struct LcmSink::Impl {
   io::LcmLogWriter w;
   std::int32_t seq_head[16] = {};
   std::int32_t seq_acc = 0;
+  std::int32_t seq_stars = 0;
   bool open = false;
   bool failed = false;
 };
@@ -44,6 +47,27 @@ void LcmSink::accel(const AccSampleOut& a) {
   }
   m.flags = 3;
   m.seq = impl_->seq_acc++;
+  impl_->failed |= !impl_->w.write(m);
+}
+
+void LcmSink::stars(const StarVectorsOut& s) {
+  if (!impl_->open) return;
+  io::StarVectors m;
+  m.utime = s.tag;
+  m.head_id = s.head;
+  m.seq = impl_->seq_stars++;
+  m.n_stars = std::min(s.n, io::StarVectors::kCapacity);
+  for (int k = 0; k < m.n_stars; ++k) {
+    const auto& st = s.star[static_cast<std::size_t>(k)];
+    m.star_id[k] = st.hip;
+    for (int j = 0; j < 3; ++j) {
+      m.s_head[k][j] = st.s_Si[j];
+      m.r_inertial[k][j] = st.r_I[j];
+    }
+    m.sigma_rad[k] = static_cast<float>(s.sigma_rad);
+    m.magnitude[k] = static_cast<float>(st.mag);
+  }
+  m.flags = 1;
   impl_->failed |= !impl_->w.write(m);
 }
 

@@ -103,6 +103,7 @@ bool ChunkedProductWriter<Rec>::close(std::string* error) {
 template class ChunkedProductWriter<io::Sca1aRecord>;
 template class ChunkedProductWriter<io::FlaggedRecord>;
 template class ChunkedProductWriter<io::GnvRecord>;
+template class ChunkedProductWriter<io::ScvRecord>;
 
 std::string productFileName(const char* product, const Scenario& sc) {
   return std::string(product) + "_" + io::formatDate(sc.start) + "_" + sc.satellite + "_" + sc.output.version + ".txt";
@@ -112,9 +113,36 @@ bool Level1Sink::open(const std::string& dir, const Scenario& sc, std::string* e
   sat_ = sc.satellite;
   files_ = {dir + "/" + productFileName("SCA1A", sc), dir + "/" + productFileName("ACC1A", sc),
             dir + "/" + productFileName("GNV1B", sc)};
+  scv_on_ = sc.output.star_vectors_interval_s > 0;
+  if (scv_on_) files_.push_back(dir + "/" + productFileName("SCV1A", sc));
   return sca_.open(files_[0], io::makeProduct<io::Sca1aRecord>(io::Product::SCA1A, sat_), error) &&
          acc_.open(files_[1], io::makeProduct<io::FlaggedRecord>(io::Product::ACC1A, sat_), error) &&
-         gnv_.open(files_[2], io::makeProduct<io::GnvRecord>(io::Product::GNV1B, sat_), error, 4096);
+         gnv_.open(files_[2], io::makeProduct<io::GnvRecord>(io::Product::GNV1B, sat_), error, 4096) &&
+         (!scv_on_ || scv_.open(files_[3], io::makeProduct<io::ScvRecord>(io::Product::SCV1A, sat_), error, 8192));
+}
+
+void toScv1a(const StarVectorsOut& s, char satellite, std::vector<io::ScvRecord>& out) {
+  out.clear();
+  for (int k = 0; k < s.n; ++k) {
+    const auto& st = s.star[static_cast<std::size_t>(k)];
+    io::ScvRecord r;
+    r.t = s.tag;
+    r.satellite = satellite;
+    r.head = static_cast<std::uint8_t>(s.head);
+    r.star = st.hip;
+    for (int j = 0; j < 3; ++j) {
+      r.s[j] = st.s_Si[j];
+      r.r[j] = st.r_I[j];
+    }
+    r.mag = st.mag;
+    out.push_back(r);
+  }
+}
+
+void Level1Sink::stars(const StarVectorsOut& s) {
+  if (!scv_on_) return;
+  toScv1a(s, sat_, scv_buf_);
+  for (const auto& r : scv_buf_) scv_.add(r);
 }
 
 io::Sca1aRecord toSca1a(const HeadSampleOut& s, char satellite) {
@@ -173,7 +201,7 @@ void Level1Sink::accel(const AccSampleOut& a) { acc_.add(toAcc1a(a, sat_)); }
 void Level1Sink::orbit(const OrbitSampleOut& o) { gnv_.add(toGnv1b(o, sat_)); }
 
 bool Level1Sink::close(std::string* error) {
-  return sca_.close(error) && acc_.close(error) && gnv_.close(error);
+  return sca_.close(error) && acc_.close(error) && gnv_.close(error) && scv_.close(error);
 }
 
 bool writeQsa1b(const std::string& path, const Simulator& sim, std::string* error) {
@@ -184,7 +212,7 @@ bool writeQsa1b(const std::string& path, const Simulator& sim, std::string* erro
     r.t = (sim.scenario().start / kUsPerSecond) * kUsPerSecond;
     r.satellite = sim.scenario().satellite;
     r.sensor = h.config().id;
-    quatToScalarFirst(h.config().q_Si_B_nominal, r.q);
+    quatToScalarFirst(h.config().q_Si_B, r.q);
     r.zero = 0;
     r.qualflg = io::Bits{0, 8};
     f.records.push_back(r);
@@ -243,7 +271,7 @@ bool writeTruthYaml(const std::string& path, const Simulator& sim, const std::ve
     y << YAML::BeginMap;
     y << YAML::Key << "id" << YAML::Value << c.id;
     y << YAML::Key << "q_Si_B_nominal" << YAML::Value;
-    emitQuat(y, c.q_Si_B_nominal);
+    emitQuat(y, c.q_Si_B);
     y << YAML::Key << "q_Si_B_true" << YAML::Value;
     emitQuat(y, h.qSiBTrue());
     y << YAML::Comment("constant mounting; time-varying effects below come on top");

@@ -156,10 +156,10 @@ class MapReader {
 };
 
 void readHead(MapReader& r, model::HeadConfig& h) {
-  double q[4] = {h.q_Si_B_nominal.w(), h.q_Si_B_nominal.x(), h.q_Si_B_nominal.y(), h.q_Si_B_nominal.z()};
+  double q[4] = {h.q_Si_B.w(), h.q_Si_B.x(), h.q_Si_B.y(), h.q_Si_B.z()};
   r.vec("q_Si_B", q, 4, -1.0, 1.0);
   const double qn = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
-  h.q_Si_B_nominal = quatFromScalarFirst(q[0] / qn, q[1] / qn, q[2] / qn, q[3] / qn);
+  h.q_Si_B = quatFromScalarFirst(q[0] / qn, q[1] / qn, q[2] / qn, q[3] / qn);
   r.vec3("mounting_error_arcsec", h.mounting_error_rad, -36000, 36000, kRadPerArcsec);
   r.vec3("boresight", h.boresight_Si, -1, 1);
   r.num("rate_hz", h.rate_hz, 0.01, 100);
@@ -168,8 +168,9 @@ void readHead(MapReader& r, model::HeadConfig& h) {
   h.tag_offset_us = off;
   r.num("time_tag_jitter_us", h.tag_jitter_us, 0, 1000);
   r.num("time_tag_drift_ppm", h.tag_drift_ppm, -1000, 1000);
-  r.num("noise_cross_arcsec", h.noise_cross_rad, 0, 3600, kRadPerArcsec);
-  r.num("noise_about_arcsec", h.noise_about_rad, 0, 3600, kRadPerArcsec);
+  r.num("noise_cross_arcsec", h.sigma_cross_rad, 0, 3600, kRadPerArcsec);
+  r.num("noise_about_arcsec", h.sigma_roll_rad, 0, 3600, kRadPerArcsec);
+  r.num("star_noise_arcsec", h.sigma_star_rad, 0, 3600, kRadPerArcsec);
   r.num("fov_half_angle_deg", h.fov_half_angle_rad, 0.5, 45, kRadPerDeg);
   r.num("limiting_magnitude", h.limiting_mag, -2, 12);
   r.num("sun_exclusion_deg", h.sun_exclusion_rad, 0, 180, kRadPerDeg);
@@ -230,8 +231,8 @@ bool parseScenarioAt(const std::string& text, const std::string& file, const std
     s.start = 0;
     (void)io::parseGpsCalendar("2023-06-01T00:00:00", s.start);
     s.star_catalogue = dir + "/stars_bright.csv";
-    s.head_defaults.noise_cross_rad = 6 * kRadPerArcsec;
-    s.head_defaults.noise_about_rad = 48 * kRadPerArcsec;
+    s.head_defaults.sigma_cross_rad = 6 * kRadPerArcsec;
+    s.head_defaults.sigma_roll_rad = 48 * kRadPerArcsec;
   }
   s.file = file;
   std::string sat(1, s.satellite);
@@ -392,6 +393,7 @@ bool parseScenarioAt(const std::string& text, const std::string& file, const std
     r.num("gnv1b_interval_s", s.output.gnv1b_interval_s, 1, 3600);
     if (s.output.gnv1b_interval_s != std::floor(s.output.gnv1b_interval_s))
       c.fail(root["output"]["gnv1b_interval_s"], "output.gnv1b_interval_s", "whole seconds only");
+    r.num("star_vectors_interval_s", s.output.star_vectors_interval_s, 0, 86400);
     r.str("version", s.output.version);
     r.finish();
   }

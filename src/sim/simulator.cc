@@ -115,6 +115,11 @@ bool Simulator::init(const Scenario& sc, std::uint64_t seed, double duration_s, 
   stats_.head_missing.assign(n, 0);
   stats_.head_outliers.assign(n, 0);
   stats_.head_sign_flips.assign(n, 0);
+  stats_.head_star_epochs.assign(n, 0);
+  if (sc_.output.star_vectors_per_head < 1 || sc_.output.star_vectors_per_head > kMaxSimStarsPerHead) {
+    if (error) *error = sc_.file + ": output.star_vectors_per_head must be in 1.." + std::to_string(kMaxSimStarsPerHead);
+    return false;
+  }
   return true;
 }
 
@@ -138,7 +143,12 @@ void Simulator::run(SimSink& sink, const std::function<void(double)>& progress) 
 
   std::vector<TagStream> head_tags;
   std::vector<GapTracker> head_gaps(nh);
-  std::vector<CounterRng> noise, outl, flip;
+  std::vector<CounterRng> noise, outl, flip, star_noise;
+  const TimeUs star_period =
+      sc_.output.star_vectors_interval_s > 0 ? static_cast<TimeUs>(std::llround(sc_.output.star_vectors_interval_s * 1e6)) : 0;
+  std::vector<std::int64_t> star_slot(nh, -1);  ///< last interval that got star vectors, per head
+  std::vector<int> fov;
+  StarVectorsOut sv;
   std::vector<FovStarCounter> counters;
   std::vector<Quat> prev_q(nh, Quat(1, 0, 0, 0));
   for (std::size_t i = 0; i < nh; ++i) {
@@ -152,6 +162,7 @@ void Simulator::run(SimSink& sink, const std::function<void(double)>& progress) 
     noise.emplace_back(seed_, Stream::HeadNoise, id);
     outl.emplace_back(seed_, Stream::HeadOutlier, id);
     flip.emplace_back(seed_, Stream::HeadSignFlip, id);
+    star_noise.emplace_back(seed_, Stream::StarNoise, id);
     counters.emplace_back(&stars_, c.fov_half_angle_rad, c.limiting_mag);
   }
   const auto& ac = acc_.config();
@@ -324,6 +335,40 @@ void Simulator::run(SimSink& sink, const std::function<void(double)>& progress) 
     s.nstars = counters[i].count(b_I);
     ++stats_.head_samples[i];
     sink.head(s);
+    if (star_period > 0) {
+      const std::int64_t slot = (tmin - sc_.start) / star_period;
+      if (slot > star_slot[i]) {
+        star_slot[i] = slot;
+        // The head sees the catalogue directions through its reported (aberrated) attitude; the
+        // inertial directions given with them carry that aberration, so (s, r) solve for the
+        // geometric attitude q_I_B q_Si_B(t)^-1 (mounting error and thermal effects included).
+        const Quat q_geom = (s.q_I_B * hm.qSiB(ctx).conjugate()).normalized();
+        const Mat3 C_exp = s.q_I_Si_expected.toRotationMatrix();
+        const Mat3 C_geom = q_geom.toRotationMatrix();
+        counters[i].select(b_I, fov);
+        // brightest first (ties: catalogue order), at most star_vectors_per_head
+        std::stable_sort(fov.begin(), fov.end(), [&](int a, int b) {
+          return stars_.stars()[static_cast<std::size_t>(a)].mag < stars_.stars()[static_cast<std::size_t>(b)].mag;
+        });
+        sv.tag = tmin;
+        sv.head = hc.id;
+        sv.index = n;
+        sv.q_I_Si_geometric = q_geom;
+        sv.sigma_rad = hm.sigmaStar();
+        sv.n = std::min<int>(static_cast<int>(fov.size()), sc_.output.star_vectors_per_head);
+        for (int k = 0; k < sv.n; ++k) {
+          const Star& st = stars_.stars()[static_cast<std::size_t>(fov[static_cast<std::size_t>(k)])];
+          auto& o = sv.star[static_cast<std::size_t>(k)];
+          o.hip = st.hip;
+          o.mag = st.mag;
+          o.s_Si_true = (C_exp.transpose() * st.u_I).normalized();
+          o.r_I = (C_geom * o.s_Si_true).normalized();
+          o.s_Si = hm.noisyStar(o.s_Si_true, star_noise[i], n, static_cast<std::uint64_t>(k));
+        }
+        ++stats_.head_star_epochs[i];
+        sink.stars(sv);
+      }
+    }
   }
   stats_.thruster_pulses = att.thrusterPulses();
   for (const auto& c : counters) stats_.star_refreshes += c.refreshes();

@@ -83,6 +83,14 @@ std::vector<Vec3> starVectorsInHead(const StarCatalogue& cat, const Quat& q_I_Si
   return out;
 }
 
+void FovStarCounter::select(const Vec3& b, std::vector<int>& out) {
+  count(b);  // refreshes the candidates when needed
+  out.clear();
+  const double c = std::cos(half_);
+  for (int i : cand_)
+    if (cat_->stars()[static_cast<std::size_t>(i)].u_I.dot(b) >= c) out.push_back(i);
+}
+
 int FovStarCounter::count(const Vec3& b) {
   if (centre_.isZero() || b.dot(centre_) < std::cos(0.9 * margin_)) {
     cat_->inCone(b, half_ + margin_, mag_, cand_);

@@ -250,8 +250,8 @@ TEST(SimEffects, AccTimeOffsetMovesTheStarSensorAccelerometerCrossCorrelationPea
   m2.duration_s = 1160;
   sc.attitude.manoeuvres = {m1, m2};
   for (auto& h : sc.heads) {
-    h.noise_cross_rad = 0.1 * kRadPerArcsec;
-    h.noise_about_rad = 0.8 * kRadPerArcsec;
+    h.sigma_cross_rad = 0.1 * kRadPerArcsec;
+    h.sigma_roll_rad = 0.8 * kRadPerArcsec;
   }
   auto base = run(sc, kSeed, 1200);
   auto eff = run(withEffects(sc, {"time_offset:sensor=acc,offset_ms=250"}), kSeed, 1200);

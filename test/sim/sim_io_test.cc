@@ -98,12 +98,28 @@ TEST(SimIo, Level1FilesAndLcmLogReadBackIdentical) {
   for (std::size_t i = 0; i < gnv.records.size(); ++i)
     ASSERT_TRUE(gnv.records[i] == sim::toGnv1b(w->cap.orb[i], sat)) << "GNV1B record " << i;
 
-  const auto qsa = io::readProduct<io::QsaRecord>(w->files[3]);
+  // SCV1A: every star vector of every head epoch, in order, values bit for bit
+  ASSERT_EQ(w->files.size(), 5u);  // SCA1A ACC1A GNV1B SCV1A QSA1B
+  const auto scv = io::readProduct<io::ScvRecord>(w->files[3]);
+  ASSERT_TRUE(scv.ok) << scv.error;
+  EXPECT_EQ(scv.rejected_count, 0u);
+  {
+    std::vector<io::ScvRecord> expect, one;
+    for (const auto& v : w->cap.sv) {
+      sim::toScv1a(v, sat, one);
+      expect.insert(expect.end(), one.begin(), one.end());
+    }
+    ASSERT_GT(expect.size(), 3u * 360u);  // 3 heads x 360 ten-second epochs, at least one star each
+    ASSERT_EQ(scv.records.size(), expect.size());
+    for (std::size_t i = 0; i < expect.size(); ++i) ASSERT_TRUE(scv.records[i] == expect[i]) << "SCV1A record " << i;
+  }
+
+  const auto qsa = io::readProduct<io::QsaRecord>(w->files[4]);
   ASSERT_TRUE(qsa.ok) << qsa.error;
   ASSERT_EQ(qsa.records.size(), 3u);
   for (std::size_t i = 0; i < 3; ++i) {
     double q[4];
-    quatToScalarFirst(sc.heads[i].q_Si_B_nominal, q);
+    quatToScalarFirst(sc.heads[i].q_Si_B, q);
     EXPECT_EQ(qsa.records[i].sensor, sc.heads[i].id);
     for (int k = 0; k < 4; ++k) EXPECT_EQ(qsa.records[i].q[k], q[k]);
   }
@@ -114,7 +130,7 @@ TEST(SimIo, Level1FilesAndLcmLogReadBackIdentical) {
   ASSERT_TRUE(rd.open((w->dir / "sim.lcmlog").string(), &err)) << err;
   io::HeadSample hs;
   io::AccelSample as;
-  std::size_t ih = 0, ia = 0;
+  std::size_t ih = 0, ia = 0, is = 0;
   std::vector<const sim::HeadSampleOut*> delivered;
   for (const auto& h : w->cap.heads)
     if (!h.blind) delivered.push_back(&h);
@@ -131,6 +147,22 @@ TEST(SimIo, Level1FilesAndLcmLogReadBackIdentical) {
       quatToScalarFirst(e.q_I_Si, q);
       for (int j = 0; j < 4; ++j) ASSERT_EQ(hs.q[j], q[j]);
       EXPECT_EQ(hs.star_count, e.nstars);
+    } else if (k == io::LcmLogReader::Kind::Stars) {
+      ASSERT_LT(is, w->cap.sv.size());
+      const auto& e = w->cap.sv[is];
+      const io::StarVectors& m = rd.stars();
+      EXPECT_EQ(m.utime, e.tag);
+      EXPECT_EQ(m.head_id, e.head);
+      EXPECT_EQ(m.seq, static_cast<std::int32_t>(is));
+      ASSERT_EQ(m.n_stars, e.n);
+      for (int j = 0; j < e.n; ++j) {
+        EXPECT_EQ(m.star_id[j], e.star[static_cast<std::size_t>(j)].hip);
+        for (int c = 0; c < 3; ++c) {
+          ASSERT_EQ(m.s_head[j][c], e.star[static_cast<std::size_t>(j)].s_Si[c]);
+          ASSERT_EQ(m.r_inertial[j][c], e.star[static_cast<std::size_t>(j)].r_I[c]);
+        }
+      }
+      ++is;
     } else {
       ASSERT_LT(ia, w->cap.acc.size());
       const auto& e = w->cap.acc[ia++];
@@ -140,6 +172,7 @@ TEST(SimIo, Level1FilesAndLcmLogReadBackIdentical) {
   }
   EXPECT_EQ(ih, delivered.size());
   EXPECT_EQ(ia, w->cap.acc.size());
+  EXPECT_EQ(is, w->cap.sv.size());
 
   // truth.yaml: the true mounting of each head and the injected effects.
   const YAML::Node t = YAML::LoadFile((w->dir / "truth.yaml").string());
@@ -203,7 +236,7 @@ TEST(SimIo, ScenarioErrorsNameFileLineKeyAndReason) {
   ASSERT_TRUE(sim::parseScenario(base, "good.yaml", simtest::sourceDir() + "/config", ok, &err)) << err;
   EXPECT_EQ(ok.heads.size(), 3u);
   EXPECT_NEAR(ok.orbit.altitude_m, 490e3, 1e-6);
-  EXPECT_NEAR(ok.heads[0].noise_about_rad * kArcsecPerRad, 48, 1e-9);
+  EXPECT_NEAR(ok.heads[0].sigma_roll_rad * kArcsecPerRad, 48, 1e-9);
   EXPECT_EQ(ok.acc.C_A_B, accToBodyDefault().transpose());
 
   auto replace = [&](const std::string& from, const std::string& to) {

@@ -47,8 +47,8 @@ TEST(SimNoise, HeadNoiseStdAndWhitenessMatchTheConfigurationPerAxis) {
   // 4 Monte Carlo runs x 1800 s x 2 Hz = 14400 samples per head and axis: the relative standard error
   // of a standard deviation is 1/sqrt(2N) = 0.6 %; tolerance 3 %.
   auto sc = noExclusion();
-  sc.heads[1].noise_cross_rad = 3 * kRadPerArcsec;
-  sc.heads[1].noise_about_rad = 30 * kRadPerArcsec;
+  sc.heads[1].sigma_cross_rad = 3 * kRadPerArcsec;
+  sc.heads[1].sigma_roll_rad = 30 * kRadPerArcsec;
   const int runs = 4;
   std::vector<Vec3> sum2(3, Vec3::Zero());
   std::vector<std::size_t> n(3, 0);
@@ -74,7 +74,7 @@ TEST(SimNoise, HeadNoiseStdAndWhitenessMatchTheConfigurationPerAxis) {
   for (int id = 1; id <= 3; ++id) {
     const auto i = static_cast<std::size_t>(id - 1);
     const Vec3 sd = (sum2[i] / static_cast<double>(n[i])).cwiseSqrt() * kArcsecPerRad;
-    const double c = sc.heads[i].noise_cross_rad * kArcsecPerRad, a = sc.heads[i].noise_about_rad * kArcsecPerRad;
+    const double c = sc.heads[i].sigma_cross_rad * kArcsecPerRad, a = sc.heads[i].sigma_roll_rad * kArcsecPerRad;
     std::printf("head %d noise [arcsec]: x %.3f y %.3f about %.3f (configured %.1f / %.1f, N=%zu)\n", id, sd.x(), sd.y(),
                 sd.z(), c, a, n[i]);
     EXPECT_NEAR(sd.x(), c, 0.03 * c);

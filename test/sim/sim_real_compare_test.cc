@@ -219,8 +219,8 @@ TEST(SimVersusReal, SideBySideTable) {
     // mounting errors below 1'), and the difference to QSA1B is shown as a finding.
     Vec3 sa = Vec3::UnitZ(), sb = Vec3::UnitZ();
     for (const auto& h : sc.heads) {
-      if (h.id == p.first) sa = h.q_Si_B_nominal.conjugate() * h.boresight_Si;
-      if (h.id == p.second) sb = h.q_Si_B_nominal.conjugate() * h.boresight_Si;
+      if (h.id == p.first) sa = h.q_Si_B.conjugate() * h.boresight_Si;
+      if (h.id == p.second) sb = h.q_Si_B.conjugate() * h.boresight_Si;
     }
     const double nominal_deg = std::acos(sa.dot(sb)) / kRadPerDeg;
     std::snprintf(a, sizeof a, "%.4f deg (QSA1B)", qsa_deg);

@@ -28,6 +28,8 @@ struct Capture : sim::SimSink {
   std::vector<sim::HeadSampleOut> heads;  // delivered and blinded
   std::vector<sim::AccSampleOut> acc;
   std::vector<sim::OrbitSampleOut> orb;
+  std::vector<sim::StarVectorsOut> sv;
+  void stars(const sim::StarVectorsOut& s) override { sv.push_back(s); }
   void head(const sim::HeadSampleOut& s) override { heads.push_back(s); }
   void accel(const sim::AccSampleOut& a) override { acc.push_back(a); }
   void orbit(const sim::OrbitSampleOut& o) override { orb.push_back(o); }

@@ -17,6 +17,8 @@ namespace boresight::io {
 
 constexpr const char* kStarHeadChannel = "STAR_HEAD";
 constexpr const char* kAccelChannel = "ACCEL";
+/// boresight_lcm::star_vectors_t: one head's star vectors of one epoch (Wahba input).
+constexpr const char* kStarVectorsChannel = "STAR_VECTORS";
 
 /// Plain mirrors of the LCM types (so users of this header need no generated code).
 struct HeadSample {
@@ -35,6 +37,21 @@ struct AccelSample {
   std::int32_t seq = 0;
 };
 
+/// Mirror of star_vectors_t (units in src/lcmtypes/star_vectors_t.lcm).
+struct StarVectors {
+  static constexpr int kCapacity = 16;
+  TimeUs utime = 0;
+  int head_id = 1;
+  std::int32_t seq = 0;
+  int n_stars = 0;                 ///< 0..kCapacity
+  std::int32_t star_id[kCapacity] = {};
+  double s_head[kCapacity][3] = {};      ///< unit, head frame
+  double r_inertial[kCapacity][3] = {};  ///< unit, inertial frame
+  float sigma_rad[kCapacity] = {};       ///< rad, 0: configured
+  float magnitude[kCapacity] = {};       ///< Hp
+  std::int32_t flags = 1;                ///< bit 0 valid
+};
+
 class LcmLogWriter {
  public:
   LcmLogWriter();
@@ -45,6 +62,7 @@ class LcmLogWriter {
   bool open(const std::string& path, std::string* error);
   bool write(const HeadSample& s);
   bool write(const AccelSample& s);
+  bool write(const StarVectors& s);  ///< false also when n_stars is outside 0..kCapacity
   void close();
   std::uint64_t written() const { return written_; }
 
@@ -57,7 +75,7 @@ class LcmLogWriter {
 /// Reads a log event by event. Unknown channels and undecodable messages are counted, not fatal.
 class LcmLogReader {
  public:
-  enum class Kind { Head, Accel, Skipped, End };
+  enum class Kind { Head, Accel, Skipped, End, Stars };
   LcmLogReader();
   ~LcmLogReader();
   LcmLogReader(const LcmLogReader&) = delete;
@@ -65,6 +83,8 @@ class LcmLogReader {
   bool open(const std::string& path, std::string* error);
   /// Next event: fills head or accel. Skipped: unknown channel or decode failure (see counters).
   Kind next(HeadSample& head, AccelSample& accel);
+  /// After next() returned Kind::Stars: the star-vector message (STAR_VECTORS channel).
+  const StarVectors& stars() const { return stars_; }
   std::uint64_t unknownChannel() const { return unknown_channel_; }
   std::uint64_t decodeFailures() const { return decode_failures_; }
 
@@ -72,7 +92,11 @@ class LcmLogReader {
   struct Impl;
   std::unique_ptr<Impl> impl_;
   std::uint64_t unknown_channel_ = 0, decode_failures_ = 0;
+  StarVectors stars_{};
 };
+
+/// Decodes one STAR_VECTORS message (false: not decodable or n_stars outside 0..kCapacity).
+bool decodeStarVectors(const void* data, int size, StarVectors& out);
 
 // ---- Level-1 <-> message conversions (used by `boresight convert` and `boresight process`) ----
 

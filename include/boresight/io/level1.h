@@ -36,6 +36,7 @@ enum class Product : std::uint8_t {
   HRT1A, HRT1B,
   TIM1B,
   CLK1A, CLK1B,
+  SCV1A,  // boresight simulator product (star vectors per head), not a GRACE-FO product: see ScvRecord
   Other,  // a recognised Level-1 name without a typed reader (KBR1B, MAG1B, ...): read generically
 };
 
@@ -159,6 +160,23 @@ constexpr std::uint32_t kAcc1aRecordBits = 0x3Fu | (7u << 26);
 
 /// AHK1A/AHK1B: the bit that holds a 32-character status bit string.
 constexpr int kAhkStatusFlagBit = 29;
+
+/// SCV1A: one star seen by one head (a boresight SIMULATOR product: GRACE-FO publishes no Level-1
+/// star vectors; the layout follows SCA1A). Receiver time, YAML header like the other Level-1 files:
+///   rcvtime_intg rcvtime_frac GRACEFO_id sca_id star_id s_x s_y s_z r_x r_y r_z magnitude
+/// s: measured unit direction in the head frame Si (noise included); r: unit direction in the inertial
+/// frame I (ICRS/GCRF axes) with the aberration the simulator applies to the head (so a Wahba solution
+/// of (s, r) gives the head's geometric attitude); star_id: Hipparcos number; magnitude: Hp.
+struct ScvRecord {
+  TimeUs t = 0;
+  char satellite = 'C';
+  std::uint8_t head = 1;    ///< sca_id, 1..9
+  std::int32_t star = 0;    ///< Hipparcos catalogue number
+  double s[3] = {0, 0, 1};  ///< unit vector, head frame
+  double r[3] = {0, 0, 1};  ///< unit vector, inertial frame
+  double mag = 0;           ///< Hp magnitude
+  friend bool operator==(const ScvRecord&, const ScvRecord&);
+};
 
 /// QSA1B (star camera to SRF alignment, q_Si_B) and QKS1B (KBR to SRF): static records.
 /// time id sca_id q0 qi qj qk 0 qualflg
@@ -362,6 +380,7 @@ BORESIGHT_IO_DECLARE(Sca1aRecord)
 BORESIGHT_IO_DECLARE(FlaggedRecord)
 BORESIGHT_IO_DECLARE(Acc1aRecord)
 BORESIGHT_IO_DECLARE(QsaRecord)
+BORESIGHT_IO_DECLARE(ScvRecord)
 BORESIGHT_IO_DECLARE(Sca1bRecord)
 BORESIGHT_IO_DECLARE(Acc1bRecord)
 BORESIGHT_IO_DECLARE(GnvRecord)

@@ -21,7 +21,7 @@ constexpr std::uint64_t mix64(std::uint64_t z) {
 
 /// Named random streams. Values are part of the reproducibility contract: do not renumber.
 enum class Stream : std::uint64_t {
-  HeadNoise = 1, HeadOutlier = 2, HeadSignFlip = 3, HeadGap = 4, HeadTagJitter = 5,
+  HeadNoise = 1, HeadOutlier = 2, HeadSignFlip = 3, HeadGap = 4, HeadTagJitter = 5, StarNoise = 6,
   AccNoise = 11, AccLowFreq = 12, AccGap = 13, AccTagJitter = 14,
   Attitude = 21, MountingDraw = 22, Magnetic = 23,
 };

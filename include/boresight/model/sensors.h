@@ -5,34 +5,38 @@
 // configured sensor is expected to deliver (no noise), and the noise it adds.
 //
 //   head i:  q_I_Si_meas = q_I_B (x) q_Si_B(t)^-1 (x) Exp(phi_aberration) (x) Exp(n)
-//            q_Si_B(t)   = Exp(phi_eff(t)) (x) Exp(phi_mount) (x) q_Si_B_nominal      (see effects.h)
+//            q_Si_B(t)   = Exp(phi_eff(t)) (x) Exp(phi_mount) (x) q_Si_B (nominal)      (see effects.h)
 //            n ~ N(0, sigma_cross^2 (e1 e1^T + e2 e2^T) + sigma_about^2 b b^T)  (head frame, per sample)
 //   acc:     a_A = (I + diag(scale)) R(Exp(m)) C_A_B a_B + bias + white + low-frequency noise
 #pragma once
 
 #include <boresight/core/conventions.h>
+#include <boresight/core/heads.h>
 #include <boresight/model/effects.h>
 #include <boresight/model/random.h>
 
 namespace boresight::model {
 
-struct HeadConfig {
-  int id = 1;                              ///< sca_id, 1-based
-  Quat q_Si_B_nominal = Quat::Identity();  ///< nominal (ground) mounting, as in QSA1B
+/// One head. The common fields are the core's HeadConfig, the one definition of a head (core/heads.h):
+///   id, q_Si_B (the NOMINAL / ground mounting, as in QSA1B), boresight_Si, sigma_cross_rad /
+///   sigma_roll_rad (for the simulator: the true per-sample attitude noise, cross-boresight per axis
+///   and about the boresight), sigma_star_rad (true noise of one star direction, per axis).
+/// A core configuration of the simulated heads is `HeadSetConfig::head[k] = model_head` (slicing to
+/// the base is the intended conversion). The fields below are the simulator's own.
+struct HeadConfig : core::HeadConfig {
+  HeadConfig() { id = 1; }
   Vec3 mounting_error_rad = Vec3::Zero();  ///< truth: the in-orbit mounting differs by Exp(this)
-  Vec3 boresight_Si = Vec3::UnitZ();       ///< boresight axis in the head frame
   double rate_hz = 2.0;
   std::int64_t tag_offset_us = 0;          ///< fractional-second offset of the time tags
   double tag_jitter_us = 0;                ///< uniform +- jitter of the tags (shared by heads with equal rate/offset)
   double tag_drift_ppm = 0;                ///< linear drift of the tags relative to the truth (receiver clock)
-  double noise_cross_rad = 0;              ///< 1-sigma per axis, cross-boresight, per sample
-  double noise_about_rad = 0;              ///< 1-sigma about the boresight, per sample
   double fov_half_angle_rad = 10 * kRadPerDeg;
   double limiting_mag = 6.0;               ///< faintest Hp counted as a tracked star
   double sun_exclusion_rad = 30 * kRadPerDeg;    ///< blind when the Sun is within this of the boresight
   double earth_exclusion_rad = 20 * kRadPerDeg;  ///< blind when the bright limb is within this of the boresight
   double moon_exclusion_rad = 10 * kRadPerDeg;   ///< blind when the Moon is within this of the boresight
   char desig = 'P';
+  const core::HeadConfig& core() const { return *this; }
 };
 
 class HeadModel {
@@ -52,8 +56,12 @@ class HeadModel {
   /// Boresight direction in I for an attitude q_I_Si.
   Vec3 boresightInertial(const Quat& q_I_Si) const { return q_I_Si * b_; }
 
-  double sigmaCross() const { return cfg_.noise_cross_rad; }
-  double sigmaAbout() const { return eff_.about_sigma_rad >= 0 ? eff_.about_sigma_rad : cfg_.noise_about_rad; }
+  double sigmaCross() const { return cfg_.sigma_cross_rad; }
+  double sigmaAbout() const { return eff_.about_sigma_rad >= 0 ? eff_.about_sigma_rad : cfg_.sigma_roll_rad; }
+  double sigmaStar() const { return cfg_.sigma_star_rad; }
+  /// A measured star direction: unit s_true (head frame) with noise of sigmaStar() per perpendicular
+  /// axis, draw number `k` of sample `n` of this head (counter-based: independent of other draws).
+  Vec3 noisyStar(const Vec3& s_true, const CounterRng& rng, std::uint64_t n, std::uint64_t k) const;
   /// Per-sample attitude noise covariance in Si (rad^2).
   Mat3 noiseCovariance() const;
   /// The noise rotation vector (Si) of sample number n of this head.

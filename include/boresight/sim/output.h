@@ -54,26 +54,35 @@ std::string productFileName(const char* product, const Scenario& sc);
 io::Sca1aRecord toSca1a(const HeadSampleOut& s, char satellite);
 io::FlaggedRecord toAcc1a(const AccSampleOut& a, char satellite);
 io::GnvRecord toGnv1b(const OrbitSampleOut& o, char satellite);
+/// SCV1A records (one per star) of a head's star vectors.
+void toScv1a(const StarVectorsOut& s, char satellite, std::vector<io::ScvRecord>& out);
 
-/// Writes SCA1A (all heads, blinded samples skipped), ACC1A and GNV1B as the simulation runs.
+/// Writes SCA1A (all heads, blinded samples skipped), ACC1A and GNV1B as the simulation runs, and
+/// SCV1A (star vectors, a simulator product) when the scenario's output.star_vectors_interval_s > 0.
+/// files(): SCA1A, ACC1A, GNV1B, then SCV1A when written.
 class Level1Sink : public SimSink {
  public:
   bool open(const std::string& dir, const Scenario& sc, std::string* error);
   void head(const HeadSampleOut& s) override;
   void accel(const AccSampleOut& a) override;
   void orbit(const OrbitSampleOut& o) override;
+  void stars(const StarVectorsOut& s) override;
   bool close(std::string* error);
   std::vector<std::string> files() const { return files_; }
 
  private:
   char sat_ = 'C';
+  bool scv_on_ = false;
+  ChunkedProductWriter<io::ScvRecord> scv_;
+  std::vector<io::ScvRecord> scv_buf_;
   ChunkedProductWriter<io::Sca1aRecord> sca_;
   ChunkedProductWriter<io::FlaggedRecord> acc_;
   ChunkedProductWriter<io::GnvRecord> gnv_;
   std::vector<std::string> files_;
 };
 
-/// The node's input messages (io::LcmLogWriter): heads on STAR_HEAD, accelerometer on ACCEL.
+/// The node's input messages (io::LcmLogWriter): heads on STAR_HEAD, accelerometer on ACCEL, star
+/// vectors on STAR_VECTORS (one message per head epoch, sequence counted over the channel).
 class LcmSink : public SimSink {
  public:
   LcmSink();
@@ -81,6 +90,7 @@ class LcmSink : public SimSink {
   bool open(const std::string& path, std::string* error);
   void head(const HeadSampleOut& s) override;
   void accel(const AccSampleOut& a) override;
+  void stars(const StarVectorsOut& s) override;
   bool close(std::string* error);
   std::uint64_t written() const;
 
@@ -101,6 +111,9 @@ class TeeSink : public SimSink {
   }
   void orbit(const OrbitSampleOut& o) override {
     for (auto* k : sinks_) k->orbit(o);
+  }
+  void stars(const StarVectorsOut& s) override {
+    for (auto* k : sinks_) k->stars(s);
   }
 
  private:

@@ -19,6 +19,10 @@ namespace boresight::sim {
 struct OutputConfig {
   bool lcm_log = true;
   double gnv1b_interval_s = 1.0;
+  /// Star vectors (SCV1A file, STAR_VECTORS LCM messages): every head's stars at the first sample at
+  /// or after each multiple of this interval, s; 0: none. At most star_vectors_per_head (brightest).
+  double star_vectors_interval_s = 10.0;
+  int star_vectors_per_head = 8;
   std::string version = "04";  ///< the release field of the file names (SCA1A_2023-06-01_C_04.txt)
 };
 

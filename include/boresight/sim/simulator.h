@@ -13,6 +13,7 @@
 #include <boresight/sim/scenario.h>
 #include <boresight/sim/stars.h>
 
+#include <array>
 #include <functional>
 #include <memory>
 
@@ -32,6 +33,28 @@ struct HeadSampleOut {
   double t_true_s = 0;           ///< seconds since the start at which the sample describes the truth
   Quat q_I_B = Quat::Identity();
   Quat q_I_Si_expected = Quat::Identity();  ///< model prediction without noise
+};
+
+/// Most star vectors one head delivers per epoch (the core's kMaxStarsPerHead, the LCM message's 16).
+constexpr int kMaxSimStarsPerHead = 16;
+
+/// The star vectors of one head sample (brightest first), see io::ScvRecord for the product.
+struct StarVectorsOut {
+  TimeUs tag = 0;
+  int head = 1;
+  std::uint64_t index = 0;  ///< the head sample's number
+  int n = 0;
+  struct Star {
+    int hip = 0;
+    double mag = 0;
+    Vec3 s_Si = Vec3::UnitZ();       ///< measured unit direction, head frame (noise included)
+    Vec3 r_I = Vec3::UnitZ();        ///< unit direction, inertial, with the head's aberration applied
+    Vec3 s_Si_true = Vec3::UnitZ();  ///< truth: noise-free direction in the head frame
+  };
+  std::array<Star, kMaxSimStarsPerHead> star{};
+  // Truth, for tests:
+  Quat q_I_Si_geometric = Quat::Identity();  ///< the head's true attitude without aberration
+  double sigma_rad = 0;                      ///< the noise used, per axis
 };
 
 struct AccSampleOut {
@@ -55,11 +78,13 @@ class SimSink {
   virtual void head(const HeadSampleOut&) {}
   virtual void accel(const AccSampleOut&) {}
   virtual void orbit(const OrbitSampleOut&) {}
+  /// Star vectors of a head sample (after its head() call; never for a blinded head).
+  virtual void stars(const StarVectorsOut&) {}
 };
 
 struct SimStats {
   std::vector<std::uint64_t> head_samples, head_blinded_sun, head_blinded_earth, head_blinded_moon, head_missing,
-      head_outliers, head_sign_flips;
+      head_outliers, head_sign_flips, head_star_epochs;
   std::uint64_t acc_samples = 0, acc_missing = 0, orbit_samples = 0, thruster_pulses = 0, star_refreshes = 0;
   double max_abs_alpha = 0;  ///< rad/s^2, largest true angular acceleration component seen by the accelerometer
 };

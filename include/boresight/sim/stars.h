@@ -44,6 +44,8 @@ class FovStarCounter {
   FovStarCounter(const StarCatalogue* cat, double half_angle_rad, double max_mag, double margin_rad = 3 * kRadPerDeg)
       : cat_(cat), half_(half_angle_rad), mag_(max_mag), margin_(margin_rad) {}
   int count(const Vec3& boresight_I);
+  /// The stars in the field of view (catalogue indices, ascending), from the same cached candidates.
+  void select(const Vec3& boresight_I, std::vector<int>& out);
   std::uint64_t refreshes() const { return refreshes_; }
 
  private:
