@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <map>
 #include <memory>
 
@@ -148,6 +149,12 @@ TEST(SimStarVectors, ChainSimulateToWahbaThreeAxisCorrectionBeatsNoneAndOneAxis)
     ASSERT_EQ(p[static_cast<std::size_t>(m)]->configure(pc), core::Status::kOk);
   }
   std::array<ModeStats, 3> st;
+  // optional per-epoch table for a figure: BORESIGHT_CHAIN_CSV=path (see the report / README)
+  std::FILE* csv = nullptr;
+  if (const char* path = std::getenv("BORESIGHT_CHAIN_CSV")) {
+    csv = std::fopen(path, "w");
+    if (csv) std::fprintf(csv, "t_s,err_none_arcsec,err_one_axis_arcsec,err_three_axis_arcsec,sigma_three_axis_arcsec\n");
+  }
   const model::HeadModel& h1 = r->sim.heads()[0];
   std::size_t ih = 0, is = 0;
   long star_epochs = 0, rejected = 0;
@@ -189,6 +196,7 @@ TEST(SimStarVectors, ChainSimulateToWahbaThreeAxisCorrectionBeatsNoneAndOneAxis)
     const double t_rel = toSeconds(t - sc.start);
     // truth: head 1 has no time-varying effect: its geometric attitude is q_I_B through its true mounting
     const Quat q_I_S1 = q_I_B_true * h1.qSiBTrue().conjugate();
+    double err_row[3] = {std::nan(""), std::nan(""), std::nan("")}, sig_row = std::nan("");
     for (int m = 0; m < 3; ++m) {
       auto& pp = *p[static_cast<std::size_t>(m)];
       if (pp.stepStars(se) != core::Status::kOk) {
@@ -198,6 +206,8 @@ TEST(SimStarVectors, ChainSimulateToWahbaThreeAxisCorrectionBeatsNoneAndOneAxis)
       if (t_rel < kWarmupS) continue;
       const core::WahbaSolution& sol = pp.wahba().output();
       const Vec3 e = core::quatLog(q_I_S1.conjugate() * sol.q_I_SR);
+      err_row[m] = e.norm() * kArcsecPerRad;
+      if (m == 2) sig_row = std::sqrt(sol.P_SR.trace()) * kArcsecPerRad;
       ModeStats& c = st[static_cast<std::size_t>(m)];
       c.ss += e.cwiseProduct(e);
       c.nees += e.dot(sol.P_SR.inverse() * e);
@@ -209,7 +219,10 @@ TEST(SimStarVectors, ChainSimulateToWahbaThreeAxisCorrectionBeatsNoneAndOneAxis)
         c.acc_n = 0;
       }
     }
+    if (csv && t_rel >= kWarmupS)
+      std::fprintf(csv, "%.1f,%.4f,%.4f,%.4f,%.4f\n", t_rel, err_row[0], err_row[1], err_row[2], sig_row);
   }
+  if (csv) std::fclose(csv);
   std::printf("simulated chain (%.0f s scored, %ld star epochs, %ld rejected):\n", kSpanS - kWarmupS, star_epochs, rejected);
   for (int m = 0; m < 3; ++m) {
     const ModeStats& c = st[static_cast<std::size_t>(m)];
