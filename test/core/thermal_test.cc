@@ -243,6 +243,29 @@ TEST(Thermal, FilteredDeformationIsHeldOrPredictedWhileAHeadIsBlind) {
   EXPECT_LT((mon.filtered(0, 1).delta_Si - sc.delta_S1).norm(), 4.0 * std::sqrt(mon.filtered(0, 1).cov_Si.trace()));
 }
 
+TEST(Thermal, ASingularPairCovarianceIsCountedAndLeavesTheFilterAlone) {
+  // sigma_scale 0 on both heads of a pair: the pair's covariance is zero, its information undefined
+  Rng rng(36);
+  Scenario sc;
+  BoresightMonitor mon;
+  ASSERT_EQ(mon.configure(sc.heads), Status::kOk);
+  for (int e = 0; e < 100; ++e) ASSERT_EQ(mon.step(sc.epoch(rng, kT0 + static_cast<TimeUs>(e) * 500000, test::randomQuat(rng))), Status::kOk);
+  const FilteredDeformation before = mon.filtered(0, 1);
+  ValidHeads v = sc.epoch(rng, kT0 + 100 * 500000, test::randomQuat(rng));
+  v.sigma_scale[0] = 0;
+  v.sigma_scale[1] = 0;
+  ASSERT_EQ(mon.step(v), Status::kOk);
+  EXPECT_EQ(mon.health().count(Status::kNumericalFailure), 1u);  // pair (0, 1) only: (0, 2), (1, 2) have one head left
+  EXPECT_EQ(mon.filtered(0, 1).delta_Si, before.delta_Si);
+  EXPECT_EQ(mon.filtered(0, 1).t, before.t);
+  DeformationFilterConfig bad;
+  bad.tau_s = 0;
+  EXPECT_EQ(mon.configure(sc.heads, bad), Status::kInvalidConfig);
+  bad.tau_s = 100;
+  bad.hold_drift_rad_per_s = std::nan("");
+  EXPECT_EQ(mon.configure(sc.heads, bad), Status::kInvalidConfig);
+}
+
 TEST(Thermal, ClosureDetectsAnInconsistentHead) {
   // Head 3's samples are rotated by 100" about its boresight at the epochs without head 2 (every
   // other epoch): the mean (1,3) takes half of that, (1,2) and (2,3) none, and the closure must show

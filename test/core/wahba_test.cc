@@ -130,6 +130,87 @@ TEST(Wahba, CorrectedRelativeMatrixRemovesAHeadDeformation) {
   EXPECT_LT(rc, 0.6 * rg);
 }
 
+TEST(Wahba, RelativeMatrixCovarianceIsCarriedAsACommonErrorOfTheHeadsStars) {
+  // Each epoch the relative matrix of head 2 is wrong by a fresh e ~ N(0, Q) (common to all its
+  // stars); Wahba is told Q. The solution's NEES with P_SR must be ~3; the per-star alternative
+  // (skew(u) Q skew(u)^T added to each star's noise, as if independent) is computed beside it from
+  // the same stars and must come out clearly too small (NEES well above 3).
+  constexpr int kRuns = 4000;
+  Rng rng(44);
+  WahbaConfig cfg;
+  cfg.heads = test::graceLikeHeads(3);
+  MultiHeadWahba w;
+  ASSERT_EQ(w.configure(cfg), Status::kOk);
+  const Mat3 L = (Vec3(12, 4, 20) * kRadPerArcsec).asDiagonal();  // anisotropic, in S1
+  const Mat3 Q = L * L;
+  const Mat3 C0_12 = groundRelative(cfg.heads, 0, 1);
+  double nees = 0, nees_star = 0, nees_ignored = 0;
+  for (int r = 0; r < kRuns; ++r) {
+    const Vec3 e = L * test::randomVec(rng, 1.0);
+    // the stars of head 2 come through C_S1_S2,true = Exp(e) C0 while Wahba uses C0 with covariance Q
+    const Quat extra_S2 = Quat(Mat3(C0_12.transpose() * so3Exp(e) * C0_12));
+    const Quat q_I_B = test::randomQuat(rng);
+    const StarEpoch ep = makeStars(rng, cfg.heads, q_I_B, 6, 1000 + static_cast<TimeUs>(r) * 500000, extra_S2);
+    ASSERT_EQ(w.setRelative(1, C0_12, Q), Status::kOk);
+    ASSERT_EQ(w.step(ep), Status::kOk);
+    const WahbaSolution& s = w.output();
+    const Quat q_I_S1 = q_I_B * cfg.heads.head[0].q_Si_B.conjugate();
+    const Vec3 err = quatLog(q_I_S1.conjugate() * s.q_I_SR);
+    nees += err.dot(s.P_SR.inverse() * err);
+    nees_ignored += err.dot(s.P_stars_SR.inverse() * err);
+    // per-star alternative: P (sum_j A_j (sigma^2 I + skew(u) Q skew(u)^T) A_j^T w^2) P, j of head 2
+    Mat3 extra = Mat3::Zero();
+    for (int j = 0; j < s.stars_used; ++j) {
+      const StarObservation& o = ep.star[static_cast<std::size_t>(s.used[static_cast<std::size_t>(j)])];
+      if (o.head_id != 2) continue;
+      const Vec3 u = (C0_12 * o.s_Sk).normalized();
+      const double wj = 1.0 / (cfg.heads.head[1].sigma_star_rad * cfg.heads.head[1].sigma_star_rad);
+      const Mat3 A = wj * (Mat3::Identity() - u * u.transpose());
+      extra += A * Q * A.transpose();  // star noise skew(u) Q skew(u)^T, projected: w^2 (I - uu^T) Q (I - uu^T)
+    }
+    const Mat3 P_star = s.P_stars_SR + s.P_stars_SR * extra * s.P_stars_SR;
+    nees_star += err.dot(P_star.inverse() * err);
+  }
+  nees /= kRuns;
+  nees_star /= kRuns;
+  nees_ignored /= kRuns;
+  std::printf("relative-matrix covariance: mean NEES %.2f (common error, P_SR), %.2f (per-star), %.2f (ignored)\n", nees,
+              nees_star, nees_ignored);
+  EXPECT_NEAR(nees, 3.0, 0.3);  // 4000 runs: 1-sigma of the mean 0.04
+  EXPECT_GT(nees_star, 4.5);
+  EXPECT_GT(nees_ignored, nees_star);
+}
+
+TEST(Wahba, TooManyInputsAreCountedAndCut) {
+  Rng rng(45);
+  WahbaConfig cfg;
+  cfg.heads = test::graceLikeHeads(3);
+  MultiHeadWahba w;
+  ASSERT_EQ(w.configure(cfg), Status::kOk);
+  StarEpoch e = makeStars(rng, cfg.heads, test::randomQuat(rng), kMaxStarsPerHead, 1000);
+  e.n = kMaxStarInputs + 5;  // more than the array holds: the excess is dropped, the rest used
+  ASSERT_EQ(w.step(e), Status::kOk);
+  EXPECT_EQ(w.health().count(Status::kCapacityExceeded), 1u);
+  EXPECT_EQ(w.output().stars_used, kMaxStars);
+  // the slots between the 48 stars and the capacity hold no head (id 0): each counted as unknown
+  EXPECT_EQ(w.health().count(Status::kUnknownHead), static_cast<std::uint64_t>(kMaxStarInputs - 3 * kMaxStarsPerHead));
+  EXPECT_EQ(w.output().stars_in, 3 * kMaxStarsPerHead);
+  w.reset();
+  // a non-finite or negative star sigma and a non-unit direction are rejected star by star
+  e.t = 2000;
+  e.n = 3 * kMaxStarsPerHead;
+  e.star[0].sigma_rad = -1;
+  e.star[1].r_I *= 1.01;
+  e.star[2].head_id = 9;
+  ASSERT_EQ(w.step(e), Status::kOk);
+  EXPECT_EQ(w.health().count(Status::kNonFinite), 1u);
+  EXPECT_EQ(w.health().count(Status::kNonUnitQuaternion), 1u);
+  EXPECT_EQ(w.health().count(Status::kUnknownHead), 1u);
+  EXPECT_EQ(w.output().stars_in, 3 * kMaxStarsPerHead - 3);
+  // a relative covariance that is not a covariance is refused
+  EXPECT_EQ(w.setRelative(1, groundRelative(cfg.heads, 0, 1), -Mat3::Identity()), Status::kNonFinite);
+}
+
 TEST(Wahba, TooFewOrCollinearStarsAreRejected) {
   WahbaConfig cfg;
   cfg.heads = test::graceLikeHeads(3);
