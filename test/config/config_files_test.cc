@@ -134,9 +134,9 @@ TEST(Scenario, CalibrationDayIsAnOverlayOfTheBase) {
   ASSERT_EQ(cal.heads.size(), base.heads.size());
   for (std::size_t i = 0; i < base.heads.size(); ++i) {
     EXPECT_EQ(cal.heads[i].id, base.heads[i].id);
-    EXPECT_TRUE(cal.heads[i].q_Si_B_nominal.isApprox(base.heads[i].q_Si_B_nominal));
+    EXPECT_TRUE(cal.heads[i].q_Si_B.isApprox(base.heads[i].q_Si_B));
     EXPECT_EQ(cal.heads[i].mounting_error_rad, base.heads[i].mounting_error_rad);
-    EXPECT_EQ(cal.heads[i].noise_about_rad, base.heads[i].noise_about_rad);
+    EXPECT_EQ(cal.heads[i].sigma_roll_rad, base.heads[i].sigma_roll_rad);
   }
   EXPECT_EQ(cal.start, base.start);
   EXPECT_EQ(cal.orbit.altitude_m, base.orbit.altitude_m);
@@ -155,7 +155,7 @@ TEST(Scenario, OverlayReplacesValuesAndReportsErrorsInItsOwnFile) {
   EXPECT_NEAR(sc.orbit.inclination_rad / kRadPerDeg, 89.0, 1e-12);  // kept from the base
   ASSERT_EQ(sc.heads.size(), 1u);  // a list replaces the base's
   EXPECT_EQ(sc.heads[0].id, 4);
-  EXPECT_NEAR(sc.heads[0].noise_about_rad * kArcsecPerRad, 48, 1e-9);  // the base's head defaults
+  EXPECT_NEAR(sc.heads[0].sigma_roll_rad * kArcsecPerRad, 48, 1e-9);  // the base's head defaults
 
   EXPECT_FALSE(sim::parseScenario("base: sim_gracefo.yaml\norbit:\n  altitude_kms: 500\n", "ov.yaml", dir, sc, &err));
   EXPECT_NE(err.find("ov.yaml:3: key 'orbit.altitude_kms': unknown key; did you mean 'altitude_km'?"), std::string::npos)
