@@ -96,6 +96,7 @@ struct FilteredDeformation {
   Vec3 delta_Si = Vec3::Zero();   ///< rad, in Si (C_Si_Sj = Exp(delta) C0)
   Mat3 cov_Si = Mat3::Zero();     ///< rad^2 (noise part, without the hold growth)
   double n_eff = 0;               ///< effective number of epochs in the filter
+  std::uint64_t solve_failures = 0;  ///< times the filter's normal equations were singular (value kept)
 };
 
 class BoresightMonitor {
@@ -144,26 +145,37 @@ class BoresightMonitor {
   struct Filt {
     bool seen = false;
     TimeUs t = 0;
-    // sums over the epochs k with forgetting weights f_k, s_k = t_k - t (s, <= 0):
-    //   S_m = sum f_k s_k^m W_k, N_m = sum f_k^2 s_k^m W_k (m = 0..2), y_m = sum f_k s_k^m W_k delta_k
+    // sums over the epochs k with weights g_k = exp((t_k - anchor) / tau), s_k = t_k - anchor (s):
+    //   S_m = sum g_k s_k^m W_k, N_m = sum g_k^2 s_k^m W_k (m = 0..2), y_m = sum g_k s_k^m W_k delta_k
+    // (a common factor of the weights changes neither the estimate nor M^-1 N M^-1)
     Mat3 S0 = Mat3::Zero(), S1 = Mat3::Zero(), S2 = Mat3::Zero();
     Mat3 N0 = Mat3::Zero(), N1 = Mat3::Zero(), N2 = Mat3::Zero();
     Vec3 y0 = Vec3::Zero(), y1 = Vec3::Zero();
     double wsum = 0, w2sum = 0;  ///< scalar weights, for the effective count
-    Vec3 delta = Vec3::Zero();
-    Mat3 cov = Mat3::Zero();
+    // the solution, computed on demand from the sums (const accessors: a cache)
+    mutable bool dirty = false;
+    mutable Vec3 delta = Vec3::Zero();
+    mutable Mat3 cov = Mat3::Zero();
+    mutable std::uint64_t solve_failures = 0;  ///< singular normal equations (estimate kept)
     bool predicted = false;
     TimeUs t_pred = 0;
     Vec3 delta_pred = Vec3::Zero();
     Mat3 cov_pred = Mat3::Zero();
   };
   std::array<Filt, kMaxPairs> filt_{};
-  void updateFilter(Filt& F, TimeUs t, const Mat3& W, const Vec3& delta);
+  void updateFilter(Filt& F, TimeUs t, double g, const Mat3& W, const Vec3& delta);
+  void reanchor(TimeUs t);
+  /// Re-anchoring period of the filters' time origin, s (weights up to e^(kReanchorS / tau); the
+  /// shift s -> s - d at a solve loses about (kReanchorS / tau)^2 of relative precision: fine).
+  static constexpr double kReanchorS = 600.0;
+  TimeUs anchor_ = 0;
+  bool have_anchor_ = false;
+  void solveFilter(const Filt& F) const;
   std::array<double, kMaxPairs> sigma_iba2_{};  ///< n^T cov n, rad^2 (last epoch)
   DeformationFilterConfig fcfg_{};
   bool have_last_ = false;
   TimeUs last_t_ = 0;
-  Health health_{};
+  mutable Health health_{};  ///< mutable: the on-demand filter solve (const accessors) counts its failures
 };
 
 }  // namespace boresight::core
