@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <vector>
 #include <cmath>
 #include <cstdio>
 
@@ -264,6 +265,82 @@ TEST(Thermal, ASingularPairCovarianceIsCountedAndLeavesTheFilterAlone) {
   bad.tau_s = 100;
   bad.hold_drift_rad_per_s = std::nan("");
   EXPECT_EQ(mon.configure(sc.heads, bad), Status::kInvalidConfig);
+}
+
+TEST(Thermal, FilteredDeformationEqualsABruteForceWeightedFit) {
+  // The recursive filter against a direct weighted least-squares fit over every stored epoch
+  // (weights exp(-(t - t_k) / tau) W_k, level + rate at the last epoch, covariance R N R^T), across
+  // re-anchorings (every 600 s), a 700 s gap of head 2, varying sigma scales and the first epochs
+  // (too few for a line: the level).
+  Rng rng(37);
+  Scenario sc;
+  const OrbitDeformation def;
+  DeformationFilterConfig fc;
+  BoresightMonitor mon;
+  ASSERT_EQ(mon.configure(sc.heads, fc), Status::kOk);
+  const Mat3 C0 = mon.groundRelative(0, 1);
+  const HeadConfig& h1 = sc.heads.head[0];
+  const HeadConfig& h2 = sc.heads.head[1];
+  struct Ep {
+    double t;
+    Mat3 W;
+    Vec3 d;
+  };
+  std::vector<Ep> eps;
+  std::uniform_real_distribution<double> scale(0.5, 2.0);
+  int checked = 0;
+  for (int e = 0; e < 4000; ++e) {
+    const double t_s = 0.5 * e;
+    sc.delta_S1 = def.at(t_s);
+    ValidHeads v = sc.epoch(rng, kT0 + static_cast<TimeUs>(e) * 500000, test::randomQuat(rng));
+    if (t_s > 1000 && t_s < 1700) v.mask &= ~2u;
+    if (e % 7 == 0) v.sigma_scale[1] = scale(rng);
+    ASSERT_EQ(mon.step(v), Status::kOk);
+    const PairDeformation& pd = mon.pair(0, 1);
+    if (pd.valid) {
+      const double sa = v.sigma_scale[0], sb = v.sigma_scale[1];
+      const Mat3 cov = sa * sa * headCovariance(h1.sigma_cross_rad, h1.sigma_roll_rad, h1.boresight_Si) +
+                       sb * sb * C0 * headCovariance(h2.sigma_cross_rad, h2.sigma_roll_rad, h2.boresight_Si) * C0.transpose();
+      eps.push_back({t_s, cov.inverse(), pd.delta_Si});
+    }
+    if (!(e < 20 || e % 397 == 0 || e == 3999)) continue;
+    const FilteredDeformation f = mon.filtered(0, 1);
+    ASSERT_TRUE(f.valid);
+    const double t_last = eps.back().t;
+    EXPECT_EQ(f.t, kT0 + static_cast<TimeUs>(std::llround(t_last * 1e6)));
+    Eigen::Matrix<double, 6, 6> M = Eigen::Matrix<double, 6, 6>::Zero(), N = M;
+    Eigen::Matrix<double, 6, 1> y = Eigen::Matrix<double, 6, 1>::Zero();
+    double ws = 0, w2s = 0;
+    for (const Ep& k : eps) {
+      const double w = std::exp(-(t_last - k.t) / fc.tau_s), s = k.t - t_last;
+      Eigen::Matrix<double, 3, 6> H;  // delta_k = level + s rate
+      H << Mat3::Identity(), s * Mat3::Identity();
+      M += w * H.transpose() * k.W * H;
+      N += w * w * H.transpose() * k.W * H;
+      y += w * H.transpose() * k.W * k.d;
+      ws += w;
+      w2s += w * w;
+    }
+    Vec3 level;
+    Mat3 cov;
+    if (ws * ws / w2s > 8.0) {
+      const Eigen::Matrix<double, 6, 6> Mi = M.inverse();
+      level = (Mi * y).head<3>();
+      cov = (Mi * N * Mi).topLeftCorner<3, 3>();
+    } else {  // the level alone
+      const Mat3 Mi = M.topLeftCorner<3, 3>().inverse();
+      level = Mi * y.head<3>();
+      cov = Mi * N.topLeftCorner<3, 3>() * Mi;
+    }
+    EXPECT_LT((f.delta_Si - level).norm(), 1e-6 * kRadPerArcsec + 1e-8 * level.norm()) << "epoch " << e;
+    EXPECT_LT((f.cov_Si - cov).norm(), 1e-7 * cov.norm()) << "epoch " << e;
+    EXPECT_NEAR(f.n_eff, ws * ws / w2s, 1e-9 * f.n_eff);
+    ++checked;
+  }
+  EXPECT_GT(checked, 25);
+  // reset() forgets the filter
+  mon.reset();
+  EXPECT_FALSE(mon.filtered(0, 1).valid);
 }
 
 TEST(Thermal, ClosureDetectsAnInconsistentHead) {
