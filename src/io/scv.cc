@@ -46,3 +46,29 @@ struct ScvCodec {
 }  // namespace boresight::io
 
 BORESIGHT_IO_INSTANTIATE(boresight::io::ScvCodec)
+
+#include <boresight/io/scv.h>
+
+namespace boresight::io {
+
+std::size_t nextStarEpoch(const std::vector<ScvRecord>& recs, std::size_t begin, core::StarEpoch& out,
+                          std::size_t* dropped) {
+  out.n = 0;
+  if (begin >= recs.size()) return begin;
+  out.t = recs[begin].t;
+  std::size_t i = begin;
+  for (; i < recs.size() && recs[i].t == out.t; ++i) {
+    if (out.n >= core::kMaxStarInputs) {
+      if (dropped) ++*dropped;
+      continue;
+    }
+    core::StarObservation& o = out.star[static_cast<std::size_t>(out.n++)];
+    o.head_id = recs[i].head;
+    o.s_Sk = Vec3(recs[i].s[0], recs[i].s[1], recs[i].s[2]);
+    o.r_I = Vec3(recs[i].r[0], recs[i].r[1], recs[i].r[2]);
+    o.sigma_rad = 0;
+  }
+  return i;
+}
+
+}  // namespace boresight::io

@@ -2,6 +2,7 @@
 // aberrated) head with the configured noise; and the whole chain simulate -> Pipeline (heads, then
 // stars) -> joint attitude against the simulator's truth, for the three relative corrections.
 #include <boresight/core/pipeline.h>
+#include <boresight/io/scv.h>
 #include <boresight/model/rotation.h>
 
 #include "sim_test_util.h"
@@ -115,6 +116,50 @@ TEST(SimStarVectors, ZeroIntervalTurnsThemOffIntervalAndCapAreHonoured) {
   std::string err;
   EXPECT_FALSE(s.init(sc, 3, 60, &err));
   EXPECT_NE(err.find("star_vectors_per_head"), std::string::npos) << err;
+}
+
+TEST(SimStarVectors, Scv1aReaderRejectsBadLinesAndGroupsEpochs) {
+  auto f = io::makeProduct<io::ScvRecord>(io::Product::SCV1A, 'C');
+  io::ScvRecord r;
+  r.t = 738849600LL * kUsPerSecond + 29992;
+  r.star = 32349;
+  r.mag = -1.09;
+  for (int h = 1; h <= 3; ++h) {
+    r.head = static_cast<std::uint8_t>(h);
+    f.records.push_back(r);
+    f.records.push_back(r);
+  }
+  r.t += 500000;
+  f.records.push_back(r);
+  std::string text = io::formatProduct(f);
+  const auto good = io::parseProduct<io::ScvRecord>(text, "SCV1A_2023-06-01_C_04.txt");
+  ASSERT_TRUE(good.ok) << good.error;
+  ASSERT_EQ(good.records.size(), 7u);
+  EXPECT_TRUE(good.records[0] == f.records[0]);
+  core::StarEpoch e;
+  std::size_t dropped = 0;
+  std::size_t next = io::nextStarEpoch(good.records, 0, e, &dropped);
+  EXPECT_EQ(next, 6u);
+  EXPECT_EQ(e.n, 6);
+  EXPECT_EQ(e.t, r.t - 500000);
+  EXPECT_EQ(e.star[5].head_id, 3);
+  next = io::nextStarEpoch(good.records, next, e, &dropped);
+  EXPECT_EQ(next, 7u);
+  EXPECT_EQ(e.n, 1);
+  EXPECT_EQ(io::nextStarEpoch(good.records, next, e, &dropped), 7u);
+  EXPECT_EQ(e.n, 0);
+  EXPECT_EQ(dropped, 0u);
+  // a direction that is not a unit vector, and a head id out of range: rejected with file:line
+  const std::size_t last = text.rfind('\n', text.size() - 2) + 1;
+  std::string bad = text.substr(0, last) + "738850100 529992 C 3 32349 0 0 1.1 0 0 1 -1.09\n" +
+                    "738850100 529992 C 12 32349 0 0 1 0 0 1 -1.09\n";
+  const auto b = io::parseProduct<io::ScvRecord>(bad, "SCV1A_2023-06-01_C_04.txt");
+  ASSERT_TRUE(b.ok) << b.error;
+  EXPECT_EQ(b.records.size(), 6u);
+  ASSERT_EQ(b.rejected_count, 2u);
+  EXPECT_NE(b.rejected[0].str().find("unit vector"), std::string::npos) << b.rejected[0].str();
+  EXPECT_NE(b.rejected[1].str().find("sca_id"), std::string::npos) << b.rejected[1].str();
+  EXPECT_NE(b.rejected[0].str().find("SCV1A_2023-06-01_C_04.txt:"), std::string::npos);
 }
 
 // ---- the chain against the simulator's truth ----
