@@ -58,11 +58,22 @@ void BoresightMonitor::reset() {
 
 void BoresightMonitor::reanchor(TimeUs t) {
   // move the time origin of every pair's sums from anchor_ to t (s -> s - d) and scale the weights
-  // by exp(-d / tau) (f2 for the squared weights): the estimates do not change
+  // by exp(-d / tau) (its square for the squared weights): the estimates do not change
   const double d = toSeconds(t - anchor_);
   const double c = std::exp(-d / fcfg_.tau_s), c2 = c * c;
   for (Filt& F : filt_) {
     if (!F.seen) continue;
+    F.a2 = c * (F.a2 - 2.0 * d * F.a1 + d * d * F.a0);
+    F.a1 = c * (F.a1 - d * F.a0);
+    F.a0 = c * F.a0;
+    F.b2 = c2 * (F.b2 - 2.0 * d * F.b1 + d * d * F.b0);
+    F.b1 = c2 * (F.b1 - d * F.b0);
+    F.b0 = c2 * F.b0;
+    F.z1 = c * (F.z1 - d * F.z0);
+    F.z0 = c * F.z0;
+    F.wsum *= c;
+    F.w2sum *= c2;
+    if (!F.general) continue;
     F.S2 = c * (F.S2 - 2.0 * d * F.S1 + d * d * F.S0);
     F.S1 = c * (F.S1 - d * F.S0);
     F.S0 = c * F.S0;
@@ -71,52 +82,76 @@ void BoresightMonitor::reanchor(TimeUs t) {
     F.N0 = c2 * F.N0;
     F.y1 = c * (F.y1 - d * F.y0);
     F.y0 = c * F.y0;
-    F.wsum *= c;
-    F.w2sum *= c2;
   }
   anchor_ = t;
 }
 
-void BoresightMonitor::updateFilter(Filt& F, TimeUs t, double g, const Mat3& W, const Vec3& delta) {
+void BoresightMonitor::updateFilter(Filt& F, TimeUs t, double g, bool nominal, const Mat3& W, const Vec3& delta) {
   // growing weights g = exp((t - anchor) / tau) instead of decaying every sum each epoch (same
-  // estimate, a third of the work); s = t - anchor is the time in the sums
+  // estimate, less work); s = t - anchor is the time in the sums
   const double sa = toSeconds(t - anchor_);
-  const Mat3 gW = g * W;
-  const Mat3 g2W = g * gW;
-  F.S0 += gW;
-  F.S1 += sa * gW;
-  F.S2 += (sa * sa) * gW;
-  F.N0 += g2W;
-  F.N1 += sa * g2W;
-  F.N2 += (sa * sa) * g2W;
-  const Vec3 gWd = gW * delta;
-  F.y0 += gWd;
-  F.y1 += sa * gWd;
+  const double g2 = g * g;
+  if (nominal) {  // W = W1: scalar and vector sums only
+    F.a0 += g;
+    F.a1 += g * sa;
+    F.a2 += g * sa * sa;
+    F.b0 += g2;
+    F.b1 += g2 * sa;
+    F.b2 += g2 * sa * sa;
+    F.z0 += g * delta;
+    F.z1 += (g * sa) * delta;
+  } else {
+    const Mat3 gW = g * W;
+    const Mat3 g2W = g2 * W;
+    F.S0 += gW;
+    F.S1 += sa * gW;
+    F.S2 += (sa * sa) * gW;
+    F.N0 += g2W;
+    F.N1 += sa * g2W;
+    F.N2 += (sa * sa) * g2W;
+    const Vec3 gWd = gW * delta;
+    F.y0 += gWd;
+    F.y1 += sa * gWd;
+    F.general = true;
+  }
   F.wsum += g;
-  F.w2sum += g * g;
+  F.w2sum += g2;
   F.seen = true;
   F.t = t;
   F.predicted = false;
   F.dirty = true;  // solved when asked (filtered(), relativeFor()): the sums are cheap, the solve is not
 }
 
-void BoresightMonitor::solveFilter(const Filt& F) const {
+void BoresightMonitor::solveFilter(const Filt& F, const Mat3& W1) const {
   if (!F.dirty) return;
   F.dirty = false;
   bool ok = false;
+  // the full sums: nominal part (scalars times W1) plus the general part
+  Mat3 S0 = F.a0 * W1, S1 = F.a1 * W1, S2 = F.a2 * W1, N0 = F.b0 * W1, N1 = F.b1 * W1, N2 = F.b2 * W1;
+  Vec3 y0 = W1 * F.z0, y1 = W1 * F.z1;
+  if (F.general) {
+    S0 += F.S0;
+    S1 += F.S1;
+    S2 += F.S2;
+    N0 += F.N0;
+    N1 += F.N1;
+    N2 += F.N2;
+    y0 += F.y0;
+    y1 += F.y1;
+  }
   if (fcfg_.model == DeformationModel::kLinear && F.wsum * F.wsum / F.w2sum > 8.0) {
     // times relative to the pair's last epoch: s -> s - d (the level is then the estimate at F.t)
     const double d = toSeconds(F.t - anchor_);
-    const Mat3 S1 = F.S1 - d * F.S0, S2 = F.S2 - 2.0 * d * F.S1 + d * d * F.S0;
-    const Mat3 N1 = F.N1 - d * F.N0, N2 = F.N2 - 2.0 * d * F.N1 + d * d * F.N0;
+    const Mat3 T1 = S1 - d * S0, T2 = S2 - 2.0 * d * S1 + d * d * S0;
+    const Mat3 U1 = N1 - d * N0, U2 = N2 - 2.0 * d * N1 + d * d * N0;
     // [S0 S1; S1 S2] [level; rate] = [y0; y1], covariance M^-1 N M^-1 (top-left block: the level)
     Mat6 M, N;
-    M << F.S0, S1, S1, S2;
-    N << F.N0, N1, N1, N2;
+    M << S0, T1, T1, T2;
+    N << N0, U1, U1, U2;
     const Eigen::LDLT<Mat6> ldlt(M);
     if (ldlt.info() == Eigen::Success && ldlt.isPositive()) {
       Vec6 y;
-      y << F.y0, F.y1 - d * F.y0;
+      y << y0, y1 - d * y0;
       const Vec6 x = ldlt.solve(y);
       // the level's rows of M^-1 (M symmetric: its first three columns) and R N R^T
       const Eigen::Matrix<double, 6, 3> Rt = ldlt.solve(Eigen::Matrix<double, 6, 3>::Identity());
@@ -129,9 +164,9 @@ void BoresightMonitor::solveFilter(const Filt& F) const {
     }
   } else {
     Mat3 P;
-    if (invertSpd3(F.S0, P)) {
-      F.delta = P * F.y0;
-      F.cov = P * F.N0 * P;
+    if (invertSpd3(S0, P)) {
+      F.delta = P * y0;
+      F.cov = P * N0 * P;
       F.cov = 0.5 * (F.cov + F.cov.transpose()).eval();
       ok = true;
     }
@@ -194,7 +229,7 @@ Status BoresightMonitor::step(const ValidHeads& in) {
       A.dev_sum += r.iba_dev_rad;
       sigma_iba2_[p] = n_[p].dot(r.cov_delta_Si * n_[p]);
       // filtered deformation: information-weighted fit with exponential forgetting
-      updateFilter(filt_[p], in.t, g, W, r.delta_Si);
+      updateFilter(filt_[p], in.t, g, sa == 1.0 && sb == 1.0, W, r.delta_Si);
     }
   health_.record(Status::kOk);
   return Status::kOk;
@@ -228,7 +263,7 @@ FilteredDeformation BoresightMonitor::filtered(int a, int b) const {
     return d;
   }
   if (!F.seen) return d;
-  solveFilter(F);
+  solveFilter(F, W1_[static_cast<std::size_t>(pairIndex(a, b))]);
   d.valid = true;
   d.t = F.t;
   d.delta_Si = F.delta;
@@ -275,7 +310,7 @@ Status BoresightMonitor::relativeFor(int a, int b, RelativeCorrection mode, Time
         C_lh = so3Exp(F.delta_pred) * C0_[p];
         P = F.cov_pred;
       } else if (F.seen) {
-        solveFilter(F);
+        solveFilter(F, W1_[p]);
         C_lh = so3Exp(F.delta) * C0_[p];
         P = F.cov;
         const double age = t > F.t ? toSeconds(t - F.t) : 0.0;

@@ -147,7 +147,13 @@ class BoresightMonitor {
     TimeUs t = 0;
     // sums over the epochs k with weights g_k = exp((t_k - anchor) / tau), s_k = t_k - anchor (s):
     //   S_m = sum g_k s_k^m W_k, N_m = sum g_k^2 s_k^m W_k (m = 0..2), y_m = sum g_k s_k^m W_k delta_k
-    // (a common factor of the weights changes neither the estimate nor M^-1 N M^-1)
+    // (a common factor of the weights changes neither the estimate nor M^-1 N M^-1). Epochs with the
+    // nominal information W1 (sigma scales 1, almost all) go into scalar and vector sums
+    // (a_m = sum g s^m, b_m = sum g^2 s^m, z_m = sum g s^m delta; S_m = a_m W1 + ...), the others
+    // into the matrix sums below (`general` once there is one).
+    double a0 = 0, a1 = 0, a2 = 0, b0 = 0, b1 = 0, b2 = 0;
+    Vec3 z0 = Vec3::Zero(), z1 = Vec3::Zero();
+    bool general = false;
     Mat3 S0 = Mat3::Zero(), S1 = Mat3::Zero(), S2 = Mat3::Zero();
     Mat3 N0 = Mat3::Zero(), N1 = Mat3::Zero(), N2 = Mat3::Zero();
     Vec3 y0 = Vec3::Zero(), y1 = Vec3::Zero();
@@ -163,14 +169,14 @@ class BoresightMonitor {
     Mat3 cov_pred = Mat3::Zero();
   };
   std::array<Filt, kMaxPairs> filt_{};
-  void updateFilter(Filt& F, TimeUs t, double g, const Mat3& W, const Vec3& delta);
+  void updateFilter(Filt& F, TimeUs t, double g, bool nominal, const Mat3& W, const Vec3& delta);
   void reanchor(TimeUs t);
   /// Re-anchoring period of the filters' time origin, s (weights up to e^(kReanchorS / tau); the
   /// shift s -> s - d at a solve loses about (kReanchorS / tau)^2 of relative precision: fine).
   static constexpr double kReanchorS = 600.0;
   TimeUs anchor_ = 0;
   bool have_anchor_ = false;
-  void solveFilter(const Filt& F) const;
+  void solveFilter(const Filt& F, const Mat3& W1) const;
   std::array<double, kMaxPairs> sigma_iba2_{};  ///< n^T cov n, rad^2 (last epoch)
   DeformationFilterConfig fcfg_{};
   bool have_last_ = false;
