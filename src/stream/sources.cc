@@ -167,6 +167,9 @@ Source::Next LcmLogSource::next(Sample& out, Reject& why) {
     case io::LcmLogReader::Kind::Skipped:
       why = r_->decodeFailures() != undecodable ? Reject::kMalformed : Reject::kOtherChannel;
       return Next::kRejected;
+    case io::LcmLogReader::Kind::Stars:  // star vectors (STAR_VECTORS): not fed to the core by this source yet
+      why = Reject::kOtherChannel;
+      return Next::kRejected;
     case io::LcmLogReader::Kind::End:
       break;
   }

@@ -89,7 +89,9 @@ io::ProductSummary summarizeLcm(const std::string& path) {
     auto k = r.next(h, a);
     if (k == io::LcmLogReader::Kind::End) break;
     if (k == io::LcmLogReader::Kind::Skipped) continue;
-    const TimeUs t = k == io::LcmLogReader::Kind::Head ? h.utime : a.utime;
+    const TimeUs t = k == io::LcmLogReader::Kind::Head    ? h.utime
+                     : k == io::LcmLogReader::Kind::Stars ? r.stars().utime
+                                                          : a.utime;
     if (!s.has_time) s.first_time = t;
     s.has_time = true;
     s.last_time = t;
