@@ -115,7 +115,7 @@ bool loadPlatformConfig(const std::string& path, PlatformConfig& out, std::strin
   }
   try {
     if (!root.IsMap()) fail("(top level)", "expected a mapping", root);
-    checkKeys(root, "", {"platform", "heads", "crn_attitude", "crn_acc", "accelerometer"});
+    checkKeys(root, "", {"platform", "heads", "crn_attitude", "crn_acc", "accelerometer", "thermal"});
     out.platform = root["platform"] ? root["platform"].as<std::string>() : "unnamed";
     auto& p = out.pipeline;
     const YAML::Node heads = root["heads"];
@@ -172,6 +172,29 @@ bool loadPlatformConfig(const std::string& path, PlatformConfig& out, std::strin
         p.C_B_A = C;
       }
       if (acc["use"]) p.use_accelerometer = acc["use"].as<bool>();
+    }
+    if (const YAML::Node th = root["thermal"]) {
+      if (!th.IsMap()) fail("thermal", "expected a mapping", th);
+      checkKeys(th, "thermal", {"wahba_correction", "deformation_model", "tau_s", "hold_drift_arcsec_per_s"});
+      if (const YAML::Node w = th["wahba_correction"]) {
+        const std::string v = w.as<std::string>();
+        if (v == "none") p.wahba_correction = core::RelativeCorrection::kNone;
+        else if (v == "iba_one_axis") p.wahba_correction = core::RelativeCorrection::kIbaOneAxis;
+        else if (v == "filtered_three_axis") p.wahba_correction = core::RelativeCorrection::kFilteredThreeAxis;
+        else fail("thermal.wahba_correction", "expected none, iba_one_axis or filtered_three_axis, not '" + v + "'", w);
+      }
+      if (const YAML::Node m = th["deformation_model"]) {
+        const std::string v = m.as<std::string>();
+        if (v == "level") p.deformation.model = core::DeformationModel::kLevel;
+        else if (v == "linear") p.deformation.model = core::DeformationModel::kLinear;
+        else fail("thermal.deformation_model", "expected level or linear, not '" + v + "'", m);
+      }
+      p.deformation.tau_s = positive(th["tau_s"], "thermal.tau_s", p.deformation.tau_s);
+      p.deformation.hold_drift_rad_per_s =
+          num(th["hold_drift_arcsec_per_s"], "thermal.hold_drift_arcsec_per_s",
+              p.deformation.hold_drift_rad_per_s * kArcsecPerRad) * kRadPerArcsec;
+      if (p.deformation.hold_drift_rad_per_s < 0)
+        fail("thermal.hold_drift_arcsec_per_s", "must be >= 0", th["hold_drift_arcsec_per_s"]);
     }
   } catch (const ConfigError& e) {
     if (error) *error = path + ":" + (e.line > 0 ? std::to_string(e.line) + ":" : std::string()) + " " + e.what();

@@ -110,6 +110,21 @@ TEST(PlatformConfig, BadValuesNameLineAndReason) {
   EXPECT_NE(err.find("duplicate head id 1"), std::string::npos) << err;
 }
 
+TEST(PlatformConfig, ThermalSectionReachesThePipeline) {
+  const std::string base = slurp(kConfigDir + "/gracefo.yaml");
+  const std::string changed = replaced(replaced(base, "wahba_correction: filtered_three_axis", "wahba_correction: iba_one_axis"),
+                                       "tau_s: 150 ", "tau_s: 300 ");
+  io::PlatformConfig pc;
+  std::string err;
+  ASSERT_TRUE(io::loadPlatformConfig(writeTemp("thermal.yaml", changed), pc, &err)) << err;
+  EXPECT_EQ(pc.pipeline.wahba_correction, core::RelativeCorrection::kIbaOneAxis);
+  EXPECT_EQ(pc.pipeline.deformation.tau_s, 300.0);
+  const std::string bad = replaced(base, "wahba_correction: filtered_three_axis", "wahba_correction: three_axis");
+  EXPECT_FALSE(io::loadPlatformConfig(writeTemp("thermal_bad.yaml", bad), pc, &err));
+  EXPECT_NE(err.find(":" + std::to_string(lineOfText(bad, "wahba_correction: three")) + ": key 'thermal.wahba_correction'"),
+            std::string::npos) << err;
+}
+
 TEST(Scenario, OldAccelerometerKeyNamesTheNewOne) {
   const std::string base = slurp(kConfigDir + "/sim_gracefo.yaml");
   sim::Scenario sc;
