@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <random>
+#include <vector>
 
 namespace boresight::core {
 namespace {
@@ -225,6 +226,72 @@ TEST(CrnStreamTest, EvaluateAtAnyTagInsideTheHistory) {
   CrnStream<1>::Output o;
   EXPECT_EQ(s.evaluateAt(t - 10 * kUsPerSecond, o), Status::kNotReady);
   EXPECT_EQ(s.evaluateAt(t - 100 * kUsPerSecond, o), Status::kUnavailable);
+}
+
+TEST(CrnStreamTest, BridgedSamplesAreEvenlySpacedAndLinearAndFractionalStepsAreClassified) {
+  CrnConfig c = grace(2.0);
+  c.gap_policy = GapPolicy::kBridge;
+  c.max_bridge_samples = 20;
+  c.output_period_us = 500000;  // every centre sample is an output: the bridged ones show in the outputs
+  const TimeUs dt = 500000;      // tolerance: a quarter interval, 125 ms
+  // a ramp plus a parabola: the bridged samples lie on the line between their real neighbours
+  auto x = [](TimeUs t) { return 0.3 + 0.01 * toSeconds(t) + 1e-4 * std::pow(toSeconds(t) - 150.0, 2); };
+  for (int missing : {1, 2, 5, 20}) {
+    CrnStream<1> s;
+    ASSERT_EQ(s.configure(c), Status::kOk);
+    TimeUs t = 0;
+    for (int i = 0; i < 300; ++i) {
+      t += dt;
+      ASSERT_EQ(s.step(t, Eigen::Matrix<double, 1, 1>(x(t))), Status::kOk);
+    }
+    const TimeUs t_before = t;
+    const TimeUs d = (missing + 1) * dt + 60000;  // the end of the gap 60 ms off the grid (within n tol)
+    t += d;
+    ASSERT_EQ(s.step(t, Eigen::Matrix<double, 1, 1>(x(t))), Status::kGapBridged) << missing;
+    const TimeUs t_after = t;
+    // push on until the gap has passed the centre tap, collecting the centre-stamped outputs
+    std::vector<CrnStream<1>::Output> outs;
+    for (int i = 0; i < 100; ++i) {
+      t += dt;
+      ASSERT_EQ(s.step(t, Eigen::Matrix<double, 1, 1>(x(t))), Status::kOk);
+      for (int o = 0; o < s.numOutputs(); ++o) outs.push_back(s.output(o));
+    }
+    int bridged_seen = 0;
+    for (std::size_t i = 1; i < outs.size(); ++i) EXPECT_GT(outs[i].t, outs[i - 1].t);
+    for (int k = 1; k <= missing; ++k) {
+      const TimeUs tk = t_before + d * k / (missing + 1);
+      for (const auto& o : outs) {
+        if (o.t != tk) continue;
+        ++bridged_seen;
+        // the low-pass of a parabola on a uniform grid is exact up to the curvature term; the linear
+        // interpolation deviates from the parabola by at most 1e-4 (d/2)^2: both small against a
+        // wrong tag (0.01 per s)
+        const double f = static_cast<double>(k) / (missing + 1);
+        const double line = x(t_before) + f * (x(t_after) - x(t_before));
+        EXPECT_NEAR(o.y[0][0], line, 2e-4 + 1e-4 * std::pow(toSeconds(d) / 2, 2)) << missing << " " << k;
+      }
+    }
+    EXPECT_EQ(bridged_seen, missing);
+  }
+  {  // fractional steps: 1.3 intervals is a late sample (dropped), the next on-grid sample bridges its slot
+    CrnStream<1> s;
+    ASSERT_EQ(s.configure(c), Status::kOk);
+    TimeUs t = 0;
+    for (int i = 0; i < 10; ++i) ASSERT_EQ(s.step(t += dt, Eigen::Matrix<double, 1, 1>(1.0)), Status::kOk);
+    EXPECT_EQ(s.step(t + 13 * dt / 10, Eigen::Matrix<double, 1, 1>(1.0)), Status::kIrregularTime);
+    EXPECT_EQ(s.step(t + 14 * dt / 10, Eigen::Matrix<double, 1, 1>(1.0)), Status::kIrregularTime);
+    EXPECT_EQ(s.step(t + 6 * dt / 10, Eigen::Matrix<double, 1, 1>(1.0)), Status::kIrregularTime);  // early
+    EXPECT_EQ(s.step(t + 12 * dt / 10, Eigen::Matrix<double, 1, 1>(1.0)), Status::kOk);            // within tol
+    t += 12 * dt / 10;
+    EXPECT_EQ(s.step(t + 16 * dt / 10, Eigen::Matrix<double, 1, 1>(1.0)), Status::kGapBridged);  // 2 intervals
+    t += 16 * dt / 10;
+    EXPECT_EQ(s.step(t + 2 * dt, Eigen::Matrix<double, 1, 1>(1.0)), Status::kGapBridged);
+    t += 2 * dt;
+    EXPECT_EQ(s.step(t + 22 * dt, Eigen::Matrix<double, 1, 1>(1.0)), Status::kGapRestarted);  // 21 missing > 20
+    EXPECT_EQ(s.health().count(Status::kIrregularTime), 3u);
+    EXPECT_EQ(s.health().count(Status::kGapBridged), 2u);
+    EXPECT_EQ(s.health().count(Status::kGapRestarted), 1u);
+  }
 }
 
 }  // namespace

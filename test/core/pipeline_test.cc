@@ -142,5 +142,88 @@ TEST(Pipeline, AccelerometerGapLeavesOnlyThoseRowsWithoutAcc) {
   EXPECT_EQ(run.health.count(Status::kGapRestarted), 1u);
 }
 
+// Heads gap in all heads: epochs [600, 600 + gap) at 2 Hz are missing (5 min into a 10 min run).
+PipelineRun runPipelineHeadGap(int gap) {
+  Rng rng(72);
+  Truth tr;
+  PipelineConfig pc;
+  pc.heads = test::graceLikeHeads(3);
+  auto p = std::make_unique<Pipeline>();
+  EXPECT_EQ(p->configure(pc), Status::kOk);
+  PipelineRun out;
+  TimeUs ta = kT0 + 6901;
+  PipelineRow r;
+  for (int i = 0; i < 1200; ++i) {
+    const TimeUs t = kT0 + 30000 + static_cast<TimeUs>(i) * 500000;
+    while (ta <= t) {
+      p->stepAcc(ta, pc.C_B_A.transpose() * tr.alpha_B(ta));
+      ta += 100000;
+    }
+    HeadEpoch e;
+    e.t = t;
+    for (int k = 0; k < 3; ++k) {
+      const HeadConfig& h = pc.heads.head[static_cast<std::size_t>(k)];
+      HeadSample& s = e.sample[static_cast<std::size_t>(e.n++)];
+      s.head_id = h.id;
+      s.q_I_Si = test::noisyHead(rng, tr.q_I_B(t) * h.q_Si_B.conjugate(), h);  // drawn also in the gap
+    }
+    if (i >= 600 && i < 600 + gap) continue;
+    EXPECT_EQ(p->stepHeads(e), Status::kOk);
+    while (p->popRow(r)) out.rows.push_back(r);
+  }
+  p->flush();
+  while (p->popRow(r)) out.rows.push_back(r);
+  out.health = p->health();
+  return out;
+}
+
+TEST(Pipeline, HeadGapsOf1_2_5_20EpochsAndARestartKeepEveryRowWithinTheNoGapError) {
+  Truth tr;
+  const PipelineRun ref = runPipelineHeadGap(0);
+  double sw = 0, sa = 0;
+  int n = 0;
+  for (const PipelineRow& r : ref.rows) {
+    if (!r.has_rates) continue;
+    sw += (r.w_B - tr.w_B(r.t)).squaredNorm();
+    sa += (r.a_sc_B - tr.alpha_B(r.t)).squaredNorm();
+    ++n;
+  }
+  ASSERT_GT(n, 500);
+  const double ew = std::sqrt(sw / n), ea = std::sqrt(sa / n);
+  const TimeUs gap_start = kT0 + 30000 + 600 * 500000;
+  for (int gap : {1, 2, 5, 20, 40}) {  // 40 epochs (20 s) exceed the bridge limit (20): restart
+    const PipelineRun run = runPipelineHeadGap(gap);
+    const bool restart = gap > 20;
+    EXPECT_EQ(run.health.count(Status::kGapBridged), restart ? 0u : 1u) << gap;
+    EXPECT_EQ(run.health.count(Status::kGapRestarted), restart ? 1u : 0u) << gap;
+    const TimeUs gap_end = gap_start + gap * 500000;  // first epoch after the gap
+    std::size_t j = 0;
+    double worst_w = 0, worst_a = 0;
+    int compared = 0;
+    for (const PipelineRow& a : ref.rows) {
+      if (a.t >= gap_start && a.t < gap_end) continue;  // no head epoch there: no row
+      ASSERT_LT(j, run.rows.size());
+      const PipelineRow& b = run.rows[j++];
+      ASSERT_EQ(b.t, a.t) << "gap " << gap;
+      EXPECT_EQ(b.has_acc, a.has_acc);
+      const bool window_clear = a.t + 35 * kUsPerSecond < gap_start || a.t - 35 * kUsPerSecond >= gap_end;
+      if (!restart || window_clear) {
+        EXPECT_EQ(b.has_rates, a.has_rates) << "gap " << gap << " row " << toSeconds(a.t - kT0);
+      } else {
+        EXPECT_FALSE(b.has_rates);  // a restart: no rates for the rows whose window spans the gap
+      }
+      if (!(a.has_rates && b.has_rates)) continue;
+      ++compared;
+      worst_w = std::max(worst_w, (b.w_B - a.w_B).norm() / ew);
+      worst_a = std::max(worst_a, (b.a_sc_B - a.a_sc_B).norm() / ea);
+    }
+    EXPECT_EQ(j, run.rows.size());
+    EXPECT_LT(worst_w, 4.0) << gap;  // the tolerance of rates_test's RatesGaps (same reasoning)
+    EXPECT_LT(worst_a, 4.0) << gap;
+    std::printf("pipeline heads gap %2d epochs: %d rows compared, worst difference / no-gap rms error: rate %.2f, "
+                "accel %.2f\n", gap, compared, worst_w, worst_a);
+  }
+}
+
 }  // namespace
 }  // namespace boresight::core

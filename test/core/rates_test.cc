@@ -7,6 +7,9 @@
 
 #include <gtest/gtest.h>
 
+#include <map>
+#include <vector>
+
 namespace boresight::core {
 namespace {
 
@@ -169,6 +172,122 @@ TEST(Rates, AccelerometerOnTheSameTagsAndFrameAgreesWithStarSensor) {
   EXPECT_GT(compared, 250);
   EXPECT_LT(worst, 0.002);
   std::printf("star-sensor vs accelerometer angular acceleration: worst difference %.2e of the amplitude\n", worst);
+}
+
+// ---- gaps: every output row of a run with a gap against the same seed's run without it ----
+
+struct GapRun {
+  std::map<TimeUs, RateOutput> rows;  // by tag
+  Health health;
+};
+
+// Noisy samples of a smooth motion (orbit-rate pitch plus a libration), 2 Hz, 2 arcsec per axis.
+struct NoisyStream {
+  Motion m;
+  std::vector<TimeUs> t;
+  std::vector<Quat> q;
+  explicit NoisyStream(int n) {
+    Rng rng(31);
+    m.q0 = test::randomQuat(rng);
+    m.w0 = Vec3(0, -1.1e-3, 0);
+    m.n = Vec3(0.3, -0.5, 0.8).normalized();
+    m.amp = 2e-4;
+    m.f = 0.01;
+    m.t0 = 738849600LL * kUsPerSecond;
+    for (int i = 0; i < n; ++i) {
+      t.push_back(m.t0 + 30000 + static_cast<TimeUs>(i) * 500000);
+      q.push_back(m.q_I_B(t.back()) * quatExp(test::randomVec(rng, 2.0 * kRadPerArcsec)));
+    }
+  }
+};
+
+GapRun runRates(const NoisyStream& s, int gap_first, int gap_len, GapPolicy pol) {
+  CrnConfig c = attitudeCrn();
+  c.gap_policy = pol;
+  c.max_bridge_samples = 20;
+  AttitudeRates r;
+  EXPECT_EQ(r.configure(c), Status::kOk);
+  GapRun out;
+  for (std::size_t i = 0; i < s.t.size(); ++i) {
+    const int ii = static_cast<int>(i);
+    if (ii >= gap_first && ii < gap_first + gap_len) continue;
+    EXPECT_TRUE(accepted(r.step(s.t[i], s.q[i])));
+    for (int o = 0; o < r.numOutputs(); ++o) {
+      EXPECT_EQ(out.rows.count(r.output(o).t), 0u) << "a tag output twice";
+      out.rows[r.output(o).t] = r.output(o);
+    }
+  }
+  out.health = r.health();
+  return out;
+}
+
+// rms of |w - w_true| and |alpha - alpha_true| of a run
+std::pair<double, double> rmsErrors(const GapRun& run, const Motion& m) {
+  double sw = 0, sa = 0;
+  for (const auto& [t, o] : run.rows) {
+    sw += (o.w_X - m.w_B(t)).squaredNorm();
+    sa += (o.alpha_X - m.alpha_B(t)).squaredNorm();
+  }
+  const double n = static_cast<double>(run.rows.size());
+  return {std::sqrt(sw / n), std::sqrt(sa / n)};
+}
+
+// Tolerance: a bridged gap replaces the noisy samples of the gap by a noise-free line, so the
+// difference to the no-gap run is the filter's response to those samples' noise plus the line's
+// curvature error: bounded by the no-gap run's own error against truth, times kGapFactor.
+constexpr double kGapFactor = 4.0;
+
+TEST(RatesGaps, BridgedGapsOf1_2_5_20SamplesChangeNoRowBeyondTheNoGapError) {
+  const NoisyStream s(1200);
+  const GapRun ref = runRates(s, 0, 0, GapPolicy::kBridge);
+  const auto [ew, ea] = rmsErrors(ref, s.m);
+  ASSERT_GT(ref.rows.size(), 400u);
+  for (int gap : {1, 2, 5, 20}) {
+    const GapRun run = runRates(s, 600, gap, GapPolicy::kBridge);
+    EXPECT_EQ(run.health.count(Status::kGapBridged), 1u) << gap;
+    EXPECT_EQ(run.health.count(Status::kGapRestarted), 0u) << gap;
+    // every row of the no-gap run exists, on the same tag, and agrees within the tolerance
+    EXPECT_EQ(run.rows.size(), ref.rows.size()) << gap;
+    double worst_w = 0, worst_a = 0;
+    for (const auto& [t, o] : ref.rows) {
+      const auto it = run.rows.find(t);
+      ASSERT_NE(it, run.rows.end()) << "gap " << gap << ": row " << toSeconds(t - s.m.t0) << " s missing";
+      worst_w = std::max(worst_w, (it->second.w_X - o.w_X).norm() / ew);
+      worst_a = std::max(worst_a, (it->second.alpha_X - o.alpha_X).norm() / ea);
+    }
+    EXPECT_LT(worst_w, kGapFactor) << gap;
+    EXPECT_LT(worst_a, kGapFactor) << gap;
+    std::printf("bridged gap of %2d samples: worst row difference / no-gap rms error: rate %.2f, accel %.2f\n", gap,
+                worst_w, worst_a);
+  }
+}
+
+TEST(RatesGaps, RestartLeavesEveryOtherRowUnchangedAndOnlyTheWindowAroundTheGapWithout) {
+  const NoisyStream s(1200);
+  const GapRun ref = runRates(s, 0, 0, GapPolicy::kBridge);
+  const auto [ew, ea] = rmsErrors(ref, s.m);
+  for (GapPolicy pol : {GapPolicy::kRestart, GapPolicy::kBridge}) {
+    const int gap = pol == GapPolicy::kRestart ? 5 : 30;  // 30 > the bridge limit (20)
+    const GapRun run = runRates(s, 600, gap, pol);
+    EXPECT_EQ(run.health.count(Status::kGapRestarted), 1u);
+    EXPECT_EQ(run.health.count(Status::kGapBridged), 0u);
+    const TimeUs half = 70 * 500000;  // M = 70 samples at 2 Hz
+    const TimeUs last_before = s.t[599], first_after = s.t[static_cast<std::size_t>(600 + gap)];
+    int expected = 0;
+    for (const auto& [t, o] : ref.rows) {
+      const bool window_clear = t + half <= last_before || t - half >= first_after;
+      const auto it = run.rows.find(t);
+      if (!window_clear) {
+        EXPECT_EQ(it, run.rows.end()) << toSeconds(t - s.m.t0);
+        continue;
+      }
+      ++expected;
+      ASSERT_NE(it, run.rows.end()) << toSeconds(t - s.m.t0);
+      EXPECT_LT((it->second.w_X - o.w_X).norm(), 1e-3 * ew);
+      EXPECT_LT((it->second.alpha_X - o.alpha_X).norm(), 1e-3 * ea);
+    }
+    EXPECT_EQ(static_cast<int>(run.rows.size()), expected);
+  }
 }
 
 }  // namespace

@@ -18,9 +18,14 @@
 // multiple of output_period_us (the first such sample per grid point). evaluateAt(tau) evaluates the
 // filter at any tag tau inside the history, from the nearest centre sample with a second-order
 // Taylor step (tau - t_c, at most half a sampling interval) using the derivative kernels.
-// Time: samples are taken as uniform at fs; tags may jitter by up to jitter_tolerance_us. A step
-// longer than one interval plus the tolerance is a gap: it restarts the filter or, when configured
-// and at most max_bridge_samples are missing, is bridged by linear interpolation.
+// Time: samples are taken as uniform at fs; tags may jitter by up to jitter_tolerance_us (tol). A step
+// d is rounded to the nearest whole number n of intervals. n = 1 within tol: a normal sample. n <= 1
+// outside tol (early, or late by more than tol but less than half an interval): kIrregularTime, the
+// sample is dropped (a late sample's slot is then bridged by the next one). n >= 2: a gap of n-1
+// missing samples; bridged (kGapBridged) when configured, n-1 <= max_bridge_samples and d is within
+// n tol of n intervals: the missing samples get the tags t_last + d k/n (evenly spaced between the two
+// real samples) and the values interpolated linearly between them. Otherwise the filter restarts
+// (kGapRestarted: history dropped, the new sample is the first of a new window).
 #pragma once
 
 #include "boresight/core/capacities.h"
@@ -113,15 +118,22 @@ class CrnStream {
       const TimeUs d = t - last_t_;
       if (d < 0) return record(Status::kTimeBackwards);
       if (d == 0) return record(Status::kDuplicateTime);
-      if (d < dt_us_ - tol_us_) return record(Status::kIrregularTime);
-      if (d > dt_us_ + tol_us_) {
-        const TimeUs missing = (d + dt_us_ / 2) / dt_us_ - 1;
-        if (cfg_.gap_policy == GapPolicy::kBridge && missing >= 1 && missing <= cfg_.max_bridge_samples &&
-            count_ > 0) {
+      // The step in whole sampling intervals, rounded to the nearest; it is on the grid when its
+      // intervals deviate from dt by at most the tolerance each (n intervals: n * tol in all).
+      const TimeUs n = (d + dt_us_ / 2) / dt_us_;
+      const TimeUs dev = d - n * dt_us_;
+      const bool on_grid = n >= 1 && dev <= n * tol_us_ && -dev <= n * tol_us_;
+      if (n <= 1 && !on_grid) return record(Status::kIrregularTime);  // too early or too late for its slot
+      if (n > 1) {
+        const TimeUs missing = n - 1;
+        if (cfg_.gap_policy == GapPolicy::kBridge && on_grid && missing <= cfg_.max_bridge_samples && count_ > 0) {
+          // missing samples evenly spaced between the last real sample and this one, values linear
+          // between the two real neighbours
+          const TimeUs t0 = last_t_;
           const VecN x0 = last_x_;
           for (TimeUs k = 1; k <= missing; ++k) {
-            const double f = static_cast<double>(k) / static_cast<double>(missing + 1);
-            push(last_t_ + (d * k) / (missing + 1), x0 + f * (x - x0), false);
+            const double f = static_cast<double>(k) / static_cast<double>(n);
+            push(t0 + (d * k) / n, x0 + f * (x - x0), false);
           }
           result = Status::kGapBridged;
         } else {
