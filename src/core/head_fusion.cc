@@ -22,7 +22,23 @@ Status HeadFusion::configure(const HeadSetConfig& cfg) {
   return Status::kOk;
 }
 
+Status HeadFusion::setRelativeAlignment(const HeadAlignment& a) {
+  if (!configured_) return Status::kNotConfigured;
+  const std::uint32_t all = (1u << cfg_.n_heads) - 1u;
+  if (a.mask != 0 && a.mask != all) return Status::kInvalidConfig;
+  for (int k = 0; k < cfg_.n_heads; ++k)
+    if (!allFinite(a.c_B[static_cast<std::size_t>(k)])) return Status::kInvalidConfig;
+  align_ = a;
+  for (int k = 0; k < cfg_.n_heads; ++k) {
+    const auto u = static_cast<std::size_t>(k);
+    q_fuse_[u] = a.mask ? Quat(q_Si_B_[u] * quatExp(-a.c_B[u])) : q_Si_B_[u];
+  }
+  return Status::kOk;
+}
+
 void HeadFusion::reset() {
+  align_ = HeadAlignment{};
+  q_fuse_ = q_Si_B_;
   have_last_ = false;
   last_t_ = 0;
   out_ = FusedAttitude{};
@@ -39,7 +55,7 @@ Status HeadFusion::step(const ValidHeads& in) {
   for (int k = 0; k < cfg_.n_heads; ++k) {
     if (!in.has(k)) continue;
     const auto u = static_cast<std::size_t>(k);
-    q_I_B[u] = in.q_I_Si[u] * q_Si_B_[u];
+    q_I_B[u] = in.q_I_Si[u] * q_fuse_[u];
     const double sc = in.sigma_scale[u];
     W[u] = (sc == 1.0) ? W_B_[u] : Mat3(W_B_[u] / (sc * sc));
     W_sum += W[u];

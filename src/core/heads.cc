@@ -48,6 +48,8 @@ void Health::add(const Health& other) {
 Status validate(const HeadSetConfig& cfg) {
   if (cfg.n_heads < 1 || cfg.n_heads > kMaxHeads) return Status::kInvalidConfig;
   if (!(cfg.unit_norm_tolerance > 0) || !(cfg.unit_norm_tolerance < 0.1)) return Status::kInvalidConfig;
+  if (!(cfg.relative_time_constant_s >= 0) || !std::isfinite(cfg.relative_time_constant_s) || cfg.relative_min_epochs < 1)
+    return Status::kInvalidConfig;
   for (int s = 0; s < cfg.n_heads; ++s) {
     const HeadConfig& h = cfg.head[static_cast<std::size_t>(s)];
     if (h.id <= 0) return Status::kInvalidConfig;

@@ -28,7 +28,7 @@ Status Pipeline::configure(const PipelineConfig& cfg) {
     s = wahba_.configure(w);
   }
   if (s != Status::kOk) return s;
-  if (cfg.crn_attitude.output_period_us <= 0) return Status::kInvalidConfig;
+  if (cfg.crn_attitude.output_period_us <= 0 || cfg.alignment_update_epochs < 1) return Status::kInvalidConfig;
   cfg_ = cfg;
   head_dt_us_ = rates_.stream().samplingIntervalUs();
   configured_ = true;
@@ -44,6 +44,8 @@ void Pipeline::reset() {
   rates_.reset();
   acc_.reset();
   wahba_.reset();
+  handed_ = false;
+  align_countdown_ = 0;
   have_grid_ = false;
   last_grid_ = 0;
   p_head_ = n_pending_ = 0;
@@ -122,9 +124,16 @@ Status Pipeline::stepHeads(const HeadEpoch& in) {
   Status s = validator_.step(in);
   if (s != Status::kOk) return s;
   const ValidHeads& v = validator_.output();
+  means_.step(v);
+  if (cfg_.fusion_alignment == FusionAlignment::kRunningMeans && !handed_ && --align_countdown_ <= 0) {
+    HeadAlignment a;
+    if (means_.alignment(a)) {
+      fusion_.setRelativeAlignment(a);
+      align_countdown_ = cfg_.alignment_update_epochs;
+    }  // else (start-up): nominal mountings, try again at the next epoch
+  }
   s = fusion_.step(v);
   if (s != Status::kOk) return s;
-  means_.step(v);
   if (cfg_.heads.n_heads >= 2) monitor_.step(v);
   const FusedAttitude& f = fusion_.output();
 
@@ -198,6 +207,18 @@ Status Pipeline::stepStars(const StarEpoch& in) {
     }
   }
   return wahba_.step(in);
+}
+
+Status Pipeline::handMountings(const std::array<Quat, kMaxHeads>& q_Si_B) {
+  if (!configured_) {
+    health_.record(Status::kNotConfigured);
+    return Status::kNotConfigured;
+  }
+  HeadAlignment a;
+  if (!means_.alignmentFromMountings(q_Si_B, a)) return Status::kInvalidConfig;
+  const Status s = fusion_.setRelativeAlignment(a);
+  if (s == Status::kOk) handed_ = true;
+  return s;
 }
 
 void Pipeline::flush() {

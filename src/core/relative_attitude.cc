@@ -2,6 +2,9 @@
 
 #include "boresight/core/rotation.h"
 
+#include <Eigen/Cholesky>
+#include <cmath>
+
 namespace boresight::core {
 
 Status RelativeAttitudeMeans::configure(const HeadSetConfig& cfg) {
@@ -12,6 +15,10 @@ Status RelativeAttitudeMeans::configure(const HeadSetConfig& cfg) {
   for (int a = 0; a < cfg.n_heads; ++a) {
     const HeadConfig& h = cfg.head[static_cast<std::size_t>(a)];
     Sigma_[static_cast<std::size_t>(a)] = headCovariance(h.sigma_cross_rad, h.sigma_roll_rad, h.boresight_Si);
+    const Mat3 C_B_Si = h.q_Si_B.normalized().toRotationMatrix().transpose();
+    Mat3 W_Si;
+    if (!invertSpd3(Sigma_[static_cast<std::size_t>(a)], W_Si)) return Status::kInvalidConfig;
+    W_B_[static_cast<std::size_t>(a)] = C_B_Si * W_Si * C_B_Si.transpose();
   }
   for (int a = 0; a < cfg.n_heads; ++a)
     for (int b = a + 1; b < cfg.n_heads; ++b) {
@@ -36,6 +43,7 @@ Status RelativeAttitudeMeans::step(const ValidHeads& in) {
   if (const Status g = admitStep(configured_, have_last_, last_t_, in.t, health_); g != Status::kOk) return g;
   have_last_ = true;
   last_t_ = in.t;
+  const double tau = cfg_.relative_time_constant_s;
   for (int a = 0; a < cfg_.n_heads; ++a) {
     if (!in.has(a)) continue;
     const auto ua = static_cast<std::size_t>(a);
@@ -57,8 +65,19 @@ Status RelativeAttitudeMeans::step(const ValidHeads& in) {
       }
       Acc& A = acc_[p];
       if (A.n == 0) A.q_ref = B;
+      if (A.n > 0 && tau > 0) {  // exponential forgetting: lambda = exp(-dt/tau), series for small dt/tau
+        const double x = toSeconds(in.t - A.t_last) / tau;
+        const double lambda = x < 1e-3 ? 1.0 - x * (1.0 - 0.5 * x * (1.0 - x / 3.0)) : std::exp(-x);
+        A.n_w *= lambda;
+        A.W_sum *= lambda;
+        A.W_eta *= lambda;
+        A.eta_sum *= lambda;
+        A.eta_eta *= lambda;
+      }
+      A.t_last = in.t;
       const Vec3 eta = quatLog(A.q_ref.conjugate() * B);
       ++A.n;
+      A.n_w += 1.0;
       A.W_sum += W;
       A.W_eta += W * eta;
       A.eta_sum += eta;
@@ -68,7 +87,7 @@ Status RelativeAttitudeMeans::step(const ValidHeads& in) {
       if (!invertSpd3(A.W_sum, P)) continue;
       const Vec3 m = P * A.W_eta;
       if (m.norm() > kReanchorRad) {  // move the anchor to the mean (first order in m)
-        const double n = static_cast<double>(A.n);
+        const double n = A.n_w;
         A.q_ref = (A.q_ref * quatExp(m)).normalized();
         A.W_eta -= A.W_sum * m;
         A.eta_eta += -m * A.eta_sum.transpose() - A.eta_sum * m.transpose() + n * m * m.transpose();
@@ -88,7 +107,7 @@ PairMean RelativeAttitudeMeans::mean(int a, int b) const {
   Mat3 P;
   if (!invertSpd3(A.W_sum, P)) return r;
   const Vec3 m = P * A.W_eta;
-  const double n = static_cast<double>(A.n);
+  const double n = A.n_w;
   const Vec3 eta_mean = A.eta_sum / n;
   r.valid = true;
   r.n = A.n;
@@ -119,6 +138,87 @@ ClosureCheck RelativeAttitudeMeans::closure(int i, int j, int k) const {
   c.angle_rad = e_Sk.norm();
   c.chi2 = e_Sk.dot(W * e_Sk);
   return c;
+}
+
+bool RelativeAttitudeMeans::datumProject(HeadAlignment& a) const {
+  // subtract the information-weighted mean: c_k -= (sum W)^-1 sum W_k c_k (pair differences unchanged)
+  Mat3 W_all = Mat3::Zero();
+  Vec3 Wc = Vec3::Zero();
+  for (int k = 0; k < cfg_.n_heads; ++k) {
+    const auto u = static_cast<std::size_t>(k);
+    W_all += W_B_[u];
+    Wc += W_B_[u] * a.c_B[u];
+  }
+  Mat3 P;
+  if (!invertSpd3(W_all, P)) return false;
+  const Vec3 mean = P * Wc;
+  for (int k = 0; k < cfg_.n_heads; ++k) a.c_B[static_cast<std::size_t>(k)] -= mean;
+  a.mask = (1u << cfg_.n_heads) - 1u;
+  return true;
+}
+
+bool RelativeAttitudeMeans::alignment(HeadAlignment& out) const {
+  out = HeadAlignment{};
+  if (!configured_ || cfg_.n_heads < 2) return false;
+  constexpr int kN = 3 * kMaxHeads;
+  Eigen::Matrix<double, kN, kN> H = Eigen::Matrix<double, kN, kN>::Zero();
+  Eigen::Matrix<double, kN, 1> g = Eigen::Matrix<double, kN, 1>::Zero();
+  std::array<int, kMaxHeads> root{};  // union-find over the usable pairs: every head must be linked
+  for (int k = 0; k < kMaxHeads; ++k) root[static_cast<std::size_t>(k)] = k;
+  auto find = [&root](int k) {
+    while (root[static_cast<std::size_t>(k)] != k) k = root[static_cast<std::size_t>(k)];
+    return k;
+  };
+  for (int a = 0; a < cfg_.n_heads; ++a)
+    for (int b = a + 1; b < cfg_.n_heads; ++b) {
+      const Acc& A = acc_[static_cast<std::size_t>(pairIndex(a, b))];
+      if (A.n < static_cast<std::uint64_t>(cfg_.relative_min_epochs)) continue;
+      Mat3 P;
+      if (!invertSpd3(A.W_sum, P)) continue;
+      const Quat q_ab = A.q_ref * quatExp(P * A.W_eta);  // mean C_Sa_Sb
+      const Quat& q_Sa_B = cfg_.head[static_cast<std::size_t>(a)].q_Si_B;
+      const Quat& q_Sb_B = cfg_.head[static_cast<std::size_t>(b)].q_Si_B;
+      const Vec3 r = quatLog(q_Sa_B.conjugate() * q_ab * q_Sb_B);  // d_b - d_a, in B
+      const Mat3 C_B_Sb = q_Sb_B.toRotationMatrix().transpose();
+      const Mat3 Wr = C_B_Sb * A.W_sum * C_B_Sb.transpose();     // information of r in B
+      H.block<3, 3>(3 * a, 3 * a) += Wr;
+      H.block<3, 3>(3 * b, 3 * b) += Wr;
+      H.block<3, 3>(3 * a, 3 * b) -= Wr;
+      H.block<3, 3>(3 * b, 3 * a) -= Wr;
+      g.segment<3>(3 * b) += Wr * r;
+      g.segment<3>(3 * a) -= Wr * r;
+      root[static_cast<std::size_t>(find(a))] = find(b);
+    }
+  for (int k = 1; k < cfg_.n_heads; ++k)
+    if (find(k) != find(0)) return false;
+  // gauge: the pair terms see only differences; the datum term (sum W_k d_k)^T M (sum W_k d_k),
+  // M = (sum W)^-1, fixes the common part at zero without changing the differences
+  Mat3 W_all = Mat3::Zero();
+  for (int k = 0; k < cfg_.n_heads; ++k) W_all += W_B_[static_cast<std::size_t>(k)];
+  Mat3 M;
+  if (!invertSpd3(W_all, M)) return false;
+  for (int i = 0; i < cfg_.n_heads; ++i)
+    for (int j = 0; j < cfg_.n_heads; ++j)
+      H.block<3, 3>(3 * i, 3 * j) += W_B_[static_cast<std::size_t>(i)] * M * W_B_[static_cast<std::size_t>(j)];
+  for (int k = cfg_.n_heads; k < kMaxHeads; ++k) H.block<3, 3>(3 * k, 3 * k) = Mat3::Identity();
+  const Eigen::LDLT<Eigen::Matrix<double, kN, kN>> ldlt(H);
+  if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) return false;
+  const Eigen::Matrix<double, kN, 1> d = ldlt.solve(g);
+  if (!d.allFinite()) return false;
+  for (int k = 0; k < cfg_.n_heads; ++k) out.c_B[static_cast<std::size_t>(k)] = d.segment<3>(3 * k);
+  return datumProject(out);  // exact datum (removes the solver's rounding)
+}
+
+bool RelativeAttitudeMeans::alignmentFromMountings(const std::array<Quat, kMaxHeads>& q_Si_B, HeadAlignment& out) const {
+  out = HeadAlignment{};
+  if (!configured_) return false;
+  for (int k = 0; k < cfg_.n_heads; ++k) {
+    const auto u = static_cast<std::size_t>(k);
+    if (!allFinite(q_Si_B[u]) || std::abs(q_Si_B[u].norm() - 1.0) > 1e-6) return false;
+    // Exp(d_k) = C_B_Sk C_Sk_B^0: the rotation, in B, from the nominal to the handed mounting
+    out.c_B[u] = quatLog(q_Si_B[u].conjugate() * cfg_.head[u].q_Si_B.normalized());
+  }
+  return datumProject(out);
 }
 
 }  // namespace boresight::core

@@ -225,5 +225,154 @@ TEST(Pipeline, HeadGapsOf1_2_5_20EpochsAndARestartKeepEveryRowWithinTheNoGapErro
   }
 }
 
+// ---- dropout continuity: a head 45" off its ground mounting drops out for 10 minutes ----
+
+struct DropoutRun {
+  std::vector<TimeUs> t;
+  std::vector<Vec3> err_B;    // Log(q_true^-1 q_fused), rad in B
+  std::vector<Vec3> diff_B;   // against the nominal-mounting pipeline on the same input
+  std::vector<double> sigma;  // max per-axis 1-sigma of the fused attitude
+  std::vector<int> used;
+};
+
+// 40 minutes at 2 Hz; head 3's true mounting is 45" (cross-boresight) off its configured one; it is
+// blind from minute 20 to 30 (and, when early_dropout, also from epoch 60 to 100: before the start-up
+// minimum of 120 epochs). mode: the pipeline under test; a second pipeline with nominal mountings
+// gets the same input. hand: the true mountings are handed in at the start (batch solver's way).
+DropoutRun runDropout(FusionAlignment mode, bool hand, bool early_dropout, Pipeline* reuse = nullptr) {
+  Rng rng(73);
+  Truth tr;
+  PipelineConfig pc;
+  pc.heads = test::graceLikeHeads(3);
+  pc.use_accelerometer = false;
+  pc.fusion_alignment = mode;
+  std::array<Quat, kMaxHeads> q_true = filled<Quat, kMaxHeads>(Quat::Identity());
+  for (int k = 0; k < 3; ++k) q_true[static_cast<std::size_t>(k)] = pc.heads.head[static_cast<std::size_t>(k)].q_Si_B;
+  const Vec3 delta_S3 = 45.0 * kRadPerArcsec * Vec3(1, 1, 0).normalized();  // about cross-boresight axes
+  q_true[2] = (quatExp(delta_S3) * q_true[2]).normalized();
+  std::unique_ptr<Pipeline> own;
+  Pipeline* p = reuse;
+  if (!p) {
+    own = std::make_unique<Pipeline>();
+    p = own.get();
+    EXPECT_EQ(p->configure(pc), Status::kOk);
+  }
+  PipelineConfig pn = pc;
+  pn.fusion_alignment = FusionAlignment::kNominal;
+  auto nominal = std::make_unique<Pipeline>();
+  EXPECT_EQ(nominal->configure(pn), Status::kOk);
+  if (hand) {
+    EXPECT_EQ(p->handMountings(q_true), Status::kOk);
+  }
+  DropoutRun out;
+  for (int i = 0; i < 4800; ++i) {
+    const TimeUs t = kT0 + 30000 + static_cast<TimeUs>(i) * 500000;
+    HeadEpoch e;
+    e.t = t;
+    const bool blind = (i >= 2400 && i < 3600) || (early_dropout && i >= 60 && i < 100);
+    for (int k = 0; k < 3; ++k) {
+      const HeadConfig& h = pc.heads.head[static_cast<std::size_t>(k)];
+      const Quat q = tr.q_I_B(t) * q_true[static_cast<std::size_t>(k)].conjugate();
+      const Quat qn = test::noisyHead(rng, q, h);
+      if (k == 2 && blind) continue;
+      HeadSample& sm = e.sample[static_cast<std::size_t>(e.n++)];
+      sm.head_id = h.id;
+      sm.q_I_Si = qn;
+    }
+    EXPECT_EQ(p->stepHeads(e), Status::kOk);
+    EXPECT_EQ(nominal->stepHeads(e), Status::kOk);
+    const FusedAttitude& f = p->fusion().output();
+    out.t.push_back(t);
+    out.err_B.push_back(quatLog(tr.q_I_B(t).conjugate() * f.q_I_B));
+    out.diff_B.push_back(quatLog(nominal->fusion().output().q_I_B.conjugate() * f.q_I_B));
+    out.sigma.push_back(std::sqrt(f.P_B.diagonal().maxCoeff()));
+    out.used.push_back(f.heads_used);
+    PipelineRow r;
+    while (p->popRow(r)) {
+    }
+    while (nominal->popRow(r)) {
+    }
+  }
+  return out;
+}
+
+Vec3 meanOver(const DropoutRun& r, int from, int to) {
+  Vec3 m = Vec3::Zero();
+  for (int i = from; i < to; ++i) m += r.err_B[static_cast<std::size_t>(i)];
+  return m / (to - from);
+}
+
+TEST(Pipeline, HeadDropoutDoesNotMoveTheFusedAttitude) {
+  const double as = kRadPerArcsec;
+  for (bool hand : {false, true}) {
+    const DropoutRun run = runDropout(FusionAlignment::kRunningMeans, hand, false);
+    const Vec3 before = meanOver(run, 1200, 2400), during = meanOver(run, 2400, 3600), after = meanOver(run, 3600, 4800);
+    // the per-epoch 1-sigma of the fused attitude (all heads), per axis, from the model covariance
+    PipelineConfig pc;
+    pc.heads = test::graceLikeHeads(3);
+    HeadFusion hf;
+    ASSERT_EQ(hf.configure(pc.heads), Status::kOk);
+    Mat3 W = Mat3::Zero();
+    for (int k = 0; k < 3; ++k) W += hf.information_B(k);
+    const Vec3 sigma = Mat3(W.inverse()).diagonal().cwiseSqrt();
+    for (int a = 0; a < 3; ++a) {
+      EXPECT_LT(std::abs(during[a] - before[a]), sigma[a]) << "axis " << a << (hand ? " handed" : " running");
+      EXPECT_LT(std::abs(after[a] - before[a]), sigma[a]) << "axis " << a;
+    }
+    std::printf("%s alignment: fused mean jump at the dropout %.2f\" (per-axis 1-sigma %.1f/%.1f/%.1f\"), at the "
+                "return %.2f\"\n", hand ? "handed" : "running-mean", (during - before).norm() / as, sigma[0] / as,
+                sigma[1] / as, sigma[2] / as, (after - before).norm() / as);
+    // the datum: with all heads present the fused attitude is where the nominal mountings put it
+    double worst = 0;
+    for (std::size_t i = 0; i < run.t.size(); ++i)
+      if (run.used[i] == 3) worst = std::max(worst, run.diff_B[i].norm() / run.sigma[i]);
+    EXPECT_LT(worst, 0.05);
+    std::printf("  all heads present: largest |aligned - nominal| %.3f of the fused 1-sigma\n", worst);
+  }
+  // the same test against the nominal mountings only (the seed's fusion): the jump is visible
+  const DropoutRun nominal = runDropout(FusionAlignment::kNominal, false, false);
+  const Vec3 jump = meanOver(nominal, 2400, 3600) - meanOver(nominal, 1200, 2400);
+  std::printf("nominal mountings: fused mean jump at the dropout %.2f\"\n", jump.norm() / as);
+  EXPECT_GT(jump.norm(), 5 * as);
+}
+
+TEST(Pipeline, AlignmentAtStartUpDropoutAndAfterReset) {
+  // start-up: nominal mountings until every pair has relative_min_epochs (120); a dropout inside that
+  // time is fused with the nominal mountings (it moves, as in the seed); everything stays finite and,
+  // with all heads present, at the nominal fusion
+  const DropoutRun run = runDropout(FusionAlignment::kRunningMeans, false, true);
+  for (std::size_t i = 0; i < run.t.size(); ++i) {
+    ASSERT_TRUE(run.err_B[i].allFinite()) << i;
+    if (i < 119) {
+      EXPECT_EQ(run.diff_B[i].norm(), 0.0) << i;  // nominal before the minimum data
+    }
+    if (run.used[i] == 3) {
+      EXPECT_LT(run.diff_B[i].norm(), 0.05 * run.sigma[i]) << i;
+    }
+  }
+  EXPECT_LT(run.err_B[3000].norm(), 60 * kRadPerArcsec);
+  // reset: the alignment is dropped with the means, and a rerun gives the same result as a new pipeline
+  PipelineConfig pc;
+  pc.heads = test::graceLikeHeads(3);
+  pc.use_accelerometer = false;
+  auto p = std::make_unique<Pipeline>();
+  ASSERT_EQ(p->configure(pc), Status::kOk);
+  const DropoutRun first = runDropout(FusionAlignment::kRunningMeans, false, false, p.get());
+  EXPECT_NE(p->fusion().relativeAlignment().mask, 0u);
+  p->reset();
+  EXPECT_EQ(p->fusion().relativeAlignment().mask, 0u);
+  EXPECT_FALSE(p->means().mean(0, 1).valid);
+  const DropoutRun second = runDropout(FusionAlignment::kRunningMeans, false, false, p.get());
+  for (std::size_t i = 0; i < first.t.size(); ++i) ASSERT_EQ(first.err_B[i], second.err_B[i]) << i;
+  // bad handed mountings are refused and change nothing
+  std::array<Quat, kMaxHeads> bad = filled<Quat, kMaxHeads>(Quat(2, 0, 0, 0));
+  EXPECT_EQ(p->handMountings(bad), Status::kInvalidConfig);
+  HeadAlignment partial;
+  partial.mask = 1u;
+  HeadFusion hf;
+  ASSERT_EQ(hf.configure(pc.heads), Status::kOk);
+  EXPECT_EQ(hf.setRelativeAlignment(partial), Status::kInvalidConfig);
+}
+
 }  // namespace
 }  // namespace boresight::core

@@ -7,6 +7,10 @@
 // small-angle differences): to first order dx = (sum W_i)^-1 sum W_i Log(C_ref^T C_I_B_i); the code
 // takes two Gauss-Newton steps with the exact SO(3) Jacobian from the first head. P_B = (sum W_i)^-1.
 // Any subset of the heads may be present; a head dropping out changes the weights, not the frame.
+// Relative alignment: with setRelativeAlignment(a) head k is fused as C_I_Sk C_Sk_B^0 Exp(-c_k) (the
+// in-flight relative alignment, see HeadAlignment; datum sum W_k c_k = 0): heads that disagree with
+// their ground mountings then agree with each other, and a dropout leaves the fused attitude where it
+// was. Without it (or after reset()) the nominal mountings are used.
 #pragma once
 
 #include "boresight/core/heads.h"
@@ -30,11 +34,17 @@ class HeadFusion {
   const Health& health() const { return health_; }
   /// Information matrix (rad^-2, in B) of one head at unit sigma_scale.
   const Mat3& information_B(int slot) const { return W_B_[static_cast<std::size_t>(slot)]; }
+  /// Sets the relative alignment used from the next step on (allocation-free; a.mask == 0: nominal).
+  /// kInvalidConfig (and no change) when a.mask does not cover every configured head or c is not finite.
+  Status setRelativeAlignment(const HeadAlignment& a);
+  const HeadAlignment& relativeAlignment() const { return align_; }
 
  private:
   HeadSetConfig cfg_{};
   bool configured_ = false;
-  std::array<Quat, kMaxHeads> q_Si_B_ = filled<Quat, kMaxHeads>(Quat::Identity());
+  std::array<Quat, kMaxHeads> q_Si_B_ = filled<Quat, kMaxHeads>(Quat::Identity());   ///< nominal
+  std::array<Quat, kMaxHeads> q_fuse_ = filled<Quat, kMaxHeads>(Quat::Identity());   ///< nominal Exp(-c_k)
+  HeadAlignment align_{};
   std::array<Mat3, kMaxHeads> W_B_ = filled<Mat3, kMaxHeads>(Mat3::Zero());
   bool have_last_ = false;
   TimeUs last_t_ = 0;

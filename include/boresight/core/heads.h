@@ -31,6 +31,21 @@ struct HeadSetConfig {
   int n_heads = 0;                         ///< 1..kMaxHeads
   std::array<HeadConfig, kMaxHeads> head{};  ///< slots 0..n_heads-1
   double unit_norm_tolerance = 1e-5;       ///< reject a quaternion when | |q| - 1 | exceeds this (-)
+  /// Time constant of the exponential forgetting of the running relative means, s (0: no forgetting).
+  /// Several orbits: the in-flight relative alignment follows slow (seasonal, beta-angle) changes.
+  double relative_time_constant_s = 3 * 5400.0;
+  /// Epochs every head pair needs before the running means align the fusion (start-up: nominal).
+  int relative_min_epochs = 120;
+};
+
+/// In-flight relative alignment of the heads, as corrections c_k (rad, in B) to the nominal mountings:
+/// head k enters the fusion as C_I_Sk C_Sk_B^0 Exp(-c_k). The datum: sum_k W_k c_k = 0 over all
+/// configured heads (W_k: head k's information in B at unit sigma scale), so with every head present
+/// the fused attitude is where the nominal mountings put it, and a head's dropout does not move it.
+/// mask == 0: no correction (nominal mountings).
+struct HeadAlignment {
+  std::uint32_t mask = 0;  ///< slots with a correction (all configured heads, or none)
+  std::array<Vec3, kMaxHeads> c_B = filled<Vec3, kMaxHeads>(Vec3::Zero());
 };
 
 /// Checks a HeadSetConfig (ids unique and positive, unit boresights and mountings, sigmas > 0).

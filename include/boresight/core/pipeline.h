@@ -26,6 +26,12 @@
 
 namespace boresight::core {
 
+/// Which head alignment the fusion uses.
+enum class FusionAlignment : std::uint8_t {
+  kNominal = 0,       ///< the configured (ground) mountings only
+  kRunningMeans = 1,  ///< the running relative means (forgetting: heads.relative_time_constant_s)
+};
+
 struct PipelineConfig {
   HeadSetConfig heads{};
   /// CRN of the fused attitude: fs_hz = head epoch rate (GRACE-FO 2 Hz); output_period_us = row period.
@@ -38,6 +44,8 @@ struct PipelineConfig {
   /// Relative matrices for the star-vector solution and the deformation filter behind them (thermal.h).
   RelativeCorrection wahba_correction = RelativeCorrection::kFilteredThreeAxis;
   DeformationFilterConfig deformation{};
+  FusionAlignment fusion_alignment = FusionAlignment::kRunningMeans;
+  int alignment_update_epochs = 64; ///< head epochs between alignment updates from the running means
 };
 
 struct PipelineRow {
@@ -61,6 +69,9 @@ class Pipeline {
   Status stepHeads(const HeadEpoch& in);
   Status stepAcc(TimeUs t, const Vec3& a_A);
   Status stepStars(const StarEpoch& in);
+  /// A full mounting set (e.g. the batch solver's, slots 0..n_heads-1) for the fusion from the next head
+  /// epoch on, with the datum of HeadAlignment; replaces the running means until reset(). No allocation.
+  Status handMountings(const std::array<Quat, kMaxHeads>& q_Si_B);
   /// End of data: every pending row is completed with what is available.
   void flush();
   bool popRow(PipelineRow& out);
@@ -95,6 +106,8 @@ class Pipeline {
   AccAngularFilter acc_{};
   MultiHeadWahba wahba_{};
   TimeUs head_dt_us_ = 0;
+  bool handed_ = false;      ///< a mounting set was handed in: the running means no longer align
+  int align_countdown_ = 0;  ///< head epochs to the next alignment update
   TimeUs last_grid_ = 0;
   bool have_grid_ = false;
   std::array<Pending, kMaxPendingRows> pending_{};

@@ -8,6 +8,12 @@
 // mean = B_ref Exp((sum W)^-1 sum W eta_k), eta_k = Log(B_ref^T B_k); the anchor moves to the mean
 // (first-order re-anchoring of the sums) when they drift apart by more than kReanchorRad.
 // Covariance of the mean: (sum W)^-1 (model). Spread: the sample covariance of eta (data).
+// Forgetting: every sum is multiplied by exp(-dt/tau) before an epoch is added (tau =
+// HeadSetConfig::relative_time_constant_s; 0 keeps everything), so the means follow slow changes; the
+// model covariance (sum lambda^k W)^-1 is then an upper bound of the mean's true covariance.
+// Alignment (for the fusion): from the pair means, r_ab = Log(C_B_Sa^0 B_ab C_Sb_B^0) = d_b - d_a to
+// first order, d_k the mounting error of head k in B; the information-weighted least squares over all
+// pairs with the datum sum_k W_k d_k = 0 gives the corrections c_k = d_k (see HeadAlignment).
 // Closure (three heads i<j<k): Log(B_ik^T B_ij B_jk) should vanish. At epochs where all three heads
 // are present the head noise cancels from the closure to first order, so the chi2 below (which
 // treats the three means as independent) is an upper bound of the noise: a closure error well
@@ -45,11 +51,18 @@ class RelativeAttitudeMeans {
   PairMean mean(int a, int b) const;
   /// Closure of slots i < j < k (all three pair means must exist).
   ClosureCheck closure(int i, int j, int k) const;
+  /// Relative alignment of all heads from the current means (datum: sum_k W_k c_k = 0). false (and
+  /// out.mask = 0) until every head is linked to the others through pairs with relative_min_epochs.
+  bool alignment(HeadAlignment& out) const;
+  /// Corrections from a full set of mountings (e.g. the batch solver's), with the same datum.
+  bool alignmentFromMountings(const std::array<Quat, kMaxHeads>& q_Si_B, HeadAlignment& out) const;
   const Health& health() const { return health_; }
 
  private:
   struct Acc {
-    std::uint64_t n = 0;
+    std::uint64_t n = 0;    ///< epochs added
+    double n_w = 0;         ///< forgotten count (sum of lambda^k)
+    TimeUs t_last = 0;
     Quat q_ref = Quat::Identity();
     Mat3 W_sum = Mat3::Zero();
     Vec3 W_eta = Vec3::Zero();
@@ -61,7 +74,9 @@ class RelativeAttitudeMeans {
   std::array<Mat3, kMaxHeads> Sigma_ = filled<Mat3, kMaxHeads>(Mat3::Zero());           ///< head covariance in its own frame
   std::array<Mat3, kMaxPairs> C_Sj_Si0_ = filled<Mat3, kMaxPairs>(Mat3::Zero());         ///< ground relative matrices
   std::array<Mat3, kMaxPairs> W1_ = filled<Mat3, kMaxPairs>(Mat3::Zero());               ///< pair information at unit sigma scales
+  std::array<Mat3, kMaxHeads> W_B_ = filled<Mat3, kMaxHeads>(Mat3::Zero());             ///< head information in B
   std::array<Acc, kMaxPairs> acc_{};
+  bool datumProject(HeadAlignment& a) const;
   bool have_last_ = false;
   TimeUs last_t_ = 0;
   Health health_{};
