@@ -6,6 +6,12 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
+
+#ifdef BORESIGHT_HAVE_CERES
+#include <ceres/jet.h>
+#endif
+
 namespace boresight::core {
 namespace {
 
@@ -200,6 +206,118 @@ TEST(FusionMonteCarlo, NaiveQuaternionAveragingIsWorse) {
   std::printf("RMS ratio naive/fused per axis: %.2f %.2f %.2f\n", std::sqrt(vn[0] / vf[0]), std::sqrt(vn[1] / vf[1]),
               std::sqrt(vn[2] / vf[2]));
 }
+
+// ---- the templated rotation functions (rotation_t.h) with double against Eigen's own ----
+
+TEST(RotationTemplated, AgreesWithEigenOverRandomRotationsIncludingTinyAngles) {
+  Rng rng(11);
+  std::uniform_real_distribution<double> ang(0.0, 3.14159);
+  std::uniform_real_distribution<double> lg(-14.0, -1.0);
+  int tiny = 0;
+  for (int i = 0; i < kRuns; ++i) {
+    // half the angles anywhere in (0, pi), half log-uniform in (1e-14, 0.1) rad: the series branches
+    const double th = (i % 2 == 0) ? ang(rng) : std::pow(10.0, lg(rng));
+    tiny += th < 1e-2 ? 1 : 0;
+    const Vec3 axis = test::randomUnit(rng);
+    const Vec3 phi = th * axis;
+    const Quat ref(Eigen::AngleAxisd(th, axis));  // Eigen's exponential
+    const double p[3] = {phi.x(), phi.y(), phi.z()};
+    double q[4];
+    rot::quatExp(p, q);
+    const Quat qt(q[0], q[1], q[2], q[3]);
+    ASSERT_LT((qt.coeffs() - ref.coeffs()).norm(), 2e-16 * 8) << "Exp, angle " << th;
+    // Log against Eigen's AngleAxis (angle times axis), relative to the angle
+    double back[3];
+    const double qa[4] = {ref.w(), ref.x(), ref.y(), ref.z()};
+    rot::quatLog(qa, back);
+    const Eigen::AngleAxisd aa(ref);
+    const Vec3 phi_ref = aa.angle() * aa.axis();
+    ASSERT_LT((Vec3(back[0], back[1], back[2]) - phi_ref).norm(), 1e-15 + 1e-13 * th) << "Log, angle " << th;
+    ASSERT_LT((Vec3(back[0], back[1], back[2]) - phi).norm(), 1e-15 + 1e-13 * th);
+    // product, rotation of a vector, quaternion <-> matrix
+    const Quat a = test::randomQuat(rng), b = test::randomQuat(rng);
+    const double aw[4] = {a.w(), a.x(), a.y(), a.z()}, bw[4] = {b.w(), b.x(), b.y(), b.z()};
+    double ab[4];
+    rot::quatProduct(aw, bw, ab);
+    const Quat abe = a * b;
+    ASSERT_LT((Quat(ab[0], ab[1], ab[2], ab[3]).coeffs() - abe.coeffs()).norm(), 1e-15);
+    const Vec3 v = test::randomVec(rng, 1.0);
+    const double vv[3] = {v.x(), v.y(), v.z()};
+    double rv[3];
+    rot::quatRotate(aw, vv, rv);
+    ASSERT_LT((Vec3(rv[0], rv[1], rv[2]) - a * v).norm(), 1e-14);
+    double R[9];
+    rot::quatToMatrix(aw, R);
+    const Mat3 Re = a.toRotationMatrix();
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) ASSERT_NEAR(R[3 * r + c], Re(r, c), 1e-15);
+    double qm[4];
+    rot::matrixToQuat(R, qm);
+    const Quat qme(qm[0], qm[1], qm[2], qm[3]);
+    ASSERT_LT(std::min((qme.coeffs() - a.coeffs()).norm(), (qme.coeffs() + a.coeffs()).norm()), 1e-14);
+    ASSERT_GE(qm[0], 0.0);
+  }
+  EXPECT_GT(tiny, kRuns / 3);
+  // the core's Eigen wrappers are these functions
+  const Vec3 phi(1e-9, -2e-9, 3e-10);
+  EXPECT_LT((quatLog(quatExp(phi)) - phi).norm(), 1e-24);
+  // a rotation by 180 degrees through the matrix path
+  double R[9] = {1, 0, 0, 0, -1, 0, 0, 0, -1}, q[4];
+  rot::matrixToQuat(R, q);
+  EXPECT_NEAR(std::abs(q[1]), 1.0, 1e-15);
+}
+
+#ifdef BORESIGHT_HAVE_CERES
+TEST(RotationTemplated, JetDerivativesOfExpAndLogAreFiniteAtZeroAndMatchFiniteDifferences) {
+  using J = ceres::Jet<double, 4>;
+  Rng rng(12);
+  // points: exactly zero, tiny, at the series/closed-form switch, and ordinary
+  for (double th : {0.0, 1e-12, 1e-6, 0.00999, 0.01001, 0.3, 2.0}) {
+    const Vec3 axis = th == 0.0 ? Vec3::UnitX() : test::randomUnit(rng);
+    const Vec3 phi0 = th * axis;
+    // Exp: d q / d phi
+    J p[3];
+    for (int k = 0; k < 3; ++k) p[k] = J(phi0[k], k);
+    J q[4];
+    rot::quatExp(p, q);
+    const double h = 1e-7;
+    for (int k = 0; k < 3; ++k) {
+      double pp[3] = {phi0[0], phi0[1], phi0[2]}, pm[3] = {phi0[0], phi0[1], phi0[2]}, qp[4], qm[4];
+      pp[k] += h;
+      pm[k] -= h;
+      rot::quatExp(pp, qp);
+      rot::quatExp(pm, qm);
+      for (int c = 0; c < 4; ++c) {
+        ASSERT_TRUE(std::isfinite(q[c].v[k]));
+        EXPECT_NEAR(q[c].v[k], (qp[c] - qm[c]) / (2 * h), 1e-7) << "Exp angle " << th << " d q" << c << "/d phi" << k;
+      }
+    }
+    // Log: d phi / d q at q = Exp(phi0) (4 inputs: w, x, y, z)
+    double q0[4];
+    rot::quatExp(&phi0[0], q0);
+    J qj[4];
+    for (int c = 0; c < 4; ++c) qj[c] = J(q0[c], c);
+    J l[3];
+    rot::quatLog(qj, l);
+    for (int c = 0; c < 4; ++c) {
+      double qp[4] = {q0[0], q0[1], q0[2], q0[3]}, qm[4] = {q0[0], q0[1], q0[2], q0[3]}, lp[3], lm[3];
+      qp[c] += h;
+      qm[c] -= h;
+      rot::quatLog(qp, lp);
+      rot::quatLog(qm, lm);
+      for (int k = 0; k < 3; ++k) {
+        ASSERT_TRUE(std::isfinite(l[k].v[c]));
+        EXPECT_NEAR(l[k].v[c], (lp[k] - lm[k]) / (2 * h), 1e-6) << "Log angle " << th << " d phi" << k << "/d q" << c;
+      }
+    }
+  }
+  // at zero the derivative of Exp is 1/2 on the vector part, of Log 2 on the vector part
+  J z[3] = {J(0.0, 0), J(0.0, 1), J(0.0, 2)}, qz[4];
+  rot::quatExp(z, qz);
+  EXPECT_DOUBLE_EQ(qz[1].v[0], 0.5);
+  EXPECT_DOUBLE_EQ(qz[0].v[0], 0.0);
+}
+#endif
 
 }  // namespace
 }  // namespace boresight::core

@@ -4,6 +4,7 @@
 #pragma once
 
 #include "boresight/core/conventions.h"
+#include "boresight/core/rotation_t.h"
 
 #include <array>
 #include <cmath>
@@ -28,35 +29,21 @@ inline Mat3 skew(const Vec3& a) {
   return m;
 }
 
-/// Exp: rotation vector (rad) -> unit quaternion.
+/// Exp: rotation vector (rad) -> unit quaternion (rot::quatExp of rotation_t.h).
 inline Quat quatExp(const Vec3& phi) {
-  const double t2 = phi.squaredNorm();
-  if (t2 < 1e-4) {  // |phi| < 0.01 rad: series, truncation below 1e-15 relative
-    const double s = 0.5 * (1.0 - t2 / 24.0 * (1.0 - t2 / 80.0));  // sin(th/2)/th
-    const double c = 1.0 - t2 / 8.0 * (1.0 - t2 / 48.0);           // cos(th/2)
-    Quat q(c, s * phi.x(), s * phi.y(), s * phi.z());
-    q.normalize();
-    return q;
-  }
-  const double th = std::sqrt(t2);
-  const double s = std::sin(0.5 * th) / th;
-  return Quat(std::cos(0.5 * th), s * phi.x(), s * phi.y(), s * phi.z());
+  const double p[3] = {phi.x(), phi.y(), phi.z()};
+  double q[4];
+  rot::quatExp(p, q);
+  return Quat(q[0], q[1], q[2], q[3]);
 }
 
-/// Log: unit quaternion -> rotation vector (rad) of the shortest rotation (q and -q give the same).
+/// Log: unit quaternion -> rotation vector (rad) of the shortest rotation (q and -q give the same)
+/// (rot::quatLog of rotation_t.h).
 inline Vec3 quatLog(const Quat& q) {
-  double w = q.w();
-  Vec3 v = q.vec();
-  if (w < 0) {
-    w = -w;
-    v = -v;
-  }
-  const double n = v.norm();
-  if (n < 1e-2 * w) {  // 2 atan(x)/n with x = n/w < 0.01: series, truncation below 1e-15 relative
-    const double x2 = (n / w) * (n / w);
-    return (2.0 / w * (1.0 - x2 / 3.0 + x2 * x2 / 5.0)) * v;
-  }
-  return (2.0 * std::atan2(n, w) / n) * v;
+  const double a[4] = {q.w(), q.x(), q.y(), q.z()};
+  double phi[3];
+  rot::quatLog(a, phi);
+  return Vec3(phi[0], phi[1], phi[2]);
 }
 
 inline Mat3 so3Exp(const Vec3& phi) { return quatExp(phi).toRotationMatrix(); }

@@ -7,32 +7,15 @@
 #pragma once
 
 #include <boresight/core/conventions.h>
+#include <boresight/core/rotation.h>
 
 #include <cmath>
 
 namespace boresight::model {
 
-inline Quat quatExp(const Vec3& phi) {
-  const double a = phi.norm();
-  if (a < 1e-8) {
-    // Taylor branch: keeps the result unit to double precision for tiny angles.
-    Quat q(1.0 - a * a / 8.0, 0.5 * phi.x(), 0.5 * phi.y(), 0.5 * phi.z());
-    q.normalize();
-    return q;
-  }
-  const double s = std::sin(0.5 * a) / a;
-  return Quat(std::cos(0.5 * a), s * phi.x(), s * phi.y(), s * phi.z());
-}
-
-inline Vec3 quatLog(const Quat& q_in) {
-  Quat q = q_in;
-  if (q.w() < 0) q.coeffs() = -q.coeffs();
-  const Vec3 v = q.vec();
-  const double sn = v.norm();
-  if (sn < 1e-12) return 2.0 * v;
-  const double a = 2.0 * std::atan2(sn, q.w());
-  return v * (a / sn);
-}
+// The one Exp/Log (templated in core/rotation_t.h, wrapped for Eigen types in core/rotation.h).
+using core::quatExp;
+using core::quatLog;
 
 /// Orthonormal axes (e1, e2, b) of a head frame with boresight b: e1, e2 span the cross-boresight
 /// plane. Deterministic: e1 is the unit vector of b x (the Si axis least aligned with b).
