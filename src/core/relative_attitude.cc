@@ -34,6 +34,7 @@ Status RelativeAttitudeMeans::configure(const HeadSetConfig& cfg) {
 
 void RelativeAttitudeMeans::reset() {
   acc_.fill(Acc{});
+  reanchors_ = 0;
   have_last_ = false;
   last_t_ = 0;
   health_.clear();
@@ -92,6 +93,7 @@ Status RelativeAttitudeMeans::step(const ValidHeads& in) {
         A.W_eta -= A.W_sum * m;
         A.eta_eta += -m * A.eta_sum.transpose() - A.eta_sum * m.transpose() + n * m * m.transpose();
         A.eta_sum -= n * m;
+        ++reanchors_;
       }
     }
   }

@@ -255,5 +255,86 @@ TEST(AllocGuard, EveryComponentStepIsAllocationFree) {
   EXPECT_GT(pipe->health().count(Status::kGapBridged), 0u);
 }
 
+TEST(AllocGuard, ConfigureReanchoringAlignmentAndRestartAreAllocationFree) {
+  Rng rng(52);
+  const HeadSetConfig heads = test::graceLikeHeads(3);
+  auto validator = std::make_unique<HeadInputValidator>();
+  auto fusion = std::make_unique<HeadFusion>();
+  auto means = std::make_unique<RelativeAttitudeMeans>();
+  auto monitor = std::make_unique<BoresightMonitor>();
+  auto rates = std::make_unique<AttitudeRates>();
+  auto acc = std::make_unique<AccAngularFilter>();
+  auto crn = std::make_unique<CrnStream<4>>();
+  auto wahba = std::make_unique<MultiHeadWahba>();
+  auto pipe = std::make_unique<Pipeline>();
+  PipelineConfig pc;
+  pc.heads = heads;
+  pc.alignment_update_epochs = 8;
+  WahbaConfig wc;
+  wc.heads = heads;
+  CrnConfig cr;  // restart policy for the plain stream
+  cr.fs_hz = 2.0;
+  cr.gap_policy = GapPolicy::kRestart;
+  CrnConfig cb;
+  cb.fs_hz = 10.0;
+  // head 2 turns away from its mounting by 8 mrad over the run: the pair means re-anchor
+  constexpr int kEpochs = 2000;
+  std::vector<HeadEpoch> epochs;
+  for (int i = 0; i < kEpochs; ++i) {
+    const TimeUs t = 1000 + static_cast<TimeUs>(i) * 500000 + (i >= 1000 ? 60 * kUsPerSecond : 0);  // a 60 s gap
+    const Quat q = quatExp(Vec3(1e-3, 2e-3, -1.1e-3 * toSeconds(t)));
+    HeadEpoch e = epochOf(rng, heads, q, t);
+    e.sample[1].q_I_Si = (e.sample[1].q_I_Si * quatExp(Vec3(8e-3 * i / kEpochs, 0, 0))).normalized();
+    epochs.push_back(e);
+  }
+  std::array<Quat, kMaxHeads> mountings = filled<Quat, kMaxHeads>(Quat::Identity());
+  for (int k = 0; k < 3; ++k) mountings[static_cast<std::size_t>(k)] = heads.head[static_cast<std::size_t>(k)].q_Si_B;
+
+  long allocs = 0;
+  std::uint64_t reanchors = 0, restarts = 0;
+  bool aligned = false;
+  {
+    NoHeap guard;
+    // configure() of every component (allowed to allocate by the contract; none does)
+    bool ok = validator->configure(heads) == Status::kOk && fusion->configure(heads) == Status::kOk &&
+              means->configure(heads) == Status::kOk && monitor->configure(heads) == Status::kOk &&
+              rates->configure(cr) == Status::kOk && acc->configure(cb, accToBodyDefault()) == Status::kOk &&
+              crn->configure(cr) == Status::kOk && wahba->configure(wc) == Status::kOk &&
+              pipe->configure(pc) == Status::kOk;
+    for (int i = 0; i < kEpochs && ok; ++i) {
+      const HeadEpoch& e = epochs[static_cast<std::size_t>(i)];
+      if (validator->step(e) != Status::kOk) continue;
+      const ValidHeads& v = validator->output();
+      means->step(v);
+      HeadAlignment a;
+      if (i % 16 == 0 && means->alignment(a)) fusion->setRelativeAlignment(a);
+      fusion->step(v);
+      rates->step(e.t, fusion->output().q_I_B);  // the 60 s gap restarts (restart policy)
+      const Quat& q = fusion->output().q_I_B;
+      crn->step(e.t, Eigen::Vector4d(q.w(), q.x(), q.y(), q.z()));
+      pipe->stepAcc(e.t - 100000, Vec3(1e-7, 0, 0));
+      pipe->stepHeads(e);  // pipeline: bridge policy, 60 s > the bridge limit: restart
+      PipelineRow row;
+      while (pipe->popRow(row)) {
+      }
+      if (i == 1500) pipe->handMountings(mountings);
+    }
+    pipe->flush();
+    // the paths under test really ran (reading counters does not allocate)
+    reanchors = means->reanchors();
+    restarts = rates->health().count(Status::kGapRestarted) + crn->health().count(Status::kGapRestarted) +
+               pipe->health().count(Status::kGapRestarted);
+    aligned = fusion->relativeAlignment().mask != 0;
+    pipe->reset();
+    means->reset();
+    allocs = guard.disarm();
+    ASSERT_TRUE(ok);
+  }
+  EXPECT_EQ(allocs, 0);
+  EXPECT_GT(reanchors, 0u);
+  EXPECT_EQ(restarts, 4u);  // rates, the plain stream, and the pipeline's rate and accelerometer filters
+  EXPECT_TRUE(aligned);
+}
+
 }  // namespace
 }  // namespace boresight::core

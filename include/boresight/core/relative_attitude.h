@@ -57,6 +57,8 @@ class RelativeAttitudeMeans {
   /// Corrections from a full set of mountings (e.g. the batch solver's), with the same datum.
   bool alignmentFromMountings(const std::array<Quat, kMaxHeads>& q_Si_B, HeadAlignment& out) const;
   const Health& health() const { return health_; }
+  /// Anchor moves so far (all pairs; diagnostics and tests).
+  std::uint64_t reanchors() const { return reanchors_; }
 
  private:
   struct Acc {
@@ -79,6 +81,7 @@ class RelativeAttitudeMeans {
   bool datumProject(HeadAlignment& a) const;
   bool have_last_ = false;
   TimeUs last_t_ = 0;
+  std::uint64_t reanchors_ = 0;
   Health health_{};
 };
 
