@@ -82,6 +82,74 @@ TEST(Health, EveryRejectionReasonIsCounted) {
   EXPECT_EQ(w.health().count(Status::kTooFewStars), 1u);
 }
 
+TEST(Health, NoValidInputNumericalFailureAndCapacityThroughThePipeline) {
+  PipelineConfig pc;
+  pc.heads = test::graceLikeHeads(3);
+  pc.use_accelerometer = false;
+  auto p = std::make_unique<Pipeline>();
+  ASSERT_EQ(p->configure(pc), Status::kOk);
+  TimeUs t = 1000;
+  ASSERT_EQ(p->stepHeads(goodEpoch(pc.heads, t)), Status::kOk);
+
+  // kNoValidInput: an epoch without any head sample
+  HeadEpoch empty;
+  empty.t = (t += 500000);
+  EXPECT_EQ(p->stepHeads(empty), Status::kNoValidInput);
+  EXPECT_EQ(p->health().count(Status::kNoValidInput), 1u);
+
+  // kNumericalFailure: sigma scales so large (1e160: information 1e-320, below the smallest double)
+  // that the fusion's information matrix is singular
+  HeadEpoch huge = goodEpoch(pc.heads, t += 500000);
+  for (int k = 0; k < huge.n; ++k) huge.sample[static_cast<std::size_t>(k)].sigma_scale = 1e160;
+  EXPECT_EQ(p->stepHeads(huge), Status::kNumericalFailure);
+  EXPECT_EQ(p->fusion().health().count(Status::kNumericalFailure), 1u);
+  EXPECT_GE(p->health().count(Status::kNumericalFailure), 1u);
+  EXPECT_EQ(p->stepHeads(goodEpoch(pc.heads, t += 500000)), Status::kOk);  // and the next epoch is fine
+
+  // kCapacityExceeded (1): more head samples than kMaxHeads in one epoch: the excess is dropped
+  HeadEpoch many = goodEpoch(pc.heads, t += 500000);
+  many.n = kMaxHeads + 1;
+  EXPECT_EQ(p->stepHeads(many), Status::kOk);
+  EXPECT_EQ(p->health().count(Status::kCapacityExceeded), 1u);
+
+  // kCapacityExceeded (2): nobody pops rows: past kMaxPendingRows the oldest ready rows are dropped,
+  // each counted
+  const std::uint64_t before = p->health().count(Status::kCapacityExceeded);
+  int epochs = 0;
+  for (; epochs < 2 * (kMaxPendingRows + 200); ++epochs)
+    ASSERT_EQ(p->stepHeads(goodEpoch(pc.heads, t += 500000)), Status::kOk);
+  EXPECT_EQ(p->rowsReady(), kMaxPendingRows);
+  p->flush();
+  // rows: one per second of the run (the head epochs nearest whole seconds), ready ones kept up to capacity
+  const std::uint64_t dropped = p->health().count(Status::kCapacityExceeded) - before;
+  EXPECT_GT(dropped, 150u);
+  int popped = 0;
+  PipelineRow r;
+  while (p->popRow(r)) ++popped;
+  EXPECT_EQ(popped, kMaxPendingRows);
+  std::printf("capacity: %llu rows dropped and counted, %d kept\n", static_cast<unsigned long long>(dropped), popped);
+
+  // kCapacityExceeded (3): more star inputs than kMaxStarInputs
+  StarEpoch se;
+  se.t = t;
+  se.n = kMaxStarInputs + 5;
+  for (auto& o : se.star) {
+    o.head_id = 1;
+    o.s_Sk = Vec3::UnitZ();
+    o.r_I = Vec3::UnitX();
+  }
+  p->stepStars(se);
+  EXPECT_GE(p->wahba().health().count(Status::kCapacityExceeded), 1u);
+
+  // kNotReady / kUnavailable of evaluateAt
+  RateOutput ro;
+  EXPECT_EQ(p->rates().evaluateAt(t, ro), Status::kNotReady);
+  EXPECT_EQ(p->rates().evaluateAt(t - 1000 * kUsPerSecond, ro), Status::kUnavailable);
+  for (int i = 0; i < kStatusCount; ++i) std::printf("%s=%llu ", statusName(static_cast<Status>(i)),
+                                                     static_cast<unsigned long long>(p->health().by_status[static_cast<std::size_t>(i)]));
+  std::printf("\n");
+}
+
 TEST(Health, InvalidConfigurationsAreRejected) {
   HeadSetConfig h = test::graceLikeHeads(3);
   h.head[1].id = h.head[0].id;
