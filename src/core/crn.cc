@@ -1,8 +1,110 @@
 #include "boresight/core/crn.h"
 
 #include <cmath>
+#include <cstring>
+
+// Run-time dispatch of the two inner loops (GCC on x86-64 Linux): an AVX2 clone and the baseline,
+// chosen once at load time (ifunc); no allocation, same summation order in both.
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && defined(__linux__) && \
+    !defined(BORESIGHT_NO_TARGET_CLONES)
+#define BORESIGHT_CLONES __attribute__((target_clones("avx2", "default")))
+#else
+#define BORESIGHT_CLONES
+#endif
 
 namespace boresight::core {
+
+// Four-lane vectors (GCC/clang vector extension: AVX registers in the AVX2 clone, SSE2 pairs in the
+// baseline); loads through memcpy (unaligned, no aliasing issue). Every sum below is lane-wise and
+// then reduced in a fixed order, so both clones give bit-identical results.
+// (-Wpsabi: the helpers pass V4 by value; they are internal and inlined, no ABI crosses a boundary.)
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic ignored "-Wpsabi"
+#endif
+typedef double V4 __attribute__((vector_size(32)));
+
+namespace {
+__attribute__((always_inline)) inline V4 load4(const double* p) {
+  V4 v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+__attribute__((always_inline)) inline double hsum(V4 v) { return (v[0] + v[2]) + (v[1] + v[3]); }
+}  // namespace
+
+BORESIGHT_CLONES double crnDot(const double* a, const double* b, int n) {
+  V4 s0 = {0, 0, 0, 0}, s1 = {0, 0, 0, 0};
+  int j = 0;
+  for (; j + 8 <= n; j += 8) {
+    s0 += load4(a + j) * load4(b + j);
+    s1 += load4(a + j + 4) * load4(b + j + 4);
+  }
+  double r = 0;
+  for (; j < n; ++j) r += a[j] * b[j];
+  return hsum(s0 + s1) + r;
+}
+
+BORESIGHT_CLONES void crnDotTaylor3(const double* g0, const double* g1, double s, const double* x0, const double* x1,
+                                    const double* x2, int n, double out[3]) {
+  const V4 sv = {s, s, s, s};
+  V4 a0 = {0, 0, 0, 0}, a1 = a0, a2 = a0, b0 = a0, b1 = a0, b2 = a0;
+  int j = 0;
+  for (; j + 8 <= n; j += 8) {
+    const V4 k = load4(g0 + j) + sv * load4(g1 + j);
+    const V4 kk = load4(g0 + j + 4) + sv * load4(g1 + j + 4);
+    a0 += k * load4(x0 + j);
+    a1 += k * load4(x1 + j);
+    a2 += k * load4(x2 + j);
+    b0 += kk * load4(x0 + j + 4);
+    b1 += kk * load4(x1 + j + 4);
+    b2 += kk * load4(x2 + j + 4);
+  }
+  double r0 = 0, r1 = 0, r2 = 0;
+  for (; j < n; ++j) {
+    const double k = g0[j] + s * g1[j];
+    r0 += k * x0[j];
+    r1 += k * x1[j];
+    r2 += k * x2[j];
+  }
+  out[0] = hsum(a0 + b0) + r0;
+  out[1] = hsum(a1 + b1) + r1;
+  out[2] = hsum(a2 + b2) + r2;
+}
+
+BORESIGHT_CLONES void crnDot4x3(const double* g0, const double* g1, const double* g2, const double* x0, const double* x1,
+                                const double* x2, const double* x3, int n, double out[12]) {
+  V4 a[12];
+  for (auto& v : a) v = V4{0, 0, 0, 0};
+  int j = 0;
+  for (; j + 4 <= n; j += 4) {
+    const V4 k0 = load4(g0 + j), k1 = load4(g1 + j), k2 = load4(g2 + j);
+    const V4 y0 = load4(x0 + j), y1 = load4(x1 + j), y2 = load4(x2 + j), y3 = load4(x3 + j);
+    a[0] += k0 * y0;
+    a[1] += k1 * y0;
+    a[2] += k2 * y0;
+    a[3] += k0 * y1;
+    a[4] += k1 * y1;
+    a[5] += k2 * y1;
+    a[6] += k0 * y2;
+    a[7] += k1 * y2;
+    a[8] += k2 * y2;
+    a[9] += k0 * y3;
+    a[10] += k1 * y3;
+    a[11] += k2 * y3;
+  }
+  const double* g[3] = {g0, g1, g2};
+  const double* x[4] = {x0, x1, x2, x3};
+  for (int c = 0; c < 4; ++c)
+    for (int o = 0; o < 3; ++o) {
+      double r = 0;
+      for (int jj = j; jj < n; ++jj) r += g[o][jj] * x[c][jj];
+      out[3 * c + o] = hsum(a[3 * c + o]) + r;
+    }
+}
+
+BORESIGHT_CLONES void crnAxpy(const double* a, const double* b, double s, double* out, int n) {
+  for (int j = 0; j < n; ++j) out[j] = a[j] + s * b[j];
+}
 
 namespace {
 double ipow(double x, int n) {

@@ -2,6 +2,8 @@
 
 #include "boresight/core/rotation.h"
 
+#include <cmath>
+
 namespace boresight::core {
 
 Status HeadFusion::configure(const HeadSetConfig& cfg) {
@@ -16,6 +18,16 @@ Status HeadFusion::configure(const HeadSetConfig& cfg) {
     const Mat3 C_B_Si = q_Si_B_[u].toRotationMatrix().transpose();
     const Mat3 Sigma_B = C_B_Si * headCovariance(h.sigma_cross_rad, h.sigma_roll_rad, h.boresight_Si) * C_B_Si.transpose();
     if (!invertSpd3(Sigma_B, W_B_[u])) return Status::kInvalidConfig;
+  }
+  for (std::uint32_t m = 0; m < kMasks; ++m) {  // (sum W_i)^-1 of every head subset
+    Mat3 W_sum = Mat3::Zero();
+    bool any = false;
+    for (int k = 0; k < cfg.n_heads; ++k)
+      if ((m >> k) & 1u) {
+        W_sum += W_B_[static_cast<std::size_t>(k)];
+        any = true;
+      }
+    P_ok_[m] = any && invertSpd3(W_sum, P_mask_[m]);
   }
   configured_ = true;
   reset();
@@ -45,20 +57,30 @@ void HeadFusion::reset() {
   health_.clear();
 }
 
+namespace {
+// c(th) of J_l^-1(r) = I - [r]/2 + c [r]^2 from th^2 = |r|^2.
+inline double leftInverseCoefficient(double th2) {
+  if (th2 < 1e-4) return 1.0 / 12.0 + th2 / 720.0;  // series: the next term, th^4/30240, is below 4e-13
+  const double th = std::sqrt(th2);
+  return 1.0 / th2 - (1.0 + std::cos(th)) / (2.0 * th * std::sin(th));
+}
+}  // namespace
+
 Status HeadFusion::step(const ValidHeads& in) {
   if (const Status g = admitStep(configured_, have_last_, last_t_, in.t, health_); g != Status::kOk) return g;
-  auto q_I_B = filled<Quat, kMaxHeads>(Quat::Identity());
-  auto W = filled<Mat3, kMaxHeads>(Mat3::Zero());
+  std::array<Quat, kMaxHeads> q_I_B;
+  std::array<Mat3, kMaxHeads> W;
   int ref = -1;
   int used = 0;
-  Mat3 W_sum = Mat3::Zero();
+  bool nominal_scales = true;
+  std::uint32_t mask = 0;
   for (int k = 0; k < cfg_.n_heads; ++k) {
     if (!in.has(k)) continue;
     const auto u = static_cast<std::size_t>(k);
     q_I_B[u] = in.q_I_Si[u] * q_fuse_[u];
     const double sc = in.sigma_scale[u];
-    W[u] = (sc == 1.0) ? W_B_[u] : Mat3(W_B_[u] / (sc * sc));
-    W_sum += W[u];
+    if (sc != 1.0) nominal_scales = false;
+    mask |= 1u << k;
     if (ref < 0) ref = k;
     ++used;
   }
@@ -66,46 +88,83 @@ Status HeadFusion::step(const ValidHeads& in) {
     health_.record(Status::kNoValidInput);
     return Status::kNoValidInput;
   }
+  // P = (sum W_i)^-1: precomputed per head subset at nominal sigma scales, else inverted here
   Mat3 P;
-  if (!invertSpd3(W_sum, P)) {
-    health_.record(Status::kNumericalFailure);
-    return Status::kNumericalFailure;
-  }
-  // Weighted least squares on sum_i |Log(Exp(-x) q^-1 q_i)|^2_{W_i}, started at the first head:
-  // step 1 with the first-order Jacobian (identity: H = sum W_i, already inverted in P), step 2 a
-  // Gauss-Newton step with the exact SO(3) Jacobian; the result is the optimum to third order in the
-  // head errors.
-  Quat q = q_I_B[static_cast<std::size_t>(ref)];
-  {
-    Vec3 rhs = Vec3::Zero();
-    const Quat q_inv = q.conjugate();
-    for (int k = 0; k < cfg_.n_heads; ++k) {
-      if (!in.has(k)) continue;
-      const auto u = static_cast<std::size_t>(k);
-      rhs += W[u] * quatLog(q_inv * q_I_B[u]);
-    }
-    q = (q * quatExp(P * rhs)).normalized();
-  }
-  {
-    Mat3 H = Mat3::Zero();
-    Vec3 g = Vec3::Zero();
-    const Quat q_inv = q.conjugate();
-    for (int k = 0; k < cfg_.n_heads; ++k) {
-      if (!in.has(k)) continue;
-      const auto u = static_cast<std::size_t>(k);
-      const Vec3 r = quatLog(q_inv * q_I_B[u]);
-      const Mat3 A = jacobianLeftInverse(r);
-      const Mat3 AtW = A.transpose() * W[u];
-      H.noalias() += AtW * A;
-      g.noalias() += AtW * r;
-    }
-    Mat3 Hinv;
-    if (!invertSpd3(H, Hinv)) {
+  if (nominal_scales) {
+    for (int k = 0; k < cfg_.n_heads; ++k)
+      if ((mask >> k) & 1u) W[static_cast<std::size_t>(k)] = W_B_[static_cast<std::size_t>(k)];
+    if (!P_ok_[mask]) {
       health_.record(Status::kNumericalFailure);
       return Status::kNumericalFailure;
     }
-    q = (q * quatExp(Hinv * g)).normalized();
+    P = P_mask_[mask];
+  } else {
+    Mat3 W_sum = Mat3::Zero();
+    for (int k = 0; k < cfg_.n_heads; ++k) {
+      if (!((mask >> k) & 1u)) continue;
+      const auto u = static_cast<std::size_t>(k);
+      const double sc = in.sigma_scale[u];
+      W[u] = W_B_[u] / (sc * sc);
+      W_sum += W[u];
+    }
+    if (!invertSpd3(W_sum, P)) {
+      health_.record(Status::kNumericalFailure);
+      return Status::kNumericalFailure;
+    }
   }
+  // Weighted least squares on sum_i |Log(Exp(-x) q^-1 q_i)|^2_{W_i}, started at the first head:
+  // step 1 first order (gradient sum W_i r_i, Hessian sum W_i: dx = P g) to q1; the residuals
+  // r_i = Log(q1^-1 q_i) once, exactly; then two steps with the exact gradient
+  // sum J_l^-1(r_i)^T W_i r_i and the same Hessian, the residuals carried in the tangent space
+  // (r_i <- r_i - J_l^-1(r_i) dx, exact to O(dx^2) ~ 1e-15 since dx is second order in the head
+  // errors). Each step multiplies the remaining error by the Hessian's first-order error (property
+  // test: within 1e-6 of the noise of the exact optimum; one exact-gradient step leaves up to
+  // 1.03e-6 in 2 000 random cases, two none).
+  const auto uref = static_cast<std::size_t>(ref);
+  Quat q = q_I_B[uref];
+  {
+    Vec3 g = Vec3::Zero();
+    const Quat q_inv = q.conjugate();
+    for (int k = ref + 1; k < cfg_.n_heads; ++k) {  // the first head's residual is zero
+      if (!((mask >> k) & 1u)) continue;
+      const auto u = static_cast<std::size_t>(k);
+      g.noalias() += W[u] * quatLog(q_inv * q_I_B[u]);
+    }
+    q = q * quatExp(P * g);
+  }
+  std::array<Vec3, kMaxHeads> r;
+  std::array<double, kMaxHeads> c{};
+  {
+    const Quat q_inv = q.conjugate();
+    for (int k = 0; k < cfg_.n_heads; ++k) {
+      if (!((mask >> k) & 1u)) continue;
+      const auto u = static_cast<std::size_t>(k);
+      r[u] = quatLog(q_inv * q_I_B[u]);
+      c[u] = leftInverseCoefficient(r[u].squaredNorm());
+    }
+  }
+  Vec3 x = Vec3::Zero();
+  for (int pass = 0; pass < 2; ++pass) {
+    Vec3 g = Vec3::Zero();
+    for (int k = 0; k < cfg_.n_heads; ++k) {
+      if (!((mask >> k) & 1u)) continue;
+      const auto u = static_cast<std::size_t>(k);
+      const Vec3 Wr = W[u] * r[u];
+      const Vec3 rWr = r[u].cross(Wr);
+      g += Wr + 0.5 * rWr + c[u] * r[u].cross(rWr);  // J_l^-1(r)^T W r
+    }
+    const Vec3 dx = P * g;
+    x += dx;
+    if (pass == 1) break;
+    for (int k = 0; k < cfg_.n_heads; ++k) {
+      if (!((mask >> k) & 1u)) continue;
+      const auto u = static_cast<std::size_t>(k);
+      const Vec3 rdx = r[u].cross(dx);
+      r[u] -= dx - 0.5 * rdx + c[u] * r[u].cross(rdx);  // J_l^-1(r) dx
+    }
+  }
+  q = q * quatExp(x);
+  q.normalize();
   if (have_last_) q = continuous(q, out_.q_I_B);
   out_.t = in.t;
   out_.q_I_B = q;

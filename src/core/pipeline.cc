@@ -49,6 +49,8 @@ void Pipeline::reset() {
   have_grid_ = false;
   last_grid_ = 0;
   p_head_ = n_pending_ = 0;
+  rate_cursor_ = acc_cursor_ = 0;
+  acc_next_check_ = std::numeric_limits<TimeUs>::min();
   r_head_ = n_ready_ = 0;
   health_.clear();
 }
@@ -77,6 +79,8 @@ void Pipeline::emitOldest() {
   ++n_ready_;
   p_head_ = (p_head_ + 1) % kMaxPendingRows;
   --n_pending_;
+  if (rate_cursor_ > 0) --rate_cursor_;
+  if (acc_cursor_ > 0) --acc_cursor_;
 }
 
 void Pipeline::resolve() {
@@ -84,19 +88,21 @@ void Pipeline::resolve() {
   const TimeUs att_newest = rates_.stream().newestTime();
   const TimeUs rate_deadline = rates_.stream().delayUs() + 2 * head_dt_us_;
   // rows are in time order: the rate deadline and the accelerometer's readiness both move forward,
-  // so each scan stops at the first row that is still waiting
-  for (int i = 0; i < n_pending_; ++i) {
-    Pending& p = pending_[static_cast<std::size_t>((p_head_ + i) % kMaxPendingRows)];
+  // so each scan starts at its cursor (the first row still waiting) and stops at the next one waiting
+  for (; rate_cursor_ < n_pending_; ++rate_cursor_) {
+    Pending& p = pending_[static_cast<std::size_t>((p_head_ + rate_cursor_) % kMaxPendingRows)];
     if (p.rate_done) continue;
-    if (have_att && att_newest - p.row.t > rate_deadline) {
-      p.rate_done = true;
-    } else {
-      break;
-    }
+    if (!(have_att && att_newest - p.row.t > rate_deadline)) break;
+    p.rate_done = true;
   }
-  for (int i = 0; i < n_pending_; ++i) {
-    Pending& p = pending_[static_cast<std::size_t>((p_head_ + i) % kMaxPendingRows)];
+  const CrnStream<3>& as = acc_.stream();
+  // not ready while fewer than M samples follow the tag (a row deferred by this test is only evaluated
+  // at a later sample: it never loses its window, the ring holds 1024 samples)
+  const TimeUs acc_wait = static_cast<TimeUs>(as.kernel().half) * as.samplingIntervalUs() - as.samplingIntervalUs() / 2;
+  for (; acc_cursor_ < n_pending_; ++acc_cursor_) {
+    Pending& p = pending_[static_cast<std::size_t>((p_head_ + acc_cursor_) % kMaxPendingRows)];
     if (p.acc_done) continue;
+    if (as.hasSamples() && as.newestTime() - p.row.t < acc_wait) break;  // surely not ready yet (cheap)
     AccOutput a;
     const Status s = acc_.evaluateAt(p.row.t, a);
     if (s == Status::kOk) {
@@ -113,6 +119,14 @@ void Pipeline::resolve() {
     const Pending& p = pending_[static_cast<std::size_t>(p_head_)];
     if (!(p.rate_done && p.acc_done)) break;
     emitOldest();
+  }
+  // the accelerometer time from which the first row still waiting for it can be ready
+  acc_next_check_ = std::numeric_limits<TimeUs>::max();  // none waiting: new rows come with stepHeads
+  for (int i = acc_cursor_; i < n_pending_; ++i) {
+    const Pending& p = pending_[static_cast<std::size_t>((p_head_ + i) % kMaxPendingRows)];
+    if (p.acc_done) continue;
+    acc_next_check_ = p.row.t + acc_wait;
+    break;
   }
 }
 
@@ -189,7 +203,8 @@ Status Pipeline::stepAcc(TimeUs t, const Vec3& a_A) {
   }
   if (!cfg_.use_accelerometer) return Status::kOk;
   const Status s = acc_.step(t, a_A);
-  if (accepted(s)) resolve();
+  // only when the oldest row waiting for the accelerometer may have become ready (or a gap changed it)
+  if (accepted(s) && (s != Status::kOk || t >= acc_next_check_)) resolve();
   return s;
 }
 

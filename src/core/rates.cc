@@ -78,18 +78,18 @@ void AccAngularFilter::reset() { crn_.reset(); }
 
 Status AccAngularFilter::step(TimeUs t, const Vec3& a_A) {
   if (!configured_) return crn_.step(t, Vec3::Constant(std::nan("")));
-  return crn_.step(t, C_X_A_ * a_A);
+  return crn_.step(t, a_A);  // filtered in A (linear): rotated to X once per output, not per sample
 }
 
 AccOutput AccAngularFilter::output(int i) const {
   const auto& o = crn_.output(i);
-  return AccOutput{o.t, o.y[0]};
+  return AccOutput{o.t, C_X_A_ * o.y[0]};
 }
 
 Status AccAngularFilter::evaluateAt(TimeUs t, AccOutput& out) const {
-  CrnStream<3>::Output o;
-  const Status s = crn_.evaluateAt(t, o);
-  if (s == Status::kOk) out = AccOutput{t, o.y[0]};
+  Vec3 y;
+  const Status s = crn_.evaluateValueAt(t, y);
+  if (s == Status::kOk) out = AccOutput{t, C_X_A_ * y};
   return s;
 }
 

@@ -71,6 +71,18 @@ struct CrnKernel {
 /// Designs the kernels; kInvalidConfig when the parameters are out of range.
 Status designCrn(const CrnConfig& cfg, CrnKernel& out);
 
+/// sum_j a[j] b[j], j < n, in eight interleaved partial sums added in a fixed order: vectorised, and
+/// the same result whichever instruction set the run-time dispatch picks (no FMA contraction).
+double crnDot(const double* a, const double* b, int n);
+/// Three channels at once with the kernel g0 + s g1 formed on the fly (value with a Taylor step).
+void crnDotTaylor3(const double* g0, const double* g1, double s, const double* x0, const double* x1,
+                   const double* x2, int n, double out[3]);
+/// Four channels times three kernels: out[3 c + o] = sum_j g_o[j] x_c[j] (the rate filter's q, q', q'').
+void crnDot4x3(const double* g0, const double* g1, const double* g2, const double* x0, const double* x1,
+               const double* x2, const double* x3, int n, double out[12]);
+/// out[j] = a[j] + s b[j], j < n.
+void crnAxpy(const double* a, const double* b, double s, double* out, int n);
+
 /// Streaming CRN filter of N channels.
 template <int N>
 class CrnStream {
@@ -120,7 +132,8 @@ class CrnStream {
       if (d == 0) return record(Status::kDuplicateTime);
       // The step in whole sampling intervals, rounded to the nearest; it is on the grid when its
       // intervals deviate from dt by at most the tolerance each (n intervals: n * tol in all).
-      const TimeUs n = (d + dt_us_ / 2) / dt_us_;
+      const bool regular = d >= dt_us_ - tol_us_ && d <= dt_us_ + tol_us_;  // the usual case: n = 1
+      const TimeUs n = regular ? 1 : (d + dt_us_ / 2) / dt_us_;
       const TimeUs dev = d - n * dt_us_;
       const bool on_grid = n >= 1 && dev <= n * tol_us_ && -dev <= n * tol_us_;
       if (n <= 1 && !on_grid) return record(Status::kIrregularTime);  // too early or too late for its slot
@@ -150,29 +163,10 @@ class CrnStream {
   /// kNotReady: not enough samples after tau yet; kUnavailable: tau is not covered (too old, in a
   /// restarted gap, or before the first sample).
   Status evaluateAt(TimeUs tau, Output& out) const {
-    if (!configured_ || count_ == 0) return Status::kNotReady;
-    const TimeUs ahead = last_t_ - tau;  // newest minus tau
-    const int M = kernel_.half;
-    if (ahead < 0) return Status::kNotReady;
-    TimeUs k = (ahead + dt_us_ / 2) / dt_us_;
-    if (k > kCrnRing) return Status::kUnavailable;
-    for (int it = 0; it < 4; ++it) {  // tags jitter: move to the sample nearest to tau
-      if (k >= count_) break;
-      const TimeUs tk = times_[static_cast<std::size_t>((pos_ - static_cast<int>(k)) & (kCrnRing - 1))];
-      if (tau - tk > dt_us_ / 2 && k > 0) {
-        --k;
-      } else if (tk - tau > dt_us_ / 2) {
-        ++k;
-      } else {
-        break;
-      }
-    }
-    if (k < M) return Status::kNotReady;
-    if (k + M > count_ - 1 || k + M > kCrnRing - 1) return Status::kUnavailable;
-    const int c = centreIndex(static_cast<int>(k));
-    const TimeUs tc = times_[static_cast<std::size_t>(c & (kCrnRing - 1))];
-    const double dts = toSeconds(tau - tc);
-    if (std::abs(tau - tc) > dt_us_ / 2 + tol_us_) return Status::kUnavailable;
+    int c = 0;
+    double dts = 0;
+    const Status s = locate(tau, c, dts);
+    if (s != Status::kOk) return s;
     Output o;
     const int top = cfg_.max_order;
     evaluate(c, top, o);
@@ -184,6 +178,35 @@ class CrnStream {
     }
     o.t = tau;
     out = o;
+    return Status::kOk;
+  }
+
+  /// The low-passed value only at tag tau (statuses as evaluateAt): with max_order >= 1 the
+  /// first-order Taylor step is folded into one kernel, g0 + (tau - t_c) g1, so one pass per channel
+  /// (the accelerometer path: order 2 ignored, |dts| <= half an interval).
+  Status evaluateValueAt(TimeUs tau, VecN& y) const {
+    int c = 0;
+    double dts = 0;
+    const Status s = locate(tau, c, dts);
+    if (s != Status::kOk) return s;
+    const int M = kernel_.half, L = 2 * M + 1;
+    if constexpr (N == 3) {
+      if (cfg_.max_order >= 1) {
+        double r[3];
+        crnDotTaylor3(kernel_.g[0].data(), kernel_.g[1].data(), dts, &buf_[0][static_cast<std::size_t>(c - M)],
+                      &buf_[1][static_cast<std::size_t>(c - M)], &buf_[2][static_cast<std::size_t>(c - M)], L, r);
+        y = VecN(r[0], r[1], r[2]);
+        return Status::kOk;
+      }
+    }
+    const double* g = kernel_.g[0].data();
+    std::array<double, kMaxCrnTaps> k;  // the combined kernel (stack, no heap)
+    if (cfg_.max_order >= 1) {
+      crnAxpy(kernel_.g[0].data(), kernel_.g[1].data(), dts, k.data(), L);
+      g = k.data();
+    }
+    for (int ch = 0; ch < N; ++ch)
+      y[ch] = crnDot(g, &buf_[static_cast<std::size_t>(ch)][static_cast<std::size_t>(c - M)], L);
     return Status::kOk;
   }
 
@@ -233,23 +256,54 @@ class CrnStream {
     o.t = tc;
   }
 
-  // Folded dot products (the kernels are even or odd about the centre tap): per channel and order
-  // one pass over the M sample pairs, y = g[0] x_c + sum_n g[n] (x_{c+n} +- x_{c-n}).
-  void evaluate(int c, int top, Output& o) const {
+  // The centre sample c (doubled-ring index) nearest to tau and tau - t_c (s).
+  Status locate(TimeUs tau, int& c, double& dts) const {
+    if (!configured_ || count_ == 0) return Status::kNotReady;
+    const TimeUs ahead = last_t_ - tau;  // newest minus tau
     const int M = kernel_.half;
-    for (int ch = 0; ch < N; ++ch) {
-      const double* x = &buf_[static_cast<std::size_t>(ch)][static_cast<std::size_t>(c)];
-      const Eigen::Map<const Eigen::VectorXd> hi(x + 1, M);
-      const Eigen::Map<const Eigen::VectorXd> lo(x - M, M);
-      for (int order = 0; order < 3; ++order) {
-        double y = 0;
-        if (order <= top) {
-          const double* g = kernel_.g[static_cast<std::size_t>(order)].data() + M;
-          const Eigen::Map<const Eigen::VectorXd> gh(g + 1, M);
-          y = (order == 1) ? gh.dot(hi - lo.reverse()) : g[0] * x[0] + gh.dot(hi + lo.reverse());
-        }
-        o.y[static_cast<std::size_t>(order)][ch] = y;
+    if (ahead < 0) return Status::kNotReady;
+    TimeUs k = (ahead + dt_us_ / 2) / dt_us_;
+    if (k > kCrnRing) return Status::kUnavailable;
+    for (int it = 0; it < 4; ++it) {  // tags jitter: move to the sample nearest to tau
+      if (k >= count_) break;
+      const TimeUs tk = times_[static_cast<std::size_t>((pos_ - static_cast<int>(k)) & (kCrnRing - 1))];
+      if (tau - tk > dt_us_ / 2 && k > 0) {
+        --k;
+      } else if (tk - tau > dt_us_ / 2) {
+        ++k;
+      } else {
+        break;
       }
+    }
+    if (k < M) return Status::kNotReady;
+    if (k + M > count_ - 1 || k + M > kCrnRing - 1) return Status::kUnavailable;
+    c = centreIndex(static_cast<int>(k));
+    const TimeUs tc = times_[static_cast<std::size_t>(c & (kCrnRing - 1))];
+    if (std::abs(tau - tc) > dt_us_ / 2 + tol_us_) return Status::kUnavailable;
+    dts = toSeconds(tau - tc);
+    return Status::kOk;
+  }
+
+  // Per channel and order one contiguous dot product over the 2M+1 taps (crnDot: fixed summation
+  // order, vectorised; the doubled ring makes every window contiguous).
+  void evaluate(int c, int top, Output& o) const {
+    const int M = kernel_.half, L = 2 * M + 1;
+    if constexpr (N == 4) {
+      if (top == 2) {
+        double r[12];
+        const auto b = static_cast<std::size_t>(c - M);
+        crnDot4x3(kernel_.g[0].data(), kernel_.g[1].data(), kernel_.g[2].data(), &buf_[0][b], &buf_[1][b], &buf_[2][b],
+                  &buf_[3][b], L, r);
+        for (int ch = 0; ch < 4; ++ch)
+          for (int order = 0; order < 3; ++order) o.y[static_cast<std::size_t>(order)][ch] = r[3 * ch + order];
+        return;
+      }
+    }
+    for (int ch = 0; ch < N; ++ch) {
+      const double* x = &buf_[static_cast<std::size_t>(ch)][static_cast<std::size_t>(c - M)];
+      for (int order = 0; order < 3; ++order)
+        o.y[static_cast<std::size_t>(order)][ch] =
+            order <= top ? crnDot(kernel_.g[static_cast<std::size_t>(order)].data(), x, L) : 0.0;
     }
   }
 

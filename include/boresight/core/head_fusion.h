@@ -5,7 +5,8 @@
 // = C_I_B_true Exp(C_B_Si eps_i): the error in B has covariance C_B_Si Sigma_i C_Si_B, information W_i.
 // The fused C_I_B minimises sum_i |Log(C_I_B^T C_I_B_i)|^2_{W_i} (weighted least squares on the
 // small-angle differences): to first order dx = (sum W_i)^-1 sum W_i Log(C_ref^T C_I_B_i); the code
-// takes two Gauss-Newton steps with the exact SO(3) Jacobian from the first head. P_B = (sum W_i)^-1.
+// takes a first-order step from the first head, then two steps with the exact SO(3) gradient and the
+// first-order Hessian (all with P_B = (sum W_i)^-1, precomputed per head subset at configure).
 // Any subset of the heads may be present; a head dropping out changes the weights, not the frame.
 // Relative alignment: with setRelativeAlignment(a) head k is fused as C_I_Sk C_Sk_B^0 Exp(-c_k) (the
 // in-flight relative alignment, see HeadAlignment; datum sum W_k c_k = 0): heads that disagree with
@@ -46,6 +47,9 @@ class HeadFusion {
   std::array<Quat, kMaxHeads> q_fuse_ = filled<Quat, kMaxHeads>(Quat::Identity());   ///< nominal Exp(-c_k)
   HeadAlignment align_{};
   std::array<Mat3, kMaxHeads> W_B_ = filled<Mat3, kMaxHeads>(Mat3::Zero());
+  static constexpr std::uint32_t kMasks = 1u << kMaxHeads;
+  std::array<Mat3, kMasks> P_mask_ = filled<Mat3, kMasks>(Mat3::Zero());  ///< (sum W_i)^-1 per head subset
+  std::array<bool, kMasks> P_ok_{};
   bool have_last_ = false;
   TimeUs last_t_ = 0;
   FusedAttitude out_{};

@@ -112,6 +112,8 @@ class Pipeline {
   bool have_grid_ = false;
   std::array<Pending, kMaxPendingRows> pending_{};
   int p_head_ = 0, n_pending_ = 0;
+  int rate_cursor_ = 0, acc_cursor_ = 0;  ///< first pending row (offset from p_head_) still waiting
+  TimeUs acc_next_check_ = std::numeric_limits<TimeUs>::min();  ///< stepAcc resolves from this tag on
   std::array<PipelineRow, kMaxPendingRows> ready_{};
   int r_head_ = 0, n_ready_ = 0;
   Health health_{};

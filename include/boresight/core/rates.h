@@ -8,8 +8,9 @@
 //   alpha_X = (2 vec(q* q'') - 2 (q . q') w_X) / |q|^2
 // (exact for q = n u with u unit: vec(u* u') = w/2 and d/dt vec(u* u') = vec(u* u'') since u'* u' is real).
 //
-// AccAngularFilter takes a_A (rad/s^2, accelerometer frame) at its rate (GRACE-FO 10 Hz), rotates it
-// to X with the configured C_X_A and runs the same CRN low-pass (order 0; order 1 only for the
+// AccAngularFilter takes a_A (rad/s^2, accelerometer frame) at its rate (GRACE-FO 10 Hz), runs the
+// same CRN low-pass in A and rotates the result to X with the configured C_X_A (the filter is linear:
+// the same as rotating every sample, at one rotation per output) (order 0; order 1 only for the
 // first-order Taylor step to a requested tag). evaluateAt(t) puts it on the attitude stream's output tags.
 #pragma once
 
@@ -64,6 +65,7 @@ class AccAngularFilter {
   AccOutput output(int i) const;
   Status evaluateAt(TimeUs t, AccOutput& out) const;
   const Health& health() const { return crn_.health(); }
+  /// The stream (values in the accelerometer frame A).
   const CrnStream<3>& stream() const { return crn_; }
 
  private:

@@ -51,8 +51,9 @@ inline void quatConjugate(const T q[4], T out[4]) {
   out[3] = -q[3];
 }
 
-/// Exp: rotation vector phi (rad) -> unit quaternion. Below |phi| = 0.01 rad a series in |phi|^2
-/// (truncation below 1e-15 relative), then normalised.
+/// Exp: rotation vector phi (rad) -> unit quaternion. Below |phi| = 0.01 rad a series in |phi|^2:
+/// truncation below 1e-15 relative, and |q|^2 - 1 = O(|phi|^12) < 1e-17, so no normalisation (no
+/// sqrt, no division: the branch the real-time core takes for every small correction).
 template <typename T>
 inline void quatExp(const T phi[3], T q[4]) {
   using std::cos;
@@ -62,11 +63,10 @@ inline void quatExp(const T phi[3], T q[4]) {
   if (t2 < T(1e-4)) {
     const T s = T(0.5) * (T(1.0) - t2 / T(24.0) * (T(1.0) - t2 / T(80.0)));  // sin(th/2)/th
     const T c = T(1.0) - t2 / T(8.0) * (T(1.0) - t2 / T(48.0));            // cos(th/2)
-    const T inv = T(1.0) / sqrt(c * c + s * s * t2);
-    q[0] = c * inv;
-    q[1] = s * inv * phi[0];
-    q[2] = s * inv * phi[1];
-    q[3] = s * inv * phi[2];
+    q[0] = c;
+    q[1] = s * phi[0];
+    q[2] = s * phi[1];
+    q[3] = s * phi[2];
     return;
   }
   const T th = sqrt(t2);
@@ -90,8 +90,9 @@ inline void quatLog(const T q[4], T phi[3]) {
   const T n2 = dot3(v, v);
   T k;
   if (n2 < T(1e-4) * w * w) {
-    const T x2 = n2 / (w * w);
-    k = T(2.0) / w * (T(1.0) - x2 / T(3.0) + x2 * x2 / T(5.0));
+    const T iw = T(1.0) / w;  // one division
+    const T x2 = n2 * iw * iw;
+    k = T(2.0) * iw * (T(1.0) - x2 * (T(1.0 / 3.0) - x2 * T(0.2)));
   } else {
     const T n = sqrt(n2);
     k = T(2.0) * atan2(n, w) / n;
