@@ -3,20 +3,22 @@
 #include <cmath>
 #include <cstring>
 
-// Run-time dispatch of the two inner loops (GCC on x86-64 Linux): an AVX2 clone and the baseline,
-// chosen once at load time (ifunc); no allocation, same summation order in both.
+// Run-time dispatch of the inner loops (GCC on x86-64 Linux): an x86-64-v3 (AVX2 + FMA) clone and the
+// baseline, chosen once at load time (ifunc, no allocation). Same lanes and summation order in both;
+// the v3 clone fuses multiply-adds (crn.cc is compiled with -ffp-contract=fast), so its results can
+// differ from the baseline's in the last bits (a few 1e-16 relative), never between runs on one machine.
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && defined(__linux__) && \
     !defined(BORESIGHT_NO_TARGET_CLONES)
-#define BORESIGHT_CLONES __attribute__((target_clones("avx2", "default")))
+#define BORESIGHT_CLONES __attribute__((target_clones("arch=x86-64-v3", "default")))
 #else
 #define BORESIGHT_CLONES
 #endif
 
 namespace boresight::core {
 
-// Four-lane vectors (GCC/clang vector extension: AVX registers in the AVX2 clone, SSE2 pairs in the
+// Four-lane vectors (GCC/clang vector extension: AVX registers in the v3 clone, SSE2 pairs in the
 // baseline); loads through memcpy (unaligned, no aliasing issue). Every sum below is lane-wise and
-// then reduced in a fixed order, so both clones give bit-identical results.
+// then reduced in a fixed order.
 // (-Wpsabi: the helpers pass V4 by value; they are internal and inlined, no ABI crosses a boundary.)
 #if defined(__GNUC__) && !defined(__clang__)
 #pragma GCC diagnostic ignored "-Wpsabi"

@@ -106,12 +106,13 @@ Status HeadInputValidator::step(const HeadEpoch& in) {
   for (int k = 0; k < n; ++k) {
     const HeadSample& hs = in.sample[static_cast<std::size_t>(k)];
     Status r = Status::kOk;
+    double norm = 0;
     const int slot = slotOf(cfg_, hs.head_id);
     if (slot < 0) {
       r = Status::kUnknownHead;
     } else if (!allFinite(hs.q_I_Si) || !std::isfinite(hs.sigma_scale) || hs.sigma_scale <= 0) {
       r = Status::kNonFinite;
-    } else if (std::abs(hs.q_I_Si.norm() - 1.0) > cfg_.unit_norm_tolerance) {
+    } else if (norm = hs.q_I_Si.norm(), std::abs(norm - 1.0) > cfg_.unit_norm_tolerance) {
       r = Status::kNonUnitQuaternion;
     } else if (v.has(slot)) {
       r = Status::kDuplicateHead;
@@ -122,7 +123,8 @@ Status HeadInputValidator::step(const HeadEpoch& in) {
       continue;
     }
     const auto us = static_cast<std::size_t>(slot);
-    v.q_I_Si[us] = hs.q_I_Si.normalized();
+    const double inv = 1.0 / norm;
+    v.q_I_Si[us] = Quat(hs.q_I_Si.w() * inv, hs.q_I_Si.x() * inv, hs.q_I_Si.y() * inv, hs.q_I_Si.z() * inv);
     v.sigma_scale[us] = hs.sigma_scale;
     v.mask |= 1u << slot;
   }

@@ -71,8 +71,8 @@ struct CrnKernel {
 /// Designs the kernels; kInvalidConfig when the parameters are out of range.
 Status designCrn(const CrnConfig& cfg, CrnKernel& out);
 
-/// sum_j a[j] b[j], j < n, in eight interleaved partial sums added in a fixed order: vectorised, and
-/// the same result whichever instruction set the run-time dispatch picks (no FMA contraction).
+/// sum_j a[j] b[j], j < n, in eight interleaved partial sums added in a fixed order (vectorised; an
+/// AVX2+FMA clone is picked at load time where the CPU has it: same order, fused multiply-adds).
 double crnDot(const double* a, const double* b, int n);
 /// Three channels at once with the kernel g0 + s g1 formed on the fly (value with a Taylor step).
 void crnDotTaylor3(const double* g0, const double* g1, double s, const double* x0, const double* x1,
