@@ -55,15 +55,18 @@ Status RelativeAttitudeMeans::step(const ValidHeads& in) {
       const auto p = static_cast<std::size_t>(pairIndex(a, b));
       const Quat B = q_Sa_I * in.q_I_Si[ub];
       const double sa = in.sigma_scale[ua], sb = in.sigma_scale[ub];
-      Mat3 W = W1_[p];
+      Mat3 W_scaled;
+      const Mat3* Wp = &W1_[p];  // no copy at nominal sigma scales
       if (sa != 1.0 || sb != 1.0) {
         const Mat3& C = C_Sj_Si0_[p];
         const Mat3 S = sb * sb * Sigma_[ub] + sa * sa * C * Sigma_[ua] * C.transpose();
-        if (!invertSpd3(S, W)) {
+        if (!invertSpd3(S, W_scaled)) {
           health_.record(Status::kNumericalFailure);
           continue;
         }
+        Wp = &W_scaled;
       }
+      const Mat3& W = *Wp;
       Acc& A = acc_[p];
       if (A.n == 0) A.q_ref = B;
       if (A.n > 0 && tau > 0) {  // exponential forgetting: lambda = exp(-dt/tau), series for small dt/tau
@@ -80,9 +83,9 @@ Status RelativeAttitudeMeans::step(const ValidHeads& in) {
       ++A.n;
       A.n_w += 1.0;
       A.W_sum += W;
-      A.W_eta += W * eta;
+      A.W_eta.noalias() += W * eta;
       A.eta_sum += eta;
-      A.eta_eta += eta * eta.transpose();
+      A.eta_eta.noalias() += eta * eta.transpose();
       if ((A.n & 63u) != 1u) continue;  // re-anchoring check every 64 epochs
       Mat3 P;
       if (!invertSpd3(A.W_sum, P)) continue;
