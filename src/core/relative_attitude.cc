@@ -69,16 +69,23 @@ Status RelativeAttitudeMeans::step(const ValidHeads& in) {
       const Mat3& W = *Wp;
       Acc& A = acc_[p];
       if (A.n == 0) A.q_ref = B;
-      if (A.n > 0 && tau > 0) {  // exponential forgetting: lambda = exp(-dt/tau), series for small dt/tau
+      // exponential forgetting, applied in blocks: the sums are multiplied by exp(-(t - t_last)/tau)
+      // once the elapsed time reaches kForgetBlockS (or tau/1000), so the epochs inside one block
+      // share one weight (relative weight error below 1e-3 for the default tau; exact at block ends)
+      if (A.n == 0) {
+        A.t_last = in.t;
+      } else if (tau > 0) {
         const double x = toSeconds(in.t - A.t_last) / tau;
-        const double lambda = x < 1e-3 ? 1.0 - x * (1.0 - 0.5 * x * (1.0 - x / 3.0)) : std::exp(-x);
-        A.n_w *= lambda;
-        A.W_sum *= lambda;
-        A.W_eta *= lambda;
-        A.eta_sum *= lambda;
-        A.eta_eta *= lambda;
+        if (x >= 1e-3 || toSeconds(in.t - A.t_last) >= kForgetBlockS) {
+          const double lambda = x < 1e-3 ? 1.0 - x * (1.0 - 0.5 * x * (1.0 - x / 3.0)) : std::exp(-x);
+          A.n_w *= lambda;
+          A.W_sum *= lambda;
+          A.W_eta *= lambda;
+          A.eta_sum *= lambda;
+          A.eta_eta *= lambda;
+          A.t_last = in.t;
+        }
       }
-      A.t_last = in.t;
       const Vec3 eta = quatLog(A.q_ref.conjugate() * B);
       ++A.n;
       A.n_w += 1.0;

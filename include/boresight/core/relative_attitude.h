@@ -8,8 +8,9 @@
 // mean = B_ref Exp((sum W)^-1 sum W eta_k), eta_k = Log(B_ref^T B_k); the anchor moves to the mean
 // (first-order re-anchoring of the sums) when they drift apart by more than kReanchorRad.
 // Covariance of the mean: (sum W)^-1 (model). Spread: the sample covariance of eta (data).
-// Forgetting: every sum is multiplied by exp(-dt/tau) before an epoch is added (tau =
-// HeadSetConfig::relative_time_constant_s; 0 keeps everything), so the means follow slow changes; the
+// Forgetting: the sums are multiplied by exp(-dt/tau) (tau = HeadSetConfig::relative_time_constant_s;
+// 0 keeps everything) every kForgetBlockS seconds or tau/1000, whichever is shorter (epochs inside a
+// block share one weight), so the means follow slow changes; the
 // model covariance (sum lambda^k W)^-1 is then an upper bound of the mean's true covariance.
 // Alignment (for the fusion): from the pair means, r_ab = Log(C_B_Sa^0 B_ab C_Sb_B^0) = d_b - d_a to
 // first order, d_k the mounting error of head k in B; the information-weighted least squares over all
@@ -43,6 +44,8 @@ struct ClosureCheck {
 class RelativeAttitudeMeans {
  public:
   static constexpr double kReanchorRad = 1e-3;
+  /// Forgetting is applied to the sums at most this often (s); see step().
+  static constexpr double kForgetBlockS = 8.0;
 
   Status configure(const HeadSetConfig& cfg);
   void reset();

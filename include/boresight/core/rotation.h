@@ -46,7 +46,27 @@ inline Vec3 quatLog(const Quat& q) {
   return Vec3(phi[0], phi[1], phi[2]);
 }
 
-inline Mat3 so3Exp(const Vec3& phi) { return quatExp(phi).toRotationMatrix(); }
+/// Exp to a matrix: Rodrigues, R = I + s [phi]x + k [phi]x^2 = (1 - k th^2) I + s [phi]x + k phi phi^T,
+/// s = sin(th)/th, k = (1 - cos th)/th^2; series below 0.01 rad (truncation below 1e-16).
+inline Mat3 so3Exp(const Vec3& phi) {
+  const double t2 = phi.squaredNorm();
+  double s, k;
+  if (t2 < 1e-4) {
+    s = 1.0 - t2 / 6.0 * (1.0 - t2 / 20.0);
+    k = 0.5 * (1.0 - t2 / 12.0 * (1.0 - t2 / 30.0));
+  } else {
+    const double th = std::sqrt(t2);
+    s = std::sin(th) / th;
+    k = (1.0 - std::cos(th)) / t2;
+  }
+  const double d = 1.0 - k * t2;
+  const double x = phi.x(), y = phi.y(), z = phi.z();
+  Mat3 R;
+  R << d + k * x * x, k * x * y - s * z, k * x * z + s * y,  //
+      k * x * y + s * z, d + k * y * y, k * y * z - s * x,   //
+      k * x * z - s * y, k * y * z + s * x, d + k * z * z;
+  return R;
+}
 inline Vec3 so3Log(const Mat3& C) { return quatLog(Quat(C)); }
 
 /// Inverse left Jacobian of SO(3): Log(Exp(-x) Exp(r)) = r - jacobianLeftInverse(r) x + O(x^2).
