@@ -6,6 +6,10 @@
 #   __cxa_throw __cxa_rethrow __cxa_allocate_exception  std::__throw_* (_ZSt*__throw_*)
 #   __cxa_guard_acquire (function-local statics)  pthread_mutex_* / pthread_*lock*
 #   printf family, puts, fwrite, fopen, std::cout / std::cerr (I/O)
+# -DWAIVE="obj.o:symbol,..." lists known findings that do not fail the test (each is still printed);
+# every waiver must name its cause where the test is registered, and go when the cause is fixed.
+cmake_minimum_required(VERSION 3.16)
+string(REPLACE "," ";" WAIVE "${WAIVE}")
 if(NOT NM OR NOT LIB)
   message(FATAL_ERROR "usage: cmake -DNM=<nm> -DLIB=<archive> -P check_core_symbols.cmake")
 endif()
@@ -41,7 +45,11 @@ foreach(line IN LISTS lines)
   math(EXPR n_symbols "${n_symbols} + 1")
   foreach(pattern IN LISTS forbidden)
     if(sym MATCHES "${pattern}")
-      list(APPEND bad "${object}: ${sym}")
+      if("${object}:${sym}" IN_LIST WAIVE)
+        message(WARNING "waived (known, to be fixed): ${object}: ${sym}")
+      else()
+        list(APPEND bad "${object}: ${sym}")
+      endif()
     endif()
   endforeach()
 endforeach()
