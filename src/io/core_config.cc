@@ -120,11 +120,25 @@ bool loadPlatformConfig(const std::string& path, PlatformConfig& out, std::strin
     auto& p = out.pipeline;
     const YAML::Node heads = root["heads"];
     if (!heads || !heads.IsMap()) fail("heads", "missing (a mapping with 'list')", heads ? heads : root);
-    checkKeys(heads, "heads", {"mounting", "unit_norm_tolerance", "list"});
+    checkKeys(heads, "heads", {"mounting", "unit_norm_tolerance", "list", "fusion_alignment",
+                               "relative_time_constant_s", "relative_min_epochs", "alignment_update_epochs"});
     std::string mounting = heads["mounting"] ? heads["mounting"].as<std::string>() : "explicit";
     if (mounting != "qsa1b" && mounting != "explicit") fail("heads.mounting", "expected qsa1b or explicit", heads["mounting"]);
     out.mounting_from_qsa1b = mounting == "qsa1b";
     p.heads.unit_norm_tolerance = positive(heads["unit_norm_tolerance"], "heads.unit_norm_tolerance", 1e-5);
+    if (const YAML::Node fa = heads["fusion_alignment"]) {
+      const std::string v = fa.as<std::string>();
+      if (v == "nominal") p.fusion_alignment = core::FusionAlignment::kNominal;
+      else if (v == "running_means") p.fusion_alignment = core::FusionAlignment::kRunningMeans;
+      else fail("heads.fusion_alignment", "expected nominal or running_means, not '" + v + "'", fa);
+    }
+    p.heads.relative_time_constant_s =
+        positive(heads["relative_time_constant_s"], "heads.relative_time_constant_s", p.heads.relative_time_constant_s);
+    p.heads.relative_min_epochs = integer(heads["relative_min_epochs"], "heads.relative_min_epochs", p.heads.relative_min_epochs);
+    if (p.heads.relative_min_epochs < 1) fail("heads.relative_min_epochs", "must be >= 1", heads["relative_min_epochs"]);
+    p.alignment_update_epochs = integer(heads["alignment_update_epochs"], "heads.alignment_update_epochs", p.alignment_update_epochs);
+    if (p.alignment_update_epochs < 1)
+      fail("heads.alignment_update_epochs", "must be >= 1", heads["alignment_update_epochs"]);
     const YAML::Node list = heads["list"];
     if (!list || !list.IsSequence() || list.size() == 0) fail("heads.list", "missing or empty", list ? list : heads);
     if (list.size() > static_cast<std::size_t>(core::kMaxHeads))

@@ -119,6 +119,12 @@ TEST(PlatformConfig, ThermalSectionReachesThePipeline) {
   ASSERT_TRUE(io::loadPlatformConfig(writeTemp("thermal.yaml", changed), pc, &err)) << err;
   EXPECT_EQ(pc.pipeline.wahba_correction, core::RelativeCorrection::kIbaOneAxis);
   EXPECT_EQ(pc.pipeline.deformation.tau_s, 300.0);
+  const std::string nominal = replaced(base, "fusion_alignment: running_means", "fusion_alignment: nominal");
+  ASSERT_TRUE(io::loadPlatformConfig(writeTemp("nominal.yaml", nominal), pc, &err)) << err;
+  EXPECT_EQ(pc.pipeline.fusion_alignment, core::FusionAlignment::kNominal);
+  const std::string tau = replaced(base, "relative_time_constant_s: 16200", "relative_time_constant_s: 5400");
+  ASSERT_TRUE(io::loadPlatformConfig(writeTemp("tau.yaml", tau), pc, &err)) << err;
+  EXPECT_EQ(pc.pipeline.heads.relative_time_constant_s, 5400.0);
   const std::string bad = replaced(base, "wahba_correction: filtered_three_axis", "wahba_correction: three_axis");
   EXPECT_FALSE(io::loadPlatformConfig(writeTemp("thermal_bad.yaml", bad), pc, &err));
   EXPECT_NE(err.find(":" + std::to_string(lineOfText(bad, "wahba_correction: three")) + ": key 'thermal.wahba_correction'"),
