@@ -144,6 +144,7 @@ struct LcmLogReader::Impl {
   std::vector<char> buf;
   std::size_t begin = 0, end = 0;
   bool eof = false;
+  std::uint64_t file_size = 0, file_read = 0;  ///< size at open; bytes read from the file so far
   Event ev;
 
   ~Impl() { close(); }
@@ -154,18 +155,31 @@ struct LcmLogReader::Impl {
   static std::uint32_t be32(const unsigned char* p) {
     return (std::uint32_t{p[0]} << 24) | (std::uint32_t{p[1]} << 16) | (std::uint32_t{p[2]} << 8) | std::uint32_t{p[3]};
   }
+  /// Unread bytes: in the buffer and in the file after it (as of the size at open).
+  std::uint64_t available() const {
+    return (end - begin) + (file_size > file_read ? file_size - file_read : 0);
+  }
   /// At least n unread bytes in buf (false: the file ends before).
   bool need(std::size_t n) {
     while (end - begin < n) {
       if (eof || !f) return false;
+      // An event header that claims more bytes than the file has left is a cut (or damaged) last
+      // event: answered without growing the buffer to the claimed size (up to 64 MB per event).
+      if (file_size > 0 && n > available()) {
+        eof = true;
+        return false;
+      }
       if (begin > 0) {
         std::memmove(buf.data(), buf.data() + begin, end - begin);
         end -= begin;
         begin = 0;
       }
-      if (buf.size() < std::max<std::size_t>(n, 1u << 20)) buf.resize(std::max<std::size_t>(n, 1u << 20));
+      // 1 MB reads, or the whole file when it is smaller.
+      const std::size_t chunk = file_size > 0 ? static_cast<std::size_t>(std::min<std::uint64_t>(file_size, 1u << 20)) : (1u << 20);
+      if (buf.size() < std::max(n, chunk)) buf.resize(std::max(n, chunk));
       const std::size_t got = std::fread(buf.data() + end, 1, buf.size() - end, f);
       end += got;
+      file_read += got;
       if (got == 0) eof = true;
     }
     return true;
@@ -191,7 +205,10 @@ struct LcmLogReader::Impl {
       }
       const auto* p = reinterpret_cast<const unsigned char*>(buf.data() + begin);
       const std::uint32_t clen = be32(p + 20), dlen = be32(p + 24);
-      if (be32(p) != kSync || clen > kMaxChannel || dlen > kMaxData) {
+      // A length that runs past the end of the file is damage, not an event: resynchronise at the
+      // next sync word (so one bad length costs that event, not the rest of the log).
+      if (be32(p) != kSync || clen > kMaxChannel || dlen > kMaxData ||
+          (file_size > 0 && kHeader + clen + dlen > available())) {
         ++begin;  // not an event here: look for the next sync word
         skipped = true;
         continue;
@@ -245,6 +262,14 @@ bool LcmLogReader::open(const std::string& path, std::string* error) {
   }
   impl_->begin = impl_->end = 0;
   impl_->eof = false;
+  impl_->file_read = 0;
+  impl_->file_size = 0;
+  if (std::fseek(impl_->f, 0, SEEK_END) == 0) {
+    const long size = std::ftell(impl_->f);
+    impl_->file_size = size > 0 ? static_cast<std::uint64_t>(size) : 0;
+  }
+  std::rewind(impl_->f);
+  unknown_channel_ = decode_failures_ = 0;  // a reader opened again counts the new log only
   return true;
 }
 

@@ -76,19 +76,42 @@ void EpochAssembler::pop(Item& it) {
   heap_.pop_back();
 }
 
-EpochAssembler::Out EpochAssembler::next(core::HeadEpoch& epoch, TimeUs& t, Vec3& a_A) {
+bool EpochAssembler::fill(Out& out) {
   // Read from the source that is furthest behind until every unfinished source is past the
   // earliest buffered tag plus the look-ahead (or the buffer is full).
   for (;;) {
     std::size_t lag = src_.size();
     for (std::size_t i = 0; i < src_.size(); ++i)
       if (!src_[i].done && (lag == src_.size() || src_[i].frontier < src_[lag].frontier)) lag = i;
-    if (lag == src_.size()) break;  // every source finished
-    if (!heap_.empty() && src_[lag].frontier >= heap_.front().t + cfg_.lookahead_us) break;
-    if (heap_.size() >= cfg_.max_buffered) break;
-    Out o = Out::kEnd;
-    if (!pull(lag, o)) return o;
+    if (lag == src_.size()) return true;  // every source finished
+    if (!heap_.empty() && src_[lag].frontier >= heap_.front().t + cfg_.lookahead_us) return true;
+    if (heap_.size() >= cfg_.max_buffered) return true;
+    if (!pull(lag, out)) return false;
   }
+}
+
+EpochAssembler::Out EpochAssembler::nextSample(Sample& s) {
+  Out o = Out::kEnd;
+  if (!fill(o)) return o;
+  if (heap_.empty()) return Out::kEnd;
+  Item it;
+  pop(it);
+  emitted_ = true;
+  last_t_ = it.t;
+  s = it.s;
+  if (it.s.kind == Sample::Kind::kAccel) {
+    ++src_[it.src].c.used_accel;
+    ++total_.used_accel;
+    return Out::kAccel;
+  }
+  ++src_[it.src].c.used_heads;
+  ++total_.used_heads;
+  return Out::kHeads;
+}
+
+EpochAssembler::Out EpochAssembler::next(core::HeadEpoch& epoch, TimeUs& t, Vec3& a_A) {
+  Out o = Out::kEnd;
+  if (!fill(o)) return o;
   if (heap_.empty()) return Out::kEnd;
   Item it;
   pop(it);

@@ -98,6 +98,8 @@ Source::Next Sca1aSource::next(Sample& out, Reject& why) {
     out.t = rec_.t;
     out.head_id = rec_.head;
     out.q_I_S = quatFromScalarFirst(rec_.q);
+    out.star_count = rec_.nstars;
+    out.flags = 1;
   }
   return n;
 }
@@ -114,13 +116,17 @@ bool Acc1aSource::open(const std::string& path, const io::ReadOptions& opt, std:
 Source::Next Acc1aSource::next(Sample& out, Reject& why) {
   Next n = level1Next(s_, reported_rejects_, held_, done_, rec_, why);
   if (n != Next::kSample) return n;
-  if (!(rec_.has(io::acc_bits::kAngX) && rec_.has(io::acc_bits::kAngY) && rec_.has(io::acc_bits::kAngZ))) {
+  // The same fields and validity bits as the message (io::accelFromAcc1a).
+  const io::AccelSample m = io::accelFromAcc1a(rec_, 0);
+  if (!(m.flags & 1) && !keep_without_angular_) {
     why = Reject::kNoAngular;
     return Next::kRejected;
   }
   out.kind = Sample::Kind::kAccel;
-  out.t = rec_.t;
-  out.a_A = Vec3(rec_.value[io::acc_bits::kAngX], rec_.value[io::acc_bits::kAngY], rec_.value[io::acc_bits::kAngZ]);
+  out.t = m.utime;
+  out.a_A = Vec3(m.ang_accel[0], m.ang_accel[1], m.ang_accel[2]);
+  out.lin_A = Vec3(m.lin_accel[0], m.lin_accel[1], m.lin_accel[2]);
+  out.flags = m.flags;
   return n;
 }
 
@@ -154,6 +160,8 @@ Source::Next LcmLogSource::next(Sample& out, Reject& why) {
       out.t = h.utime;
       out.head_id = h.head_id;
       out.q_I_S = quatFromScalarFirst(h.q);
+      out.star_count = h.star_count;
+      out.flags = h.flags;
       return Next::kSample;
     case io::LcmLogReader::Kind::Accel:
       if (!(a.flags & 1)) {
@@ -163,6 +171,8 @@ Source::Next LcmLogSource::next(Sample& out, Reject& why) {
       out.kind = Sample::Kind::kAccel;
       out.t = a.utime;
       out.a_A = Vec3(a.ang_accel[0], a.ang_accel[1], a.ang_accel[2]);
+      out.lin_A = Vec3(a.lin_accel[0], a.lin_accel[1], a.lin_accel[2]);
+      out.flags = a.flags;
       return Next::kSample;
     case io::LcmLogReader::Kind::Skipped:
       why = r_->decodeFailures() != undecodable ? Reject::kMalformed : Reject::kOtherChannel;

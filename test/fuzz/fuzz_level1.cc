@@ -1,6 +1,6 @@
 // libFuzzer target for the Level-1 readers: one executable; the reader is chosen at run time by the
 // environment variable BORESIGHT_FUZZ_READER (header, sca1a, flagged, acc1a, sca1b, acc1b, gnv, qsa,
-// imu, thr, ihk, hrt, tim, clk, generic, summary), e.g.
+// imu, thr, ihk, hrt, tim, clk, generic, summary, stream_sca1a, stream_acc1a, lcmlog), e.g.
 //   BORESIGHT_FUZZ_READER=sca1a build-fuzz/test/fuzz/fuzz_level1 -max_total_time=30 CORPUS
 //
 // Input layout: byte 0 selects the mode, the rest is the body.
@@ -12,14 +12,34 @@
 //   - a successful read without rejected lines writes text that reads back to the same records
 //     (ASCII and, for binary readers, binary), and the record count in the written header is right;
 //   - every reported issue has a line number inside the text.
+// The streaming readers (stream_sca1a, stream_acc1a) write the text to a temporary file and read it
+// with io::ProductStream (mode bits 5..6 choose the chunk size, so lines cross chunk boundaries) and
+// with the engine's Sca1aSource / Acc1aSource: the stream must give the same records, rejected count,
+// kept issues and outcome as the whole-file reader on the same file, and the source must report every
+// line once (sample or rejected with its reason).
+// The LCM log reader (lcmlog) reads arbitrary bytes as a log file (mode bits 1..2: 0 the bytes as they
+// are, 1 behind the event sync word, 2 the body cut into well-formed events on the node's channels with
+// arbitrary payloads, so the decoders are reached): no crash; every event is a head, accelerometer,
+// star-vector or skipped event (skipped = other channel + undecodable); LcmLogSource through the
+// assembler counts every event once as used or rejected, with the reasons the reader's kinds imply.
+//
+// BORESIGHT_FUZZ_MAKE_SEED=FILE (with BORESIGHT_FUZZ_READER=lcmlog): writes a small LCM log seed input
+// (heads valid and not, accelerometer samples with and without angular acceleration, star vectors, an
+// event on another channel) and exits; run_fuzzers.sh uses it when no `boresight` program is at hand.
 #include <boresight/io/any_product.h>
+#include <boresight/io/lcm_log.h>
 #include <boresight/io/level1.h>
+#include <boresight/io/product_stream.h>
+#include <boresight/stream/assembler.h>
+#include <boresight/stream/sources.h>
 
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <string>
 #include <string_view>
+#include <unistd.h>
 
 using namespace boresight::io;
 
@@ -126,7 +146,10 @@ using namespace fuzz_helpers;
 
 namespace fuzz_helpers {
 
-enum class Reader { Header, Sca1a, Flagged, Acc1a, Sca1b, Acc1b, Gnv, Qsa, Imu, Thr, Ihk, Hrt, Tim, Clk, Generic, Summary };
+enum class Reader {
+  Header, Sca1a, Flagged, Acc1a, Sca1b, Acc1b, Gnv, Qsa, Imu, Thr, Ihk, Hrt, Tim, Clk, Generic, Summary,
+  StreamSca1a, StreamAcc1a, LcmLog
+};
 struct NamedReader {
   const char* name;
   Reader reader;
@@ -136,6 +159,7 @@ constexpr NamedReader kReaders[] = {
     {"sca1b", Reader::Sca1b},   {"acc1b", Reader::Acc1b}, {"gnv", Reader::Gnv},         {"qsa", Reader::Qsa},
     {"imu", Reader::Imu},       {"thr", Reader::Thr},     {"ihk", Reader::Ihk},         {"hrt", Reader::Hrt},
     {"tim", Reader::Tim},       {"clk", Reader::Clk},     {"generic", Reader::Generic}, {"summary", Reader::Summary},
+    {"stream_sca1a", Reader::StreamSca1a}, {"stream_acc1a", Reader::StreamAcc1a}, {"lcmlog", Reader::LcmLog},
 };
 Reader g_reader = Reader::Header;
 
@@ -172,6 +196,248 @@ void fuzzSummary(std::string_view body, std::uint8_t mode) {
   if (!s.ok && s.error.empty()) fail("failure without an error");
 }
 
+// ---- files for the readers that take a path ----
+std::string g_dir;  // a private temporary folder, made once
+
+void writeFile(const std::string& path, std::string_view bytes) {
+  std::FILE* f = std::fopen(path.c_str(), "wb");
+  if (!f) fail("cannot write the temporary input file");
+  if (!bytes.empty() && std::fwrite(bytes.data(), 1, bytes.size(), f) != bytes.size()) fail("short write of the input file");
+  std::fclose(f);
+}
+
+// ---- streaming Level-1 readers ----
+template <typename Rec>
+void fuzzStream(std::string_view body, std::uint8_t mode, Product p) {
+  ReadOptions opt;
+  opt.on_error = (mode & 1) ? OnError::Stop : OnError::Skip;
+  opt.max_issues_kept = 8;
+  const int kind = (mode >> 1) & 3;
+  const bool fixed = (mode >> 3) & 1;
+  std::string text;
+  if (kind == 0) {
+    text.assign(body.data(), body.size());
+  } else {
+    static const std::string hy = header<Rec>(p, false, false), hf = header<Rec>(p, true, false);
+    text = fixed ? hf : hy;
+    text.append(body.data(), body.size());
+  }
+  static const std::size_t chunks[4] = {4096, 4099, 6000, LineStream::kDefaultChunk};
+  const std::size_t chunk = chunks[(mode >> 5) & 3];
+  const std::string path = g_dir + "/" + productName(p) + "_2023-06-01_C_04.txt";
+  writeFile(path, text);
+
+  const auto whole = readProduct<Rec>(path, opt);
+  ProductStream<Rec> s;
+  std::string err;
+  if (!s.open(path, opt, &err, chunk)) {
+    if (err.empty()) fail("stream refused the file without a reason");
+    if (err.find('\n') != std::string::npos) fail("multi-line stream error");
+    // The stream refuses binary files (read whole); anything else it refuses, the whole reader must too.
+    if (whole.ok && !whole.header.binary) fail("stream refused a file the whole-file reader reads");
+    return;
+  }
+  if (whole.header.binary) fail("stream opened a binary file");
+  std::size_t i = 0;
+  Rec r;
+  while (s.next(r)) {
+    if (i >= whole.records.size()) fail("stream gave more records than the whole-file reader");
+    if (!(r == whole.records[i])) fail("stream record differs from the whole-file reader's");
+    ++i;
+  }
+  if (s.ok() != whole.ok) fail("stream and whole-file reader disagree on success");
+  if (whole.ok) {
+    if (i != whole.records.size()) fail("stream gave fewer records than the whole-file reader");
+  } else if (s.error() != whole.error) {
+    fail("stream and whole-file reader fail with different errors");
+  }
+  if (s.rejectedCount() != whole.rejected_count) fail("stream and whole-file reader count different rejected lines");
+  if (s.rejected().size() != whole.rejected.size()) fail("stream and whole-file reader keep different issues");
+  for (std::size_t k = 0; k < whole.rejected.size(); ++k)
+    if (s.rejected()[k].str() != whole.rejected[k].str()) fail("stream issue differs from the whole-file reader's");
+}
+
+/// The engine's Level-1 source over the same file: every line reported once, as the reader saw it.
+template <typename Src, typename Rec>
+void fuzzSource(std::uint8_t mode, Product p) {
+  ReadOptions opt;
+  opt.on_error = (mode & 1) ? OnError::Stop : OnError::Skip;
+  const std::string path = g_dir + "/" + productName(p) + "_2023-06-01_C_04.txt";
+  const auto whole = readProduct<Rec>(path, opt);
+  Src src;
+  std::string err;
+  if (!src.open(path, opt, &err)) return;  // refusals are checked on the stream above
+  std::size_t samples = 0, malformed = 0, no_angular = 0, other = 0;
+  boresight::stream::Sample x;
+  boresight::stream::Reject why = boresight::stream::Reject::kMalformed;
+  boresight::stream::Source::Next n;
+  while ((n = src.next(x, why)) == boresight::stream::Source::Next::kSample ||
+         n == boresight::stream::Source::Next::kRejected) {
+    if (n == boresight::stream::Source::Next::kSample) {
+      ++samples;
+    } else if (why == boresight::stream::Reject::kMalformed) {
+      ++malformed;
+    } else if (why == boresight::stream::Reject::kNoAngular) {
+      ++no_angular;
+    } else {
+      ++other;
+    }
+    if (samples + malformed + no_angular + other > whole.records.size() + whole.rejected_count + 1)
+      fail("source reports more lines than the file has");
+  }
+  if (n == boresight::stream::Source::Next::kPending) fail("a file source is pending");
+  if ((n == boresight::stream::Source::Next::kError) == whole.ok) fail("source and whole-file reader disagree on success");
+  if (other) fail("a Level-1 source rejected with a reason other than malformed / no angular acceleration");
+  if (malformed != whole.rejected_count) fail("source counts different malformed lines");
+  if (!whole.ok) return;
+  if (samples + no_angular != whole.records.size()) fail("source reports a different number of records");
+  if (p == Product::SCA1A && no_angular) fail("SCA1A records rejected as without angular acceleration");
+}
+
+// ---- LCM log reader ----
+void putBe32(std::string& s, std::uint32_t v) {
+  for (int k = 3; k >= 0; --k) s.push_back(static_cast<char>((v >> (8 * k)) & 0xFF));
+}
+void putBe64(std::string& s, std::uint64_t v) {
+  putBe32(s, static_cast<std::uint32_t>(v >> 32));
+  putBe32(s, static_cast<std::uint32_t>(v));
+}
+
+/// The body cut into events: per event a channel selector byte, a length byte, then that many payload
+/// bytes (what is left when the body runs out).
+std::string eventsFromBody(std::string_view body) {
+  static const char* channels[4] = {kStarHeadChannel, kAccelChannel, "STAR_VECTORS", "OTHER"};
+  std::string out;
+  std::size_t i = 0;
+  std::uint64_t num = 0;
+  while (i + 2 <= body.size()) {
+    const auto sel = static_cast<std::uint8_t>(body[i]);
+    std::size_t len = static_cast<std::uint8_t>(body[i + 1]);
+    i += 2;
+    len = std::min(len, body.size() - i);
+    const char* ch = channels[sel & 3];
+    putBe32(out, 0xEDA1DA01u);
+    putBe64(out, num++);
+    putBe64(out, 1000000ull * num);
+    putBe32(out, static_cast<std::uint32_t>(std::strlen(ch)));
+    putBe32(out, static_cast<std::uint32_t>(len));
+    out += ch;
+    out.append(body.data() + i, len);
+    i += len;
+  }
+  return out;
+}
+
+void fuzzLcmLog(std::string_view body, std::uint8_t mode) {
+  namespace st = boresight::stream;
+  const int kind = (mode >> 1) & 3;
+  std::string bytes;
+  if (kind == 1 || kind == 3) putBe32(bytes, 0xEDA1DA01u);
+  if (kind == 2)
+    bytes = eventsFromBody(body);
+  else
+    bytes.append(body.data(), body.size());
+  const std::string path = g_dir + "/input.lcmlog";
+  writeFile(path, bytes);
+
+  // The reader: every event has a kind; skipped ones are other channels or undecodable.
+  LcmLogReader r;
+  std::string err;
+  const bool opened = r.open(path, &err);
+  st::LcmLogSource probe;
+  std::string err2;
+  if (probe.open(path, &err2) != opened) fail("LcmLogSource and LcmLogReader disagree on opening");
+  if (!opened) {
+    if (err.empty()) fail("log refused without a reason");
+    return;
+  }
+  std::uint64_t heads_valid = 0, heads_invalid = 0, acc_valid = 0, acc_invalid = 0, stars = 0, skipped = 0, events = 0;
+  HeadSample h;
+  AccelSample a;
+  for (;;) {
+    const auto k = r.next(h, a);
+    if (k == LcmLogReader::Kind::End) break;
+    if (++events > bytes.size() + 1) fail("more events than bytes");
+    switch (k) {
+      case LcmLogReader::Kind::Head: ++((h.flags & 1) ? heads_valid : heads_invalid); break;
+      case LcmLogReader::Kind::Accel: ++((a.flags & 1) ? acc_valid : acc_invalid); break;
+      case LcmLogReader::Kind::Stars:
+        ++stars;
+        if (r.stars().n_stars < 0 || r.stars().n_stars > StarVectors::kCapacity) fail("star count outside capacity");
+        break;
+      case LcmLogReader::Kind::Skipped: ++skipped; break;
+      case LcmLogReader::Kind::End: break;
+    }
+  }
+  if (skipped != r.unknownChannel() + r.decodeFailures()) fail("skipped events != other channel + undecodable");
+  if (r.next(h, a) != LcmLogReader::Kind::End) fail("reader goes on after its end");
+
+  // The source through the assembler: every event once, used or rejected with its reason.
+  st::AssemblerConfig cfg;
+  cfg.lookahead_us = (mode & 16) ? 1 : 2 * boresight::kUsPerSecond;
+  cfg.max_buffered = (mode & 32) ? 4 : 1u << 16;
+  st::EpochAssembler as(cfg);
+  as.addSource(&probe);
+  st::Sample x;
+  std::uint64_t out = 0;
+  for (;;) {
+    const auto o = as.nextSample(x);
+    if (o == st::EpochAssembler::Out::kEnd) break;
+    if (o != st::EpochAssembler::Out::kHeads && o != st::EpochAssembler::Out::kAccel) fail("a log source failed or is pending");
+    if (++out > events) fail("more samples out than events");
+  }
+  const st::Counters& c = as.counters();
+  auto rej = [&](st::Reject why) { return c.rejected[static_cast<std::size_t>(why)]; };
+  if (c.read != events) fail("the source read a different number of events than the reader");
+  if (c.read != c.used() + c.rejectedTotal()) fail("read != used + rejected");
+  if (c.used() != out) fail("used != samples handed out");
+  if (rej(st::Reject::kInvalid) != heads_invalid) fail("invalid head messages miscounted");
+  if (rej(st::Reject::kNoAngular) != acc_invalid) fail("accelerometer messages without angular acceleration miscounted");
+  if (rej(st::Reject::kMalformed) != r.decodeFailures()) fail("undecodable events miscounted");
+  if (rej(st::Reject::kOtherChannel) != r.unknownChannel() + stars) fail("other-channel events miscounted");
+  if (c.used_heads + c.used_accel + rej(st::Reject::kLate) != heads_valid + acc_valid) fail("valid samples lost");
+}
+
+/// A small log for the seed corpus (BORESIGHT_FUZZ_MAKE_SEED).
+int writeLcmSeed(const char* path) {
+  LcmLogWriter w;
+  std::string err;
+  if (!w.open(path, &err)) {
+    std::fprintf(stderr, "%s\n", err.c_str());
+    return 1;
+  }
+  bool ok = true;
+  for (int k = 0; k < 6; ++k) {
+    const boresight::TimeUs t = 738849600LL * boresight::kUsPerSecond + k * 500000;
+    for (int head = 1; head <= 3; ++head) {
+      HeadSample h;
+      h.utime = t + (head == 3 && k == 4 ? 3000000 : 0);  // one head sample out of order
+      h.head_id = head;
+      h.q[0] = 0.5, h.q[1] = 0.5, h.q[2] = -0.5, h.q[3] = 0.5;
+      h.star_count = 5 + head;
+      h.flags = (k == 2 && head == 2) ? 0 : 1;
+      h.seq = k;
+      ok = ok && w.write(h);
+    }
+    for (int j = 0; j < 5; ++j) {
+      AccelSample a;
+      a.utime = t + j * 100000;
+      a.ang_accel[0] = 1e-7 * j;
+      a.lin_accel[2] = 1e-6;
+      a.flags = (j == 3) ? 2 : 3;
+      a.seq = 5 * k + j;
+      ok = ok && w.write(a);
+    }
+    StarVectors sv;
+    sv.utime = t;
+    sv.n_stars = k % 3;
+    for (int i = 0; i < sv.n_stars; ++i) sv.s_head[i][2] = sv.r_inertial[i][0] = 1.0;
+    ok = ok && w.write(sv);
+  }
+  w.close();
+  return ok ? 0 : 1;
+}
+
 }  // namespace fuzz_helpers
 
 extern "C" int LLVMFuzzerInitialize(int*, char***) {
@@ -180,6 +446,22 @@ extern "C" int LLVMFuzzerInitialize(int*, char***) {
   for (const auto& r : kReaders)
     if (want == r.name) {
       g_reader = r.reader;
+      if (const char* seed = std::getenv("BORESIGHT_FUZZ_MAKE_SEED")) std::exit(writeLcmSeed(seed));
+      if (g_reader == Reader::StreamSca1a || g_reader == Reader::StreamAcc1a || g_reader == Reader::LcmLog) {
+        const char* tmp = std::getenv("TMPDIR");
+        std::string tmpl = std::string(tmp && *tmp ? tmp : "/tmp") + "/boresight_fuzz_XXXXXX";
+        if (!::mkdtemp(tmpl.data())) {
+          std::fprintf(stderr, "fuzz_level1: cannot make a temporary folder\n");
+          std::exit(2);
+        }
+        g_dir = tmpl;
+        std::atexit([] {
+          for (const char* f : {"/SCA1A_2023-06-01_C_04.txt", "/ACC1A_2023-06-01_C_04.txt", "/ACT1A_2023-06-01_C_04.txt",
+                                "/input.lcmlog"})
+            std::remove((g_dir + f).c_str());
+          ::rmdir(g_dir.c_str());
+        });
+      }
       return 0;
     }
   std::fprintf(stderr, "fuzz_level1: set BORESIGHT_FUZZ_READER to one of:");
@@ -209,6 +491,17 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     case Reader::Clk: runTyped<ClkRecord>(body, mode, Product::CLK1B, false); break;
     case Reader::Generic: fuzzGeneric(body, mode); break;
     case Reader::Summary: fuzzSummary(body, mode); break;
+    case Reader::StreamSca1a:
+      fuzzStream<Sca1aRecord>(body, mode, Product::SCA1A);
+      fuzzSource<boresight::stream::Sca1aSource, Sca1aRecord>(mode, Product::SCA1A);
+      break;
+    case Reader::StreamAcc1a: {
+      const Product p = (mode & 16) ? Product::ACT1A : Product::ACC1A;
+      fuzzStream<FlaggedRecord>(body, mode, p);
+      fuzzSource<boresight::stream::Acc1aSource, FlaggedRecord>(mode, p);
+      break;
+    }
+    case Reader::LcmLog: fuzzLcmLog(body, mode); break;
   }
   return 0;
 }

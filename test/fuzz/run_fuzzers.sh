@@ -7,6 +7,9 @@
 #   ninja -C build-fuzz boresight_fuzzers
 # Seed corpora are made at run time in a temporary folder from the real samples when they are present
 # (../shared/data/real next to the project, or $BORESIGHT_REAL_DATA); nothing is written to the repo.
+# The LCM log reader's seeds: a small log the fuzz executable writes itself (BORESIGHT_FUZZ_MAKE_SEED),
+# and, when a `boresight` program is found ($BORESIGHT_CLI, BUILD_DIR/tools, build/tools), a log written
+# by `boresight convert` from the real SCA1A/ACC1A samples.
 set -euo pipefail
 
 build=${1:?usage: run_fuzzers.sh BUILD_DIR [SECONDS_PER_READER] [READER...]}
@@ -27,6 +30,7 @@ declare -A seeds=(
   [sca1a]="SCA1A" [flagged]="ACC1A ACT1A AHK1A AHK1B" [acc1a]="ACC1A ACT1A" [sca1b]="SCA1B" [acc1b]="ACC1B ACT1B"
   [gnv]="GNV1B GNI1B" [qsa]="QSA1B QKS1B" [imu]="IMU1A IMU1B" [thr]="THR1A THR1B" [ihk]="IHK1A IHK1B"
   [hrt]="HRT1A HRT1B" [tim]="TIM1B" [clk]="CLK1A CLK1B"
+  [stream_sca1a]="SCA1A" [stream_acc1a]="ACC1A ACT1A" [lcmlog]=""
 )
 
 # mode byte: bit0 stop-on-error, bits1-2 kind (0 whole file, 1 ASCII header + body, 2 binary header + body)
@@ -41,13 +45,22 @@ make_corpus() {
   local reader=$1 dir=$work/corpus_$reader
   mkdir -p "$dir"
   printf '\000' > "$dir/empty"
+  if [[ $reader == lcmlog ]]; then
+    make_lcm_seeds "$dir"
+    return 0
+  fi
   [[ -d $real ]] || return 0
   local n=0 pat f
   for pat in ${seeds[$reader]}; do
     while IFS= read -r -d '' f; do
       n=$((n + 1))
       seed_file "$dir/whole_$n" 000 "$f"
-      if [[ $reader != header && $reader != summary && $reader != generic ]]; then
+      if [[ $reader == stream_* ]]; then
+        # the streaming readers read files: the body behind the synthesised header, cut to fit max_len
+        # (head ends the pipe early: awk's SIGPIPE is expected, hence || true under pipefail)
+        { printf '\002'; awk 'body{print} /# End of YAML header|END OF HEADER/{body=1}' "$f" | head -c 60000 || true; } > "$dir/body_$n"
+        head -c 60000 "$f" > "$dir/whole_$n.tmp" && { printf '\000'; cat "$dir/whole_$n.tmp"; } > "$dir/whole_$n" && rm -f "$dir/whole_$n.tmp"
+      elif [[ $reader != header && $reader != summary && $reader != generic ]]; then
         # records only, behind the target's own synthesised header (kind 1)
         { printf '\002'; awk 'body{print} /# End of YAML header|END OF HEADER/{body=1}' "$f"; } > "$dir/body_$n"
       fi
@@ -86,8 +99,31 @@ PY
   fi
 }
 
+# LCM log seeds (mode byte 0: the log's bytes as they are).
+make_lcm_seeds() {
+  local dir=$1 cli=""
+  if BORESIGHT_FUZZ_READER=lcmlog BORESIGHT_FUZZ_MAKE_SEED="$work/own.lcm" "$exe" >/dev/null 2>&1; then
+    { printf '\000'; cat "$work/own.lcm"; } > "$dir/own"
+  fi
+  for c in "${BORESIGHT_CLI:-}" "$build/tools/boresight" "$here/../../build/tools/boresight"; do
+    [[ -n $c && -x $c ]] && { cli=$c; break; }
+  done
+  [[ -n $cli && -d $real ]] || return 0
+  local sca acc k=0
+  sca=$(find "$real" -type f -name 'SCA1A_*' 2>/dev/null | sort | head -n 2 || true)
+  acc=$(find "$real" -type f -name 'ACC1A_*' 2>/dev/null | sort | head -n 2 || true)
+  for s in $sca; do
+    for a in $acc; do
+      k=$((k + 1))
+      if "$cli" convert "$s" "$a" --out "$work/real_$k.lcm" >/dev/null 2>&1; then
+        { printf '\000'; head -c 60000 "$work/real_$k.lcm"; } > "$dir/real_$k"
+      fi
+    done
+  done
+}
+
 readers=("$@")
-[[ ${#readers[@]} -gt 0 ]] || readers=(header sca1a flagged acc1a sca1b acc1b gnv qsa imu thr ihk hrt tim clk generic summary)
+[[ ${#readers[@]} -gt 0 ]] || readers=(header sca1a flagged acc1a sca1b acc1b gnv qsa imu thr ihk hrt tim clk generic summary stream_sca1a stream_acc1a lcmlog)
 status=0
 summary=()
 for reader in "${readers[@]}"; do

@@ -501,3 +501,67 @@ TEST(StreamEngine, DamagedLcmLogCountsWhatItCannotRead) {
   EXPECT_EQ(r.total.used(), clean.total.used() - 1);  // only the cut event is lost
   expectCountersAddUp(r);
 }
+
+TEST(StreamReplay, Qsa1bReferenceTimeIsTheEarliestFirstHeadTagOverAllInputs) {
+  // Two SCA1A files, the later half given first, and a QSA1B history: alignment A valid from long
+  // before the span, alignment B from a time between the two files' first tags. The mountings must be
+  // those valid at the earliest first head tag over all inputs (A), not at the first file's (B).
+  const auto sca = readSca(span().sca);
+  const std::string d = tempDir();
+  const std::size_t half = sca.size() / 2;
+  const auto early = writeRecords(d + "/SCA1A_early.txt", io::Product::SCA1A,
+                                  std::vector<io::Sca1aRecord>(sca.begin(), sca.begin() + long(half)));
+  const auto late = writeRecords(d + "/SCA1A_late.txt", io::Product::SCA1A,
+                                 std::vector<io::Sca1aRecord>(sca.begin() + long(half), sca.end()));
+  const TimeUs t_b = sca[half / 2].t;  // after the early file's first tag, before the late file's
+  ASSERT_LT(sca.front().t, t_b);
+  ASSERT_LT(t_b, sca[half].t);
+  std::vector<io::QsaRecord> qsa;
+  for (int head = 1; head <= 3; ++head) {
+    io::QsaRecord a;
+    a.t = 0;
+    a.sensor = head;
+    a.q[0] = 1, a.q[1] = 0, a.q[2] = 0, a.q[3] = 0;
+    io::QsaRecord b = a;
+    b.t = t_b;
+    b.q[0] = 0, b.q[1] = 1;
+    qsa.push_back(a);
+    qsa.push_back(b);
+  }
+  const auto qsa_file = writeRecords(d + "/QSA1B_hist.txt", io::Product::QSA1B, qsa);
+  for (const auto& order : {std::vector<std::string>{late, early, qsa_file}, std::vector<std::string>{early, late, qsa_file}}) {
+    stream::ReplayInputs in;
+    std::string err;
+    ASSERT_TRUE(stream::classifyInputs(order, in, &err)) << err;
+    io::PlatformConfig pc;
+    ASSERT_TRUE(io::loadPlatformConfig(sourceDir() + "/config/gracefo.yaml", pc, &err)) << err;
+    ASSERT_TRUE(stream::prepareConfig(in, {}, pc, &err)) << err;
+    for (int s = 0; s < pc.pipeline.heads.n_heads; ++s)
+      EXPECT_EQ(pc.pipeline.heads.head[std::size_t(s)].q_Si_B.w(), 1.0) << "head " << s << ", first input " << order[0];
+  }
+}
+
+TEST(StreamEngine, AnLcmEventWithADamagedLengthCostsOnlyThatEvent) {
+  // An event in the middle whose data length claims 48 MB (past the end of the file): the reader
+  // resynchronises at the next sync word, so that one event is malformed and the rest are read
+  // (before, the claimed length swallowed the rest of the log as one cut event).
+  const std::string bytes = slurp(span().lcm);
+  const std::string sync = "\xED\xA1\xDA\x01";
+  const std::size_t e1 = bytes.find(sync, 5000);
+  ASSERT_NE(e1, std::string::npos);
+  std::string damaged = bytes;
+  damaged[e1 + 24] = '\x03';  // data length (big-endian int32 at byte 24 of the event header)
+  const std::string d = tempDir();
+  const std::string path = d + "/bad_length.log";
+  std::FILE* f = std::fopen(path.c_str(), "wb");
+  ASSERT_NE(f, nullptr);
+  std::fwrite(damaged.data(), 1, damaged.size(), f);
+  std::fclose(f);
+  const auto cfg = pipelineConfig(readSca(span().sca));
+  EngineRun clean = runEngine({}, {}, {span().lcm}, cfg);
+  EngineRun r = runEngine({}, {}, {path}, cfg);
+  ASSERT_EQ(r.result, stream::Engine::Result::kDone) << r.error;
+  EXPECT_EQ(r.total.rejected[std::size_t(stream::Reject::kMalformed)], 1u);
+  EXPECT_EQ(r.total.used(), clean.total.used() - 1);
+  expectCountersAddUp(r);
+}

@@ -297,3 +297,41 @@ TEST(Cli, ProcessStreamsTheSimulatorsOutputWhateverTheLogIsCalled) {
   EXPECT_EQ(i.status, 0) << i.out;
   EXPECT_NE(i.out.find("LCM log"), std::string::npos) << i.out;
 }
+
+TEST(Cli, ProcessCompareSca1bFilesThatCannotBeReadAreErrors) {
+  std::string dir = tempDir();
+  CliRun sim = run("simulate --scenario " BORESIGHT_SOURCE_DIR "/config/sim_gracefo.yaml --seed 3 --duration 20 --out " +
+                   dir + " --quiet --no-lcm");
+  ASSERT_EQ(sim.status, 0) << sim.out;
+  const std::string d = dir + "/";
+  const std::string base = "process --config " BORESIGHT_SOURCE_DIR "/config/gracefo.yaml " + d +
+                           "SCA1A_2023-06-01_C_04.txt " + d + "QSA1B_2023-06-01_C_04.txt --out " + d + "p.csv";
+  // A missing SCA1B: exit 1 with the file and the reason (before the replay, nothing else printed).
+  CliRun a = run(base + " --compare-sca1b " + d + "no_such_SCA1B.txt");
+  EXPECT_EQ(a.status, 1) << a.out;
+  EXPECT_NE(a.out.find(d + "no_such_SCA1B.txt:0: cannot open"), std::string::npos) << a.out;
+  EXPECT_EQ(a.out.find("rows"), std::string::npos) << a.out;
+  // A file that is not SCA1B.
+  CliRun b = run(base + " --compare-sca1b " + d + "GNV1B_2023-06-01_C_04.txt");
+  EXPECT_EQ(b.status, 1) << b.out;
+  EXPECT_NE(b.out.find(d + "GNV1B_2023-06-01_C_04.txt:1: GNV1B is not an SCA1B product"), std::string::npos) << b.out;
+  // Garbage: not a Level-1 product at all.
+  { std::ofstream(d + "SCA1B_garbage.txt") << "no header here\n"; }
+  CliRun c = run(base + " --compare-sca1b " + d + "SCA1B_garbage.txt");
+  EXPECT_EQ(c.status, 1) << c.out;
+  EXPECT_NE(c.out.find(d + "SCA1B_garbage.txt:"), std::string::npos) << c.out;
+  // A missing or wrong CLK1B, with a readable SCA1B (an empty one written through the library).
+  auto sca1b = makeProduct<Sca1bRecord>(Product::SCA1B, 'C');
+  std::string err;
+  ASSERT_TRUE(writeProduct(d + "SCA1B_2023-06-01_C_04.txt", sca1b, &err)) << err;
+  CliRun e = run(base + " --compare-sca1b " + d + "SCA1B_2023-06-01_C_04.txt --clk1b " + d + "no_such_CLK1B.txt");
+  EXPECT_EQ(e.status, 1) << e.out;
+  EXPECT_NE(e.out.find(d + "no_such_CLK1B.txt:0: cannot open"), std::string::npos) << e.out;
+  CliRun f = run(base + " --compare-sca1b " + d + "SCA1B_2023-06-01_C_04.txt --clk1b " + d + "GNV1B_2023-06-01_C_04.txt");
+  EXPECT_EQ(f.status, 1) << f.out;
+  EXPECT_NE(f.out.find("GNV1B is not a CLK1B product"), std::string::npos) << f.out;
+  // The readable (empty) SCA1B: the replay runs, the comparison says it found nothing, exit 0.
+  CliRun g = run(base + " --compare-sca1b " + d + "SCA1B_2023-06-01_C_04.txt");
+  EXPECT_EQ(g.status, 0) << g.out;
+  EXPECT_NE(g.out.find("SCA1B comparison: no common epochs"), std::string::npos) << g.out;
+}

@@ -5,12 +5,15 @@
 #include <boresight/io/time_format.h>
 #include <boresight/sim/output.h>
 
+#include <boresight/stream/assembler.h>
 #include <boresight/stream/sources.h>
 
 #include "cli_common.h"
 #include "commands.h"
 
 #include <algorithm>
+#include <cmath>
+#include <memory>
 #include <cstdio>
 #include <map>
 #include <string>
@@ -27,7 +30,9 @@ const char* kUsage =
     "Level-1 to LCM: SCA1A records become star_head_sample_t messages on channel STAR_HEAD and ACC1A\n"
     "records accel_sample_t messages on channel ACCEL, merged in sensor-time order (ties: heads by id,\n"
     "then the accelerometer). Other products are not node inputs: they are listed and skipped.\n"
-    "Rejected lines are counted and reported per file; --strict stops at the first one.\n"
+    "Rejected lines are counted and reported per file; --strict stops at the first one. The files are\n"
+    "streamed and merged with a bounded look-ahead (memory does not grow with the span): a record more\n"
+    "than --lookahead seconds out of time order is rejected as late and counted.\n"
     "\n"
     "LCM to Level-1: writes SCA1A_<date>_<sat>_04.txt and ACC1A_<date>_<sat>_04.txt in DIR. The LCM\n"
     "types carry time, head, quaternion, star count and accelerations; the SCA1A fields nlocks,\n"
@@ -37,31 +42,30 @@ const char* kUsage =
     "  --to-level1 DIR     convert an LCM log back to Level-1 files in DIR (created if missing)\n"
     "  --satellite C       satellite letter for the Level-1 files written back (default C)\n"
     "  --strict            stop at the first malformed line instead of skipping it\n"
+    "  --lookahead S       how far out of time order a record may be and still be sorted in (default 2)\n"
     "\n"
     "Inputs are recognised by their content (Level-1 header, LCM log sync word), not their names. A file\n"
     "that is neither, or a log that cannot be read, is an error (exit status 1) naming the file and why.\n";
-
-struct Event {
-  TimeUs t;
-  int order;  // head id for heads, 100 for the accelerometer: deterministic ties
-  bool is_head;
-  std::size_t index;
-};
 
 struct Options {
   std::vector<std::string> inputs;
   std::string out, to_level1, satellite = "C";
   bool strict = false;
+  double lookahead_s = 2.0;
 };
 
+/// Level-1 -> LCM as a stream: one source per file, merged by the engine's assembler with a bounded
+/// look-ahead, written sample by sample. Memory does not grow with the span. The order is the one a
+/// stable sort of everything by (time tag; heads by id, then the accelerometer) gives: the assembler
+/// hands out by tag, heads before the accelerometer, then by file in the order given and in each
+/// file's order, and the heads of one tag are put in id order here. Records out of order by more than
+/// the look-ahead are rejected as late and counted per file. Message sequence numbers count per head
+/// (and for the accelerometer) in the order written.
 int toLcm(const Options& a) {
-  std::vector<io::HeadSample> heads;
-  std::vector<io::AccelSample> accels;
   io::ReadOptions opt;
   if (a.strict) opt.on_error = io::OnError::Stop;
-  int status = 0;
-  std::map<int, std::int32_t> head_seq;
-  std::int32_t acc_seq = 0;
+  std::vector<std::unique_ptr<stream::Source>> sources;
+  std::vector<std::string> product_of;
   for (const auto& f : a.inputs) {
     stream::FileKind kind = stream::identifyFile(f);
     if (kind.type == stream::FileKind::Type::kUnknown) {
@@ -72,41 +76,34 @@ int toLcm(const Options& a) {
       std::fprintf(stderr, "boresight convert: %s is an LCM log: convert it with --to-level1 DIR\n", f.c_str());
       return 1;
     }
-    std::string name = kind.product_name;
-    if (name == "SCA1A") {
-      auto p = io::readProduct<io::Sca1aRecord>(f, opt);
-      if (!p.ok) {
-        std::fprintf(stderr, "%s\n", p.error.c_str());
+    const std::string& name = kind.product_name;
+    std::string err;
+    if (kind.product == io::Product::SCA1A) {
+      auto s = std::make_unique<stream::Sca1aSource>();
+      if (!s->open(f, opt, &err)) {
+        std::fprintf(stderr, "boresight convert: %s\n", err.c_str());
         return 1;
       }
-      for (const auto& r : p.records) heads.push_back(io::headFromSca1a(r, head_seq[r.head]++));
-      std::printf("%s: %zu SCA1A records, %zu rejected\n", f.c_str(), p.records.size(), p.rejected_count);
-      for (std::size_t i = 0; i < p.rejected.size() && i < 5; ++i) std::printf("    rejected %s\n", p.rejected[i].str().c_str());
-    } else if (name == "ACC1A" || name == "ACT1A") {
-      auto p = io::readProduct<io::FlaggedRecord>(f, opt);
-      if (!p.ok) {
-        std::fprintf(stderr, "%s\n", p.error.c_str());
+      sources.push_back(std::make_unique<stream::PrefetchSource>(std::move(s)));
+      product_of.push_back(name);
+    } else if (kind.product == io::Product::ACC1A || kind.product == io::Product::ACT1A) {
+      auto s = std::make_unique<stream::Acc1aSource>();
+      if (!s->open(f, opt, &err)) {
+        std::fprintf(stderr, "boresight convert: %s\n", err.c_str());
         return 1;
       }
-      std::size_t without_ang = 0;
-      for (const auto& r : p.records) {
-        accels.push_back(io::accelFromAcc1a(r, acc_seq++));
-        without_ang += (accels.back().flags & 1) ? 0 : 1;
-      }
-      std::printf("%s: %zu ACC1A records (%zu without angular acceleration: flagged invalid), %zu rejected\n",
-                  f.c_str(), p.records.size(), without_ang, p.rejected_count);
-      for (std::size_t i = 0; i < p.rejected.size() && i < 5; ++i) std::printf("    rejected %s\n", p.rejected[i].str().c_str());
+      s->keepWithoutAngular(true);  // written as messages with the angular bit clear
+      sources.push_back(std::make_unique<stream::PrefetchSource>(std::move(s)));
+      product_of.push_back(name);
     } else {
       std::printf("%s: %s is not a node input (SCA1A, ACC1A): ignored\n", f.c_str(), name.c_str());
     }
   }
-  std::vector<Event> ev;
-  ev.reserve(heads.size() + accels.size());
-  for (std::size_t i = 0; i < heads.size(); ++i) ev.push_back({heads[i].utime, heads[i].head_id, true, i});
-  for (std::size_t i = 0; i < accels.size(); ++i) ev.push_back({accels[i].utime, 100, false, i});
-  std::stable_sort(ev.begin(), ev.end(), [](const Event& x, const Event& y) {
-    return x.t != y.t ? x.t < y.t : x.order < y.order;
-  });
+  stream::AssemblerConfig acfg;
+  acfg.lookahead_us = static_cast<TimeUs>(std::llround(a.lookahead_s * 1e6));
+  stream::EpochAssembler asm_(acfg);
+  for (auto& s : sources) asm_.addSource(s.get());
+
   io::LcmLogWriter w;
   std::string err;
   const std::string out = a.out;
@@ -114,18 +111,95 @@ int toLcm(const Options& a) {
     std::fprintf(stderr, "boresight convert: %s\n", err.c_str());
     return 1;
   }
-  for (const auto& e : ev) {
-    bool ok = e.is_head ? w.write(heads[e.index]) : w.write(accels[e.index]);
-    if (!ok) {
-      std::fprintf(stderr, "boresight convert: %s: write failed\n", out.c_str());
+  std::map<int, std::int32_t> head_seq;
+  std::int32_t acc_seq = 0;
+  std::uint64_t n_heads = 0, n_accel = 0, without_ang = 0;
+  TimeUs first_t = 0, last_t = 0;
+  bool write_failed = false;
+  // The samples of one time tag (heads first, as the assembler gives them): heads put in id order.
+  std::vector<stream::Sample> group;
+  auto flush = [&]() {
+    auto heads_end = std::find_if(group.begin(), group.end(),
+                                  [](const stream::Sample& x) { return x.kind != stream::Sample::Kind::kHead; });
+    std::stable_sort(group.begin(), heads_end,
+                     [](const stream::Sample& x, const stream::Sample& y) { return x.head_id < y.head_id; });
+    for (const auto& x : group) {
+      bool ok;
+      if (x.kind == stream::Sample::Kind::kHead) {
+        io::HeadSample h;
+        h.utime = x.t;
+        h.head_id = x.head_id;
+        quatToScalarFirst(x.q_I_S, h.q);
+        h.star_count = x.star_count;
+        h.flags = x.flags;
+        h.seq = head_seq[x.head_id]++;
+        ok = w.write(h);
+        ++n_heads;
+      } else {
+        io::AccelSample m;
+        m.utime = x.t;
+        for (int i = 0; i < 3; ++i) {
+          m.ang_accel[i] = x.a_A[i];
+          m.lin_accel[i] = x.lin_A[i];
+        }
+        m.flags = x.flags;
+        m.seq = acc_seq++;
+        without_ang += (m.flags & 1) ? 0 : 1;
+        ok = w.write(m);
+        ++n_accel;
+      }
+      if (!ok) write_failed = true;
+    }
+    group.clear();
+  };
+  stream::Sample x;
+  for (;;) {
+    const auto o = asm_.nextSample(x);
+    if (o == stream::EpochAssembler::Out::kError) {
+      const int i = asm_.errorSource();
+      std::fprintf(stderr, "boresight convert: %s\n",
+                   i >= 0 ? sources[std::size_t(i)]->error().c_str() : "a source failed");
       return 1;
     }
+    if (o != stream::EpochAssembler::Out::kHeads && o != stream::EpochAssembler::Out::kAccel) break;
+    if (!group.empty() && group.front().t != x.t) flush();
+    if (n_heads + n_accel + group.size() == 0) first_t = x.t;
+    last_t = x.t;
+    group.push_back(x);
+    if (write_failed) break;
   }
+  flush();
   w.close();
-  std::printf("%s: %zu star head samples, %zu accelerometer samples", out.c_str(), heads.size(), accels.size());
-  if (!ev.empty()) std::printf(", %s .. %s", io::formatTime(ev.front().t).c_str(), io::formatTime(ev.back().t).c_str());
+  if (write_failed) {
+    std::fprintf(stderr, "boresight convert: %s: write failed\n", out.c_str());
+    return 1;
+  }
+  // Every record read is written or rejected with its reason, per file.
+  for (std::size_t i = 0; i < sources.size(); ++i) {
+    const auto& c = asm_.counters(i);
+    std::printf("%s: %llu %s records read, %llu written", sources[i]->name().c_str(),
+                static_cast<unsigned long long>(c.read), product_of[i].c_str(),
+                static_cast<unsigned long long>(c.used()));
+    for (int r = 0; r < stream::kRejectCount; ++r)
+      if (c.rejected[std::size_t(r)])
+        std::printf(", %llu rejected: %s", static_cast<unsigned long long>(c.rejected[std::size_t(r)]),
+                    stream::rejectName(stream::Reject(r)));
+    std::printf("\n");
+    auto issues = sources[i]->issues();
+    for (std::size_t k = 0; k < issues.size() && k < 5; ++k) std::printf("    rejected %s\n", issues[k].c_str());
+  }
+  if (without_ang)
+    std::printf("%llu accelerometer records without angular acceleration: written flagged invalid\n",
+                static_cast<unsigned long long>(without_ang));
+  if (asm_.counters().rejected[std::size_t(stream::Reject::kLate)])
+    std::printf("%llu records more than the look-ahead (%.3g s) out of time order: rejected as late (--lookahead)\n",
+                static_cast<unsigned long long>(asm_.counters().rejected[std::size_t(stream::Reject::kLate)]),
+                a.lookahead_s);
+  std::printf("%s: %llu star head samples, %llu accelerometer samples", out.c_str(),
+              static_cast<unsigned long long>(n_heads), static_cast<unsigned long long>(n_accel));
+  if (n_heads + n_accel) std::printf(", %s .. %s", io::formatTime(first_t).c_str(), io::formatTime(last_t).c_str());
   std::printf("\n");
-  return status;
+  return 0;
 }
 
 int toLevel1(const Options& a) {
@@ -229,6 +303,7 @@ int runConvert(int argc, char** argv) {
   out->excludes(back);
   app.add_option("--satellite", o.satellite);
   app.add_flag("--strict", o.strict);
+  app.add_option("--lookahead", o.lookahead_s)->check(CLI::Range(0.0, 3600.0));
   if (int st = parseCommandLine(app, argc, argv, "convert", kUsage); st >= 0) return st;
   if (o.out.empty() == o.to_level1.empty()) {
     std::fprintf(stderr, "boresight convert: give exactly one of --out and --to-level1\n\n%s", kUsage);

@@ -34,6 +34,11 @@ class EpochAssembler {
   /// The next epoch (kHeads: `epoch`) or accelerometer sample (kAccel: `t`, `a_A`). kPending: a
   /// source has nothing now (call again later); kError: a source failed (errorSource()).
   Out next(core::HeadEpoch& epoch, TimeUs& t, Vec3& a_A);
+  /// The same merge one sample at a time, with every field the source gave (kHeads: a head sample,
+  /// kAccel: an accelerometer sample), for consumers that write messages rather than feed the core
+  /// (`boresight convert`). Same order, look-ahead, late rule and counters as next(), except that
+  /// samples are not grouped into epochs, so no kTooManyHeads. Use one of next() and nextSample().
+  Out nextSample(Sample& s);
 
   /// Counters of all sources together, and of each (index = order added).
   const Counters& counters() const { return total_; }
@@ -60,6 +65,8 @@ class EpochAssembler {
   static bool later(const Item& a, const Item& b);
   /// Reads one sample from source i into the buffer. False: pending or error (out says which).
   bool pull(std::size_t i, Out& out);
+  /// Reads until the earliest buffered sample may go (false: pending or error, out says which).
+  bool fill(Out& out);
   void reject(std::size_t i, Reject why);
   void pop(Item& it);
 

@@ -23,6 +23,11 @@ struct Sample {
   int head_id = 0;              ///< kHead: telemetry id
   Quat q_I_S = Quat::Identity();  ///< kHead: head attitude, R = C_I_S
   Vec3 a_A = Vec3::Zero();      ///< kAccel: angular acceleration, rad/s^2, accelerometer frame
+  // Message fields the core does not use, kept so that a sample can be written as an LCM message
+  // again (`boresight convert`): as in io::HeadSample / io::AccelSample.
+  int star_count = 0;            ///< kHead: stars tracked (SCA1A nstars)
+  std::int32_t flags = 1;        ///< head: bit 0 valid; accelerometer: bit 0 angular, bit 1 linear valid
+  Vec3 lin_A = Vec3::Zero();     ///< kAccel: linear acceleration, m/s^2, accelerometer frame (flags bit 1)
 };
 
 /// Why an input record or message was not handed to the core.

@@ -48,10 +48,12 @@ class Sca1aSource final : public Source {
 };
 
 /// ACC1A (or ACT1A) angular accelerations from one file, in file order. Records without all three
-/// angular accelerations are rejected (Reject::kNoAngular).
+/// angular accelerations are rejected (Reject::kNoAngular), unless keepWithoutAngular(true): then
+/// they are samples with flags bit 0 clear (for writing messages; never hand those to the core).
 class Acc1aSource final : public Source {
  public:
   bool open(const std::string& path, const io::ReadOptions& opt, std::string* error);
+  void keepWithoutAngular(bool keep) { keep_without_angular_ = keep; }
   Next next(Sample& out, Reject& why) override;
   const std::string& name() const override { return name_; }
   std::string error() const override { return s_.error(); }
@@ -61,7 +63,7 @@ class Acc1aSource final : public Source {
   io::ProductStream<io::FlaggedRecord> s_;
   std::string name_;
   std::size_t reported_rejects_ = 0;
-  bool held_ = false, done_ = false;
+  bool held_ = false, done_ = false, keep_without_angular_ = false;
   io::FlaggedRecord rec_;
 };
 
