@@ -40,8 +40,11 @@ bool EpochAssembler::pull(std::size_t i, Out& out) {
       ++total_.read;
       ss.frontier = std::max(ss.frontier, s.t);
       // Late: something after it was handed out already. A head sample at the tag of the last
-      // hand-out is late too (its epoch, or an accelerometer sample that sorts after it, is gone).
-      if (emitted_ && (s.t < last_t_ || (s.t == last_t_ && s.kind == Sample::Kind::kHead))) {
+      // hand-out is late too (its epoch, or an accelerometer sample that sorts after it, is gone), and
+      // so is a star vector at the tag of a star epoch already handed out.
+      if (emitted_ && (s.t < last_t_ || (s.t == last_t_ && (s.kind == Sample::Kind::kHead ||
+                                                             (s.kind == Sample::Kind::kStar &&
+                                                              last_kind_ == Sample::Kind::kStar))))) {
         reject(i, Reject::kLate);
         return true;
       }
@@ -98,25 +101,54 @@ EpochAssembler::Out EpochAssembler::nextSample(Sample& s) {
   pop(it);
   emitted_ = true;
   last_t_ = it.t;
+  last_kind_ = it.s.kind;
   s = it.s;
   if (it.s.kind == Sample::Kind::kAccel) {
     ++src_[it.src].c.used_accel;
     ++total_.used_accel;
     return Out::kAccel;
   }
+  if (it.s.kind == Sample::Kind::kStar) {
+    ++src_[it.src].c.used_stars;
+    ++total_.used_stars;
+    return Out::kStars;
+  }
   ++src_[it.src].c.used_heads;
   ++total_.used_heads;
   return Out::kHeads;
 }
 
-EpochAssembler::Out EpochAssembler::next(core::HeadEpoch& epoch, TimeUs& t, Vec3& a_A) {
+EpochAssembler::Out EpochAssembler::next(core::HeadEpoch& epoch, TimeUs& t, Vec3& a_A, core::StarEpoch* stars) {
   Out o = Out::kEnd;
   if (!fill(o)) return o;
   if (heap_.empty()) return Out::kEnd;
   Item it;
   pop(it);
+  while (it.s.kind == Sample::Kind::kStar && stars == nullptr) {  // counted, never handed out
+    reject(it.src, Reject::kNoStarConsumer);
+    if (!fill(o)) return o;
+    if (heap_.empty()) return Out::kEnd;
+    pop(it);
+  }
   emitted_ = true;
   last_t_ = it.t;
+  last_kind_ = it.s.kind;
+  if (it.s.kind == Sample::Kind::kStar) {
+    stars->t = it.t;
+    stars->n = 0;
+    for (;;) {
+      if (stars->n < core::kMaxStarInputs) {
+        stars->star[static_cast<std::size_t>(stars->n++)] = it.s.star;
+        ++src_[it.src].c.used_stars;
+        ++total_.used_stars;
+      } else {
+        reject(it.src, Reject::kTooManyStars);
+      }
+      if (heap_.empty() || heap_.front().t != stars->t || heap_.front().s.kind != Sample::Kind::kStar) break;
+      pop(it);
+    }
+    return Out::kStars;
+  }
   if (it.s.kind == Sample::Kind::kAccel) {
     ++src_[it.src].c.used_accel;
     ++total_.used_accel;

@@ -3,7 +3,8 @@
 
 namespace boresight::stream {
 
-Engine::Engine(const AssemblerConfig& acfg) : pipe_(std::make_unique<core::Pipeline>()), asm_(acfg) {}
+Engine::Engine(const AssemblerConfig& acfg)
+    : pipe_(std::make_unique<core::Pipeline>()), asm_(acfg), stars_(std::make_unique<core::StarEpoch>()) {}
 Engine::~Engine() = default;
 
 bool Engine::configure(const core::PipelineConfig& cfg, std::string* error) {
@@ -53,7 +54,24 @@ Engine::Result Engine::run() {
   TimeUs t = 0;
   Vec3 a = Vec3::Zero();
   for (;;) {
-    switch (asm_.next(e, t, a)) {
+    switch (asm_.next(e, t, a, stars_.get())) {
+      case EpochAssembler::Out::kStars: {
+        ++star_epochs_;
+        if (pipe_->stepStars(*stars_) == core::Status::kOk) {
+          ++star_solutions_;
+          StarSolution sol;
+          sol.wahba = pipe_->wahba().output();
+          const core::FusedAttitude& f = pipe_->fusion().output();
+          sol.has_fused = epochs_ > 0 && f.t == stars_->t && f.heads_used > 0;
+          sol.q_I_B_fused = f.q_I_B;
+          for (RowSink* s : sinks_)
+            if (!s->writeStars(sol)) {
+              error_ = s->error();
+              return Result::kError;
+            }
+        }
+        break;
+      }
       case EpochAssembler::Out::kHeads:
         if (epochs_++ == 0) first_epoch_ = e.t;
         last_epoch_ = e.t;

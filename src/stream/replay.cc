@@ -65,13 +65,15 @@ bool classifyInputs(const std::vector<std::string>& files, ReplayInputs& in, std
       case io::Product::ACC1A:
       case io::Product::ACT1A: in.acc.push_back(f); break;
       case io::Product::QSA1B: in.qsa.push_back(f); break;
+      case io::Product::SCV1A: in.scv.push_back(f); break;
       default: in.ignored.emplace_back(f, k.product_name); break;
     }
   }
-  if (!in.lcm.empty() && !(in.sca.empty() && in.acc.empty())) {
+  if (!in.lcm.empty() && !(in.sca.empty() && in.acc.empty() && in.scv.empty())) {
+    const bool sca = !in.sca.empty(), acc = !in.acc.empty();
     if (error)
-      *error = in.lcm.front() + " is an LCM log and " + (in.sca.empty() ? in.acc : in.sca).front() +
-               " is a Level-1 " + (in.sca.empty() ? "ACC1A" : "SCA1A") +
+      *error = in.lcm.front() + " is an LCM log and " + (sca ? in.sca : acc ? in.acc : in.scv).front() +
+               " is a Level-1 " + (sca ? "SCA1A" : acc ? "ACC1A" : "SCV1A") +
                " file: give either Level-1 files or LCM logs (they carry the same samples; mixing them would feed "
                "the core twice)";
     return false;
@@ -122,6 +124,11 @@ bool addSources(const ReplayInputs& in, const io::ReadOptions& opt, bool prefetc
   }
   for (const auto& f : in.acc) {
     auto s = std::make_unique<Acc1aSource>();
+    if (!s->open(f, opt, error)) return false;
+    add(std::move(s));
+  }
+  for (const auto& f : in.scv) {
+    auto s = std::make_unique<ScvSource>();
     if (!s->open(f, opt, error)) return false;
     add(std::move(s));
   }

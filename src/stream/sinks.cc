@@ -120,3 +120,55 @@ bool BatchBufferSink::write(const core::PipelineRow& row) {
 }
 
 }  // namespace boresight::stream
+
+namespace boresight::stream {
+
+CsvStarSink::~CsvStarSink() {
+  if (f_) std::fclose(f_);
+}
+
+bool CsvStarSink::begin(const core::PipelineConfig&) {
+  f_ = std::fopen(path_.c_str(), "w");
+  if (!f_) {
+    error_ = path_ + ": cannot write";
+    return false;
+  }
+  std::fputs("time_s,q0,q1,q2,q3,sigma_x_arcsec,sigma_y_arcsec,sigma_z_arcsec,stars_in,stars_used,"
+             "residual_rms_arcsec,d_fused_x_arcsec,d_fused_y_arcsec,d_fused_z_arcsec\n",
+             f_);
+  return true;
+}
+
+bool CsvStarSink::writeStars(const StarSolution& s) {
+  if (!f_) return true;
+  const core::WahbaSolution& w = s.wahba;
+  std::int64_t sec = w.t / kUsPerSecond, us = w.t % kUsPerSecond;
+  if (us < 0) us += kUsPerSecond, --sec;
+  double q[4];
+  quatToScalarFirst(w.q_I_B, q);
+  // covariance about the body axes: C_B_SR P_SR C_SR_B, C_B_SR = C_B_I C_I_SR
+  const Mat3 C_B_SR = w.q_I_B.toRotationMatrix().transpose() * w.q_I_SR.toRotationMatrix();
+  const Mat3 P_B = C_B_SR * w.P_SR * C_B_SR.transpose();
+  std::fprintf(f_, "%lld.%06lld,%.17g,%.17g,%.17g,%.17g,%.4f,%.4f,%.4f,%d,%d,%.4f", static_cast<long long>(sec),
+               static_cast<long long>(us), q[0], q[1], q[2], q[3], std::sqrt(P_B(0, 0)) * kArcsecPerRad,
+               std::sqrt(P_B(1, 1)) * kArcsecPerRad, std::sqrt(P_B(2, 2)) * kArcsecPerRad, w.stars_in, w.stars_used,
+               w.residual_rms_rad * kArcsecPerRad);
+  if (s.has_fused) {
+    const Vec3 d = core::quatLog(s.q_I_B_fused.conjugate() * w.q_I_B) * kArcsecPerRad;
+    std::fprintf(f_, ",%.4f,%.4f,%.4f\n", d.x(), d.y(), d.z());
+  } else {
+    std::fputs(",,,\n", f_);
+  }
+  ++rows_;
+  return true;
+}
+
+bool CsvStarSink::end() {
+  if (!f_) return true;
+  const bool ok = std::fclose(f_) == 0;
+  f_ = nullptr;
+  if (!ok) error_ = path_ + ": write failed";
+  return ok;
+}
+
+}  // namespace boresight::stream

@@ -2,6 +2,7 @@
 #include <boresight/io/lcm_log.h>
 #include <boresight/stream/sources.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
@@ -16,6 +17,8 @@ const char* rejectName(Reject r) {
     case Reject::kOtherChannel: return "other LCM channel";
     case Reject::kLate: return "late (beyond look-ahead)";
     case Reject::kTooManyHeads: return "more heads than kMaxHeads";
+    case Reject::kTooManyStars: return "more star vectors than kMaxStarInputs";
+    case Reject::kNoStarConsumer: return "star vector (not used here)";
     case Reject::kCount: break;
   }
   return "?";
@@ -132,6 +135,30 @@ Source::Next Acc1aSource::next(Sample& out, Reject& why) {
 
 std::vector<std::string> Acc1aSource::issues() const { return issuesOf(s_); }
 
+bool ScvSource::open(const std::string& path, const io::ReadOptions& opt, std::string* error) {
+  name_ = path;
+  io::ReadOptions o = opt;
+  o.max_issues_kept = std::min<std::size_t>(o.max_issues_kept, 20);
+  return s_.open(path, o, error);
+}
+
+Source::Next ScvSource::next(Sample& out, Reject& why) {
+  Next n = level1Next(s_, reported_rejects_, held_, done_, rec_, why);
+  if (n == Next::kSample) {
+    out = Sample{};
+    out.kind = Sample::Kind::kStar;
+    out.t = rec_.t;
+    out.head_id = rec_.head;
+    out.star.head_id = rec_.head;
+    out.star.s_Sk = Vec3(rec_.s[0], rec_.s[1], rec_.s[2]);
+    out.star.r_I = Vec3(rec_.r[0], rec_.r[1], rec_.r[2]);
+    out.star.sigma_rad = 0;  // the head's configured sigma_star
+  }
+  return n;
+}
+
+std::vector<std::string> ScvSource::issues() const { return issuesOf(s_); }
+
 LcmLogSource::LcmLogSource() = default;
 LcmLogSource::~LcmLogSource() = default;
 
@@ -147,6 +174,19 @@ bool LcmLogSource::open(const std::string& path, std::string* error) {
 
 Source::Next LcmLogSource::next(Sample& out, Reject& why) {
   if (!r_) return Next::kEnd;
+  if (star_next_ < star_n_) {  // the rest of a STAR_VECTORS message, one star per sample
+    const io::StarVectors& m = r_->stars();
+    const auto k = static_cast<std::size_t>(star_next_++);
+    out = Sample{};
+    out.kind = Sample::Kind::kStar;
+    out.t = m.utime;
+    out.head_id = m.head_id;
+    out.star.head_id = m.head_id;
+    out.star.s_Sk = Vec3(m.s_head[k][0], m.s_head[k][1], m.s_head[k][2]);
+    out.star.r_I = Vec3(m.r_inertial[k][0], m.r_inertial[k][1], m.r_inertial[k][2]);
+    out.star.sigma_rad = m.sigma_rad[k];
+    return Next::kSample;
+  }
   io::HeadSample h;
   io::AccelSample a;
   const std::uint64_t undecodable = r_->decodeFailures();
@@ -177,9 +217,16 @@ Source::Next LcmLogSource::next(Sample& out, Reject& why) {
     case io::LcmLogReader::Kind::Skipped:
       why = r_->decodeFailures() != undecodable ? Reject::kMalformed : Reject::kOtherChannel;
       return Next::kRejected;
-    case io::LcmLogReader::Kind::Stars:  // star vectors (STAR_VECTORS): not fed to the core by this source yet
-      why = Reject::kOtherChannel;
-      return Next::kRejected;
+    case io::LcmLogReader::Kind::Stars: {  // star vectors (STAR_VECTORS): one sample per star
+      const io::StarVectors& m = r_->stars();
+      if (!(m.flags & 1) || m.n_stars == 0) {  // a message without usable stars counts once
+        why = Reject::kInvalid;
+        return Next::kRejected;
+      }
+      star_n_ = m.n_stars;
+      star_next_ = 0;
+      return next(out, why);
+    }
     case io::LcmLogReader::Kind::End:
       break;
   }

@@ -1,6 +1,7 @@
 // The streaming replay engine on simulated spans, against a reference replay that loads everything,
 // sorts it and merges it (the replay `boresight process` used before the engine). Rows are compared
 // bit for bit; every input record must be used or rejected with a reason.
+#include <boresight/core/rotation.h>
 #include <boresight/io/core_config.h>
 #include <boresight/io/level1.h>
 #include <boresight/sim/output.h>
@@ -47,7 +48,7 @@ std::string tempDir() {
 
 /// A simulated span written as `simulate` writes it: SCA1A, ACC1A, QSA1B and the LCM log.
 struct Span {
-  std::string dir, sca, acc, qsa, lcm;
+  std::string dir, sca, acc, qsa, lcm, scv;
 };
 
 Span simulate(double seconds, std::uint64_t seed = 11) {
@@ -72,6 +73,7 @@ Span simulate(double seconds, std::uint64_t seed = 11) {
   s.sca = s.dir + "/" + sim::productFileName("SCA1A", sc);
   s.acc = s.dir + "/" + sim::productFileName("ACC1A", sc);
   s.qsa = s.dir + "/" + sim::productFileName("QSA1B", sc);
+  s.scv = s.dir + "/" + sim::productFileName("SCV1A", sc);
   EXPECT_TRUE(sim::writeQsa1b(s.qsa, simulator, &err)) << err;
   return s;
 }
@@ -134,8 +136,13 @@ std::vector<core::PipelineRow> referenceRows(std::vector<io::Sca1aRecord> sca, s
 
 struct VectorSink final : stream::RowSink {
   std::vector<core::PipelineRow> rows;
+  std::vector<stream::StarSolution> stars;
   bool write(const core::PipelineRow& r) override {
     rows.push_back(r);
+    return true;
+  }
+  bool writeStars(const stream::StarSolution& s) override {
+    stars.push_back(s);
     return true;
   }
 };
@@ -161,6 +168,8 @@ bool sameBits(double a, double b) { return (std::isnan(a) && std::isnan(b)) || a
 
 struct EngineRun {
   std::vector<core::PipelineRow> rows;
+  std::vector<stream::StarSolution> stars;
+  std::uint64_t star_epochs = 0;
   stream::Counters total;
   std::vector<stream::Counters> per_source;
   TimeUs first = 0, last = 0;
@@ -170,7 +179,7 @@ struct EngineRun {
 
 EngineRun runEngine(const std::vector<std::string>& sca, const std::vector<std::string>& acc,
                     const std::vector<std::string>& lcm, const core::PipelineConfig& cfg,
-                    stream::AssemblerConfig acfg = {}, bool prefetch = false) {
+                    stream::AssemblerConfig acfg = {}, bool prefetch = false, const std::vector<std::string>& scv = {}) {
   EngineRun out;
   stream::Engine e(acfg);
   std::string err;
@@ -189,6 +198,11 @@ EngineRun runEngine(const std::vector<std::string>& sca, const std::vector<std::
     EXPECT_TRUE(s->open(f, {}, &err)) << err;
     add(std::move(s));
   }
+  for (const auto& f : scv) {
+    auto s = std::make_unique<stream::ScvSource>();
+    EXPECT_TRUE(s->open(f, {}, &err)) << err;
+    add(std::move(s));
+  }
   for (const auto& f : lcm) {
     auto s = std::make_unique<stream::LcmLogSource>();
     EXPECT_TRUE(s->open(f, &err)) << err;
@@ -199,6 +213,8 @@ EngineRun runEngine(const std::vector<std::string>& sca, const std::vector<std::
   out.result = e.run();
   out.error = e.error();
   out.rows = std::move(sink.rows);
+  out.stars = std::move(sink.stars);
+  out.star_epochs = e.starEpochs();
   out.total = e.counters();
   for (std::size_t i = 0; i < e.sourceCount(); ++i) out.per_source.push_back(e.counters(i));
   out.first = e.firstEpoch();
@@ -272,8 +288,63 @@ TEST(StreamEngine, LcmLogGivesTheSameRowsAsLevel1) {
   EngineRun lcm = runEngine({}, {}, {span().lcm}, cfg);
   ASSERT_EQ(lcm.result, stream::Engine::Result::kDone) << lcm.error;
   EXPECT_TRUE(sameRows(lcm.rows, l1.rows));
-  EXPECT_EQ(lcm.total.used(), l1.total.used());
+  EXPECT_EQ(lcm.total.used_heads, l1.total.used_heads);
+  EXPECT_EQ(lcm.total.used_accel, l1.total.used_accel);
+  EXPECT_GT(lcm.total.used_stars, 0u);  // the simulator's log carries STAR_VECTORS too
   expectCountersAddUp(lcm);
+}
+
+TEST(StreamEngine, StarVectorsFromScv1aAndFromTheLogGiveTheSameJointAttitudes) {
+  const auto sca = readSca(span().sca);
+  const auto cfg = pipelineConfig(sca);
+  EngineRun l1 = runEngine({span().sca}, {span().acc}, {}, cfg, {}, false, {span().scv});
+  EngineRun lcm = runEngine({}, {}, {span().lcm}, cfg);
+  ASSERT_EQ(l1.result, stream::Engine::Result::kDone) << l1.error;
+  ASSERT_EQ(lcm.result, stream::Engine::Result::kDone) << lcm.error;
+  // star vectors every 10 s of the 600 s span, at head epochs
+  EXPECT_GE(l1.star_epochs, 55u);
+  EXPECT_EQ(l1.star_epochs, lcm.star_epochs);
+  EXPECT_EQ(l1.total.used_stars, lcm.total.used_stars);
+  ASSERT_EQ(l1.stars.size(), lcm.stars.size());
+  ASSERT_GT(l1.stars.size(), l1.star_epochs / 2);
+  // Star vectors come after the head epoch of their tag: the rows are those of the heads alone.
+  EXPECT_TRUE(sameRows(l1.rows, runEngine({span().sca}, {span().acc}, {}, cfg).rows));
+  for (std::size_t i = 0; i < l1.stars.size(); ++i) {
+    const auto& a = l1.stars[i];
+    const auto& b = lcm.stars[i];
+    EXPECT_EQ(a.wahba.t, b.wahba.t);
+    EXPECT_TRUE(a.has_fused);  // at a head epoch
+    EXPECT_EQ(a.wahba.stars_used, b.wahba.stars_used);
+    // the log carries the star vectors as written (SCV1A text has 10 decimals): same to ~1e-9 rad
+    EXPECT_LT(core::angleBetween(a.wahba.q_I_B, b.wahba.q_I_B), 1e-8) << i;
+    // the joint attitude and the fused one describe the same body: within the simulated mounting
+    // errors (<= 70") and noise, not degrees apart
+    EXPECT_LT(core::angleBetween(a.wahba.q_I_B, a.q_I_B_fused) * kArcsecPerRad, 150.0) << i;
+  }
+  expectCountersAddUp(l1);
+}
+
+TEST(StreamAssembler, StarVectorsWithoutAConsumerAreCountedNotHandedOut) {
+  stream::LcmLogSource src;
+  std::string err;
+  ASSERT_TRUE(src.open(span().lcm, &err)) << err;
+  stream::EpochAssembler a;
+  a.addSource(&src);
+  core::HeadEpoch e;
+  TimeUs t = 0;
+  Vec3 acc = Vec3::Zero();
+  std::uint64_t heads = 0;
+  for (;;) {
+    const auto o = a.next(e, t, acc);
+    ASSERT_NE(o, stream::EpochAssembler::Out::kStars);
+    if (o == stream::EpochAssembler::Out::kEnd) break;
+    ASSERT_NE(o, stream::EpochAssembler::Out::kError);
+    if (o == stream::EpochAssembler::Out::kHeads) heads += static_cast<std::uint64_t>(e.n);
+  }
+  EXPECT_EQ(a.counters().used_stars, 0u);
+  EXPECT_GT(a.counters().rejected[std::size_t(stream::Reject::kNoStarConsumer)], 0u);
+  EXPECT_EQ(a.counters().used_heads, heads);
+  EXPECT_EQ(a.counters().read, a.counters().used() + a.counters().rejectedTotal());
 }
 
 TEST(StreamEngine, SeveralFilesOfOneProductAreMergedByTime) {
@@ -316,14 +387,12 @@ TEST(StreamEngine, OutOfOrderInsideTheLookAheadIsSortedBeyondItRejectedAsLate) {
 
   // Beyond: one head record moved 30 s later in the file, one ACC record 60 s later. Both arrive when
   // their time is long gone: rejected as late, and the rows are those of the data without them.
-  auto sca_late = sca;
-  const io::Sca1aRecord moved_head = sca_late[300];
-  sca_late.erase(sca_late.begin() + 300);
-  sca_late.insert(sca_late.begin() + 300 + 30 * 6, moved_head);
-  auto acc_late = acc;
-  const io::FlaggedRecord moved_acc = acc_late[2000];
-  acc_late.erase(acc_late.begin() + 2000);
-  acc_late.insert(acc_late.begin() + 2000 + 600, moved_acc);
+  auto sca_late = sca;  // record 300 moved to index 300 + 30 * 6 (the others shift down by one)
+  std::rotate(sca_late.begin() + 300, sca_late.begin() + 301, sca_late.begin() + 300 + 30 * 6 + 1);
+  ASSERT_EQ(sca_late[300 + 30 * 6].t, sca[300].t);
+  auto acc_late = acc;  // record 2000 moved to index 2600
+  std::rotate(acc_late.begin() + 2000, acc_late.begin() + 2001, acc_late.begin() + 2000 + 600 + 1);
+  ASSERT_EQ(acc_late[2000 + 600].t, acc[2000].t);
   const auto f3 = writeRecords(d + "/SCA1A_late.txt", io::Product::SCA1A, sca_late);
   const auto f4 = writeRecords(d + "/ACC1A_late.txt", io::Product::ACC1A, acc_late);
   EngineRun late = runEngine({f3}, {f4}, {}, cfg);

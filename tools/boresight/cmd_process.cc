@@ -25,7 +25,7 @@ namespace {
 
 const char* kUsage =
     "usage: boresight process --config FILE INPUT... --out FILE.csv [--compare-sca1b FILE] [--clk1b FILE]\n"
-    "                         [--lookahead S] [--strict]\n"
+    "                         [--stars-out FILE.csv] [--lookahead S] [--strict]\n"
     "\n"
     "Runs the real-time core (head fusion, CRN rates and angular acceleration, accelerometer angular\n"
     "acceleration through the same CRN, inter-boresight monitor) over Level-1 files (SCA1A, ACC1A, and\n"
@@ -40,6 +40,8 @@ const char* kUsage =
     "  iba_<i><j>_deg, iba_<i><j>_dev_arcsec   per head pair: inter-boresight angle, deviation from ground\n"
     "  heads_used        heads fused at this epoch\n"
     "The CRN output is stamped at the centre tap: rates need Tf/2 (~35 s) of data on each side.\n"
+    "Star vectors (SCV1A files, STAR_VECTORS messages) among the inputs go to the multi-head Wahba solver\n"
+    "with the thermally corrected relative matrices (config: thermal.wahba_correction).\n"
     "\n"
     "  --config FILE         platform file (config/gracefo.yaml)\n"
     "  --out FILE.csv        output table\n"
@@ -47,6 +49,10 @@ const char* kUsage =
     "                        and scatter of the difference (arcsec, body axes)\n"
     "  --clk1b FILE          receiver-to-GPS clock offsets for that comparison (Level-1A tags are\n"
     "                        receiver time; without CLK1B they are compared as if they were GPS time)\n"
+    "  --stars-out FILE.csv  the joint attitude of every solved star epoch: time_s, q0..q3 (q_I_B),\n"
+    "                        sigma_x..z_arcsec (1-sigma about the body axes, with the relative matrices'\n"
+    "                        uncertainty), stars_in, stars_used, residual_rms_arcsec, d_fused_x..z_arcsec\n"
+    "                        (rotation from the fused attitude of the same tag to the star attitude)\n"
     "  --lookahead S         how far (seconds, default 2) samples may arrive out of time order and still be\n"
     "                        sorted in; older ones are counted as rejected (late)\n"
     "  --strict              stop at the first malformed input line\n"
@@ -225,7 +231,7 @@ bool compareSca1b(const std::vector<std::pair<TimeUs, Quat>>& rows, const std::s
 
 int runProcess(int argc, char** argv) {
   CLI::App app{"boresight process"};
-  std::string config, out, compare, clk1b;
+  std::string config, out, compare, clk1b, stars_out;
   std::vector<std::string> files;
   bool strict = false;
   double lookahead_s = 2.0;
@@ -233,6 +239,7 @@ int runProcess(int argc, char** argv) {
   app.add_option("--out", out)->required();
   app.add_option("--compare-sca1b", compare);
   app.add_option("--clk1b", clk1b);
+  app.add_option("--stars-out", stars_out);
   app.add_option("--lookahead", lookahead_s)->check(CLI::Range(0.0, 3600.0));
   app.add_flag("--strict", strict);
   app.add_option("inputs", files)->required();
@@ -268,7 +275,7 @@ int runProcess(int argc, char** argv) {
     return 1;
   }
   for (const auto& [f, product] : in.ignored)
-    std::printf("%s: %s is not an input of process (SCA1A, ACC1A, QSA1B, LCM log): ignored\n", f.c_str(),
+    std::printf("%s: %s is not an input of process (SCA1A, ACC1A, SCV1A, QSA1B, LCM log): ignored\n", f.c_str(),
                 product.c_str());
   io::ReadOptions opt;
   if (strict) opt.on_error = io::OnError::Stop;
@@ -284,8 +291,10 @@ int runProcess(int argc, char** argv) {
     return 1;
   }
   stream::CsvRowSink csv(out);
+  stream::CsvStarSink stars_csv(stars_out);
   AttitudeTrack track;
   engine.addSink(&csv);
+  if (!stars_out.empty()) engine.addSink(&stars_csv);
   if (!compare.empty()) engine.addSink(&track);
   if (engine.run() != stream::Engine::Result::kDone) {
     std::fprintf(stderr, "boresight process: %s\n", engine.error().c_str());
@@ -320,6 +329,15 @@ int runProcess(int argc, char** argv) {
               static_cast<unsigned long long>(tot.read), static_cast<unsigned long long>(tot.used()),
               static_cast<unsigned long long>(tot.used_heads), static_cast<unsigned long long>(engine.epochs()),
               static_cast<unsigned long long>(tot.used_accel), static_cast<unsigned long long>(tot.rejectedTotal()));
+  if (tot.used_stars > 0 || !stars_out.empty()) {
+    std::printf("star vectors: %llu in %llu star epochs, %llu epochs solved (multi-head Wahba)%s%s\n",
+                static_cast<unsigned long long>(tot.used_stars), static_cast<unsigned long long>(engine.starEpochs()),
+                static_cast<unsigned long long>(engine.starSolutions()), stars_out.empty() ? "" : " -> ",
+                stars_out.c_str());
+    if (!stars_out.empty() && tot.used_stars == 0)
+      std::printf("  no star vectors among the inputs (SCV1A files or STAR_VECTORS messages): %s has a header only\n",
+                  stars_out.c_str());
+  }
   core::Health h = engine.health();
   std::printf("core health (inputs by outcome):\n");
   for (int s = 0; s < core::kStatusCount; ++s)

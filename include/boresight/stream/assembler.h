@@ -1,7 +1,8 @@
 // Epoch assembler: merges the samples of several sources by time with a bounded look-ahead and
 // groups the head samples of one time tag into a core::HeadEpoch.
 //
-// Order handed out: by time tag; at equal tags heads before the accelerometer, then by source (in the
+// Order handed out: by time tag; at equal tags heads, then the accelerometer, then star vectors (grouped
+// into a core::StarEpoch like the heads), then by source (in the
 // order they were added), then in the order each source gave them. That is the order of a stable
 // sort of all inputs concatenated, so within the look-ahead a stream gives what sorting all the data
 // would. A sample is handed out only when every unfinished source has read past its tag plus the
@@ -26,14 +27,17 @@ struct AssemblerConfig {
 
 class EpochAssembler {
  public:
-  enum class Out : std::uint8_t { kHeads, kAccel, kEnd, kPending, kError };
+  enum class Out : std::uint8_t { kHeads, kAccel, kEnd, kPending, kError, kStars };
 
   explicit EpochAssembler(const AssemblerConfig& cfg = {});
   /// Sources are read in the order added (ties at equal tags too). Not owned.
   void addSource(Source* s);
-  /// The next epoch (kHeads: `epoch`) or accelerometer sample (kAccel: `t`, `a_A`). kPending: a
-  /// source has nothing now (call again later); kError: a source failed (errorSource()).
-  Out next(core::HeadEpoch& epoch, TimeUs& t, Vec3& a_A);
+  /// The next epoch (kHeads: `epoch`), accelerometer sample (kAccel: `t`, `a_A`) or star epoch
+  /// (kStars: `*stars`, all star vectors of one tag, at most core::kMaxStarInputs: the rest are
+  /// rejected as kTooManyStars). Without `stars`, star vectors are rejected as kNoStarConsumer
+  /// (counted, never handed out). kPending: a source has nothing now (call again later); kError: a
+  /// source failed (errorSource()).
+  Out next(core::HeadEpoch& epoch, TimeUs& t, Vec3& a_A, core::StarEpoch* stars = nullptr);
   /// The same merge one sample at a time, with every field the source gave (kHeads: a head sample,
   /// kAccel: an accelerometer sample), for consumers that write messages rather than feed the core
   /// (`boresight convert`). Same order, look-ahead, late rule and counters as next(), except that
@@ -77,6 +81,7 @@ class EpochAssembler {
   std::uint64_t seq_ = 0;
   bool emitted_ = false;
   TimeUs last_t_ = 0;
+  Sample::Kind last_kind_ = Sample::Kind::kHead;
   int error_source_ = -1;
   std::size_t max_seen_ = 0;
 };

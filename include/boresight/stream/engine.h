@@ -48,6 +48,9 @@ class Engine {
   TimeUs firstEpoch() const { return first_epoch_; }
   TimeUs lastEpoch() const { return last_epoch_; }
   std::uint64_t epochs() const { return epochs_; }
+  /// Star epochs handed to the core, and those it solved (the rest are counted in its health).
+  std::uint64_t starEpochs() const { return star_epochs_; }
+  std::uint64_t starSolutions() const { return star_solutions_; }
   std::size_t maxBuffered() const { return asm_.maxBuffered(); }
   core::Health health() const;
   const core::Pipeline& pipeline() const { return *pipe_; }
@@ -60,7 +63,8 @@ class Engine {
   std::vector<RowSink*> sinks_;
   std::string error_;
   bool configured_ = false, begun_ = false, finished_ = false;
-  std::uint64_t rows_ = 0, epochs_ = 0;
+  std::uint64_t rows_ = 0, epochs_ = 0, star_epochs_ = 0, star_solutions_ = 0;
+  std::unique_ptr<core::StarEpoch> stars_;  ///< scratch (a star epoch is ~5 kB)
   TimeUs first_epoch_ = 0, last_epoch_ = 0;
 };
 

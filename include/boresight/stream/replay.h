@@ -21,6 +21,7 @@ namespace boresight::stream {
 
 struct ReplayInputs {
   std::vector<std::string> sca, acc, lcm;  ///< SCA1A, ACC1A/ACT1A files; LCM logs
+  std::vector<std::string> scv;            ///< SCV1A star vectors (the simulator's product)
   std::vector<std::string> qsa;            ///< QSA1B files (read up front: mountings)
   std::vector<io::QsaRecord> qsa_records;
   std::vector<std::pair<std::string, std::string>> ignored;  ///< (file, product): not a replay input
@@ -38,7 +39,7 @@ bool classifyInputs(const std::vector<std::string>& files, ReplayInputs& in, std
 /// where one is needed, a head without a QSA1B record).
 bool prepareConfig(const ReplayInputs& in, const io::ReadOptions& opt, io::PlatformConfig& pc, std::string* error);
 
-/// One source per input file, in the order SCA1A files, ACC1A files, LCM logs (that order also
+/// One source per input file, in the order SCA1A files, ACC1A files, SCV1A files, LCM logs (that order also
 /// breaks ties at equal time tags). `prefetch`: each is read on its own worker thread.
 bool addSources(const ReplayInputs& in, const io::ReadOptions& opt, bool prefetch, Engine& engine, std::string* error);
 

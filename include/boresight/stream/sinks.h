@@ -10,12 +10,23 @@
 
 namespace boresight::stream {
 
+/// The joint attitude of one star epoch (multi-head Wahba, METHODS 2.4) with the fused attitude of the
+/// head epoch at the same tag, when there is one.
+struct StarSolution {
+  core::WahbaSolution wahba;       ///< q_I_B through the reference head's mounting, P_SR, stars used
+  bool has_fused = false;          ///< a head epoch with the same tag was fused
+  Quat q_I_B_fused = Quat::Identity();
+};
+
 class RowSink {
  public:
   virtual ~RowSink() = default;
   /// Before the first row, with the configuration the core runs (head ids for column names).
   virtual bool begin(const core::PipelineConfig& /*cfg*/) { return true; }
   virtual bool write(const core::PipelineRow& row) = 0;
+  /// A solved star epoch (only when star vectors are among the inputs); sinks that do not want them
+  /// ignore them.
+  virtual bool writeStars(const StarSolution& /*s*/) { return true; }
   /// After the last row (flush, close).
   virtual bool end() { return true; }
   /// Empty unless a call returned false.
@@ -44,6 +55,28 @@ class CsvRowSink final : public RowSink {
   std::string buf_;
   int n_heads_ = 0;
   std::size_t rows_ = 0, with_rates_ = 0, with_acc_ = 0;
+};
+
+/// The `boresight process --stars-out` table: one CSV row per solved star epoch.
+///   time_s, q0..q3 (q_I_B from the stars, scalar first), sigma_x..z_arcsec (1-sigma of that attitude
+///   about the body axes, from the Wahba covariance including the relative matrices' uncertainty),
+///   stars_in, stars_used, residual_rms_arcsec, d_fused_x..z_arcsec (rotation from the fused attitude
+///   of the same tag to the star attitude, body axes; empty when no head epoch has that tag)
+class CsvStarSink final : public RowSink {
+ public:
+  explicit CsvStarSink(std::string path) : path_(std::move(path)) {}
+  ~CsvStarSink() override;
+  bool begin(const core::PipelineConfig& cfg) override;
+  bool write(const core::PipelineRow&) override { return true; }
+  bool writeStars(const StarSolution& s) override;
+  bool end() override;
+  std::string error() const override { return error_; }
+  std::size_t rows() const { return rows_; }
+
+ private:
+  std::string path_, error_;
+  std::FILE* f_ = nullptr;
+  std::size_t rows_ = 0;
 };
 
 /// The last `capacity` rows in a ring (for a batch solver that works on a sliding span). Fixed

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <boresight/core/conventions.h>
+#include <boresight/core/wahba.h>
 
 #include <array>
 #include <cstdint>
@@ -15,9 +16,12 @@
 
 namespace boresight::stream {
 
-/// One input of the core: a star-head sample or an accelerometer angular acceleration.
+/// One input of the core: a star-head sample, an accelerometer angular acceleration, or one star
+/// vector of one head (star samples of one tag form a core::StarEpoch for the multi-head Wahba).
 struct Sample {
-  enum class Kind : std::uint8_t { kHead = 0, kAccel = 1 };  ///< order at equal tags: heads first
+  /// Order at equal tags: heads first (the monitor's corrections are then those of the star epoch's
+  /// own head epoch), then the accelerometer, then star vectors.
+  enum class Kind : std::uint8_t { kHead = 0, kAccel = 1, kStar = 2 };
   Kind kind = Kind::kHead;
   TimeUs t = 0;                 ///< sensor time tag, us past GPS J2000
   int head_id = 0;              ///< kHead: telemetry id
@@ -28,6 +32,8 @@ struct Sample {
   int star_count = 0;            ///< kHead: stars tracked (SCA1A nstars)
   std::int32_t flags = 1;        ///< head: bit 0 valid; accelerometer: bit 0 angular, bit 1 linear valid
   Vec3 lin_A = Vec3::Zero();     ///< kAccel: linear acceleration, m/s^2, accelerometer frame (flags bit 1)
+  core::StarObservation star{};  ///< kStar: head id, measured direction in the head frame, catalogue
+                                 ///< direction in I, sigma (0: the head's configured sigma_star)
 };
 
 /// Why an input record or message was not handed to the core.
@@ -38,6 +44,8 @@ enum class Reject : std::uint8_t {
   kOtherChannel,    ///< an LCM event on a channel the engine does not read
   kLate,            ///< older than what was already handed to the core (beyond the look-ahead)
   kTooManyHeads,    ///< more head samples in one epoch than core::kMaxHeads
+  kTooManyStars,    ///< more star vectors in one epoch than core::kMaxStarInputs
+  kNoStarConsumer,  ///< a star vector, and the caller of the assembler takes no star epochs
   kCount
 };
 constexpr int kRejectCount = static_cast<int>(Reject::kCount);
@@ -48,8 +56,9 @@ struct Counters {
   std::uint64_t read = 0;        ///< records / messages read
   std::uint64_t used_heads = 0;  ///< head samples handed to the core
   std::uint64_t used_accel = 0;  ///< accelerometer samples handed to the core
+  std::uint64_t used_stars = 0;  ///< star vectors handed to the core (each star counts once)
   std::array<std::uint64_t, kRejectCount> rejected{};
-  std::uint64_t used() const { return used_heads + used_accel; }
+  std::uint64_t used() const { return used_heads + used_accel + used_stars; }
   std::uint64_t rejectedTotal() const {
     std::uint64_t n = 0;
     for (auto v : rejected) n += v;

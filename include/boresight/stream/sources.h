@@ -67,9 +67,28 @@ class Acc1aSource final : public Source {
   io::FlaggedRecord rec_;
 };
 
-/// An LCM log (channels STAR_HEAD and ACCEL, see io/lcm_log.h) read message by message straight
-/// into samples. Head messages without the valid bit and accelerometer messages without valid
-/// angular acceleration are rejected with their reason; other channels and undecodable messages too.
+/// SCV1A star vectors (the simulator's product, one star of one head per line) from one file, in
+/// file order; sigma 0 (the head's configured sigma_star).
+class ScvSource final : public Source {
+ public:
+  bool open(const std::string& path, const io::ReadOptions& opt, std::string* error);
+  Next next(Sample& out, Reject& why) override;
+  const std::string& name() const override { return name_; }
+  std::string error() const override { return s_.error(); }
+  std::vector<std::string> issues() const override;
+
+ private:
+  io::ProductStream<io::ScvRecord> s_;
+  std::string name_;
+  std::size_t reported_rejects_ = 0;
+  bool held_ = false, done_ = false;
+  io::ScvRecord rec_;
+};
+
+/// An LCM log (channels STAR_HEAD, ACCEL and STAR_VECTORS, see io/lcm_log.h) read message by message
+/// straight into samples; a STAR_VECTORS message gives one sample per star. Head messages without the
+/// valid bit, accelerometer messages without valid angular acceleration and star messages without
+/// the valid bit or stars are rejected with their reason; other channels and undecodable messages too.
 class LcmLogSource final : public Source {
  public:
   LcmLogSource();
@@ -83,6 +102,7 @@ class LcmLogSource final : public Source {
  private:
   std::unique_ptr<io::LcmLogReader> r_;
   std::string name_, error_;
+  int star_n_ = 0, star_next_ = 0;  ///< stars of the current STAR_VECTORS message, next to hand out
 };
 
 }  // namespace boresight::stream
