@@ -246,7 +246,7 @@ bool writeTruthYaml(const std::string& path, const Simulator& sim, const std::ve
   y.SetDoublePrecision(17);
   y << YAML::Comment(
       "boresight simulate: the truth behind the simulated files. Angles in arcseconds unless named; quaternions "
-      "scalar first; q_Si_B maps body (SRF) to head; C_A_B maps body to accelerometer frame.");
+      "scalar first; q_Si_B maps body (SRF) to head; C_B_A maps accelerometer-frame vectors to the body (as in the configuration files).");
   y << YAML::BeginMap;
   y << YAML::Key << "scenario" << YAML::Value << sc.file;
   y << YAML::Key << "seed" << YAML::Value << sim.seed();
@@ -297,10 +297,10 @@ bool writeTruthYaml(const std::string& path, const Simulator& sim, const std::ve
   y << YAML::EndSeq;
   const auto& a = sim.accel();
   y << YAML::Key << "accelerometer" << YAML::Value << YAML::BeginMap;
-  y << YAML::Key << "C_A_B_nominal" << YAML::Value;
-  emitMat(y, a.config().C_A_B);
-  y << YAML::Key << "C_A_B_true" << YAML::Value;
-  emitMat(y, a.C_A_B_true());
+  y << YAML::Key << "C_B_A_nominal" << YAML::Value;
+  emitMat(y, a.config().C_A_B.transpose());
+  y << YAML::Key << "C_B_A_true" << YAML::Value;
+  emitMat(y, a.C_A_B_true().transpose());
   y << YAML::Key << "misalignment_arcsec" << YAML::Value;
   emitVec(y, a.effects().misalignment_rad, kArcsecPerRad);
   y << YAML::Key << "bias_rad_s2" << YAML::Value;
