@@ -1,8 +1,7 @@
 #include "boresight/core/thermal.h"
 
+#include "boresight/core/fixed_ldlt.h"
 #include "boresight/core/rotation.h"
-
-#include <Eigen/Cholesky>
 
 #include <algorithm>
 #include <cmath>
@@ -11,6 +10,7 @@ namespace boresight::core {
 
 namespace {
 double angle(const Vec3& a, const Vec3& b) { return std::atan2(a.cross(b).norm(), a.dot(b)); }
+
 }  // namespace
 
 Status BoresightMonitor::configure(const HeadSetConfig& cfg, const DeformationFilterConfig& filter) {
@@ -148,13 +148,20 @@ void BoresightMonitor::solveFilter(const Filt& F, const Mat3& W1) const {
     Mat6 M, N;
     M << S0, T1, T1, T2;
     N << N0, U1, U1, U2;
-    const Eigen::LDLT<Mat6> ldlt(M);
-    if (ldlt.info() == Eigen::Success && ldlt.isPositive()) {
-      Vec6 y;
-      y << y0, y1 - d * y0;
-      const Vec6 x = ldlt.solve(y);
+    Mat6 L;
+    Vec6 D;
+    if (ldltFactor<6>(M, L, D)) {
+      Vec6 x;
+      x << y0, y1 - d * y0;
+      ldltSolveInPlace<6>(L, D, x);
       // the level's rows of M^-1 (M symmetric: its first three columns) and R N R^T
-      const Eigen::Matrix<double, 6, 3> Rt = ldlt.solve(Eigen::Matrix<double, 6, 3>::Identity());
+      Eigen::Matrix<double, 6, 3> Rt;
+      for (int c = 0; c < 3; ++c) {
+        Vec6 e = Vec6::Zero();
+        e[c] = 1.0;
+        ldltSolveInPlace<6>(L, D, e);
+        Rt.col(c) = e;
+      }
       const Mat3 C = Rt.transpose() * N * Rt;
       if (x.allFinite() && C.allFinite()) {
         F.delta = x.head<3>();

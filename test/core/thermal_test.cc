@@ -1,14 +1,17 @@
 // Thermal correction and relative attitude: a known relative rotation injected between two heads is
 // recovered (IBA deviation, correction matrix, three-axis deformation, pair mean) to the noise level;
 // a head's dropout does not move the fused attitude beyond its covariance.
+#include "boresight/core/fixed_ldlt.h"
 #include "boresight/core/head_fusion.h"
 #include "boresight/core/relative_attitude.h"
 #include "boresight/core/thermal.h"
 
 #include "core_test_util.h"
 
+#include <Eigen/Cholesky>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <vector>
 #include <cmath>
@@ -265,6 +268,60 @@ TEST(Thermal, ASingularPairCovarianceIsCountedAndLeavesTheFilterAlone) {
   bad.tau_s = 100;
   bad.hold_drift_rad_per_s = std::nan("");
   EXPECT_EQ(mon.configure(sc.heads, bad), Status::kInvalidConfig);
+}
+
+TEST(Thermal, FixedSizeLdltMatchesEigenAndRejectsIndefiniteMatrices) {
+  // The filter's 6x6 solve (fixed_ldlt.h, no pivoting) against Eigen's pivoted LDLT on 2 000 random
+  // SPD matrices shaped like the filter's normal equations (blocks scaled by 1 and up to 1e4: a time
+  // axis in seconds), condition numbers up to ~1e8: M^-1 y and the first three columns of M^-1.
+  Rng rng(38);
+  std::normal_distribution<double> n01(0, 1);
+  std::uniform_real_distribution<double> lg(0, 4);
+  using M6 = Eigen::Matrix<double, 6, 6>;
+  using V6 = Eigen::Matrix<double, 6, 1>;
+  double worst = 0;
+  for (int trial = 0; trial < 2000; ++trial) {
+    M6 A;
+    for (int i = 0; i < 36; ++i) A(i / 6, i % 6) = n01(rng);
+    V6 sc;
+    for (int i = 0; i < 6; ++i) sc[i] = i < 3 ? 1.0 : std::pow(10.0, lg(rng));
+    const M6 M = sc.asDiagonal() * (A * A.transpose() + 1e-3 * M6::Identity()) * sc.asDiagonal();
+    V6 y;
+    for (int i = 0; i < 6; ++i) y[i] = n01(rng);
+    M6 L;
+    V6 D;
+    ASSERT_TRUE(ldltFactor<6>(M, L, D)) << trial;
+    const Eigen::LDLT<M6> ref(M);
+    V6 x = y;
+    ldltSolveInPlace<6>(L, D, x);
+    const V6 xr = ref.solve(y);
+    const double cond = 1.0 / ref.rcond();
+    worst = std::max(worst, (x - xr).norm() / xr.norm() / cond);
+    EXPECT_LT((x - xr).norm(), 1e-14 * cond * xr.norm()) << trial;
+    for (int c = 0; c < 3; ++c) {
+      V6 e = V6::Zero();
+      e[c] = 1.0;
+      ldltSolveInPlace<6>(L, D, e);
+      const V6 er = ref.solve(V6::Unit(c));
+      EXPECT_LT((e - er).norm(), 1e-14 * cond * er.norm()) << trial << " column " << c;
+    }
+    EXPECT_LT((L * D.asDiagonal() * L.transpose() - M).norm(), 1e-14 * M.norm()) << trial;
+  }
+  std::printf("fixed LDLT vs Eigen LDLT: max |dx|/|x|/cond = %.2e\n", worst);
+  // not positive definite: a zero, a negative and a NaN pivot are refused
+  M6 S = M6::Identity();
+  S(4, 4) = 0;
+  M6 L;
+  V6 D;
+  EXPECT_FALSE(ldltFactor<6>(S, L, D));
+  S(4, 4) = 1;
+  S(2, 5) = S(5, 2) = 2;  // minor [[1 2][2 1]]: indefinite
+  EXPECT_FALSE(ldltFactor<6>(S, L, D));
+  S(2, 5) = S(5, 2) = 0;
+  S(0, 0) = std::nan("");
+  EXPECT_FALSE(ldltFactor<6>(S, L, D));
+  S(0, 0) = 1;
+  EXPECT_TRUE(ldltFactor<6>(S, L, D));
 }
 
 TEST(Thermal, FilteredDeformationEqualsABruteForceWeightedFit) {
