@@ -64,14 +64,6 @@ inline double leftInverseCoefficient(double th2) {
   const double th = std::sqrt(th2);
   return 1.0 / th2 - (1.0 + std::cos(th)) / (2.0 * th * std::sin(th));
 }
-// Log of a unit quaternion near the identity without a division: theta/2 = asin(|v|), so
-// Log = 2 asin(n)/n v, a series in n^2 (the first omitted term, 35 n^8/1152, is below 1e-17 relative
-// for n < 0.01; |q| = 1 to rounding here: products of unit quaternions). Otherwise the general Log.
-inline Vec3 logUnitSmall(const Quat& q) {
-  const double n2 = q.vec().squaredNorm();
-  if (q.w() > 0 && n2 < 1e-4) return (2.0 * (1.0 + n2 * (1.0 / 6.0 + n2 * (3.0 / 40.0 + n2 * (5.0 / 112.0))))) * q.vec();
-  return quatLog(q);
-}
 }  // namespace
 
 Status HeadFusion::step(const ValidHeads& in) {
@@ -139,7 +131,7 @@ Status HeadFusion::step(const ValidHeads& in) {
     for (int k = ref + 1; k < cfg_.n_heads; ++k) {  // the first head's residual is zero
       if (!((mask >> k) & 1u)) continue;
       const auto u = static_cast<std::size_t>(k);
-      g.noalias() += (*Wa)[u] * logUnitSmall(q_inv * q_I_B[u]);
+      g.noalias() += (*Wa)[u] * quatLogNearIdentity(q_inv * q_I_B[u]);
     }
     q = q * quatExp(P * g);
   }
@@ -150,7 +142,7 @@ Status HeadFusion::step(const ValidHeads& in) {
     for (int k = 0; k < cfg_.n_heads; ++k) {
       if (!((mask >> k) & 1u)) continue;
       const auto u = static_cast<std::size_t>(k);
-      r[u] = logUnitSmall(q_inv * q_I_B[u]);
+      r[u] = quatLogNearIdentity(q_inv * q_I_B[u]);
       c[u] = leftInverseCoefficient(r[u].squaredNorm());
     }
   }

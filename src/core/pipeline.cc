@@ -138,7 +138,9 @@ Status Pipeline::stepHeads(const HeadEpoch& in) {
   Status s = validator_.step(in);
   if (s != Status::kOk) return s;
   const ValidHeads& v = validator_.output();
-  means_.step(v);
+  PairRelatives rel;  // C_Sa_Sb of every pair, once per epoch for the means and the monitor
+  formPairRelatives(v, cfg_.heads.n_heads, rel);
+  means_.step(v, rel);
   if (cfg_.fusion_alignment == FusionAlignment::kRunningMeans && !handed_ && --align_countdown_ <= 0) {
     HeadAlignment a;
     if (means_.alignment(a)) {
@@ -148,7 +150,7 @@ Status Pipeline::stepHeads(const HeadEpoch& in) {
   }
   s = fusion_.step(v);
   if (s != Status::kOk) return s;
-  if (cfg_.heads.n_heads >= 2) monitor_.step(v);
+  if (cfg_.heads.n_heads >= 2) monitor_.step(v, rel);
   const FusedAttitude& f = fusion_.output();
 
   // is this head epoch an output epoch? (same rule as the rate filter's centre taps)

@@ -41,32 +41,41 @@ void RelativeAttitudeMeans::reset() {
 }
 
 Status RelativeAttitudeMeans::step(const ValidHeads& in) {
+  PairRelatives rel;
+  if (configured_) formPairRelatives(in, cfg_.n_heads, rel);
+  return step(in, rel);
+}
+
+Status RelativeAttitudeMeans::step(const ValidHeads& in, const PairRelatives& rel_in) {
   if (const Status g = admitStep(configured_, have_last_, last_t_, in.t, health_); g != Status::kOk) return g;
+  const PairRelatives* relp = &rel_in;
+  PairRelatives own;
+  if (rel_in.t != in.t || rel_in.mask != in.mask) {  // not this epoch's: form them
+    formPairRelatives(in, cfg_.n_heads, own);
+    relp = &own;
+  }
   have_last_ = true;
   last_t_ = in.t;
   const double tau = cfg_.relative_time_constant_s;
   for (int a = 0; a < cfg_.n_heads; ++a) {
     if (!in.has(a)) continue;
     const auto ua = static_cast<std::size_t>(a);
-    const Quat q_Sa_I = in.q_I_Si[ua].conjugate();
     for (int b = a + 1; b < cfg_.n_heads; ++b) {
       if (!in.has(b)) continue;
       const auto ub = static_cast<std::size_t>(b);
       const auto p = static_cast<std::size_t>(pairIndex(a, b));
-      const Quat B = q_Sa_I * in.q_I_Si[ub];
+      const Quat& B = relp->q_Sa_Sb[p];
       const double sa = in.sigma_scale[ua], sb = in.sigma_scale[ub];
-      Mat3 W_scaled;
-      const Mat3* Wp = &W1_[p];  // no copy at nominal sigma scales
-      if (sa != 1.0 || sb != 1.0) {
+      const bool nominal = sa == 1.0 && sb == 1.0;
+      Mat3 W;
+      if (!nominal) {
         const Mat3& C = C_Sj_Si0_[p];
         const Mat3 S = sb * sb * Sigma_[ub] + sa * sa * C * Sigma_[ua] * C.transpose();
-        if (!invertSpd3(S, W_scaled)) {
+        if (!invertSpd3(S, W)) {
           health_.record(Status::kNumericalFailure);
           continue;
         }
-        Wp = &W_scaled;
       }
-      const Mat3& W = *Wp;
       Acc& A = acc_[p];
       if (A.n == 0) A.q_ref = B;
       // exponential forgetting, applied in blocks: the sums are multiplied by exp(-(t - t_last)/tau)
@@ -79,6 +88,8 @@ Status RelativeAttitudeMeans::step(const ValidHeads& in) {
         if (x >= 1e-3 || toSeconds(in.t - A.t_last) >= kForgetBlockS) {
           const double lambda = x < 1e-3 ? 1.0 - x * (1.0 - 0.5 * x * (1.0 - x / 3.0)) : std::exp(-x);
           A.n_w *= lambda;
+          A.w_nom *= lambda;
+          A.eta_nom *= lambda;
           A.W_sum *= lambda;
           A.W_eta *= lambda;
           A.eta_sum *= lambda;
@@ -86,20 +97,27 @@ Status RelativeAttitudeMeans::step(const ValidHeads& in) {
           A.t_last = in.t;
         }
       }
-      const Vec3 eta = quatLog(A.q_ref.conjugate() * B);
+      const Vec3 eta = quatLogNearIdentity(A.q_ref.conjugate() * B);
       ++A.n;
       A.n_w += 1.0;
-      A.W_sum += W;
-      A.W_eta.noalias() += W * eta;
+      if (nominal) {
+        A.w_nom += 1.0;
+        A.eta_nom += eta;
+      } else {
+        A.W_sum += W;
+        A.W_eta.noalias() += W * eta;
+      }
       A.eta_sum += eta;
       A.eta_eta.noalias() += eta * eta.transpose();
       if ((A.n & 63u) != 1u) continue;  // re-anchoring check every 64 epochs
+      const Mat3 W_all = infoSum(A, p);
       Mat3 P;
-      if (!invertSpd3(A.W_sum, P)) continue;
-      const Vec3 m = P * A.W_eta;
+      if (!invertSpd3(W_all, P)) continue;
+      const Vec3 m = P * infoEtaSum(A, p);
       if (m.norm() > kReanchorRad) {  // move the anchor to the mean (first order in m)
         const double n = A.n_w;
         A.q_ref = (A.q_ref * quatExp(m)).normalized();
+        A.eta_nom -= A.w_nom * m;  // W1 eta_nom + W_eta -= (w_nom W1 + W_sum) m
         A.W_eta -= A.W_sum * m;
         A.eta_eta += -m * A.eta_sum.transpose() - A.eta_sum * m.transpose() + n * m * m.transpose();
         A.eta_sum -= n * m;
@@ -114,11 +132,12 @@ Status RelativeAttitudeMeans::step(const ValidHeads& in) {
 PairMean RelativeAttitudeMeans::mean(int a, int b) const {
   PairMean r;
   if (!configured_ || a < 0 || b <= a || b >= cfg_.n_heads) return r;
-  const Acc& A = acc_[static_cast<std::size_t>(pairIndex(a, b))];
+  const auto p = static_cast<std::size_t>(pairIndex(a, b));
+  const Acc& A = acc_[p];
   if (A.n == 0) return r;
   Mat3 P;
-  if (!invertSpd3(A.W_sum, P)) return r;
-  const Vec3 m = P * A.W_eta;
+  if (!invertSpd3(infoSum(A, p), P)) return r;
+  const Vec3 m = P * infoEtaSum(A, p);
   const double n = A.n_w;
   const Vec3 eta_mean = A.eta_sum / n;
   r.valid = true;
@@ -183,16 +202,18 @@ bool RelativeAttitudeMeans::alignment(HeadAlignment& out) const {
   };
   for (int a = 0; a < cfg_.n_heads; ++a)
     for (int b = a + 1; b < cfg_.n_heads; ++b) {
-      const Acc& A = acc_[static_cast<std::size_t>(pairIndex(a, b))];
+      const auto p = static_cast<std::size_t>(pairIndex(a, b));
+      const Acc& A = acc_[p];
       if (A.n < static_cast<std::uint64_t>(cfg_.relative_min_epochs)) continue;
+      const Mat3 W_all_ab = infoSum(A, p);
       Mat3 P;
-      if (!invertSpd3(A.W_sum, P)) continue;
-      const Quat q_ab = A.q_ref * quatExp(P * A.W_eta);  // mean C_Sa_Sb
+      if (!invertSpd3(W_all_ab, P)) continue;
+      const Quat q_ab = A.q_ref * quatExp(P * infoEtaSum(A, p));  // mean C_Sa_Sb
       const Quat& q_Sa_B = cfg_.head[static_cast<std::size_t>(a)].q_Si_B;
       const Quat& q_Sb_B = cfg_.head[static_cast<std::size_t>(b)].q_Si_B;
       const Vec3 r = quatLog(q_Sa_B.conjugate() * q_ab * q_Sb_B);  // d_b - d_a, in B
       const Mat3 C_B_Sb = q_Sb_B.toRotationMatrix().transpose();
-      const Mat3 Wr = C_B_Sb * A.W_sum * C_B_Sb.transpose();     // information of r in B
+      const Mat3 Wr = C_B_Sb * W_all_ab * C_B_Sb.transpose();     // information of r in B
       H.block<3, 3>(3 * a, 3 * a) += Wr;
       H.block<3, 3>(3 * b, 3 * b) += Wr;
       H.block<3, 3>(3 * a, 3 * b) -= Wr;

@@ -37,6 +37,9 @@ Status BoresightMonitor::configure(const HeadSetConfig& cfg, const DeformationFi
                 C0_[p] * headCovariance(hb.sigma_cross_rad, hb.sigma_roll_rad, hb.boresight_Si) * C0_[p].transpose();
       if (!invertSpd3(cov_[p], W1_[p])) return Status::kInvalidConfig;
       q0_[p] = Quat(C0_[p]).normalized();
+      cos0_[p] = std::cos(alpha0_[p]);
+      sin0_[p] = std::sin(alpha0_[p]);
+      sigma_iba2_nom_[p] = n_[p].dot(cov_[p] * n_[p]);
     }
   configured_ = true;
   reset();
@@ -44,7 +47,7 @@ Status BoresightMonitor::configure(const HeadSetConfig& cfg, const DeformationFi
 }
 
 void BoresightMonitor::reset() {
-  for (auto& T : T_last_) T.setIdentity();
+  dev_last_.fill(0.0);
   cur_.fill(PairDeformation{});
   acc_.fill(Acc{});
   filt_.fill(Filt{});
@@ -185,7 +188,20 @@ void BoresightMonitor::solveFilter(const Filt& F, const Mat3& W1) const {
 }
 
 Status BoresightMonitor::step(const ValidHeads& in) {
+  PairRelatives rel;
+  if (configured_) formPairRelatives(in, cfg_.n_heads, rel);
+  return step(in, rel);
+}
+
+Status BoresightMonitor::step(const ValidHeads& in, const PairRelatives& rel_in) {
   if (const Status g = admitStep(configured_, have_last_, last_t_, in.t, health_); g != Status::kOk) return g;
+  const PairRelatives* relp = &rel_in;
+  PairRelatives own;
+  if (rel_in.t != in.t || rel_in.mask != in.mask) {  // not this epoch's: form them
+    formPairRelatives(in, cfg_.n_heads, own);
+    relp = &own;
+  }
+  const PairRelatives& rel = *relp;
   have_last_ = true;
   last_t_ = in.t;
   // the filters' time origin: re-anchored every kReanchorS (or 40 tau) so the weights stay below e^40
@@ -205,38 +221,56 @@ Status BoresightMonitor::step(const ValidHeads& in) {
       r.valid = false;
       if (!in.has(a) || !in.has(b)) continue;
       const auto ua = static_cast<std::size_t>(a), ub = static_cast<std::size_t>(b);
-      const Quat q_Sa_Sb = in.q_I_Si[ua].conjugate() * in.q_I_Si[ub];
+      const Quat& q_Sa_Sb = rel.q_Sa_Sb[p];
       const Vec3& ba = cfg_.head[ua].boresight_Si;
       const Vec3 v = q_Sa_Sb * cfg_.head[ub].boresight_Si;
-      r.iba_rad = angle(ba, v);
+      // deviation d = alpha - alpha0 from cos(alpha) = ba.v, sin(alpha) = |ba x v| (|ba| = |v| = 1):
+      // sin d = sin(alpha) cos(alpha0) - cos(alpha) sin(alpha0), cos d = ... + ...; for |sin d| < 0.01
+      // d = asin(sin d) by its series (first omitted term 35 x^9/1152 < 1e-19 rad), else atan2
+      const double c = ba.dot(v), sn = ba.cross(v).norm();
+      const double sd = sn * cos0_[p] - c * sin0_[p], cd = c * cos0_[p] + sn * sin0_[p];
+      double dev;
+      if (cd > 0 && std::abs(sd) < 1e-2) {
+        const double x2 = sd * sd;
+        dev = sd * (1.0 + x2 * (1.0 / 6.0 + x2 * (3.0 / 40.0 + x2 * (5.0 / 112.0))));
+      } else {
+        dev = std::atan2(sd, cd);
+      }
+      r.iba_dev_rad = dev;
+      r.iba_rad = alpha0_[p] + dev;
       r.iba_ground_rad = alpha0_[p];
-      r.iba_dev_rad = r.iba_rad - alpha0_[p];
-      r.T_Si = so3Exp(r.iba_dev_rad * n_[p]);
-      r.delta_Si = quatLog(q_Sa_Sb * q0_[p].conjugate());
+      r.delta_Si = quatLogNearIdentity(q_Sa_Sb * q0_[p].conjugate());
       const double sa = in.sigma_scale[ua], sb = in.sigma_scale[ub];
+      const bool nominal = sa == 1.0 && sb == 1.0;
       r.n_iba_Si = n_[p];
       r.valid = true;
-      T_last_[p] = r.T_Si;
-      Mat3 W = W1_[p];
-      if (sa == 1.0 && sb == 1.0) {
-        r.cov_delta_Si = cov_[p];
-      } else {
-        const Mat3 Sa = headCovariance(cfg_.head[ua].sigma_cross_rad, cfg_.head[ua].sigma_roll_rad, ba);
-        const Mat3 Sb = headCovariance(cfg_.head[ub].sigma_cross_rad, cfg_.head[ub].sigma_roll_rad, cfg_.head[ub].boresight_Si);
-        r.cov_delta_Si = sa * sa * Sa + sb * sb * C0_[p] * Sb * C0_[p].transpose();
-        if (!invertSpd3(r.cov_delta_Si, W)) {
-          health_.record(Status::kNumericalFailure);
-          continue;
-        }
-      }
+      dev_last_[p] = dev;
       Acc& A = acc_[p];
+      if (nominal) {
+        r.cov_delta_Si = cov_[p];
+        sigma_iba2_[p] = sigma_iba2_nom_[p];
+        ++A.n;
+        ++A.n_nom;
+        A.delta_nom += r.delta_Si;
+        A.dev_sum += dev;
+        updateFilter(filt_[p], in.t, g, true, W1_[p], r.delta_Si);
+        continue;
+      }
+      const Mat3 Sa = headCovariance(cfg_.head[ua].sigma_cross_rad, cfg_.head[ua].sigma_roll_rad, ba);
+      const Mat3 Sb = headCovariance(cfg_.head[ub].sigma_cross_rad, cfg_.head[ub].sigma_roll_rad, cfg_.head[ub].boresight_Si);
+      r.cov_delta_Si = sa * sa * Sa + sb * sb * C0_[p] * Sb * C0_[p].transpose();
+      Mat3 W;
+      if (!invertSpd3(r.cov_delta_Si, W)) {
+        health_.record(Status::kNumericalFailure);
+        continue;
+      }
       ++A.n;
       A.W_sum += W;
       A.W_delta += W * r.delta_Si;
-      A.dev_sum += r.iba_dev_rad;
+      A.dev_sum += dev;
       sigma_iba2_[p] = n_[p].dot(r.cov_delta_Si * n_[p]);
       // filtered deformation: information-weighted fit with exponential forgetting
-      updateFilter(filt_[p], in.t, g, sa == 1.0 && sb == 1.0, W, r.delta_Si);
+      updateFilter(filt_[p], in.t, g, false, W, r.delta_Si);
     }
   health_.record(Status::kOk);
   return Status::kOk;
@@ -247,12 +281,14 @@ DeformationMean BoresightMonitor::mean(int a, int b) const {
   if (!configured_ || a < 0 || b <= a || b >= cfg_.n_heads) return m;
   const Acc& A = acc_[static_cast<std::size_t>(pairIndex(a, b))];
   if (A.n == 0) return m;
+  const auto p = static_cast<std::size_t>(pairIndex(a, b));
+  const Mat3 W_sum = static_cast<double>(A.n_nom) * W1_[p] + A.W_sum;
   Mat3 P;
-  if (!invertSpd3(A.W_sum, P)) return m;
+  if (!invertSpd3(W_sum, P)) return m;
   m.valid = true;
   m.n = A.n;
   m.cov_Si = P;
-  m.delta_Si = P * A.W_delta;
+  m.delta_Si = P * (W1_[p] * A.delta_nom + A.W_delta);
   m.iba_dev_mean_rad = A.dev_sum / static_cast<double>(A.n);
   return m;
 }
@@ -308,7 +344,7 @@ Status BoresightMonitor::relativeFor(int a, int b, RelativeCorrection mode, Time
     case RelativeCorrection::kNone:
       break;
     case RelativeCorrection::kIbaOneAxis:
-      C_lh = T_last_[p] * C0_[p];
+      C_lh = so3Exp(dev_last_[p] * n_[p]) * C0_[p];
       if (filt_[p].seen) P = sigma_iba2_[p] * n_[p] * n_[p].transpose();
       break;
     case RelativeCorrection::kFilteredThreeAxis: {
@@ -347,10 +383,10 @@ Mat3 BoresightMonitor::correctedRelative(int a, int b) const {
   if (a == b) return Mat3::Identity();
   if (a < b) {
     const auto p = static_cast<std::size_t>(pairIndex(a, b));
-    return T_last_[p] * C0_[p];
+    return so3Exp(dev_last_[p] * n_[p]) * C0_[p];
   }
   const auto p = static_cast<std::size_t>(pairIndex(b, a));
-  return (T_last_[p] * C0_[p]).transpose();
+  return (so3Exp(dev_last_[p] * n_[p]) * C0_[p]).transpose();
 }
 
 }  // namespace boresight::core

@@ -69,11 +69,11 @@ TEST(Thermal, InjectedRelativeRotationIsRecovered) {
       ASSERT_EQ(means.step(v), Status::kOk);
       const PairDeformation& d = mon.pair(0, 1);
       ASSERT_TRUE(d.valid);
-      const Vec3 v2 = d.T_Si * C0 * b2;
+      const Vec3 v2 = d.T_Si() * C0 * b2;
       corrected_angle_sum += std::atan2(b1.cross(v2).norm(), b1.dot(v2));
       dev_sq += std::pow(d.iba_dev_rad - (alpha_true - d.iba_ground_rad), 2);
       // what T leaves of the injected deformation: Log(T^T Exp(delta_true))
-      resid_sum += so3Log(d.T_Si.transpose() * D_true);
+      resid_sum += so3Log(d.T_Si().transpose() * D_true);
     }
     const PairDeformation& last = mon.pair(0, 1);
     const double iba_sigma = std::sqrt(last.n_iba_Si.dot(last.cov_delta_Si * last.n_iba_Si));

@@ -102,6 +102,28 @@ struct ValidHeads {
   }
 };
 
+/// Relative attitudes of the pairs of valid heads of one epoch, q_Sa_Sb = q_I_Sa^* q_I_Sb (slots a < b,
+/// by pairIndex; only pairs with both heads in `mask`): formed once per epoch and shared by the pair
+/// means and the monitor (both also accept ValidHeads alone and form them).
+struct PairRelatives {
+  TimeUs t = 0;
+  std::uint32_t mask = 0;  ///< the ValidHeads mask they were formed from
+  std::array<Quat, kMaxPairs> q_Sa_Sb = filled<Quat, kMaxPairs>(Quat::Identity());
+};
+
+/// Forms `out` from `in` for slots 0..n_heads-1.
+inline void formPairRelatives(const ValidHeads& in, int n_heads, PairRelatives& out) {
+  out.t = in.t;
+  out.mask = in.mask;
+  for (int a = 0; a < n_heads; ++a) {
+    if (!in.has(a)) continue;
+    const Quat q_Sa_I = in.q_I_Si[static_cast<std::size_t>(a)].conjugate();
+    for (int b = a + 1; b < n_heads; ++b)
+      if (in.has(b))
+        out.q_Sa_Sb[static_cast<std::size_t>(pairIndex(a, b))] = q_Sa_I * in.q_I_Si[static_cast<std::size_t>(b)];
+  }
+}
+
 /// Rejects bad samples (each counted by reason) and maps ids to slots.
 /// step(): kOk when at least one head is valid (bad heads are dropped and counted); otherwise the
 /// reason of the epoch's rejection. Time must strictly increase from epoch to epoch.

@@ -50,6 +50,9 @@ class RelativeAttitudeMeans {
   Status configure(const HeadSetConfig& cfg);
   void reset();
   Status step(const ValidHeads& in);
+  /// The same with the epoch's pair relatives already formed (shared with the monitor; formed here
+  /// when they do not belong to `in`).
+  Status step(const ValidHeads& in, const PairRelatives& rel);
   /// Mean of the pair of slots a < b.
   PairMean mean(int a, int b) const;
   /// Closure of slots i < j < k (all three pair means must exist).
@@ -69,6 +72,10 @@ class RelativeAttitudeMeans {
     double n_w = 0;         ///< forgotten count (sum of lambda^k)
     TimeUs t_last = 0;
     Quat q_ref = Quat::Identity();
+    // epochs at unit sigma scales (almost all) have the information W1: a forgotten count and sum of
+    // eta; the others go into W_sum, W_eta. The full sums: w_nom W1 + W_sum, W1 eta_nom + W_eta.
+    double w_nom = 0;
+    Vec3 eta_nom = Vec3::Zero();
     Mat3 W_sum = Mat3::Zero();
     Vec3 W_eta = Vec3::Zero();
     Vec3 eta_sum = Vec3::Zero();
@@ -82,6 +89,8 @@ class RelativeAttitudeMeans {
   std::array<Mat3, kMaxHeads> W_B_ = filled<Mat3, kMaxHeads>(Mat3::Zero());             ///< head information in B
   std::array<Acc, kMaxPairs> acc_{};
   bool datumProject(HeadAlignment& a) const;
+  Mat3 infoSum(const Acc& A, std::size_t p) const { return A.w_nom * W1_[p] + A.W_sum; }
+  Vec3 infoEtaSum(const Acc& A, std::size_t p) const { return W1_[p] * A.eta_nom + A.W_eta; }
   bool have_last_ = false;
   TimeUs last_t_ = 0;
   std::uint64_t reanchors_ = 0;

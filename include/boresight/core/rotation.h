@@ -46,6 +46,15 @@ inline Vec3 quatLog(const Quat& q) {
   return Vec3(phi[0], phi[1], phi[2]);
 }
 
+/// Log of a unit quaternion near the identity without a division: theta/2 = asin(|v|), so
+/// Log = 2 asin(n)/n v, a series in n^2 (the first omitted term, 35 n^8/1152, is below 1e-17 relative
+/// for n < 0.01; for products of unit quaternions |q| = 1 to rounding). Otherwise the general Log.
+inline Vec3 quatLogNearIdentity(const Quat& q) {
+  const double n2 = q.vec().squaredNorm();
+  if (q.w() > 0 && n2 < 1e-4) return (2.0 * (1.0 + n2 * (1.0 / 6.0 + n2 * (3.0 / 40.0 + n2 * (5.0 / 112.0))))) * q.vec();
+  return quatLog(q);
+}
+
 /// Exp to a matrix: Rodrigues, R = I + s [phi]x + k [phi]x^2 = (1 - k th^2) I + s [phi]x + k phi phi^T,
 /// s = sin(th)/th, k = (1 - cos th)/th^2; series below 0.01 rad (truncation below 1e-16).
 inline Mat3 so3Exp(const Vec3& phi) {

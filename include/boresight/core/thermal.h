@@ -44,7 +44,9 @@ struct PairDeformation {
   double iba_rad = 0;            ///< in-orbit inter-boresight angle, rad
   double iba_ground_rad = 0;     ///< ground value, rad
   double iba_dev_rad = 0;        ///< iba - ground, rad
-  Mat3 T_Si = Mat3::Identity();  ///< real-time correction matrix (acts in Si on C0 b_j)
+  /// Real-time correction matrix (acts in Si on C0 b_j): rotation by iba_dev_rad about n_iba_Si
+  /// (formed on demand: the monitor's step does not need it).
+  Mat3 T_Si() const { return so3Exp(iba_dev_rad * n_iba_Si); }
   Vec3 delta_Si = Vec3::Zero();  ///< three-axis relative deformation this epoch, rad, in Si
   Mat3 cov_delta_Si = Mat3::Zero();  ///< its covariance, rad^2
   Vec3 n_iba_Si = Vec3::Zero();  ///< unit axis that the IBA senses (n . delta = d to first order)
@@ -105,6 +107,9 @@ class BoresightMonitor {
   Status configure(const HeadSetConfig& cfg, const DeformationFilterConfig& filter);
   void reset();
   Status step(const ValidHeads& in);
+  /// The same with the epoch's pair relatives already formed (the pipeline shares them with the means;
+  /// formed here when they do not belong to `in`).
+  Status step(const ValidHeads& in, const PairRelatives& rel);
   /// This epoch's result of the pair a < b (valid false when a head is missing).
   const PairDeformation& pair(int a, int b) const { return cur_[static_cast<std::size_t>(pairIndex(a, b))]; }
   DeformationMean mean(int a, int b) const;
@@ -133,11 +138,15 @@ class BoresightMonitor {
   std::array<Mat3, kMaxPairs> cov_ = filled<Mat3, kMaxPairs>(Mat3::Zero());       ///< Sigma_i + C0 Sigma_j C0^T
   std::array<Mat3, kMaxPairs> W1_ = filled<Mat3, kMaxPairs>(Mat3::Zero());        ///< its inverse
   std::array<Quat, kMaxPairs> q0_ = filled<Quat, kMaxPairs>(Quat::Identity());        ///< C0 as a quaternion
-  std::array<Mat3, kMaxPairs> T_last_ = filled<Mat3, kMaxPairs>(Mat3::Identity());
+  std::array<double, kMaxPairs> cos0_{}, sin0_{};  ///< cos and sin of alpha0
+  std::array<double, kMaxPairs> sigma_iba2_nom_{};  ///< n^T cov n at unit sigma scales
+  std::array<double, kMaxPairs> dev_last_{};        ///< IBA deviation of the last epoch that saw the pair
   std::array<PairDeformation, kMaxPairs> cur_{};
   struct Acc {
     std::uint64_t n = 0;
-    Mat3 W_sum = Mat3::Zero();
+    std::uint64_t n_nom = 0;        ///< epochs at unit sigma scales (information W1: counted, not summed)
+    Vec3 delta_nom = Vec3::Zero();  ///< sum of their delta
+    Mat3 W_sum = Mat3::Zero();      ///< the other epochs: sum W, sum W delta
     Vec3 W_delta = Vec3::Zero();
     double dev_sum = 0;
   };
