@@ -60,7 +60,7 @@ void HeadFusion::reset() {
 namespace {
 // c(th) of J_l^-1(r) = I - [r]/2 + c [r]^2 from th^2 = |r|^2.
 inline double leftInverseCoefficient(double th2) {
-  if (th2 < 1e-4) return 1.0 / 12.0 + th2 / 720.0;  // series: the next term, th^4/30240, is below 4e-13
+  if (th2 < 1e-4) return 1.0 / 12.0 + th2 * (1.0 / 720.0);  // series: the next term, th^4/30240, is below 4e-13
   const double th = std::sqrt(th2);
   return 1.0 / th2 - (1.0 + std::cos(th)) / (2.0 * th * std::sin(th));
 }
@@ -124,25 +124,29 @@ Status HeadFusion::step(const ValidHeads& in) {
   // test: within 1e-6 of the noise of the exact optimum; one exact-gradient step leaves up to
   // 1.03e-6 in 2 000 random cases, two none).
   const auto uref = static_cast<std::size_t>(ref);
-  Quat q = q_I_B[uref];
+  const Quat q0 = q_I_B[uref];
+  // e_i = q0^-1 q_i, kept for the exact residuals below: q1^-1 q_i = Exp(-x0) e_i (e_ref = identity)
+  std::array<Quat, kMaxHeads> e;
+  Vec3 x0;
   {
     Vec3 g = Vec3::Zero();
-    const Quat q_inv = q.conjugate();
+    const Quat q_inv = q0.conjugate();
     for (int k = ref + 1; k < cfg_.n_heads; ++k) {  // the first head's residual is zero
       if (!((mask >> k) & 1u)) continue;
       const auto u = static_cast<std::size_t>(k);
-      g.noalias() += (*Wa)[u] * quatLogNearIdentity(q_inv * q_I_B[u]);
+      e[u] = q_inv * q_I_B[u];
+      g.noalias() += (*Wa)[u] * quatLogNearIdentity(e[u]);
     }
-    q = q * quatExp(P * g);
+    x0 = P * g;
   }
   std::array<Vec3, kMaxHeads> r;
   std::array<double, kMaxHeads> c{};
   {
-    const Quat q_inv = q.conjugate();
-    for (int k = 0; k < cfg_.n_heads; ++k) {
+    const Quat e0_inv = quatExp(-x0);  // Exp(x0)^-1
+    for (int k = ref; k < cfg_.n_heads; ++k) {
       if (!((mask >> k) & 1u)) continue;
       const auto u = static_cast<std::size_t>(k);
-      r[u] = quatLogNearIdentity(q_inv * q_I_B[u]);
+      r[u] = k == ref ? Vec3(-x0) : quatLogNearIdentity(e0_inv * e[u]);  // Log(Exp(-x0)) = -x0
       c[u] = leftInverseCoefficient(r[u].squaredNorm());
     }
   }
@@ -166,8 +170,10 @@ Status HeadFusion::step(const ValidHeads& in) {
       r[u] -= dx - 0.5 * rdx + c[u] * r[u].cross(rdx);  // J_l^-1(r) dx
     }
   }
-  q = q * quatExp(x);
-  q.normalize();
+  Quat q = (q0 * quatExp(x0)) * quatExp(x);
+  // renormalise: a product of unit quaternions, |q|^2 = 1 + e with |e| ~ 1e-16, so one Newton step of
+  // 1/sqrt, (3 - |q|^2)/2, is exact to e^2 (no sqrt, no division)
+  q.coeffs() *= 0.5 * (3.0 - q.coeffs().squaredNorm());
   if (have_last_) q = continuous(q, out_.q_I_B);
   out_.t = in.t;
   out_.q_I_B = q;

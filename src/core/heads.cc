@@ -94,8 +94,12 @@ Status HeadInputValidator::step(const HeadEpoch& in) {
     health_.record(Status::kDuplicateTime);
     return Status::kDuplicateTime;
   }
-  ValidHeads v;
+  // built in place in out_ (the previous epoch's output is restored on rejection: rare)
+  const TimeUs prev_t = out_.t;
+  const std::uint32_t prev_mask = out_.mask;
+  ValidHeads& v = out_;
   v.t = in.t;
+  v.mask = 0;
   Status first_reason = Status::kNoValidInput;
   int n = in.n;
   if (n < 0) n = 0;
@@ -129,12 +133,14 @@ Status HeadInputValidator::step(const HeadEpoch& in) {
     v.mask |= 1u << slot;
   }
   if (v.mask == 0) {
+    // the slots of prev_mask were not written (no valid head): restoring t and mask restores out_
+    v.t = prev_t;
+    v.mask = prev_mask;
     if (first_reason == Status::kNoValidInput) health_.record(Status::kNoValidInput);
     return first_reason;
   }
   have_last_ = true;
   last_t_ = in.t;
-  out_ = v;
   health_.record(Status::kOk);
   return Status::kOk;
 }

@@ -61,8 +61,8 @@ inline Mat3 so3Exp(const Vec3& phi) {
   const double t2 = phi.squaredNorm();
   double s, k;
   if (t2 < 1e-4) {
-    s = 1.0 - t2 / 6.0 * (1.0 - t2 / 20.0);
-    k = 0.5 * (1.0 - t2 / 12.0 * (1.0 - t2 / 30.0));
+    s = 1.0 - t2 * (1.0 / 6.0) * (1.0 - t2 * (1.0 / 20.0));
+    k = 0.5 * (1.0 - t2 * (1.0 / 12.0) * (1.0 - t2 * (1.0 / 30.0)));
   } else {
     const double th = std::sqrt(t2);
     s = std::sin(th) / th;
@@ -84,7 +84,7 @@ inline Mat3 jacobianLeftInverse(const Vec3& r) {
   const Mat3 R = skew(r);
   double c;
   if (th < 1e-2) {  // series: the next term, th^4/30240, is below 4e-13
-    c = 1.0 / 12.0 + th * th / 720.0;
+    c = 1.0 / 12.0 + th * th * (1.0 / 720.0);
   } else {
     c = 1.0 / (th * th) - (1.0 + std::cos(th)) / (2.0 * th * std::sin(th));
   }

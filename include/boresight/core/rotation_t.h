@@ -61,8 +61,9 @@ inline void quatExp(const T phi[3], T q[4]) {
   using std::sqrt;
   const T t2 = dot3(phi, phi);
   if (t2 < T(1e-4)) {
-    const T s = T(0.5) * (T(1.0) - t2 / T(24.0) * (T(1.0) - t2 / T(80.0)));  // sin(th/2)/th
-    const T c = T(1.0) - t2 / T(8.0) * (T(1.0) - t2 / T(48.0));            // cos(th/2)
+    // (constant reciprocals multiplied, not divided: the terms are small corrections, rounding only)
+    const T s = T(0.5) * (T(1.0) - t2 * T(1.0 / 24.0) * (T(1.0) - t2 * T(1.0 / 80.0)));  // sin(th/2)/th
+    const T c = T(1.0) - t2 * T(0.125) * (T(1.0) - t2 * T(1.0 / 48.0));                 // cos(th/2)
     q[0] = c;
     q[1] = s * phi[0];
     q[2] = s * phi[1];
