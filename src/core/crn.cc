@@ -75,37 +75,32 @@ BORESIGHT_CLONES void crnDotTaylor3(const double* g0, const double* g1, double s
 
 BORESIGHT_CLONES void crnDot4x3(const double* g0, const double* g1, const double* g2, const double* x0, const double* x1,
                                 const double* x2, const double* x3, int n, double out[12]) {
-  // two passes of two channels each: 6 accumulators + 3 kernels + 2 inputs fit the 16 vector
-  // registers (12 accumulators in one pass spill); every output's lanes are summed in the same order
-  const double* x[4] = {x0, x1, x2, x3};
+  V4 a[12];
+  for (auto& v : a) v = V4{0, 0, 0, 0};
   int j = 0;
-  for (int c = 0; c < 4; c += 2) {
-    const double* xa = x[c];
-    const double* xb = x[c + 1];
-    V4 a0 = {0, 0, 0, 0}, a1 = a0, a2 = a0, b0 = a0, b1 = a0, b2 = a0;
-    for (j = 0; j + 4 <= n; j += 4) {
-      const V4 k0 = load4(g0 + j), k1 = load4(g1 + j), k2 = load4(g2 + j);
-      const V4 ya = load4(xa + j), yb = load4(xb + j);
-      a0 += k0 * ya;
-      a1 += k1 * ya;
-      a2 += k2 * ya;
-      b0 += k0 * yb;
-      b1 += k1 * yb;
-      b2 += k2 * yb;
-    }
-    out[3 * c + 0] = hsum(a0);
-    out[3 * c + 1] = hsum(a1);
-    out[3 * c + 2] = hsum(a2);
-    out[3 * c + 3] = hsum(b0);
-    out[3 * c + 4] = hsum(b1);
-    out[3 * c + 5] = hsum(b2);
+  for (; j + 4 <= n; j += 4) {
+    const V4 k0 = load4(g0 + j), k1 = load4(g1 + j), k2 = load4(g2 + j);
+    const V4 y0 = load4(x0 + j), y1 = load4(x1 + j), y2 = load4(x2 + j), y3 = load4(x3 + j);
+    a[0] += k0 * y0;
+    a[1] += k1 * y0;
+    a[2] += k2 * y0;
+    a[3] += k0 * y1;
+    a[4] += k1 * y1;
+    a[5] += k2 * y1;
+    a[6] += k0 * y2;
+    a[7] += k1 * y2;
+    a[8] += k2 * y2;
+    a[9] += k0 * y3;
+    a[10] += k1 * y3;
+    a[11] += k2 * y3;
   }
   const double* g[3] = {g0, g1, g2};
+  const double* x[4] = {x0, x1, x2, x3};
   for (int c = 0; c < 4; ++c)
     for (int o = 0; o < 3; ++o) {
       double r = 0;
       for (int jj = j; jj < n; ++jj) r += g[o][jj] * x[c][jj];
-      out[3 * c + o] += r;
+      out[3 * c + o] = hsum(a[3 * c + o]) + r;
     }
 }
 

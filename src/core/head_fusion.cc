@@ -1,5 +1,6 @@
 #include "boresight/core/head_fusion.h"
 
+#include "boresight/core/clones.h"
 #include "boresight/core/rotation.h"
 
 #include <cmath>
@@ -66,7 +67,7 @@ inline double leftInverseCoefficient(double th2) {
 }
 }  // namespace
 
-Status HeadFusion::step(const ValidHeads& in) {
+BORESIGHT_CLONES Status HeadFusion::step(const ValidHeads& in) {
   if (const Status g = admitStep(configured_, have_last_, last_t_, in.t, health_); g != Status::kOk) return g;
   std::array<Quat, kMaxHeads> q_I_B;
   std::array<Mat3, kMaxHeads> W;

@@ -1,5 +1,7 @@
 #include "boresight/core/heads.h"
 
+#include "boresight/core/clones.h"
+
 #include "boresight/core/rotation.h"
 
 #include <cmath>
@@ -81,7 +83,7 @@ void HeadInputValidator::reset() {
   health_.clear();
 }
 
-Status HeadInputValidator::step(const HeadEpoch& in) {
+BORESIGHT_CLONES Status HeadInputValidator::step(const HeadEpoch& in) {
   if (!configured_) {
     health_.record(Status::kNotConfigured);
     return Status::kNotConfigured;

@@ -1,5 +1,7 @@
 #include "boresight/core/pipeline.h"
 
+#include "boresight/core/clones.h"
+
 #include <cmath>
 #include <limits>
 
@@ -130,7 +132,7 @@ void Pipeline::resolve() {
   }
 }
 
-Status Pipeline::stepHeads(const HeadEpoch& in) {
+BORESIGHT_CLONES Status Pipeline::stepHeads(const HeadEpoch& in) {
   if (!configured_) {
     health_.record(Status::kNotConfigured);
     return Status::kNotConfigured;

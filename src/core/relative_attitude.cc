@@ -1,5 +1,6 @@
 #include "boresight/core/relative_attitude.h"
 
+#include "boresight/core/clones.h"
 #include "boresight/core/rotation.h"
 
 #include <Eigen/Cholesky>
@@ -46,7 +47,7 @@ Status RelativeAttitudeMeans::step(const ValidHeads& in) {
   return step(in, rel);
 }
 
-Status RelativeAttitudeMeans::step(const ValidHeads& in, const PairRelatives& rel_in) {
+BORESIGHT_CLONES Status RelativeAttitudeMeans::step(const ValidHeads& in, const PairRelatives& rel_in) {
   if (const Status g = admitStep(configured_, have_last_, last_t_, in.t, health_); g != Status::kOk) return g;
   const PairRelatives* relp = &rel_in;
   PairRelatives own;

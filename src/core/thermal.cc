@@ -1,6 +1,7 @@
 #include "boresight/core/thermal.h"
 
 #include "boresight/core/fixed_ldlt.h"
+#include "boresight/core/clones.h"
 #include "boresight/core/rotation.h"
 
 #include <algorithm>
@@ -193,7 +194,7 @@ Status BoresightMonitor::step(const ValidHeads& in) {
   return step(in, rel);
 }
 
-Status BoresightMonitor::step(const ValidHeads& in, const PairRelatives& rel_in) {
+BORESIGHT_CLONES Status BoresightMonitor::step(const ValidHeads& in, const PairRelatives& rel_in) {
   if (const Status g = admitStep(configured_, have_last_, last_t_, in.t, health_); g != Status::kOk) return g;
   const PairRelatives* relp = &rel_in;
   PairRelatives own;

@@ -108,7 +108,8 @@ struct ValidHeads {
 struct PairRelatives {
   TimeUs t = 0;
   std::uint32_t mask = 0;  ///< the ValidHeads mask they were formed from
-  std::array<Quat, kMaxPairs> q_Sa_Sb = filled<Quat, kMaxPairs>(Quat::Identity());
+  /// Only the pairs of `mask` are set (not initialised otherwise: constructed every epoch, read by mask).
+  std::array<Quat, kMaxPairs> q_Sa_Sb;
 };
 
 /// Forms `out` from `in` for slots 0..n_heads-1.
