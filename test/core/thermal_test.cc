@@ -270,6 +270,44 @@ TEST(Thermal, ASingularPairCovarianceIsCountedAndLeavesTheFilterAlone) {
   EXPECT_EQ(mon.configure(sc.heads, bad), Status::kInvalidConfig);
 }
 
+TEST(Thermal, IbaWithoutAtan2EqualsTheAtan2AngleOnBothBranches) {
+  // The monitor's IBA (series of asin(sin(alpha - alpha0)) below |sin d| = 0.01, atan2 above) against
+  // the atan2 angle between the boresights, per pair, for relative rotations from 1e-9 to 0.5 rad
+  // (3 000 epochs, log-uniform magnitudes, random axes: both branches, and the boundary).
+  Rng rng(39);
+  Scenario sc;
+  BoresightMonitor mon;
+  ASSERT_EQ(mon.configure(sc.heads), Status::kOk);
+  std::uniform_real_distribution<double> lg(-9, std::log10(0.5));
+  auto angle = [](const Vec3& a, const Vec3& b) { return std::atan2(a.cross(b).norm(), a.dot(b)); };
+  int small = 0, large = 0;
+  double worst = 0;
+  for (int e = 0; e < 3000; ++e) {
+    ValidHeads v = sc.epoch(rng, kT0 + static_cast<TimeUs>(e) * 500000, test::randomQuat(rng));
+    v.q_I_Si[1] = v.q_I_Si[1] * quatExp(test::randomVec(rng, 1.0).normalized() * std::pow(10.0, lg(rng)));
+    ASSERT_EQ(mon.step(v), Status::kOk);
+    for (int a = 0; a < 3; ++a)
+      for (int b = a + 1; b < 3; ++b) {
+        const PairDeformation& d = mon.pair(a, b);
+        ASSERT_TRUE(d.valid);
+        const Vec3& ba = sc.heads.head[static_cast<std::size_t>(a)].boresight_Si;
+        const Vec3& bb = sc.heads.head[static_cast<std::size_t>(b)].boresight_Si;
+        const Quat q_ab = v.q_I_Si[static_cast<std::size_t>(a)].conjugate() * v.q_I_Si[static_cast<std::size_t>(b)];
+        const double alpha = angle(ba, q_ab * bb);
+        const double alpha0 = angle(ba, mon.groundRelative(a, b) * bb);
+        EXPECT_NEAR(d.iba_rad, alpha, 4e-15) << "epoch " << e << " pair " << a << b;
+        EXPECT_NEAR(d.iba_dev_rad, alpha - alpha0, 4e-15) << "epoch " << e << " pair " << a << b;
+        EXPECT_NEAR(d.iba_ground_rad, d.iba_rad - d.iba_dev_rad, 1e-15);
+        worst = std::max(worst, std::abs(d.iba_dev_rad - (alpha - alpha0)));
+        (std::abs(std::sin(d.iba_dev_rad)) < 1e-2 ? small : large) += 1;
+      }
+  }
+  std::printf("IBA without atan2: %d small-branch, %d atan2-branch pair epochs, worst |d - d_atan2| %.1e rad\n",
+              small, large, worst);
+  EXPECT_GT(small, 1000);
+  EXPECT_GT(large, 500);
+}
+
 TEST(Thermal, FixedSizeLdltMatchesEigenAndRejectsIndefiniteMatrices) {
   // The filter's 6x6 solve (fixed_ldlt.h, no pivoting) against Eigen's pivoted LDLT on 2 000 random
   // SPD matrices shaped like the filter's normal equations (blocks scaled by 1 and up to 1e4: a time
