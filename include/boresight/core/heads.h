@@ -87,7 +87,8 @@ struct HeadEpoch {
   std::array<HeadSample, kMaxHeads> sample{};
 };
 
-/// Validated heads of one epoch, by slot. q_I_Si is normalised.
+/// Validated heads of one epoch, by slot. q_I_Si is normalised. Only the slots in `mask` are this
+/// epoch's (the validator builds it in place: other slots may hold an earlier epoch's values).
 struct ValidHeads {
   TimeUs t = 0;
   std::uint32_t mask = 0;  ///< bit s set when slot s is valid
