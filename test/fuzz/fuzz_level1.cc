@@ -21,7 +21,8 @@
 // are, 1 behind the event sync word, 2 the body cut into well-formed events on the node's channels with
 // arbitrary payloads, so the decoders are reached): no crash; every event is a head, accelerometer,
 // star-vector or skipped event (skipped = other channel + undecodable); LcmLogSource through the
-// assembler counts every event once as used or rejected, with the reasons the reader's kinds imply.
+// assembler counts every event once as used or rejected (a valid STAR_VECTORS message once per star),
+// with the reasons the reader's kinds imply.
 //
 // BORESIGHT_FUZZ_MAKE_SEED=FILE (with BORESIGHT_FUZZ_READER=lcmlog): writes a small LCM log seed input
 // (heads valid and not, accelerometer samples with and without angular acceleration, star vectors, an
@@ -351,7 +352,8 @@ void fuzzLcmLog(std::string_view body, std::uint8_t mode) {
     if (err.empty()) fail("log refused without a reason");
     return;
   }
-  std::uint64_t heads_valid = 0, heads_invalid = 0, acc_valid = 0, acc_invalid = 0, stars = 0, skipped = 0, events = 0;
+  std::uint64_t heads_valid = 0, heads_invalid = 0, acc_valid = 0, acc_invalid = 0, skipped = 0, events = 0;
+  std::uint64_t star_msgs = 0, star_msgs_invalid = 0, star_vectors = 0;  // a valid message: one sample per star
   HeadSample h;
   AccelSample a;
   for (;;) {
@@ -362,8 +364,13 @@ void fuzzLcmLog(std::string_view body, std::uint8_t mode) {
       case LcmLogReader::Kind::Head: ++((h.flags & 1) ? heads_valid : heads_invalid); break;
       case LcmLogReader::Kind::Accel: ++((a.flags & 1) ? acc_valid : acc_invalid); break;
       case LcmLogReader::Kind::Stars:
-        ++stars;
         if (r.stars().n_stars < 0 || r.stars().n_stars > StarVectors::kCapacity) fail("star count outside capacity");
+        if ((r.stars().flags & 1) && r.stars().n_stars > 0) {
+          ++star_msgs;
+          star_vectors += static_cast<std::uint64_t>(r.stars().n_stars);
+        } else {
+          ++star_msgs_invalid;
+        }
         break;
       case LcmLogReader::Kind::Skipped: ++skipped; break;
       case LcmLogReader::Kind::End: break;
@@ -383,19 +390,21 @@ void fuzzLcmLog(std::string_view body, std::uint8_t mode) {
   for (;;) {
     const auto o = as.nextSample(x);
     if (o == st::EpochAssembler::Out::kEnd) break;
-    if (o != st::EpochAssembler::Out::kHeads && o != st::EpochAssembler::Out::kAccel) fail("a log source failed or is pending");
-    if (++out > events) fail("more samples out than events");
+    if (o != st::EpochAssembler::Out::kHeads && o != st::EpochAssembler::Out::kAccel && o != st::EpochAssembler::Out::kStars)
+      fail("a log source failed or is pending");
+    if (++out > events - star_msgs + star_vectors) fail("more samples out than events and stars");
   }
   const st::Counters& c = as.counters();
   auto rej = [&](st::Reject why) { return c.rejected[static_cast<std::size_t>(why)]; };
-  if (c.read != events) fail("the source read a different number of events than the reader");
+  // every event is read once, except that a valid STAR_VECTORS message is read as its stars
+  if (c.read != events - star_msgs + star_vectors) fail("the source read a different number of events than the reader");
   if (c.read != c.used() + c.rejectedTotal()) fail("read != used + rejected");
   if (c.used() != out) fail("used != samples handed out");
-  if (rej(st::Reject::kInvalid) != heads_invalid) fail("invalid head messages miscounted");
+  if (rej(st::Reject::kInvalid) != heads_invalid + star_msgs_invalid) fail("invalid head or star messages miscounted");
   if (rej(st::Reject::kNoAngular) != acc_invalid) fail("accelerometer messages without angular acceleration miscounted");
   if (rej(st::Reject::kMalformed) != r.decodeFailures()) fail("undecodable events miscounted");
-  if (rej(st::Reject::kOtherChannel) != r.unknownChannel() + stars) fail("other-channel events miscounted");
-  if (c.used_heads + c.used_accel + rej(st::Reject::kLate) != heads_valid + acc_valid) fail("valid samples lost");
+  if (rej(st::Reject::kOtherChannel) != r.unknownChannel()) fail("other-channel events miscounted");
+  if (c.used() + rej(st::Reject::kLate) != heads_valid + acc_valid + star_vectors) fail("valid samples lost");
 }
 
 /// A small log for the seed corpus (BORESIGHT_FUZZ_MAKE_SEED).
