@@ -59,43 +59,23 @@ FileKind identifyFile(const std::string& path) {
 
 namespace {
 
-/// Shared by the Level-1 sources: rejected lines first (as the stream counted them), then the record.
-template <typename Stream, typename Rec>
-Source::Next level1Next(Stream& s, std::size_t& reported, bool& held, bool& done, Rec& rec, Reject& why) {
-  if (!held && !done) {
-    held = s.next(rec);
-    done = !held;
-  }
-  if (reported < s.rejectedCount()) {
-    ++reported;
-    why = Reject::kMalformed;
-    return Source::Next::kRejected;
-  }
-  if (held) {
-    held = false;
-    return Source::Next::kSample;
-  }
-  return s.ok() ? Source::Next::kEnd : Source::Next::kError;
-}
-
-template <typename Stream>
-std::vector<std::string> issuesOf(const Stream& s) {
-  std::vector<std::string> v;
-  for (const auto& i : s.rejected()) v.push_back(i.str());
-  return v;
+/// One star vector as a sample (the SCV1A and STAR_VECTORS sources).
+Sample starSample(TimeUs t, int head, const double s[3], const double r[3], double sigma_rad) {
+  Sample out;
+  out.kind = Sample::Kind::kStar;
+  out.t = t;
+  out.head_id = head;
+  out.star.head_id = head;
+  out.star.s_Sk = Vec3(s[0], s[1], s[2]);
+  out.star.r_I = Vec3(r[0], r[1], r[2]);
+  out.star.sigma_rad = sigma_rad;
+  return out;
 }
 
 }  // namespace
 
-bool Sca1aSource::open(const std::string& path, const io::ReadOptions& opt, std::string* error) {
-  name_ = path;
-  io::ReadOptions o = opt;
-  o.max_issues_kept = std::min<std::size_t>(o.max_issues_kept, 20);
-  return s_.open(path, o, error);
-}
-
 Source::Next Sca1aSource::next(Sample& out, Reject& why) {
-  Next n = level1Next(s_, reported_rejects_, held_, done_, rec_, why);
+  const Next n = nextRecord(why);
   if (n == Next::kSample) {
     out.kind = Sample::Kind::kHead;
     out.t = rec_.t;
@@ -107,17 +87,8 @@ Source::Next Sca1aSource::next(Sample& out, Reject& why) {
   return n;
 }
 
-std::vector<std::string> Sca1aSource::issues() const { return issuesOf(s_); }
-
-bool Acc1aSource::open(const std::string& path, const io::ReadOptions& opt, std::string* error) {
-  name_ = path;
-  io::ReadOptions o = opt;
-  o.max_issues_kept = std::min<std::size_t>(o.max_issues_kept, 20);
-  return s_.open(path, o, error);
-}
-
 Source::Next Acc1aSource::next(Sample& out, Reject& why) {
-  Next n = level1Next(s_, reported_rejects_, held_, done_, rec_, why);
+  const Next n = nextRecord(why);
   if (n != Next::kSample) return n;
   // The same fields and validity bits as the message (io::accelFromAcc1a).
   const io::AccelSample m = io::accelFromAcc1a(rec_, 0);
@@ -133,31 +104,11 @@ Source::Next Acc1aSource::next(Sample& out, Reject& why) {
   return n;
 }
 
-std::vector<std::string> Acc1aSource::issues() const { return issuesOf(s_); }
-
-bool ScvSource::open(const std::string& path, const io::ReadOptions& opt, std::string* error) {
-  name_ = path;
-  io::ReadOptions o = opt;
-  o.max_issues_kept = std::min<std::size_t>(o.max_issues_kept, 20);
-  return s_.open(path, o, error);
-}
-
 Source::Next ScvSource::next(Sample& out, Reject& why) {
-  Next n = level1Next(s_, reported_rejects_, held_, done_, rec_, why);
-  if (n == Next::kSample) {
-    out = Sample{};
-    out.kind = Sample::Kind::kStar;
-    out.t = rec_.t;
-    out.head_id = rec_.head;
-    out.star.head_id = rec_.head;
-    out.star.s_Sk = Vec3(rec_.s[0], rec_.s[1], rec_.s[2]);
-    out.star.r_I = Vec3(rec_.r[0], rec_.r[1], rec_.r[2]);
-    out.star.sigma_rad = 0;  // the head's configured sigma_star
-  }
+  const Next n = nextRecord(why);
+  if (n == Next::kSample) out = starSample(rec_.t, rec_.head, rec_.s, rec_.r, 0.0);  // 0: configured sigma
   return n;
 }
-
-std::vector<std::string> ScvSource::issues() const { return issuesOf(s_); }
 
 LcmLogSource::LcmLogSource() = default;
 LcmLogSource::~LcmLogSource() = default;
@@ -177,14 +128,7 @@ Source::Next LcmLogSource::next(Sample& out, Reject& why) {
   if (star_next_ < star_n_) {  // the rest of a STAR_VECTORS message, one star per sample
     const io::StarVectors& m = r_->stars();
     const auto k = static_cast<std::size_t>(star_next_++);
-    out = Sample{};
-    out.kind = Sample::Kind::kStar;
-    out.t = m.utime;
-    out.head_id = m.head_id;
-    out.star.head_id = m.head_id;
-    out.star.s_Sk = Vec3(m.s_head[k][0], m.s_head[k][1], m.s_head[k][2]);
-    out.star.r_I = Vec3(m.r_inertial[k][0], m.r_inertial[k][1], m.r_inertial[k][2]);
-    out.star.sigma_rad = m.sigma_rad[k];
+    out = starSample(m.utime, m.head_id, m.s_head[k], m.r_inertial[k], m.sigma_rad[k]);
     return Next::kSample;
   }
   io::HeadSample h;

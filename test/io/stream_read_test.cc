@@ -8,6 +8,8 @@
 
 #include <gtest/gtest.h>
 
+#include "test_files.h"
+
 #include <cstdio>
 #include <random>
 #include <string>
@@ -19,11 +21,7 @@ using namespace boresight::io;
 
 namespace {
 
-std::string tempDir() {
-  std::string tmpl = ::testing::TempDir() + "boresight_streamio_XXXXXX";
-  const char* d = ::mkdtemp(tmpl.data());
-  return d ? std::string(d) : ::testing::TempDir();
-}
+std::string tempDir() { return testutil::makeTempDir("boresight_streamio"); }
 
 void writeFile(const std::string& path, const std::string& text) {
   std::FILE* f = std::fopen(path.c_str(), "wb");

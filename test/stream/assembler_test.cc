@@ -6,6 +6,8 @@
 
 #include <gtest/gtest.h>
 
+#include "test_files.h"
+
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -20,16 +22,7 @@ using stream::Source;
 
 namespace {
 
-std::string slurp(const std::string& path) {
-  std::string s;
-  if (std::FILE* f = std::fopen(path.c_str(), "rb")) {
-    char b[65536];
-    std::size_t n;
-    while ((n = std::fread(b, 1, sizeof b, f)) > 0) s.append(b, n);
-    std::fclose(f);
-  }
-  return s;
-}
+using testutil::slurp;
 
 struct Step {
   Source::Next n;

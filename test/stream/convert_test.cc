@@ -10,6 +10,8 @@
 
 #include <gtest/gtest.h>
 
+#include "test_files.h"
+
 #include <algorithm>
 #include <cstdio>
 #include <map>
@@ -22,40 +24,12 @@ using namespace boresight;
 
 namespace {
 
-std::string slurp(const std::string& path) {
-  std::string s;
-  if (std::FILE* f = std::fopen(path.c_str(), "rb")) {
-    char b[65536];
-    std::size_t n;
-    while ((n = std::fread(b, 1, sizeof b, f)) > 0) s.append(b, n);
-    std::fclose(f);
-  }
-  return s;
-}
+using testutil::slurp;
 
-std::string tempDir() {
-  std::string tmpl = ::testing::TempDir() + "boresight_convert_XXXXXX";
-  const char* d = ::mkdtemp(tmpl.data());
-  return d ? std::string(d) : ::testing::TempDir();
-}
+std::string tempDir() { return testutil::makeTempDir("boresight_convert"); }
 
-struct CliRun {
-  int status = -1;
-  std::string out;
-};
-
-CliRun run(const std::string& args) {
-  std::string cmd = std::string(BORESIGHT_CLI) + " " + args + " 2>&1";
-  CliRun r;
-  FILE* p = ::popen(cmd.c_str(), "r");
-  if (!p) return r;
-  char buf[4096];
-  std::size_t n;
-  while ((n = std::fread(buf, 1, sizeof buf, p)) > 0) r.out.append(buf, n);
-  int st = ::pclose(p);
-  r.status = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-  return r;
-}
+using testutil::CliRun;
+CliRun run(const std::string& args) { return testutil::runProgram(BORESIGHT_CLI, args); }
 
 struct Records {
   std::vector<io::Sca1aRecord> sca;

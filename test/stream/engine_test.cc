@@ -13,6 +13,8 @@
 
 #include <gtest/gtest.h>
 
+#include "test_files.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -27,24 +29,11 @@ using namespace boresight;
 
 namespace {
 
-std::string slurp(const std::string& path) {
-  std::string s;
-  if (std::FILE* f = std::fopen(path.c_str(), "rb")) {
-    char b[65536];
-    std::size_t n;
-    while ((n = std::fread(b, 1, sizeof b, f)) > 0) s.append(b, n);
-    std::fclose(f);
-  }
-  return s;
-}
+using testutil::slurp;
 
 std::string sourceDir() { return BORESIGHT_SOURCE_DIR; }
 
-std::string tempDir() {
-  std::string tmpl = ::testing::TempDir() + "boresight_stream_XXXXXX";
-  const char* d = ::mkdtemp(tmpl.data());
-  return d ? std::string(d) : ::testing::TempDir();
-}
+std::string tempDir() { return testutil::makeTempDir("boresight_stream"); }
 
 /// A simulated span written as `simulate` writes it: SCA1A, ACC1A, QSA1B and the LCM log.
 struct Span {

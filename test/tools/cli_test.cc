@@ -2,6 +2,7 @@
 #include <boresight/io/level1.h>
 
 #include "real_data.h"
+#include "test_files.h"
 
 #include <yaml-cpp/yaml.h>
 
@@ -19,29 +20,10 @@ using boresight::test::realFile;
 
 namespace {
 
-struct CliRun {
-  int status;
-  std::string out;
-};
+using testutil::CliRun;
+CliRun run(const std::string& args) { return testutil::runProgram(BORESIGHT_CLI, args); }
 
-CliRun run(const std::string& args) {
-  std::string cmd = std::string(BORESIGHT_CLI) + " " + args + " 2>&1";
-  CliRun r{-1, {}};
-  FILE* p = ::popen(cmd.c_str(), "r");
-  if (!p) return r;
-  char buf[4096];
-  std::size_t n;
-  while ((n = std::fread(buf, 1, sizeof buf, p)) > 0) r.out.append(buf, n);
-  int st = ::pclose(p);
-  r.status = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-  return r;
-}
-
-std::string tempDir() {
-  std::string tmpl = ::testing::TempDir() + "boresight_cli_XXXXXX";
-  const char* d = ::mkdtemp(tmpl.data());
-  return d ? std::string(d) : ::testing::TempDir();
-}
+std::string tempDir() { return testutil::makeTempDir("boresight_cli"); }
 
 }  // namespace
 

@@ -29,60 +29,77 @@ FileKind identifyFile(const std::string& path);
 /// True when the first four bytes are the LCM log event sync word (0xEDA1DA01, big-endian).
 bool hasLcmMagic(const std::string& path);
 
-/// SCA1A head samples from one file, in file order (the engine merges by time).
-class Sca1aSource final : public Source {
+/// What every Level-1 file source shares: the streaming reader, the file name, the reader's rejected
+/// lines reported first (as Reject::kMalformed, in the order the stream counted them) and the
+/// issues kept for reports. A derived source turns the held record `rec_` into a sample.
+template <typename Rec>
+class Level1FileSource : public Source {
  public:
-  bool open(const std::string& path, const io::ReadOptions& opt, std::string* error);
-  Next next(Sample& out, Reject& why) override;
+  bool open(const std::string& path, const io::ReadOptions& opt, std::string* error) {
+    name_ = path;
+    io::ReadOptions o = opt;
+    o.max_issues_kept = o.max_issues_kept < 20 ? o.max_issues_kept : 20;
+    return s_.open(path, o, error);
+  }
   const std::string& name() const override { return name_; }
   std::string error() const override { return s_.error(); }
-  std::vector<std::string> issues() const override;
+  std::vector<std::string> issues() const override {
+    std::vector<std::string> v;
+    for (const auto& i : s_.rejected()) v.push_back(i.str());
+    return v;
+  }
   const io::Header& header() const { return s_.header(); }
 
+ protected:
+  /// kSample: `rec_` holds the next record; kRejected: a malformed line (why set); kEnd; kError.
+  Next nextRecord(Reject& why) {
+    if (!held_ && !done_) {
+      held_ = s_.next(rec_);
+      done_ = !held_;
+    }
+    if (reported_rejects_ < s_.rejectedCount()) {
+      ++reported_rejects_;
+      why = Reject::kMalformed;
+      return Next::kRejected;
+    }
+    if (held_) {
+      held_ = false;
+      return Next::kSample;
+    }
+    return s_.ok() ? Next::kEnd : Next::kError;
+  }
+  Rec rec_{};
+
  private:
-  io::ProductStream<io::Sca1aRecord> s_;
+  io::ProductStream<Rec> s_;
   std::string name_;
   std::size_t reported_rejects_ = 0;
   bool held_ = false, done_ = false;
-  io::Sca1aRecord rec_;
+};
+
+/// SCA1A head samples from one file, in file order (the engine merges by time).
+class Sca1aSource final : public Level1FileSource<io::Sca1aRecord> {
+ public:
+  Next next(Sample& out, Reject& why) override;
 };
 
 /// ACC1A (or ACT1A) angular accelerations from one file, in file order. Records without all three
 /// angular accelerations are rejected (Reject::kNoAngular), unless keepWithoutAngular(true): then
 /// they are samples with flags bit 0 clear (for writing messages; never hand those to the core).
-class Acc1aSource final : public Source {
+class Acc1aSource final : public Level1FileSource<io::FlaggedRecord> {
  public:
-  bool open(const std::string& path, const io::ReadOptions& opt, std::string* error);
   void keepWithoutAngular(bool keep) { keep_without_angular_ = keep; }
   Next next(Sample& out, Reject& why) override;
-  const std::string& name() const override { return name_; }
-  std::string error() const override { return s_.error(); }
-  std::vector<std::string> issues() const override;
 
  private:
-  io::ProductStream<io::FlaggedRecord> s_;
-  std::string name_;
-  std::size_t reported_rejects_ = 0;
-  bool held_ = false, done_ = false, keep_without_angular_ = false;
-  io::FlaggedRecord rec_;
+  bool keep_without_angular_ = false;
 };
 
 /// SCV1A star vectors (the simulator's product, one star of one head per line) from one file, in
 /// file order; sigma 0 (the head's configured sigma_star).
-class ScvSource final : public Source {
+class ScvSource final : public Level1FileSource<io::ScvRecord> {
  public:
-  bool open(const std::string& path, const io::ReadOptions& opt, std::string* error);
   Next next(Sample& out, Reject& why) override;
-  const std::string& name() const override { return name_; }
-  std::string error() const override { return s_.error(); }
-  std::vector<std::string> issues() const override;
-
- private:
-  io::ProductStream<io::ScvRecord> s_;
-  std::string name_;
-  std::size_t reported_rejects_ = 0;
-  bool held_ = false, done_ = false;
-  io::ScvRecord rec_;
 };
 
 /// An LCM log (channels STAR_HEAD, ACCEL and STAR_VECTORS, see io/lcm_log.h) read message by message
