@@ -60,6 +60,22 @@ void BoresightMonitor::reset() {
   health_.clear();
 }
 
+namespace {
+/// Weighted time moments m_k = sum w s^k x about a time origin, moved to an origin d seconds later
+/// (s -> s - d) with every weight scaled by c: m2 -> c (m2 - 2 d m1 + d^2 m0), m1 -> c (m1 - d m0).
+template <typename T>
+void shiftMoments(T& m0, T& m1, T& m2, double d, double c) {
+  m2 = c * (m2 - 2.0 * d * m1 + d * d * m0);
+  m1 = c * (m1 - d * m0);
+  m0 = c * m0;
+}
+template <typename T>
+void shiftMoments(T& m0, T& m1, double d, double c) {
+  m1 = c * (m1 - d * m0);
+  m0 = c * m0;
+}
+}  // namespace
+
 void BoresightMonitor::reanchor(TimeUs t) {
   // move the time origin of every pair's sums from anchor_ to t (s -> s - d) and scale the weights
   // by exp(-d / tau) (its square for the squared weights): the estimates do not change
@@ -67,25 +83,15 @@ void BoresightMonitor::reanchor(TimeUs t) {
   const double c = std::exp(-d / fcfg_.tau_s), c2 = c * c;
   for (Filt& F : filt_) {
     if (!F.seen) continue;
-    F.a2 = c * (F.a2 - 2.0 * d * F.a1 + d * d * F.a0);
-    F.a1 = c * (F.a1 - d * F.a0);
-    F.a0 = c * F.a0;
-    F.b2 = c2 * (F.b2 - 2.0 * d * F.b1 + d * d * F.b0);
-    F.b1 = c2 * (F.b1 - d * F.b0);
-    F.b0 = c2 * F.b0;
-    F.z1 = c * (F.z1 - d * F.z0);
-    F.z0 = c * F.z0;
+    shiftMoments(F.a0, F.a1, F.a2, d, c);
+    shiftMoments(F.b0, F.b1, F.b2, d, c2);
+    shiftMoments(F.z0, F.z1, d, c);
     F.wsum *= c;
     F.w2sum *= c2;
     if (!F.general) continue;
-    F.S2 = c * (F.S2 - 2.0 * d * F.S1 + d * d * F.S0);
-    F.S1 = c * (F.S1 - d * F.S0);
-    F.S0 = c * F.S0;
-    F.N2 = c2 * (F.N2 - 2.0 * d * F.N1 + d * d * F.N0);
-    F.N1 = c2 * (F.N1 - d * F.N0);
-    F.N0 = c2 * F.N0;
-    F.y1 = c * (F.y1 - d * F.y0);
-    F.y0 = c * F.y0;
+    shiftMoments(F.S0, F.S1, F.S2, d, c);
+    shiftMoments(F.N0, F.N1, F.N2, d, c2);
+    shiftMoments(F.y0, F.y1, d, c);
   }
   anchor_ = t;
 }
