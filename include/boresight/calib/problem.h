@@ -1,0 +1,57 @@
+// boresight::calib - the batch calibration problem of method A (METHODS 1.2, 1.5-1.7): what the span
+// builder collects from the core's streams and what the Ceres solver takes and returns.
+//
+// This header is the contract between the span builder / `boresight calibrate` (producers and
+// consumers) and the solver (include/boresight/calib/solver.h). Frames and units follow
+// include/boresight/core/conventions.h. Error angles: C_S_B(true) = Exp([r]x) C_S_B(nominal), r in the
+// head frame, rad. The accelerometer frame A is the datum (a rotation of A cannot be told from a common
+// rotation of all heads): B here means "the body frame as the configured C_B_A puts A into it".
+#pragma once
+
+#include "boresight/core/capacities.h"
+#include "boresight/core/conventions.h"
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace boresight::calib {
+
+using core::kMaxHeads;
+
+/// One calibration epoch (decimated, see SpanOptions): per-head CRN angular accelerations in each head's
+/// own frame and the accelerometer's through the same CRN low-pass on the same tag.
+struct Observation {
+  TimeUs t = 0;                                   ///< centre tag of the CRN outputs, us past GPS J2000
+  std::array<bool, kMaxHeads> has_head{};         ///< slot h observed at t
+  std::array<Vec3, kMaxHeads> alpha_S{};          ///< head h angular acceleration in S_h, rad/s^2
+  std::array<Mat3, kMaxHeads> cov_alpha_S{};      ///< its covariance (head noise through the CRN), rad^2/s^4
+  Vec3 alpha_A = Vec3::Zero();                    ///< accelerometer angular acceleration in A, rad/s^2 (CRN)
+  Mat3 cov_alpha_A = Mat3::Zero();                ///< its covariance, rad^2/s^4
+  Vec3 jerk_A = Vec3::Zero();                     ///< d(alpha_A)/dt in A, rad/s^3 (for the time offset)
+  Vec3 w_B = Vec3::Zero();                        ///< fused angular rate in B, rad/s (context, plots)
+};
+
+/// Mean relative attitude of a head pair over the span (METHODS 1.2), from core::RelativeAttitudeMeans.
+struct RelativeMean {
+  int slot_i = 0, slot_j = 1;          ///< head slots (0-based, as in HeadSetConfig)
+  Quat q_Si_Sj = Quat::Identity();     ///< R = C_Si_Sj
+  Mat3 cov_Sj = Mat3::Zero();          ///< covariance of the mean, small rotation in Sj, rad^2
+  std::uint64_t epochs = 0;
+};
+
+/// Everything the solver needs; bounded in memory by SpanOptions::max_observations.
+struct CalibrationSpan {
+  int n_heads = 0;
+  std::array<int, kMaxHeads> head_ids{};            ///< telemetry ids by slot
+  std::array<Quat, kMaxHeads> q_S_B_nominal{};      ///< nominal mountings, R = C_Si_B
+  Mat3 C_B_A = Mat3::Identity();                    ///< configured accelerometer-to-body rotation
+  std::vector<Observation> obs;                     ///< decimated epochs in time order
+  std::vector<RelativeMean> relative;               ///< one per head pair with data
+  TimeUs t_first = 0, t_last = 0;                   ///< span of head data actually used
+  std::uint64_t head_epochs = 0, acc_samples = 0;   ///< inputs that went into the span
+  double decimation_s = 0.0;                        ///< spacing of obs (the CRN correlation length)
+};
+
+}  // namespace boresight::calib
