@@ -21,6 +21,8 @@ void Engine::addSource(std::unique_ptr<Source> s) {
 
 void Engine::addSink(RowSink* sink) { sinks_.push_back(sink); }
 
+void Engine::addObserver(InputObserver* o) { observers_.push_back(o); }
+
 core::Health Engine::health() const { return pipe_->health(); }
 
 bool Engine::drain() {
@@ -75,11 +77,16 @@ Engine::Result Engine::run() {
       case EpochAssembler::Out::kHeads:
         if (epochs_++ == 0) first_epoch_ = e.t;
         last_epoch_ = e.t;
-        pipe_->stepHeads(e);
+        {
+          const core::Status st = pipe_->stepHeads(e);
+          for (InputObserver* o : observers_) o->onHeads(e, st);
+        }
         break;
-      case EpochAssembler::Out::kAccel:
-        pipe_->stepAcc(t, a);
+      case EpochAssembler::Out::kAccel: {
+        const core::Status st = pipe_->stepAcc(t, a);
+        for (InputObserver* o : observers_) o->onAcc(t, a, st);
         break;
+      }
       case EpochAssembler::Out::kPending:
         return drain() ? Result::kPending : Result::kError;
       case EpochAssembler::Out::kError: {
@@ -89,6 +96,7 @@ Engine::Result Engine::run() {
       }
       case EpochAssembler::Out::kEnd: {
         pipe_->flush();
+        for (InputObserver* o : observers_) o->onEnd();
         if (!drain()) return Result::kError;
         for (RowSink* s : sinks_)
           if (!s->end()) {

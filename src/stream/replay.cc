@@ -66,6 +66,11 @@ bool classifyInputs(const std::vector<std::string>& files, ReplayInputs& in, std
       case io::Product::ACT1A: in.acc.push_back(f); break;
       case io::Product::QSA1B: in.qsa.push_back(f); break;
       case io::Product::SCV1A: in.scv.push_back(f); break;
+      case io::Product::GNV1B:
+      case io::Product::GNI1B:
+        in.orbit.push_back(f);
+        in.ignored.emplace_back(f, k.product_name);
+        break;
       default: in.ignored.emplace_back(f, k.product_name); break;
     }
   }

@@ -270,6 +270,64 @@ TEST(StreamEngine, Level1RowsEqualTheLoadSortMergeReplay) {
   }
 }
 
+/// Records what an InputObserver sees.
+struct RecordingObserver final : stream::InputObserver {
+  std::vector<TimeUs> head_tags, acc_tags;
+  std::uint64_t head_samples = 0, heads_ok = 0, acc_ok = 0;
+  int ends = 0;
+  bool after_end = false;
+  void onHeads(const core::HeadEpoch& e, core::Status st) override {
+    after_end = after_end || ends > 0;
+    head_tags.push_back(e.t);
+    head_samples += std::uint64_t(e.n);
+    heads_ok += st == core::Status::kOk;
+  }
+  void onAcc(TimeUs t, const Vec3&, core::Status st) override {
+    after_end = after_end || ends > 0;
+    acc_tags.push_back(t);
+    acc_ok += st == core::Status::kOk;
+  }
+  void onEnd() override { ++ends; }
+};
+
+TEST(StreamEngine, AnObserverSeesEveryEpochAndAccelerometerSampleTheCoreGets) {
+  const auto sca = readSca(span().sca);
+  const auto acc = readAcc(span().acc);
+  const auto cfg = pipelineConfig(sca);
+  stream::Engine e;
+  std::string err;
+  ASSERT_TRUE(e.configure(cfg, &err)) << err;
+  auto s1 = std::make_unique<stream::Sca1aSource>();
+  ASSERT_TRUE(s1->open(span().sca, {}, &err)) << err;
+  auto s2 = std::make_unique<stream::Acc1aSource>();
+  ASSERT_TRUE(s2->open(span().acc, {}, &err)) << err;
+  e.addSource(std::move(s1));
+  e.addSource(std::move(s2));
+  RecordingObserver a, b;
+  e.addObserver(&a);
+  e.addObserver(&b);
+  ASSERT_EQ(e.run(), stream::Engine::Result::kDone) << e.error();
+  for (const RecordingObserver* o : {&a, &b}) {
+    EXPECT_EQ(o->head_tags.size(), e.epochs());
+    EXPECT_EQ(o->head_samples, e.counters().used_heads);
+    EXPECT_EQ(o->head_samples, sca.size());
+    EXPECT_EQ(o->acc_tags.size(), e.counters().used_accel);
+    EXPECT_EQ(o->acc_tags.size(), acc.size());
+    // First and last epochs, in time order, every status the core gave counted; onEnd once, last.
+    ASSERT_FALSE(o->head_tags.empty());
+    EXPECT_EQ(o->head_tags.front(), e.firstEpoch());
+    EXPECT_EQ(o->head_tags.back(), e.lastEpoch());
+    EXPECT_TRUE(std::is_sorted(o->head_tags.begin(), o->head_tags.end()));
+    EXPECT_TRUE(std::is_sorted(o->acc_tags.begin(), o->acc_tags.end()));
+    EXPECT_EQ(o->heads_ok, e.epochs());  // clean simulated data: the core takes every epoch
+    EXPECT_EQ(o->ends, 1);
+    EXPECT_FALSE(o->after_end);
+  }
+  // run() after the end does not call the observer again.
+  EXPECT_EQ(e.run(), stream::Engine::Result::kDone);
+  EXPECT_EQ(a.ends, 1);
+}
+
 TEST(StreamEngine, LcmLogGivesTheSameRowsAsLevel1) {
   const auto sca = readSca(span().sca);
   const auto cfg = pipelineConfig(sca);
@@ -513,6 +571,8 @@ TEST(StreamReplay, InputsByContentIgnoredListedMixedRefused) {
   EXPECT_EQ(in.qsa_records.size(), 3u);
   ASSERT_EQ(in.ignored.size(), 1u);
   EXPECT_EQ(in.ignored[0].second, "GNV1B");
+  ASSERT_EQ(in.orbit.size(), 1u);
+  EXPECT_EQ(in.orbit[0], gnv);
   EXPECT_FALSE(stream::classifyInputs({span().lcm, span().sca}, in, &err));
   EXPECT_NE(err.find("is an LCM log and"), std::string::npos) << err;
   // Configuration for the inputs: mountings from QSA1B at the first head tag; no accelerometer

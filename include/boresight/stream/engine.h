@@ -5,7 +5,7 @@
 //
 //   stream::Engine e;
 //   if (!e.configure(cfg, &err)) ...;
-//   e.addSource(std::move(sca_source));  e.addSink(&csv);
+//   e.addSource(std::move(sca_source));  e.addSink(&csv);  e.addObserver(&span);  // optional
 //   auto r = e.run();                    // kDone, kPending (live source), kError (e.error())
 //   e.counters();                        // read == used + rejected, with reasons
 #pragma once
@@ -34,6 +34,8 @@ class Engine {
   bool configure(const core::PipelineConfig& cfg, std::string* error);
   void addSource(std::unique_ptr<Source> s);
   void addSink(RowSink* sink);  ///< not owned; must outlive run()
+  /// Sees every head epoch and accelerometer sample handed to the core (InputObserver); not owned.
+  void addObserver(InputObserver* o);
 
   /// Runs until every source is finished (then the core is flushed and the sinks end: kDone), a
   /// source has nothing now (kPending: call run() again later), or a source or sink fails (kError).
@@ -61,6 +63,7 @@ class Engine {
   EpochAssembler asm_;
   std::vector<std::unique_ptr<Source>> sources_;
   std::vector<RowSink*> sinks_;
+  std::vector<InputObserver*> observers_;
   std::string error_;
   bool configured_ = false, begun_ = false, finished_ = false;
   std::uint64_t rows_ = 0, epochs_ = 0, star_epochs_ = 0, star_solutions_ = 0;

@@ -25,6 +25,9 @@ struct ReplayInputs {
   std::vector<std::string> qsa;            ///< QSA1B files (read up front: mountings)
   std::vector<io::QsaRecord> qsa_records;
   std::vector<std::pair<std::string, std::string>> ignored;  ///< (file, product): not a replay input
+  /// GNV1B / GNI1B files (orbit): not a replay input either, so also in `ignored`; a consumer that
+  /// wants the orbit (calibrate's thermal fit: the argument of latitude) reads them from here.
+  std::vector<std::string> orbit;
 };
 
 /// Sorts the files by their content (LCM sync word, Level-1 header). Other Level-1 products (GNV1B,

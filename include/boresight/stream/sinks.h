@@ -33,6 +33,18 @@ class RowSink {
   virtual std::string error() const { return {}; }
 };
 
+/// Sees the core's inputs as the engine hands them to the pipeline, in the same order, with the
+/// status the core returned for each (a batch consumer such as calib::SpanBuilder takes the epochs the
+/// core accepted). Called on the engine's thread, after the core's step, before its rows are drained.
+class InputObserver {
+ public:
+  virtual ~InputObserver() = default;
+  virtual void onHeads(const core::HeadEpoch& /*e*/, core::Status /*core_status*/) {}
+  virtual void onAcc(TimeUs /*t*/, const Vec3& /*a_A*/, core::Status /*core_status*/) {}
+  /// After the last input (before the sinks end); a consumer completes what it holds.
+  virtual void onEnd() {}
+};
+
 /// The `boresight process` table: one CSV row per output epoch (columns in cmd_process --help).
 /// Numbers are formatted as printf's %.17g (quaternion), %.9e (rates, accelerations), %.9f (angles,
 /// deg) and %.3f (deviations, arcsec); a value that is not available is an empty field.
