@@ -1,4 +1,6 @@
 // boresight plot FILE.csv --y COL[,COL...] [--x COL] --out PLOT.svg: line plots of CSV columns as SVG.
+#include <boresight/report/svg_plot.h>
+
 #include "cli_common.h"
 #include "commands.h"
 
@@ -25,25 +27,6 @@ std::vector<std::string> split(const std::string& s, char sep) {
   while (std::getline(is, cur, sep)) out.push_back(cur);
   if (!s.empty() && s.back() == sep) out.emplace_back();
   return out;
-}
-
-std::string esc(const std::string& s) {
-  std::string o;
-  for (char c : s) {
-    if (c == '<') o += "&lt;";
-    else if (c == '>') o += "&gt;";
-    else if (c == '&') o += "&amp;";
-    else o += c;
-  }
-  return o;
-}
-
-/// "Nice" tick step for a range.
-double tickStep(double range, int target) {
-  double raw = range / target, p = std::pow(10.0, std::floor(std::log10(raw)));
-  for (double m : {1.0, 2.0, 5.0, 10.0})
-    if (raw <= m * p) return m * p;
-  return 10 * p;
 }
 
 }  // namespace
@@ -137,62 +120,20 @@ int runPlot(int argc, char** argv) {
   }
   double x0 = relative_x ? x.front() : 0.0;
   for (double& v : x) v -= x0;
-  double xmin = *std::min_element(x.begin(), x.end()), xmax = *std::max_element(x.begin(), x.end());
-  double ymin = INFINITY, ymax = -INFINITY;
-  for (const auto& s : y)
-    for (double v : s)
-      if (std::isfinite(v)) ymin = std::min(ymin, v), ymax = std::max(ymax, v);
-  if (!std::isfinite(ymin)) ymin = 0, ymax = 1;
-  if (ymax - ymin < 1e-300) ymin -= 0.5, ymax += 0.5;
-  if (xmax - xmin < 1e-300) xmax = xmin + 1;
-  double pad = 0.05 * (ymax - ymin);
-  ymin -= pad;
-  ymax += pad;
-
-  const double W = 900, H = 420, L = 90, R = 20, T = 40, B = 55;
-  auto px = [&](double v) { return L + (v - xmin) / (xmax - xmin) * (W - L - R); };
-  auto py = [&](double v) { return H - B - (v - ymin) / (ymax - ymin) * (H - T - B); };
-  static const char* colors[] = {"#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2"};
-  std::ostringstream svg;
-  svg << "<svg xmlns='http://www.w3.org/2000/svg' width='" << W << "' height='" << H
-      << "' font-family='sans-serif' font-size='12'>\n<rect width='100%' height='100%' fill='white'/>\n";
-  svg << "<text x='" << W / 2 << "' y='22' text-anchor='middle' font-size='15'>"
-      << esc(title.empty() ? path : title) << "</text>\n";
-  double xs = tickStep(xmax - xmin, 8), ys = tickStep(ymax - ymin, 6);
-  for (double t = std::ceil(xmin / xs) * xs; t <= xmax + 1e-9 * xs; t += xs) {
-    svg << "<line x1='" << px(t) << "' y1='" << T << "' x2='" << px(t) << "' y2='" << H - B << "' stroke='#ddd'/>";
-    svg << "<text x='" << px(t) << "' y='" << H - B + 16 << "' text-anchor='middle'>" << t << "</text>\n";
-  }
-  for (double t = std::ceil(ymin / ys) * ys; t <= ymax + 1e-9 * ys; t += ys) {
-    svg << "<line x1='" << L << "' y1='" << py(t) << "' x2='" << W - R << "' y2='" << py(t) << "' stroke='#ddd'/>";
-    svg << "<text x='" << L - 6 << "' y='" << py(t) + 4 << "' text-anchor='end'>" << t << "</text>\n";
-  }
-  svg << "<rect x='" << L << "' y='" << T << "' width='" << W - L - R << "' height='" << H - T - B
-      << "' fill='none' stroke='#444'/>\n";
-  svg << "<text x='" << (L + W - R) / 2 << "' y='" << H - 12 << "' text-anchor='middle'>"
-      << esc(!xlabel.empty() ? xlabel : head[std::size_t(xc)] + (x0 != 0 ? " - " + std::to_string(x0) : "")) << "</text>\n";
-  svg << "<text transform='translate(16," << (T + H - B) / 2 << ") rotate(-90)' text-anchor='middle'>"
-      << esc(ylabel) << "</text>\n";
+  report::Plot plot;
+  plot.title = title.empty() ? path : title;
+  plot.ylabel = ylabel;
+  plot.xlabel = !xlabel.empty() ? xlabel : head[std::size_t(xc)] + (x0 != 0 ? " - " + std::to_string(x0) : "");
   for (std::size_t k = 0; k < y.size(); ++k) {
-    const char* c = colors[k % 7];
-    svg << "<path fill='none' stroke='" << c << "' stroke-width='1.3' d='";
-    bool pen = false;
-    for (std::size_t i = 0; i < x.size(); ++i) {
-      if (!std::isfinite(y[k][i])) {
-        pen = false;
-        continue;
-      }
-      svg << (pen ? " L" : " M") << px(x[i]) << ' ' << py(y[k][i]);
-      pen = true;
-    }
-    svg << "'/>\n";
-    svg << "<rect x='" << L + 10 + 150 * double(k) << "' y='" << T + 8 << "' width='14' height='3' fill='" << c
-        << "'/><text x='" << L + 28 + 150 * double(k) << "' y='" << T + 13 << "'>" << esc(ynames[k]) << "</text>\n";
+    report::Series se;
+    se.name = ynames[k];
+    se.x = x;
+    se.y = y[k];
+    plot.series.push_back(std::move(se));
   }
-  svg << "</svg>\n";
-  std::ofstream out(outpath);
-  if (!(out << svg.str())) {
-    std::fprintf(stderr, "boresight plot: cannot write %s\n", outpath.c_str());
+  std::string err;
+  if (!report::writeSvgPlot(outpath, plot, &err)) {
+    std::fprintf(stderr, "boresight plot: %s\n", err.c_str());
     return 1;
   }
   std::printf("%s: %zu points, %zu series%s\n", outpath.c_str(), x.size(), y.size(),

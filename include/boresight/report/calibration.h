@@ -1,0 +1,54 @@
+// The method A calibration result for programs (JSON), for people (the same tree as YAML) and as a
+// report (report.md with SVG plots): `boresight calibrate --json FILE --yaml FILE --report DIR`.
+//
+// JSON keys (issue 8): heads[] {id, error_angles_arcsec[3], sigma_arcsec[3] (null where not
+// determined), crlb_arcsec[3] (null where infinite), observable[3]}; unobservable_directions_B[];
+// covariance_arcsec2 (all head angles, 3n x 3n row-major, head order as heads[]); accelerometer
+// {bias_radps2, bias_sigma_radps2, scale, scale_sigma, nonorthogonality_arcsec,
+// nonorthogonality_sigma_arcsec} with only what was estimated; time_offset_s and time_offset_sigma_s
+// (null when not estimated; positive: the accelerometer's tags are late relative to the star cameras'
+// for the same instant); thermal; residual_rms_radps2; epochs; span_s. Also: datum, conventions,
+// excitation_eigenvalues_radps2_sq, options, solver message, inputs. A number that is not finite is
+// written as null.
+#pragma once
+
+#include <boresight/calib/problem.h>
+#include <boresight/calib/solver.h>
+
+#include <nlohmann/json.hpp>
+
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace boresight::report {
+
+/// What the command knows besides the solver's result.
+struct CalibrationContext {
+  std::string config;                                        ///< platform file
+  std::vector<std::string> inputs;                           ///< files used
+  std::vector<std::pair<std::string, std::string>> ignored;  ///< (file, product) not used
+  calib::SolveOptions options;
+  nlohmann::json thermal;  ///< the `thermal` section as built by the caller (null: not computed)
+};
+
+nlohmann::json calibrationJson(const calib::SolveResult& r, const CalibrationContext& c);
+
+/// The JSON tree as block YAML (same keys, same values; short number arrays in flow style).
+std::string toYaml(const nlohmann::json& j);
+
+/// Residuals of the span under the estimates, per observation and head, in the head frame (rad/s^2):
+/// alpha_S - Exp([r]x) C_S_B(nominal) C_B_A (alpha_A - bias), the bias only when estimated (scale,
+/// non-orthogonality and time offset are not applied here). NaN where the head has no value.
+struct Residuals {
+  std::vector<double> t_s;                        ///< seconds since the first observation
+  std::vector<std::array<Vec3, calib::kMaxHeads>> r_S;  ///< by observation, slot
+};
+Residuals residuals(const calib::CalibrationSpan& span, const calib::SolveResult& r);
+
+/// Writes DIR/report.md and DIR/{residuals,excitation,estimates}.svg (DIR is created). False with
+/// *error when a file cannot be written.
+bool writeCalibrationReport(const std::string& dir, const calib::CalibrationSpan& span, const calib::SolveResult& r,
+                            const nlohmann::json& result, std::string* error);
+
+}  // namespace boresight::report

@@ -1,0 +1,344 @@
+// The calibration result as JSON, YAML and report.md (include/boresight/report/calibration.h).
+#include <boresight/core/rotation.h>
+#include <boresight/report/calibration.h>
+#include <boresight/report/svg_plot.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+namespace boresight::report {
+namespace {
+
+using nlohmann::json;
+
+json num(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
+json num(const std::optional<double>& v) { return v && std::isfinite(*v) ? json(*v) : json(nullptr); }
+
+template <typename A>
+json arr(const A& a) {
+  json j = json::array();
+  for (const auto& v : a) j.push_back(num(v));
+  return j;
+}
+
+void putEstimate(json& acc, const char* value_key, const char* sigma_key, const std::optional<calib::Estimate3>& e) {
+  if (!e) return;
+  acc[value_key] = arr(e->value);
+  acc[sigma_key] = arr(e->sigma);
+}
+
+const char* modeName(calib::RelativeMode m) {
+  return m == calib::RelativeMode::kHardConstraint ? "hard_constraint" : "prior";
+}
+
+// --- YAML ---------------------------------------------------------------------------------------
+
+std::string yamlScalar(const json& j) {
+  if (j.is_null()) return "null";
+  if (j.is_boolean()) return j.get<bool>() ? "true" : "false";
+  if (j.is_number_integer() || j.is_number_unsigned()) return j.dump();
+  if (j.is_number_float()) {
+    char b[40];
+    std::snprintf(b, sizeof b, "%.10g", j.get<double>());
+    return b;
+  }
+  // Strings: always double-quoted (JSON escaping is valid YAML double-quoted style).
+  return j.dump();
+}
+
+bool isFlat(const json& j) {
+  if (!j.is_array() || j.size() > 12) return false;
+  for (const auto& v : j)
+    if (v.is_structured() || v.is_string()) return false;
+  return true;
+}
+
+void yamlNode(std::ostringstream& o, const json& j, int indent);
+
+void yamlValueAfterKey(std::ostringstream& o, const json& v, int indent) {
+  if (v.is_object() && !v.empty()) {
+    o << "\n";
+    yamlNode(o, v, indent + 2);
+  } else if (v.is_array() && !v.empty() && !isFlat(v)) {
+    o << "\n";
+    yamlNode(o, v, indent + 2);
+  } else if (v.is_array()) {
+    o << " [";
+    for (std::size_t i = 0; i < v.size(); ++i) o << (i ? ", " : "") << yamlScalar(v[i]);
+    o << "]\n";
+  } else if (v.is_object()) {
+    o << " {}\n";
+  } else {
+    o << " " << yamlScalar(v) << "\n";
+  }
+}
+
+void yamlNode(std::ostringstream& o, const json& j, int indent) {
+  const std::string pad(std::size_t(indent), ' ');
+  if (j.is_object()) {
+    for (auto it = j.begin(); it != j.end(); ++it) {
+      o << pad << json(it.key()).dump() << ":";
+      yamlValueAfterKey(o, it.value(), indent);
+    }
+  } else if (j.is_array()) {
+    for (const auto& v : j) {
+      if (v.is_object() && !v.empty()) {
+        // "- " then the first key on the same line, the others indented under it.
+        std::ostringstream sub;
+        yamlNode(sub, v, indent + 2);
+        std::string s = sub.str();
+        o << pad << "- " << s.substr(std::size_t(indent) + 2);
+      } else if (v.is_array() && !isFlat(v) && !v.empty()) {
+        o << pad << "-\n";
+        yamlNode(o, v, indent + 2);
+      } else {
+        o << pad << "-";
+        yamlValueAfterKey(o, v, indent);
+      }
+    }
+  } else {
+    o << pad << yamlScalar(j) << "\n";
+  }
+}
+
+std::string fmt(const char* f, double v) {
+  if (!std::isfinite(v)) return "-";
+  char b[64];
+  std::snprintf(b, sizeof b, f, v);
+  return b;
+}
+
+std::string fmtJ(const char* f, const json& v) { return v.is_number() ? fmt(f, v.get<double>()) : "-"; }
+
+}  // namespace
+
+json calibrationJson(const calib::SolveResult& r, const CalibrationContext& c) {
+  json j;
+  j["ok"] = r.ok;
+  j["message"] = r.message;
+  j["datum"] =
+      "accelerometer frame A: B is the body frame as the configured C_B_A puts A into it (a common rotation of "
+      "all heads relative to A is estimated; a rotation of A itself is not)";
+  j["conventions"] = {
+      {"error_angles_arcsec", "rotation vector r in the head frame, C_S_B(true) = Exp([r]x) C_S_B(nominal)"},
+      {"time_offset_s", "positive: the accelerometer's tags are late relative to the star cameras' for the same "
+                        "instant"},
+      {"null", "not determined (sigma), infinite (crlb), or not estimated"}};
+  json heads = json::array();
+  for (const auto& h : r.heads)
+    heads.push_back({{"id", h.id},
+                     {"error_angles_arcsec", arr(h.error_angles_arcsec)},
+                     {"sigma_arcsec", arr(h.sigma_arcsec)},
+                     {"crlb_arcsec", arr(h.crlb_arcsec)},
+                     {"observable", h.observable}});
+  j["heads"] = heads;
+  json dirs = json::array();
+  for (const auto& d : r.unobservable_directions_B) dirs.push_back({num(d.x()), num(d.y()), num(d.z())});
+  j["unobservable_directions_B"] = dirs;
+  j["covariance_arcsec2"] = arr(r.covariance_arcsec2);
+  json acc = json::object();
+  putEstimate(acc, "bias_radps2", "bias_sigma_radps2", r.acc_bias_radps2);
+  putEstimate(acc, "scale", "scale_sigma", r.acc_scale);
+  putEstimate(acc, "nonorthogonality_arcsec", "nonorthogonality_sigma_arcsec", r.acc_nonorthogonality_arcsec);
+  j["accelerometer"] = acc;
+  j["time_offset_s"] = num(r.time_offset_s);
+  j["time_offset_sigma_s"] = num(r.time_offset_sigma_s);
+  j["thermal"] = c.thermal.is_null() ? json{{"status", "not computed"}} : c.thermal;
+  j["residual_rms_radps2"] = num(r.residual_rms_radps2);
+  j["epochs"] = r.epochs;
+  j["span_s"] = num(r.span_s);
+  j["excitation_eigenvalues_radps2_sq"] = arr(r.excitation_eigenvalues);
+  j["options"] = {{"relative", modeName(c.options.relative)},
+                  {"estimate_acc_bias", c.options.estimate_acc_bias},
+                  {"estimate_acc_scale", c.options.estimate_acc_scale},
+                  {"estimate_acc_nonorthogonality", c.options.estimate_acc_nonorthogonality},
+                  {"estimate_time_offset", c.options.estimate_time_offset},
+                  {"huber_sigma", c.options.huber_sigma},
+                  {"unobservable_sigma_arcsec", c.options.unobservable_sigma_arcsec}};
+  j["config"] = c.config;
+  j["inputs"] = c.inputs;
+  json ign = json::array();
+  for (const auto& [f, p] : c.ignored) ign.push_back({{"file", f}, {"product", p}});
+  j["ignored"] = ign;
+  return j;
+}
+
+std::string toYaml(const json& j) {
+  std::ostringstream o;
+  yamlNode(o, j, 0);
+  return o.str();
+}
+
+Residuals residuals(const calib::CalibrationSpan& span, const calib::SolveResult& r) {
+  Residuals out;
+  std::array<Mat3, calib::kMaxHeads> C{};
+  std::array<bool, calib::kMaxHeads> have{};
+  for (int s = 0; s < span.n_heads && s < calib::kMaxHeads; ++s) {
+    const auto us = std::size_t(s);
+    Vec3 e = Vec3::Zero();
+    for (const auto& h : r.heads)
+      if (h.id == span.head_ids[us]) {
+        e = Vec3(h.error_angles_arcsec[0], h.error_angles_arcsec[1], h.error_angles_arcsec[2]) * kRadPerArcsec;
+        have[us] = true;
+      }
+    C[us] = core::so3Exp(e) * span.q_S_B_nominal[us].toRotationMatrix() * span.C_B_A;
+  }
+  Vec3 bias = Vec3::Zero();
+  if (r.acc_bias_radps2)
+    bias = Vec3(r.acc_bias_radps2->value[0], r.acc_bias_radps2->value[1], r.acc_bias_radps2->value[2]);
+  const TimeUs t0 = span.obs.empty() ? 0 : span.obs.front().t;
+  out.t_s.reserve(span.obs.size());
+  out.r_S.reserve(span.obs.size());
+  for (const auto& ob : span.obs) {
+    out.t_s.push_back(toSeconds(ob.t - t0));
+    std::array<Vec3, calib::kMaxHeads> row = core::filled<Vec3, calib::kMaxHeads>(Vec3::Constant(NAN));
+    for (int s = 0; s < span.n_heads && s < calib::kMaxHeads; ++s) {
+      const auto us = std::size_t(s);
+      if (ob.has_head[us] && have[us]) row[us] = ob.alpha_S[us] - C[us] * (ob.alpha_A - bias);
+    }
+    out.r_S.push_back(row);
+  }
+  return out;
+}
+
+bool writeCalibrationReport(const std::string& dir, const calib::CalibrationSpan& span, const calib::SolveResult& r,
+                            const json& result, std::string* error) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) {
+    if (error) *error = dir + ": cannot create the report directory: " + ec.message();
+    return false;
+  }
+  const char* ax = "xyz";
+  // Residuals against time, per head and head axis.
+  Residuals res = residuals(span, r);
+  Plot pr;
+  pr.title = "residuals under the estimates (head frames)";
+  pr.xlabel = "t - t0 [s]";
+  pr.ylabel = "residual [rad/s^2]";
+  for (int s = 0; s < span.n_heads && s < calib::kMaxHeads; ++s)
+    for (int a = 0; a < 3; ++a) {
+      Series se;
+      se.name = "head " + std::to_string(span.head_ids[std::size_t(s)]) + " " + ax[a];
+      se.x = res.t_s;
+      for (const auto& row : res.r_S) se.y.push_back(row[std::size_t(s)][a]);
+      pr.series.push_back(std::move(se));
+    }
+  pr.width = 1100;
+  // Excitation: the accelerometer's angular acceleration in B.
+  Plot pe;
+  pe.title = "excitation: accelerometer angular acceleration in B (CRN low-pass)";
+  pe.xlabel = "t - t0 [s]";
+  pe.ylabel = "[rad/s^2]";
+  for (int a = 0; a < 3; ++a) {
+    Series se;
+    se.name = std::string("alpha_B ") + ax[a];
+    se.x = res.t_s;
+    for (const auto& ob : span.obs) se.y.push_back((span.C_B_A * ob.alpha_A)[a]);
+    pe.series.push_back(std::move(se));
+  }
+  // Estimates with their sigma against the CRLB, per head axis.
+  Plot pa;
+  pa.title = "error angles: estimate +- sigma (left), +- CRLB (right)";
+  pa.ylabel = "[arcsec]";
+  pa.xlabel = "head axis";
+  Series est, bound;
+  est.name = "estimate +- sigma";
+  bound.name = "estimate +- CRLB";
+  est.style = bound.style = Series::Style::kPoints;
+  est.dx = -0.12;
+  bound.dx = 0.12;
+  for (const auto& h : r.heads)
+    for (int a = 0; a < 3; ++a) {
+      const double x = double(pa.xcategories.size());
+      pa.xcategories.push_back(std::to_string(h.id) + ax[a]);
+      est.x.push_back(x);
+      bound.x.push_back(x);
+      est.y.push_back(h.error_angles_arcsec[std::size_t(a)]);
+      bound.y.push_back(h.error_angles_arcsec[std::size_t(a)]);
+      est.yerr.push_back(h.sigma_arcsec[std::size_t(a)] ? *h.sigma_arcsec[std::size_t(a)] : NAN);
+      bound.yerr.push_back(h.crlb_arcsec[std::size_t(a)]);
+    }
+  pa.series = {est, bound};
+  for (const auto& [name, plot] : {std::pair<const char*, const Plot*>{"residuals.svg", &pr},
+                                   {"excitation.svg", &pe},
+                                   {"estimates.svg", &pa}})
+    if (!writeSvgPlot(dir + "/" + name, *plot, error)) return false;
+
+  std::ostringstream md;
+  md << "# Mounting calibration (method A)\n\n";
+  if (!r.ok) md << "**Not calibrated:** " << r.message << "\n\n";
+  md << "Span " << fmt("%.1f", r.span_s) << " s, " << r.epochs << " epochs in the solution, residual RMS "
+     << fmt("%.3e", r.residual_rms_radps2) << " rad/s^2. Relative attitude as a "
+     << result["options"]["relative"].get<std::string>() << ".\n\n";
+  md << "Datum: " << result["datum"].get<std::string>() << ". Error angles: "
+     << result["conventions"]["error_angles_arcsec"].get<std::string>() << ".\n\n";
+  md << "| head | axis | error angle [\"] | sigma [\"] | CRLB [\"] | sigma / CRLB | observable |\n"
+        "|---|---|---|---|---|---|---|\n";
+  for (const auto& h : r.heads)
+    for (std::size_t a = 0; a < 3; ++a) {
+      const double sg = h.sigma_arcsec[a] ? *h.sigma_arcsec[a] : NAN;
+      md << "| " << h.id << " | " << ax[a] << " | " << fmt("%.2f", h.error_angles_arcsec[a]) << " | "
+         << (h.sigma_arcsec[a] ? fmt("%.2f", sg) : "not determined") << " | " << fmt("%.2f", h.crlb_arcsec[a])
+         << " | " << fmt("%.2f", sg / h.crlb_arcsec[a]) << " | " << (h.observable[a] ? "yes" : "**no**") << " |\n";
+    }
+  md << "\n";
+  if (r.unobservable_directions_B.empty()) {
+    md << "Every direction of the body frame is excited.\n\n";
+  } else {
+    md << "**Not observable** (no excitation about these body directions; shared by all heads):";
+    for (const auto& d : r.unobservable_directions_B)
+      md << " (" << fmt("%.3f", d.x()) << ", " << fmt("%.3f", d.y()) << ", " << fmt("%.3f", d.z()) << ")";
+    md << "\n\n";
+  }
+  if (!r.excitation_eigenvalues.empty()) {
+    md << "Excitation (eigenvalues of sum a a^T in B, rad^2/s^4):";
+    for (double e : r.excitation_eigenvalues) md << " " << fmt("%.3e", e);
+    md << "\n\n";
+  }
+  const json& acc = result["accelerometer"];
+  if (!acc.empty()) {
+    md << "| accelerometer | x | y | z | sigma x | sigma y | sigma z |\n|---|---|---|---|---|---|---|\n";
+    for (const auto& [k, sk] : {std::pair<const char*, const char*>{"bias_radps2", "bias_sigma_radps2"},
+                                {"scale", "scale_sigma"},
+                                {"nonorthogonality_arcsec", "nonorthogonality_sigma_arcsec"}})
+      if (acc.contains(k)) {
+        md << "| " << k;
+        for (int a = 0; a < 3; ++a) md << " | " << fmtJ("%.4g", acc[k][std::size_t(a)]);
+        for (int a = 0; a < 3; ++a) md << " | " << fmtJ("%.2g", acc[sk][std::size_t(a)]);
+        md << " |\n";
+      }
+    md << "\n";
+  }
+  if (r.time_offset_s)
+    md << "Time offset (accelerometer tags late by): " << fmt("%.4f", *r.time_offset_s) << " s +- "
+       << (r.time_offset_sigma_s ? fmt("%.4f", *r.time_offset_sigma_s) : "-") << " s.\n\n";
+  md << "Thermal (orbit-periodic, relative to the datum head): ";
+  const json& th = result["thermal"];
+  if (th.contains("status")) md << th["status"].get<std::string>() << "\n\n";
+  else md << "see `thermal` in the JSON result.\n\n";
+  md << "## Plots\n\n"
+        "![residuals](residuals.svg)\n\n"
+        "Residuals: alpha_S - Exp([r]x) C_S_B(nominal) C_B_A (alpha_A - bias) per head axis, with the "
+        "estimated angles and bias (scale, non-orthogonality and the time offset are not applied in this "
+        "plot).\n\n"
+        "![excitation](excitation.svg)\n\n"
+        "![estimates](estimates.svg)\n\n"
+        "Estimates with their reported sigma (left bar) and the Cramer-Rao bound (right bar); an axis "
+        "without a bar is not determined.\n\n";
+  md << "## Inputs\n\n";
+  for (const auto& f : result["inputs"]) md << "- " << f.get<std::string>() << "\n";
+  for (const auto& f : result["ignored"])
+    md << "- " << f["file"].get<std::string>() << " (" << f["product"].get<std::string>() << ", ignored)\n";
+  std::ofstream out(dir + "/report.md");
+  if (!(out << md.str())) {
+    if (error) *error = "cannot write " + dir + "/report.md";
+    return false;
+  }
+  return true;
+}
+
+}  // namespace boresight::report
