@@ -10,6 +10,9 @@ Engine::~Engine() = default;
 bool Engine::configure(const core::PipelineConfig& cfg, std::string* error) {
   core::Status st = pipe_->configure(cfg);
   configured_ = st == core::Status::kOk;
+  heads_cfg_ = cfg.heads;
+  obs_validator_ = std::make_unique<core::HeadInputValidator>();
+  if (configured_) obs_validator_->configure(cfg.heads);
   if (!configured_ && error) *error = std::string("the core rejected the configuration: ") + core::statusName(st);
   return configured_;
 }
@@ -79,7 +82,20 @@ Engine::Result Engine::run() {
         last_epoch_ = e.t;
         {
           const core::Status st = pipe_->stepHeads(e);
-          for (InputObserver* o : observers_) o->onHeads(e, st);
+          if (!observers_.empty() && obs_validator_->step(e) == core::Status::kOk) {
+            // The epoch as the core's validator leaves it (the same checks, the same order of heads).
+            const core::ValidHeads& v = obs_validator_->output();
+            core::HeadEpoch clean;
+            clean.t = e.t;
+            for (int s = 0; s < heads_cfg_.n_heads; ++s) {
+              if (!v.has(s)) continue;
+              core::HeadSample& h = clean.sample[static_cast<std::size_t>(clean.n++)];
+              h.head_id = heads_cfg_.head[static_cast<std::size_t>(s)].id;
+              h.q_I_Si = v.q_I_Si[static_cast<std::size_t>(s)];
+              h.sigma_scale = v.sigma_scale[static_cast<std::size_t>(s)];
+            }
+            for (InputObserver* o : observers_) o->onHeads(clean, st);
+          }
         }
         break;
       case EpochAssembler::Out::kAccel: {

@@ -328,6 +328,72 @@ TEST(StreamEngine, AnObserverSeesEveryEpochAndAccelerometerSampleTheCoreGets) {
   EXPECT_EQ(a.ends, 1);
 }
 
+/// Hands out a fixed list of samples.
+class ListSource final : public stream::Source {
+ public:
+  explicit ListSource(std::vector<stream::Sample> v) : v_(std::move(v)) {}
+  Next next(stream::Sample& out, stream::Reject&) override {
+    if (i_ >= v_.size()) return Next::kEnd;
+    out = v_[i_++];
+    return Next::kSample;
+  }
+  const std::string& name() const override { return name_; }
+
+ private:
+  std::vector<stream::Sample> v_;
+  std::size_t i_ = 0;
+  std::string name_ = "list";
+};
+
+TEST(StreamEngine, AnObserverGetsHeadEpochsAsTheCoreValidatorLeavesThem) {
+  const auto sca = readSca(span().sca);
+  const auto cfg = pipelineConfig(sca, false);
+  ASSERT_EQ(cfg.heads.n_heads, 3);
+  const int id0 = cfg.heads.head[0].id, id1 = cfg.heads.head[1].id, id2 = cfg.heads.head[2].id;
+  auto head = [](TimeUs t, int id, Quat q) {
+    stream::Sample x;
+    x.kind = stream::Sample::Kind::kHead;
+    x.t = t;
+    x.head_id = id;
+    x.q_I_S = q;
+    return x;
+  };
+  const Quat q(Eigen::AngleAxisd(0.4, Vec3(1, 2, 3).normalized()));
+  const Quat nan(NAN, 0, 0, 0);
+  const Quat scaled(q.coeffs() * (1.0 + 2e-6));  // inside the unit-norm tolerance: normalised
+  std::vector<stream::Sample> in = {
+      head(1000000, id2, q), head(1000000, id0, q), head(1000000, id1, q),  // slot order on output
+      head(1500000, id0, q), head(1500000, id1, nan), head(1500000, 99, q),  // NaN and unknown id dropped
+      head(2000000, id1, nan),                                                // nothing valid: not passed
+      head(2500000, id0, scaled), head(2500000, id0, q),                      // a head twice: second dropped
+  };
+  stream::Engine e;
+  std::string err;
+  ASSERT_TRUE(e.configure(cfg, &err)) << err;
+  e.addSource(std::make_unique<ListSource>(in));
+  struct Obs final : stream::InputObserver {
+    std::vector<core::HeadEpoch> got;
+    void onHeads(const core::HeadEpoch& x, core::Status) override { got.push_back(x); }
+  } obs;
+  e.addObserver(&obs);
+  ASSERT_EQ(e.run(), stream::Engine::Result::kDone) << e.error();
+  EXPECT_EQ(e.epochs(), 4u);
+  ASSERT_EQ(obs.got.size(), 3u);
+  ASSERT_EQ(obs.got[0].n, 3);
+  EXPECT_EQ(obs.got[0].sample[0].head_id, id0);
+  EXPECT_EQ(obs.got[0].sample[1].head_id, id1);
+  EXPECT_EQ(obs.got[0].sample[2].head_id, id2);
+  ASSERT_EQ(obs.got[1].n, 1);
+  EXPECT_EQ(obs.got[1].t, 1500000);
+  EXPECT_EQ(obs.got[1].sample[0].head_id, id0);
+  ASSERT_EQ(obs.got[2].n, 1);
+  EXPECT_EQ(obs.got[2].t, 2500000);
+  EXPECT_NEAR(obs.got[2].sample[0].q_I_Si.norm(), 1.0, 1e-15);
+  EXPECT_NEAR(obs.got[2].sample[0].q_I_Si.angularDistance(q), 0.0, 1e-12);
+  for (const auto& x : obs.got)
+    for (int k = 0; k < x.n; ++k) EXPECT_TRUE(core::allFinite(x.sample[std::size_t(k)].q_I_Si));
+}
+
 TEST(StreamEngine, LcmLogGivesTheSameRowsAsLevel1) {
   const auto sca = readSca(span().sca);
   const auto cfg = pipelineConfig(sca);

@@ -34,7 +34,8 @@ class Engine {
   bool configure(const core::PipelineConfig& cfg, std::string* error);
   void addSource(std::unique_ptr<Source> s);
   void addSink(RowSink* sink);  ///< not owned; must outlive run()
-  /// Sees every head epoch and accelerometer sample handed to the core (InputObserver); not owned.
+  /// Sees every head epoch (validated, see InputObserver) and accelerometer sample handed to the core;
+  /// not owned.
   void addObserver(InputObserver* o);
 
   /// Runs until every source is finished (then the core is flushed and the sinks end: kDone), a
@@ -64,6 +65,8 @@ class Engine {
   std::vector<std::unique_ptr<Source>> sources_;
   std::vector<RowSink*> sinks_;
   std::vector<InputObserver*> observers_;
+  std::unique_ptr<core::HeadInputValidator> obs_validator_;  ///< the core's validator, for observers
+  core::HeadSetConfig heads_cfg_{};
   std::string error_;
   bool configured_ = false, begun_ = false, finished_ = false;
   std::uint64_t rows_ = 0, epochs_ = 0, star_epochs_ = 0, star_solutions_ = 0;

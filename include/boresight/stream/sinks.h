@@ -34,8 +34,11 @@ class RowSink {
 };
 
 /// Sees the core's inputs as the engine hands them to the pipeline, in the same order, with the
-/// status the core returned for each (a batch consumer such as calib::SpanBuilder takes the epochs the
-/// core accepted). Called on the engine's thread, after the core's step, before its rows are drained.
+/// status the core returned for each (a batch consumer such as calib::SpanBuilder). Head epochs are
+/// passed as the core's input validator leaves them: samples it rejects (unknown head, NaN or Inf,
+/// non-unit quaternion, a head twice) are removed, quaternions normalised, samples in slot order; an
+/// epoch the validator rejects as a whole (no valid head, time not increasing) is not passed (the
+/// core's health counts it). Called on the engine's thread, after the core's step.
 class InputObserver {
  public:
   virtual ~InputObserver() = default;
