@@ -1,8 +1,11 @@
 // The calibration result as JSON, YAML and report.md (include/boresight/report/calibration.h).
+#include <boresight/core/crn.h>
 #include <boresight/core/rotation.h>
 #include <boresight/report/calibration.h>
 #include <boresight/report/svg_plot.h>
 
+#include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -12,7 +15,7 @@
 namespace boresight::report {
 namespace {
 
-using nlohmann::json;
+using json = Json;
 
 json num(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
 json num(const std::optional<double>& v) { return v && std::isfinite(*v) ? json(*v) : json(nullptr); }
@@ -50,10 +53,17 @@ std::string yamlScalar(const json& j) {
 }
 
 bool isFlat(const json& j) {
-  if (!j.is_array() || j.size() > 12) return false;
+  if (!j.is_array()) return false;
   for (const auto& v : j)
     if (v.is_structured() || v.is_string()) return false;
   return true;
+}
+
+/// A key as a plain scalar when it is an identifier (every key of the result), else double-quoted.
+std::string yamlKey(const std::string& k) {
+  bool plain = !k.empty() && !(k[0] >= '0' && k[0] <= '9');
+  for (char c : k) plain = plain && (std::isalnum(static_cast<unsigned char>(c)) || c == '_');
+  return plain && k != "null" && k != "true" && k != "false" ? k : json(k).dump();
 }
 
 void yamlNode(std::ostringstream& o, const json& j, int indent);
@@ -80,7 +90,7 @@ void yamlNode(std::ostringstream& o, const json& j, int indent) {
   const std::string pad(std::size_t(indent), ' ');
   if (j.is_object()) {
     for (auto it = j.begin(); it != j.end(); ++it) {
-      o << pad << json(it.key()).dump() << ":";
+      o << pad << yamlKey(it.key()) << ":";
       yamlValueAfterKey(o, it.value(), indent);
     }
   } else if (j.is_array()) {
@@ -273,7 +283,7 @@ bool writeCalibrationReport(const std::string& dir, const calib::CalibrationSpan
   if (!r.ok) md << "**Not calibrated:** " << r.message << "\n\n";
   md << "Span " << fmt("%.1f", r.span_s) << " s, " << r.epochs << " epochs in the solution, residual RMS "
      << fmt("%.3e", r.residual_rms_radps2) << " rad/s^2. Relative attitude as a "
-     << result["options"]["relative"].get<std::string>() << ".\n\n";
+     << (result["options"]["relative"] == "prior" ? "prior" : "hard constraint") << ".\n\n";
   md << "Datum: " << result["datum"].get<std::string>() << ". Error angles: "
      << result["conventions"]["error_angles_arcsec"].get<std::string>() << ".\n\n";
   md << "| head | axis | error angle [\"] | sigma [\"] | CRLB [\"] | sigma / CRLB | observable |\n"
@@ -339,6 +349,26 @@ bool writeCalibrationReport(const std::string& dir, const calib::CalibrationSpan
     return false;
   }
   return true;
+}
+
+SpanNeed spanNeed(const core::PipelineConfig& cfg, double decimation_s, double excitation_rms_radps2,
+                  double target_sigma_arcsec) {
+  SpanNeed n;
+  core::CrnKernel ka, kb;
+  const bool a_ok = core::designCrn(cfg.crn_attitude, ka) == core::Status::kOk;
+  const bool b_ok = cfg.use_accelerometer && core::designCrn(cfg.crn_acc, kb) == core::Status::kOk;
+  n.crn_s = std::max(a_ok ? ka.tf_s : cfg.crn_attitude.length_s, b_ok ? kb.tf_s : 0.0);
+  double g2 = 0.0;
+  if (a_ok)
+    for (int j = 0; j < ka.nf; ++j) g2 += ka.g[2][std::size_t(j)] * ka.g[2][std::size_t(j)];
+  double sigma_cross = INFINITY;
+  for (int s = 0; s < cfg.heads.n_heads; ++s)
+    sigma_cross = std::min(sigma_cross, cfg.heads.head[std::size_t(s)].sigma_cross_rad);
+  n.sigma_alpha_radps2 = sigma_cross * std::sqrt(g2);
+  const double per_obs = n.sigma_alpha_radps2 / (excitation_rms_radps2 * target_sigma_arcsec * kRadPerArcsec);
+  n.observations = std::ceil(per_obs * per_obs);
+  n.bound_s = n.crn_s + n.observations * decimation_s;
+  return n;
 }
 
 }  // namespace boresight::report

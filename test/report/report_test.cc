@@ -17,6 +17,7 @@ namespace br = boresight::report;
 using boresight::Mat3;
 using boresight::Quat;
 using boresight::Vec3;
+using boresight::report::Json;
 
 namespace {
 
@@ -72,7 +73,7 @@ TEST(CalibrationJson, KeysOfTheIssueWithNullWhereNotDetermined) {
   EXPECT_EQ(j["covariance_arcsec2"].size(), 81u);
   EXPECT_TRUE(j["covariance_arcsec2"][80].is_null());
   EXPECT_DOUBLE_EQ(j["covariance_arcsec2"][10].get<double>(), 3.0);
-  EXPECT_EQ(j["unobservable_directions_B"][0], nlohmann::json({0.0, 0.0, 1.0}));
+  EXPECT_EQ(j["unobservable_directions_B"][0], Json({0.0, 0.0, 1.0}));
   // Only what was estimated.
   EXPECT_TRUE(j["accelerometer"].contains("bias_radps2"));
   EXPECT_TRUE(j["accelerometer"]["bias_sigma_radps2"][2].is_null());
@@ -87,18 +88,18 @@ TEST(CalibrationJson, KeysOfTheIssueWithNullWhereNotDetermined) {
   r2.time_offset_sigma_s.reset();
   EXPECT_TRUE(br::calibrationJson(r2, c)["time_offset_s"].is_null());
   // The whole document is valid JSON (dump and parse back).
-  EXPECT_EQ(nlohmann::json::parse(j.dump()), j);
+  EXPECT_EQ(Json::parse(j.dump()), j);
 }
 
 /// YAML value -> JSON value, for comparing the YAML copy with the JSON.
-nlohmann::json fromYaml(const YAML::Node& n) {
+Json fromYaml(const YAML::Node& n) {
   if (n.IsMap()) {
-    nlohmann::json j = nlohmann::json::object();
+    Json j = Json::object();
     for (const auto& kv : n) j[kv.first.as<std::string>()] = fromYaml(kv.second);
     return j;
   }
   if (n.IsSequence()) {
-    nlohmann::json j = nlohmann::json::array();
+    Json j = Json::array();
     for (const auto& v : n) j.push_back(fromYaml(v));
     return j;
   }
@@ -110,7 +111,7 @@ nlohmann::json fromYaml(const YAML::Node& n) {
 }
 
 /// JSON numbers compared as doubles to 10 significant digits (the YAML precision).
-void expectSame(const nlohmann::json& a, const nlohmann::json& b, const std::string& where) {
+void expectSame(const Json& a, const Json& b, const std::string& where) {
   if (a.is_number() && b.is_number()) {
     const double x = a.get<double>(), y = b.get<double>();
     EXPECT_NEAR(x, y, 1e-9 * std::max(std::abs(x), 1e-300)) << where;
@@ -134,7 +135,7 @@ void expectSame(const nlohmann::json& a, const nlohmann::json& b, const std::str
 TEST(CalibrationYaml, TheYamlCopyReadsBackAsTheSameTree) {
   br::CalibrationContext c;
   c.inputs = {"a: b.txt", "quote\"d"};
-  c.thermal = {{"datum_head", 1}, {"heads", nlohmann::json::array({{{"id", 2}, {"x", {1.0, 2.0}}}})}};
+  c.thermal = {{"datum_head", 1}, {"heads", Json::array({{{"id", 2}, {"x", {1.0, 2.0}}}})}};
   const auto j = br::calibrationJson(handFilled(), c);
   const std::string y = br::toYaml(j);
   YAML::Node n;

@@ -11,6 +11,7 @@
 
 #include "cli_common.h"
 #include "commands.h"
+#include "replay_summary.h"
 
 #include <algorithm>
 #include <cmath>
@@ -302,19 +303,7 @@ int runProcess(int argc, char** argv) {
   }
 
   // Every input record is used or rejected with a reason.
-  for (std::size_t i = 0; i < engine.sourceCount(); ++i) {
-    const auto& c = engine.counters(i);
-    const auto& s = engine.source(i);
-    std::printf("%s: %llu read, %llu used", s.name().c_str(), static_cast<unsigned long long>(c.read),
-                static_cast<unsigned long long>(c.used()));
-    for (int r = 0; r < stream::kRejectCount; ++r)
-      if (c.rejected[std::size_t(r)])
-        std::printf(", %llu %s", static_cast<unsigned long long>(c.rejected[std::size_t(r)]),
-                    stream::rejectName(stream::Reject(r)));
-    std::printf("\n");
-    auto issues = s.issues();
-    for (std::size_t k = 0; k < issues.size() && k < 5; ++k) std::printf("    rejected %s\n", issues[k].c_str());
-  }
+  printSourceCounters(engine);
   const auto& tot = engine.counters();
   if (tot.used_heads == 0) {
     std::fprintf(stderr, "boresight process: no star sensor samples in the inputs\n");
@@ -338,11 +327,7 @@ int runProcess(int argc, char** argv) {
       std::printf("  no star vectors among the inputs (SCV1A files or STAR_VECTORS messages): %s has a header only\n",
                   stars_out.c_str());
   }
-  core::Health h = engine.health();
-  std::printf("core health (inputs by outcome):\n");
-  for (int s = 0; s < core::kStatusCount; ++s)
-    if (h.by_status[std::size_t(s)]) std::printf("  %-22s %llu\n", core::statusName(core::Status(s)),
-                                               static_cast<unsigned long long>(h.by_status[std::size_t(s)]));
+  printCoreHealth(engine.health());
 
   if (!compare.empty()) {
     ClockMap clk;

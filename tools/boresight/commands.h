@@ -9,5 +9,6 @@ int runConvert(int argc, char** argv);
 int runProcess(int argc, char** argv);
 int runSimulate(int argc, char** argv);
 int runPlot(int argc, char** argv);
+int runCalibrate(int argc, char** argv);
 
 }  // namespace boresight::cli

@@ -25,6 +25,10 @@ const Command kCommands[] = {
 #ifdef BORESIGHT_HAVE_SIMULATE
     {"simulate", "simulate real-format telemetry with known truth and injected effects", boresight::cli::runSimulate},
 #endif
+#ifdef BORESIGHT_HAVE_CALIBRATE
+    {"calibrate", "method A: each head's mounting-error angles with sigma, Cramer-Rao bound, observability",
+     boresight::cli::runCalibrate},
+#endif
 };
 
 void usage(std::FILE* out) {

@@ -14,6 +14,7 @@
 
 #include <boresight/calib/problem.h>
 #include <boresight/calib/solver.h>
+#include <boresight/core/pipeline.h>
 
 #include <nlohmann/json.hpp>
 
@@ -23,19 +24,22 @@
 
 namespace boresight::report {
 
+/// JSON with the keys in the order they were written (the result reads top-down like the issue).
+using Json = nlohmann::ordered_json;
+
 /// What the command knows besides the solver's result.
 struct CalibrationContext {
   std::string config;                                        ///< platform file
   std::vector<std::string> inputs;                           ///< files used
   std::vector<std::pair<std::string, std::string>> ignored;  ///< (file, product) not used
   calib::SolveOptions options;
-  nlohmann::json thermal;  ///< the `thermal` section as built by the caller (null: not computed)
+  Json thermal;  ///< the `thermal` section as built by the caller (null: not computed)
 };
 
-nlohmann::json calibrationJson(const calib::SolveResult& r, const CalibrationContext& c);
+Json calibrationJson(const calib::SolveResult& r, const CalibrationContext& c);
 
-/// The JSON tree as block YAML (same keys, same values; short number arrays in flow style).
-std::string toYaml(const nlohmann::json& j);
+/// The JSON tree as block YAML (same keys, same values; number arrays in flow style).
+std::string toYaml(const Json& j);
 
 /// Residuals of the span under the estimates, per observation and head, in the head frame (rad/s^2):
 /// alpha_S - Exp([r]x) C_S_B(nominal) C_B_A (alpha_A - bias), the bias only when estimated (scale,
@@ -49,6 +53,25 @@ Residuals residuals(const calib::CalibrationSpan& span, const calib::SolveResult
 /// Writes DIR/report.md and DIR/{residuals,excitation,estimates}.svg (DIR is created). False with
 /// *error when a file cannot be written.
 bool writeCalibrationReport(const std::string& dir, const calib::CalibrationSpan& span, const calib::SolveResult& r,
-                            const nlohmann::json& result, std::string* error);
+                            const Json& result, std::string* error);
+
+/// What a span needs before method A can say anything, from the configuration alone (used when a span
+/// is refused, to say what would be needed):
+/// - the CRN: one angular acceleration needs a whole filter length Tf of data centred on it (heads
+///   and accelerometer), so nothing comes out of a span shorter than Tf;
+/// - the bound: with white head noise sigma_cross per sample through the CRN second-derivative kernel
+///   (sigma_alpha = sigma_cross sqrt(sum g2^2)), one decorrelated observation per decimation_s and an
+///   excitation of `excitation_rms_radps2` per axis, an error angle's Cramer-Rao bound is
+///   sigma_alpha / (excitation sqrt(N)); N = (sigma_alpha / (excitation target))^2 observations reach
+///   `target_sigma_arcsec`. Accelerometer noise and the boresight axis (sigma_roll) are left out, so
+///   this is a lower limit on what is needed.
+struct SpanNeed {
+  double crn_s = 0.0;                ///< Tf: the shortest span with one CRN output
+  double sigma_alpha_radps2 = 0.0;   ///< head noise through the CRN, per output, cross-boresight
+  double observations = 0.0;         ///< decorrelated observations the bound needs
+  double bound_s = 0.0;              ///< Tf + observations x decimation_s
+};
+SpanNeed spanNeed(const core::PipelineConfig& cfg, double decimation_s, double excitation_rms_radps2,
+                  double target_sigma_arcsec);
 
 }  // namespace boresight::report

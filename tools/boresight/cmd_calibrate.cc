@@ -1,0 +1,249 @@
+// boresight calibrate --config FILE INPUT... --json FILE [--yaml FILE] [--report DIR]: method A, the
+// mounting-error angles of every head from the star cameras and the accelerometer (METHODS 1.7).
+// Option parsing and printing only: the replay engine feeds a calib::SpanBuilder through its input
+// observer, calib::solve() estimates, report:: writes.
+#include <boresight/calib/solver.h>
+#include <boresight/calib/span_builder.h>
+#include <boresight/io/core_config.h>
+#include <boresight/report/calibration.h>
+#include <boresight/stream/engine.h>
+#include <boresight/stream/replay.h>
+
+#include "cli_common.h"
+#include "commands.h"
+#include "replay_summary.h"
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <string>
+#include <vector>
+
+namespace boresight::cli {
+namespace {
+
+const char* kUsage =
+    "usage: boresight calibrate --config FILE INPUT... --json FILE [--yaml FILE] [--report DIR]\n"
+    "                           [--relative hard|prior] [--no-acc-bias] [--acc-scale] [--acc-nonorthogonality]\n"
+    "                           [--time-offset] [--huber S] [--decimation S] [--max-observations N]\n"
+    "                           [--unobservable-sigma ARCSEC] [--plan-excitation RADPS2] [--plan-sigma ARCSEC]\n"
+    "                           [--lookahead S] [--strict]\n"
+    "\n"
+    "Method A: estimates how each star-camera head is really mounted from the heads' angular\n"
+    "acceleration (CRN of the fused attitude, in each head's frame) against the accelerometer's (the\n"
+    "same CRN low-pass, the same tags), with the heads' mean relative attitudes tying them together,\n"
+    "and says how well that is known: covariance, Cramer-Rao bound, and which directions are not\n"
+    "observable (no excitation about them).\n"
+    "\n"
+    "INPUT: Level-1 files (SCA1A heads, ACC1A accelerometer, QSA1B nominal mountings when the config\n"
+    "says heads.mounting: qsa1b; GNI1B or GNV1B orbit for the thermal fit) or an LCM log, recognised by\n"
+    "content. Other products are listed as ignored.\n"
+    "\n"
+    "Datum: the accelerometer frame. B is the body frame as the configured C_B_A puts A into it; a\n"
+    "rotation of the accelerometer cannot be told from a common rotation of all heads. Error angles:\n"
+    "rotation vector r in the head frame, C_S_B(true) = Exp([r]x) C_S_B(nominal), arcsec.\n"
+    "\n"
+    "  --config FILE            platform file (config/gracefo.yaml)\n"
+    "  --json FILE              the result (keys: heads[] {id, error_angles_arcsec, sigma_arcsec (null: not\n"
+    "                           determined), crlb_arcsec, observable}, unobservable_directions_B,\n"
+    "                           covariance_arcsec2, accelerometer, time_offset_s, time_offset_sigma_s,\n"
+    "                           thermal, residual_rms_radps2, epochs, span_s, ...)\n"
+    "  --yaml FILE              the same result as YAML, for people\n"
+    "  --report DIR             DIR/report.md with plots (residuals against time, excitation, estimates with\n"
+    "                           their sigma against the Cramer-Rao bound)\n"
+    "  --relative MODE          the heads' mean relative attitude as a hard constraint (hard, default) or a\n"
+    "                           prior with its covariance (prior)\n"
+    "  --no-acc-bias            do not estimate the accelerometer bias (estimated by default)\n"
+    "  --acc-scale              estimate the accelerometer scale factors\n"
+    "  --acc-nonorthogonality   estimate the accelerometer axes' non-orthogonality\n"
+    "  --time-offset            estimate the time offset (positive: the accelerometer's tags are late)\n"
+    "  --huber S                robust loss threshold in whitened residual units (default 5; 0: none)\n"
+    "  --decimation S           one observation per S seconds (default 10: the CRN correlation length)\n"
+    "  --max-observations N     keep at most N observations (0: no limit)\n"
+    "  --unobservable-sigma A   an axis whose sigma would exceed A arcsec is not determined (default 3600)\n"
+    "  --plan-excitation R      for a refused span: the excitation (rad/s^2 RMS per axis) assumed when\n"
+    "                           saying what span the bound would need (default 4.9e-5: a 1 deg, 100 s\n"
+    "                           calibration manoeuvre)\n"
+    "  --plan-sigma A           ... and the 1-sigma (arcsec) it should reach (default 30)\n"
+    "  --lookahead S            out-of-order tolerance of the inputs, seconds (default 2)\n"
+    "  --strict                 stop at the first malformed input line\n"
+    "\n"
+    "Exit status: 0 calibrated; 1 refused (span too short or too quiet: the reason and what would be\n"
+    "needed) or bad input (the reason); 2 usage error.\n";
+
+/// Forwards the engine's inputs to the span builder (head epochs as the core's validator leaves them).
+class SpanFeed final : public stream::InputObserver {
+ public:
+  explicit SpanFeed(calib::SpanBuilder& b) : b_(b) {}
+  void onHeads(const core::HeadEpoch& e, core::Status) override { b_.pushHeads(e); }
+  void onAcc(TimeUs t, const Vec3& a_A, core::Status st) override {
+    if (core::accepted(st)) b_.pushAcc(t, a_A);
+  }
+  void onEnd() override { b_.finish(); }
+
+ private:
+  calib::SpanBuilder& b_;
+};
+
+int fail(const std::string& msg) {
+  std::fprintf(stderr, "boresight calibrate: %s\n", msg.c_str());
+  return 1;
+}
+
+bool writeText(const std::string& path, const std::string& text, std::string* error) {
+  std::ofstream f(path);
+  if (!(f << text)) {
+    *error = "cannot write " + path;
+    return false;
+  }
+  return true;
+}
+
+std::string fmt(const char* f, double v) {
+  char b[64];
+  std::snprintf(b, sizeof b, f, v);
+  return b;
+}
+
+}  // namespace
+
+int runCalibrate(int argc, char** argv) {
+  CLI::App app{"boresight calibrate"};
+  std::string config, json_path, yaml_path, report_dir, relative = "hard";
+  std::vector<std::string> files;
+  bool no_bias = false, acc_scale = false, acc_nonorth = false, time_offset = false, strict = false;
+  double huber = 5.0, decimation = 10.0, unobs = 3600.0, lookahead_s = 2.0, plan_exc = 4.9e-5, plan_sigma = 30.0;
+  std::size_t max_obs = 0;
+  app.add_option("--config", config)->required();
+  app.add_option("--json", json_path)->required();
+  app.add_option("--yaml", yaml_path);
+  app.add_option("--report", report_dir);
+  app.add_option("--relative", relative)->check(CLI::IsMember({"hard", "prior"}));
+  app.add_flag("--no-acc-bias", no_bias);
+  app.add_flag("--acc-scale", acc_scale);
+  app.add_flag("--acc-nonorthogonality", acc_nonorth);
+  app.add_flag("--time-offset", time_offset);
+  app.add_option("--huber", huber)->check(CLI::Range(0.0, 1e6));
+  app.add_option("--decimation", decimation)->check(CLI::Range(0.1, 3600.0));
+  app.add_option("--max-observations", max_obs);
+  app.add_option("--unobservable-sigma", unobs)->check(CLI::Range(1e-6, 1e9));
+  app.add_option("--plan-excitation", plan_exc)->check(CLI::Range(1e-12, 1.0));
+  app.add_option("--plan-sigma", plan_sigma)->check(CLI::Range(1e-6, 1e9));
+  app.add_option("--lookahead", lookahead_s)->check(CLI::Range(0.0, 3600.0));
+  app.add_flag("--strict", strict);
+  app.add_option("inputs", files)->required();
+  if (int st = parseCommandLine(app, argc, argv, "calibrate", kUsage); st >= 0) return st;
+
+  calib::SolveOptions so;
+  so.relative = relative == "prior" ? calib::RelativeMode::kPrior : calib::RelativeMode::kHardConstraint;
+  so.estimate_acc_bias = !no_bias;
+  so.estimate_acc_scale = acc_scale;
+  so.estimate_acc_nonorthogonality = acc_nonorth;
+  so.estimate_time_offset = time_offset;
+  so.huber_sigma = huber;
+  so.unobservable_sigma_arcsec = unobs;
+
+  io::PlatformConfig pc;
+  std::string err;
+  if (!io::loadPlatformConfig(config, pc, &err)) return fail(err);
+  stream::ReplayInputs in;
+  if (!stream::classifyInputs(files, in, &err)) return fail(err);
+  for (const auto& [f, product] : in.ignored) {
+    const bool orbit = product == "GNV1B" || product == "GNI1B";
+    std::printf("%s: %s %s: ignored\n", f.c_str(), product.c_str(),
+                orbit ? "(orbit, for the thermal fit: not built into calibrate yet)"
+                      : "is not an input of calibrate (SCA1A, ACC1A, QSA1B, GNI1B/GNV1B, LCM log)");
+  }
+  io::ReadOptions opt;
+  if (strict) opt.on_error = io::OnError::Stop;
+  if (!stream::prepareConfig(in, opt, pc, &err)) return fail(err);
+  if (!pc.pipeline.use_accelerometer)
+    return fail("no accelerometer input: method A compares the heads' angular acceleration with the "
+                "accelerometer's; give ACC1A files or an LCM log with accelerometer messages");
+
+  stream::AssemblerConfig acfg;
+  acfg.lookahead_us = static_cast<TimeUs>(std::llround(lookahead_s * 1e6));
+  stream::Engine engine(acfg);
+  if (!engine.configure(pc.pipeline, &err) || !stream::addSources(in, opt, true, engine, &err)) return fail(err);
+  calib::SpanBuilder builder;
+  calib::SpanOptions spo;
+  spo.decimation_s = decimation;
+  spo.max_observations = max_obs;
+  if (!builder.configure(pc.pipeline, spo, &err)) return fail(err);
+  SpanFeed feed(builder);
+  engine.addObserver(&feed);
+  if (engine.run() != stream::Engine::Result::kDone) return fail(engine.error());
+  printSourceCounters(engine);
+  const core::Health h = engine.health();
+  printCoreHealth(h);
+
+  // Bad input the replay survived but a calibration must not.
+  const auto& tot = engine.counters();
+  if (tot.used_heads == 0) return fail("no star sensor samples in the inputs");
+  if (tot.used_accel == 0) return fail("no accelerometer samples in the inputs (every record rejected?)");
+  const auto unknown = h.by_status[std::size_t(core::Status::kUnknownHead)];
+  if (unknown > 0) {
+    std::string ids;
+    for (int s = 0; s < pc.pipeline.heads.n_heads; ++s)
+      ids += (s ? ", " : "") + std::to_string(pc.pipeline.heads.head[std::size_t(s)].id);
+    return fail("inconsistent head ids: " + std::to_string(unknown) +
+                " head samples carry an id that is not in the configuration (" + config + ": heads " + ids +
+                "); fix the configuration or the inputs");
+  }
+  const calib::CalibrationSpan& span = builder.span();
+  const double span_s = toSeconds(engine.lastEpoch() - engine.firstEpoch());
+  std::printf("span: %.1f s of head data, %llu head epochs, %llu accelerometer samples -> %zu observations\n",
+              span_s, static_cast<unsigned long long>(span.head_epochs),
+              static_cast<unsigned long long>(span.acc_samples), span.obs.size());
+
+  const report::SpanNeed need = report::spanNeed(pc.pipeline, decimation, plan_exc, plan_sigma);
+  const std::string needed =
+      "the CRN gives an angular acceleration only with Tf = " + fmt("%.1f", need.crn_s) +
+      " s of head and accelerometer data centred on it, and the Cramer-Rao bound needs about " +
+      fmt("%.0f", need.observations) + " decorrelated observations (one per " + fmt("%g", decimation) +
+      " s) to reach " + fmt("%g", plan_sigma) + "\" with " + fmt("%.2g", plan_exc) +
+      " rad/s^2 RMS excitation (head noise through the CRN " + fmt("%.2g", need.sigma_alpha_radps2) +
+      " rad/s^2): a span of at least " + fmt("%.0f", need.bound_s) + " s (" + fmt("%.1f", need.bound_s / 3600) +
+      " h) of excited data";
+  if (span.obs.empty())
+    return fail("refused: the span is too short (" + fmt("%.1f", span_s) +
+                " s of head data, no CRN angular acceleration in it): " + needed);
+
+  calib::SolveResult r = calib::solve(span, so);
+  if (!r.ok) return fail("refused: " + r.message + " (" + needed + ")");
+
+  report::CalibrationContext ctx;
+  ctx.config = config;
+  ctx.inputs = in.sca;
+  ctx.inputs.insert(ctx.inputs.end(), in.acc.begin(), in.acc.end());
+  ctx.inputs.insert(ctx.inputs.end(), in.qsa.begin(), in.qsa.end());
+  ctx.inputs.insert(ctx.inputs.end(), in.lcm.begin(), in.lcm.end());
+  ctx.ignored = in.ignored;
+  ctx.options = so;
+  ctx.thermal = {{"status", "pending: the thermal harmonic fit is not built into calibrate yet"}};
+  const report::Json j = report::calibrationJson(r, ctx);
+  if (!writeText(json_path, j.dump(2) + "\n", &err)) return fail(err);
+  if (!yaml_path.empty() && !writeText(yaml_path, report::toYaml(j), &err)) return fail(err);
+  if (!report_dir.empty() && !report::writeCalibrationReport(report_dir, span, r, j, &err)) return fail(err);
+
+  std::printf("\n%s (%zu epochs over %.1f s, residual RMS %.3e rad/s^2, relative attitude as a %s)\n",
+              r.message.c_str(), r.epochs, r.span_s, r.residual_rms_radps2,
+              so.relative == calib::RelativeMode::kPrior ? "prior" : "hard constraint");
+  std::printf("  head  axis   error [arcsec]   sigma [arcsec]   CRLB [arcsec]\n");
+  const char* ax = "xyz";
+  for (const auto& hr : r.heads)
+    for (std::size_t a = 0; a < 3; ++a)
+      std::printf("  %4d  %c     %14.2f   %14s   %13s\n", hr.id, ax[a], hr.error_angles_arcsec[a],
+                  hr.sigma_arcsec[a] ? fmt("%.2f", *hr.sigma_arcsec[a]).c_str() : "not determined",
+                  std::isfinite(hr.crlb_arcsec[a]) ? fmt("%.2f", hr.crlb_arcsec[a]).c_str() : "inf");
+  for (const auto& d : r.unobservable_directions_B)
+    std::printf("  not observable: body direction (%.3f, %.3f, %.3f) has no excitation\n", d.x(), d.y(), d.z());
+  if (r.time_offset_s)
+    std::printf("  time offset %.4f s +- %.4f s (accelerometer tags late)\n", *r.time_offset_s,
+                r.time_offset_sigma_s.value_or(NAN));
+  std::printf("-> %s%s%s%s%s\n", json_path.c_str(), yaml_path.empty() ? "" : ", ", yaml_path.c_str(),
+              report_dir.empty() ? "" : ", ", report_dir.empty() ? "" : (report_dir + "/report.md").c_str());
+  return 0;
+}
+
+}  // namespace boresight::cli
