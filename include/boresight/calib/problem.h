@@ -49,9 +49,18 @@ struct CalibrationSpan {
   Mat3 C_B_A = Mat3::Identity();                    ///< configured accelerometer-to-body rotation
   std::vector<Observation> obs;                     ///< decimated epochs in time order
   std::vector<RelativeMean> relative;               ///< one per head pair with data
-  TimeUs t_first = 0, t_last = 0;                   ///< span of head data actually used
+  TimeUs t_first = 0, t_last = 0;                   ///< first and last head epoch pushed
   std::uint64_t head_epochs = 0, acc_samples = 0;   ///< inputs that went into the span
-  double decimation_s = 0.0;                        ///< spacing of obs (the CRN correlation length)
+  double decimation_s = 0.0;                        ///< spacing of obs (multiples of it between epochs)
+  /// Correlation of one head's CRN acceleration noise between epochs k decimation intervals apart,
+  /// k = 0, 1, ... (entry 0 is 1; the list ends where the kernels no longer overlap or |rho| < 1e-4).
+  /// The head noise is white at the head rate, so this is sum_n g2[n] g2[n + k D fs] / sum_n g2[n]^2
+  /// of the CRN second-derivative kernel. The solver whitens each head's epochs with it.
+  std::vector<double> noise_correlation;
+  /// CRN outputs of the heads that never became observations (no accelerometer value at their tag:
+  /// accelerometer gap, start or end of its data), and head epochs the validator rejected.
+  std::uint64_t dropped_no_acc = 0, head_epochs_rejected = 0;
+  double crn_half_length_s = 0.0;                   ///< CRN data needed each side of an epoch, s
 };
 
 }  // namespace boresight::calib
