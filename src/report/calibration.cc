@@ -183,31 +183,31 @@ std::string toYaml(const json& j) {
 }
 
 Residuals residuals(const calib::CalibrationSpan& span, const calib::SolveResult& r) {
+  // The solver's model (solver.h) at its estimate: alpha_S = Exp([r]x) M C_B_A K^-1 (alpha_A + tau jerk_A - b),
+  // K = I + diag(s) + N(n), N = [0 n2 n1; n2 0 n0; n1 n0 0].
+  const calib::ModelParameters& p = r.estimate;
+  Mat3 K = Mat3::Identity();
+  K.diagonal() += p.acc_scale;
+  K(0, 1) = K(1, 0) = p.acc_nonorth.z();
+  K(0, 2) = K(2, 0) = p.acc_nonorth.y();
+  K(1, 2) = K(2, 1) = p.acc_nonorth.x();
+  const Mat3 Kinv = K.inverse();
   Residuals out;
   std::array<Mat3, calib::kMaxHeads> C{};
-  std::array<bool, calib::kMaxHeads> have{};
   for (int s = 0; s < span.n_heads && s < calib::kMaxHeads; ++s) {
     const auto us = std::size_t(s);
-    Vec3 e = Vec3::Zero();
-    for (const auto& h : r.heads)
-      if (h.id == span.head_ids[us]) {
-        e = Vec3(h.error_angles_arcsec[0], h.error_angles_arcsec[1], h.error_angles_arcsec[2]) * kRadPerArcsec;
-        have[us] = true;
-      }
-    C[us] = core::so3Exp(e) * span.q_S_B_nominal[us].toRotationMatrix() * span.C_B_A;
+    C[us] = core::so3Exp(p.r_S[us]) * span.q_S_B_nominal[us].toRotationMatrix() * span.C_B_A * Kinv;
   }
-  Vec3 bias = Vec3::Zero();
-  if (r.acc_bias_radps2)
-    bias = Vec3(r.acc_bias_radps2->value[0], r.acc_bias_radps2->value[1], r.acc_bias_radps2->value[2]);
   const TimeUs t0 = span.obs.empty() ? 0 : span.obs.front().t;
   out.t_s.reserve(span.obs.size());
   out.r_S.reserve(span.obs.size());
   for (const auto& ob : span.obs) {
     out.t_s.push_back(toSeconds(ob.t - t0));
     std::array<Vec3, calib::kMaxHeads> row = core::filled<Vec3, calib::kMaxHeads>(Vec3::Constant(NAN));
+    const Vec3 a = ob.alpha_A + p.time_offset_s * ob.jerk_A - p.acc_bias;
     for (int s = 0; s < span.n_heads && s < calib::kMaxHeads; ++s) {
       const auto us = std::size_t(s);
-      if (ob.has_head[us] && have[us]) row[us] = ob.alpha_S[us] - C[us] * (ob.alpha_A - bias);
+      if (ob.has_head[us]) row[us] = ob.alpha_S[us] - C[us] * a;
     }
     out.r_S.push_back(row);
   }
@@ -332,9 +332,8 @@ bool writeCalibrationReport(const std::string& dir, const calib::CalibrationSpan
   else md << "see `thermal` in the JSON result.\n\n";
   md << "## Plots\n\n"
         "![residuals](residuals.svg)\n\n"
-        "Residuals: alpha_S - Exp([r]x) C_S_B(nominal) C_B_A (alpha_A - bias) per head axis, with the "
-        "estimated angles and bias (scale, non-orthogonality and the time offset are not applied in this "
-        "plot).\n\n"
+        "Residuals per head axis under the estimate: alpha_S - Exp([r]x) C_S_B(nominal) C_B_A K^-1 "
+        "(alpha_A + tau jerk_A - bias), K = I + scale + non-orthogonality (what was not estimated is zero).\n\n"
         "![excitation](excitation.svg)\n\n"
         "![estimates](estimates.svg)\n\n"
         "Estimates with their reported sigma (left bar) and the Cramer-Rao bound (right bar); an axis "

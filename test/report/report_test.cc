@@ -155,18 +155,33 @@ TEST(CalibrationReport, ResidualsOfASpanBuiltFromTheEstimatesAreZeroAndShowAWron
   bc::SolveResult r = handFilled();
   r.heads.resize(2);
   const Vec3 bias(1e-7, -2e-7, 3e-7);
+  for (int s = 0; s < 2; ++s) {
+    const auto& e = r.heads[std::size_t(s)].error_angles_arcsec;
+    r.estimate.r_S[std::size_t(s)] = Vec3(e[0], e[1], e[2]) * boresight::kRadPerArcsec;
+  }
+  r.estimate.acc_bias = bias;
+  r.estimate.acc_scale = Vec3(1e-3, -2e-3, 5e-4);
+  r.estimate.acc_nonorth = Vec3(1e-4, 2e-4, -3e-4);
+  r.estimate.time_offset_s = 0.2;
+  Mat3 K = Mat3::Identity();
+  K.diagonal() += r.estimate.acc_scale;
+  K(0, 1) = K(1, 0) = -3e-4;
+  K(0, 2) = K(2, 0) = 2e-4;
+  K(1, 2) = K(2, 1) = 1e-4;
   std::mt19937 rng(3);
   std::normal_distribution<double> g(0.0, 1e-6);
   for (int k = 0; k < 50; ++k) {
     bc::Observation ob;
     ob.t = 1000000 + k * 10000000LL;
-    ob.alpha_A = Vec3(g(rng), g(rng), g(rng)) + bias;
+    const Vec3 truth(g(rng), g(rng), g(rng));
+    ob.jerk_A = Vec3(g(rng), g(rng), g(rng));
+    ob.alpha_A = K * truth + bias - 0.2 * ob.jerk_A;  // tags late by 0.2 s
     for (int s = 0; s < 2; ++s) {
       const auto& e = r.heads[std::size_t(s)].error_angles_arcsec;
       const Vec3 rv = Vec3(e[0], e[1], e[2]) * boresight::kRadPerArcsec;
       ob.has_head[std::size_t(s)] = !(s == 1 && k == 7);  // a gap in head 2
       ob.alpha_S[std::size_t(s)] = boresight::core::so3Exp(rv) * span.q_S_B_nominal[std::size_t(s)].toRotationMatrix() *
-                                   span.C_B_A * (ob.alpha_A - bias);
+                                   span.C_B_A * truth;
     }
     span.obs.push_back(ob);
   }
@@ -184,7 +199,7 @@ TEST(CalibrationReport, ResidualsOfASpanBuiltFromTheEstimatesAreZeroAndShowAWron
     }
   // A head angle off by 100": residuals of about 100" times the excitation.
   bc::SolveResult wrong = r;
-  wrong.heads[0].error_angles_arcsec[0] += 100.0;
+  wrong.estimate.r_S[0].x() += 100.0 * boresight::kRadPerArcsec;
   auto res2 = br::residuals(span, wrong);
   double worst = 0;
   for (const auto& row : res2.r_S) worst = std::max(worst, row[0].norm());
@@ -230,4 +245,24 @@ TEST(SvgPlot, GapsBreakTheLineAndEmptyDataGivesAFrame) {
   for (std::size_t q = svg.find(" M"); q != std::string::npos; q = svg.find(" M", q + 1)) ++moves;
   EXPECT_EQ(moves, 2u);
   EXPECT_NE(br::svgPlot(br::Plot{}).find("</svg>"), std::string::npos);
+}
+
+TEST(SpanNeed, CrnNoiseAndTheBoundsScaling) {
+  boresight::core::PipelineConfig cfg;
+  cfg.heads.n_heads = 2;
+  cfg.heads.head[0].sigma_cross_rad = 6.0 * boresight::kRadPerArcsec;
+  cfg.heads.head[1].sigma_cross_rad = 9.0 * boresight::kRadPerArcsec;
+  const auto n = br::spanNeed(cfg, 10.0, 5e-5, 30.0);
+  // The CRN length, and the head noise through the second-derivative kernel against the ideal
+  // band-limited differentiator: white noise of variance s^2 at fs through (2 pi f)^2 up to B gives
+  // s^2 (2 pi)^4 2 B^5 / (5 fs); the CRN's gentle edge keeps it within a few ten per cent.
+  EXPECT_NEAR(n.crn_s, cfg.crn_attitude.length_s, 0.5);
+  const double s = 6.0 * boresight::kRadPerArcsec, B = cfg.crn_attitude.bandwidth_hz, fs = cfg.crn_attitude.fs_hz;
+  const double ideal = s * std::sqrt(std::pow(2 * M_PI, 4) * 2 * std::pow(B, 5) / (5 * fs));
+  EXPECT_NEAR(n.sigma_alpha_radps2 / ideal, 1.0, 0.3) << n.sigma_alpha_radps2 << " vs " << ideal;
+  // N ~ (sigma_alpha / (excitation target))^2: twice the excitation or twice the target, a quarter.
+  const auto n2 = br::spanNeed(cfg, 10.0, 1e-4, 30.0), n3 = br::spanNeed(cfg, 10.0, 5e-5, 60.0);
+  EXPECT_NEAR(n2.observations / n.observations, 0.25, 0.01);
+  EXPECT_NEAR(n3.observations / n.observations, 0.25, 0.01);
+  EXPECT_NEAR(n.bound_s, n.crn_s + n.observations * 10.0, 1e-6);
 }

@@ -196,21 +196,38 @@ int runCalibrate(int argc, char** argv) {
               span_s, static_cast<unsigned long long>(span.head_epochs),
               static_cast<unsigned long long>(span.acc_samples), span.obs.size());
 
+  // What a refused span would need: the CRN's length, and the bound's span at the planning excitation
+  // (and, when the span has observations, at its own weakest-axis excitation).
+  auto needText = [&](double excitation, const char* what) {
+    const report::SpanNeed n = report::spanNeed(pc.pipeline, decimation, excitation, plan_sigma);
+    return "the Cramer-Rao bound needs about " + fmt("%.0f", n.observations) + " decorrelated observations (one per " +
+           fmt("%g", decimation) + " s) to reach " + fmt("%g", plan_sigma) + "\" with " + fmt("%.2g", excitation) +
+           " rad/s^2 RMS excitation per axis (" + what + "; head noise through the CRN " +
+           fmt("%.2g", n.sigma_alpha_radps2) + " rad/s^2): at least " +
+           (n.bound_s < 86400.0 * 365 ? fmt("%.0f", n.bound_s) + " s (" + fmt("%.1f", n.bound_s / 3600) + " h)"
+                                      : fmt("%.2g", n.bound_s / (86400.0 * 365.25)) + " years");
+  };
   const report::SpanNeed need = report::spanNeed(pc.pipeline, decimation, plan_exc, plan_sigma);
-  const std::string needed =
-      "the CRN gives an angular acceleration only with Tf = " + fmt("%.1f", need.crn_s) +
-      " s of head and accelerometer data centred on it, and the Cramer-Rao bound needs about " +
-      fmt("%.0f", need.observations) + " decorrelated observations (one per " + fmt("%g", decimation) +
-      " s) to reach " + fmt("%g", plan_sigma) + "\" with " + fmt("%.2g", plan_exc) +
-      " rad/s^2 RMS excitation (head noise through the CRN " + fmt("%.2g", need.sigma_alpha_radps2) +
-      " rad/s^2): a span of at least " + fmt("%.0f", need.bound_s) + " s (" + fmt("%.1f", need.bound_s / 3600) +
-      " h) of excited data";
+  const std::string crn_need = "the CRN gives an angular acceleration only with Tf = " + fmt("%.1f", need.crn_s) +
+                               " s of head and accelerometer data centred on it";
+  const std::string plan_need = needText(plan_exc, "--plan-excitation");
   if (span.obs.empty())
     return fail("refused: the span is too short (" + fmt("%.1f", span_s) +
-                " s of head data, no CRN angular acceleration in it): " + needed);
+                " s of head data, no CRN angular acceleration in it).\nNeeded: " + crn_need + "; " + plan_need +
+                " of excited data.");
 
   calib::SolveResult r = calib::solve(span, so);
-  if (!r.ok) return fail("refused: " + r.message + " (" + needed + ")");
+  if (!r.ok) {
+    // This span's own excitation: RMS about the mean of the accelerometer's angular acceleration in B,
+    // weakest axis.
+    Vec3 mean = Vec3::Zero(), sq = Vec3::Zero();
+    for (const auto& ob : span.obs) mean += span.C_B_A * ob.alpha_A;
+    mean /= double(span.obs.size());
+    for (const auto& ob : span.obs) sq += (span.C_B_A * ob.alpha_A - mean).cwiseAbs2();
+    const double weakest = std::sqrt(sq.minCoeff() / double(span.obs.size()));
+    return fail("refused: " + r.message + "\nNeeded: " + plan_need + "; at this span's weakest-axis excitation " +
+                (weakest > 0 ? needText(weakest, "this span") : std::string("(none)")) + ".");
+  }
 
   report::CalibrationContext ctx;
   ctx.config = config;

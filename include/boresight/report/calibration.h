@@ -41,9 +41,9 @@ Json calibrationJson(const calib::SolveResult& r, const CalibrationContext& c);
 /// The JSON tree as block YAML (same keys, same values; number arrays in flow style).
 std::string toYaml(const Json& j);
 
-/// Residuals of the span under the estimates, per observation and head, in the head frame (rad/s^2):
-/// alpha_S - Exp([r]x) C_S_B(nominal) C_B_A (alpha_A - bias), the bias only when estimated (scale,
-/// non-orthogonality and time offset are not applied here). NaN where the head has no value.
+/// Residuals of the span under the solver's model at its estimate (SolveResult::estimate), per
+/// observation and head, in the head frame (rad/s^2): alpha_S - Exp([r]x) C_S_B(nominal) C_B_A K^-1
+/// (alpha_A + tau jerk_A - b) (calib/solver.h). NaN where the head has no value.
 struct Residuals {
   std::vector<double> t_s;                        ///< seconds since the first observation
   std::vector<std::array<Vec3, calib::kMaxHeads>> r_S;  ///< by observation, slot

@@ -1,0 +1,281 @@
+// `boresight calibrate` end to end: simulated Level-1 files and LCM log with known truth
+// (config/sim_gracefo_calibration_short.yaml: 15 minutes, three manoeuvres), the result against the
+// truth within the reported sigmas, the solver variants, the JSON / YAML / report files, refusals and
+// bad input. Each test runs the program as a user would.
+#include <boresight/core/rotation.h>
+
+#include "test_files.h"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+#include <yaml-cpp/yaml.h>
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+using boresight::Mat3;
+using boresight::Quat;
+using boresight::Vec3;
+using testutil::CliRun;
+
+namespace {
+
+CliRun run(const std::string& args) { return testutil::runProgram(BORESIGHT_CLI, args); }
+
+const std::string kSrc = BORESIGHT_SOURCE_DIR;
+const std::string kConfig = kSrc + "/config/gracefo.yaml";
+
+struct Sim {
+  std::string dir, sca, acc, qsa, gnv, lcm;
+};
+
+std::string glob1(const std::string& dir, const std::string& product) {
+  return dir + "/" + product + "_2023-06-01_C_04.txt";
+}
+
+/// The short calibration scenario, simulated once (seed 1, 860 s: three 240 s manoeuvres).
+const Sim& sim() {
+  static const Sim s = [] {
+    Sim x;
+    x.dir = testutil::makeTempDir("calibrate_sim");
+    const CliRun r = run("simulate --scenario " + kSrc + "/config/sim_gracefo_calibration_short.yaml --seed 1 " +
+                         "--duration 860 --out " + x.dir + " --quiet");
+    EXPECT_EQ(r.status, 0) << r.out;
+    x.sca = glob1(x.dir, "SCA1A");
+    x.acc = glob1(x.dir, "ACC1A");
+    x.qsa = glob1(x.dir, "QSA1B");
+    x.gnv = glob1(x.dir, "GNV1B");
+    x.lcm = x.dir + "/sim.lcmlog";
+    return x;
+  }();
+  return s;
+}
+
+nlohmann::json readJson(const std::string& path) {
+  std::ifstream f(path);
+  nlohmann::json j;
+  f >> j;
+  return j;
+}
+
+Mat3 quatMatrix(const YAML::Node& q) {
+  return Quat(q[0].as<double>(), q[1].as<double>(), q[2].as<double>(), q[3].as<double>()).normalized().toRotationMatrix();
+}
+Mat3 matrix(const YAML::Node& m) {
+  Mat3 c;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) c(i, j) = m[i][j].as<double>();
+  return c;
+}
+
+/// The error angles calibrate should find, from truth.yaml: with the accelerometer frame as the datum,
+/// C_S_A(true) = C_S_B(true) C_B_A(true) is what the data fix, and the estimate is expressed through the
+/// configured C_B_A: Exp([r]x) = C_S_B(true) C_B_A(true) C_B_A(nominal)^T C_S_B(nominal)^T.
+std::map<int, Vec3> expectedAngles(const std::string& truth_path) {
+  const YAML::Node t = YAML::LoadFile(truth_path);
+  const Mat3 An = matrix(t["accelerometer"]["C_B_A_nominal"]), At = matrix(t["accelerometer"]["C_B_A_true"]);
+  std::map<int, Vec3> out;
+  for (const auto& h : t["heads"]) {
+    const Mat3 E = quatMatrix(h["q_Si_B_true"]) * At * An.transpose() * quatMatrix(h["q_Si_B_nominal"]).transpose();
+    out[h["id"].as<int>()] = boresight::core::so3Log(E) * boresight::kArcsecPerRad;
+  }
+  return out;
+}
+
+std::string level1() { return sim().sca + " " + sim().acc + " " + sim().qsa; }
+
+}  // namespace
+
+TEST(Calibrate, HelpNamesInputsKeysAndVariants) {
+  const CliRun r = run("calibrate --help");
+  EXPECT_EQ(r.status, 0);
+  for (const char* s : {"--config", "--json", "--yaml", "--report", "--relative", "--acc-scale", "--time-offset",
+                        "sigma_arcsec", "Datum: the accelerometer frame"})
+    EXPECT_NE(r.out.find(s), std::string::npos) << s;
+  EXPECT_EQ(run("calibrate --config " + kConfig + " " + level1()).status, 2);  // --json missing
+  EXPECT_EQ(run("calibrate --config " + kConfig + " --json x.json --relative sideways " + level1()).status, 2);
+}
+
+TEST(Calibrate, SimulatedSpanAgreesWithTheTruthWithinTheReportedSigmas) {
+  const std::string out = testutil::makeTempDir("calibrate_out");
+  const CliRun r = run("calibrate --config " + kConfig + " " + level1() + " " + sim().gnv + " --time-offset --json " +
+                       out + "/r.json --yaml " + out + "/r.yaml --report " + out + "/rep");
+  ASSERT_EQ(r.status, 0) << r.out;
+  EXPECT_NE(r.out.find("GNV1B"), std::string::npos) << r.out;  // listed as ignored
+  EXPECT_NE(r.out.find("ignored"), std::string::npos) << r.out;
+  const auto j = readJson(out + "/r.json");
+  const auto truth = expectedAngles(sim().dir + "/truth.yaml");
+  ASSERT_EQ(j["heads"].size(), 3u);
+  double chi2 = 0;
+  for (const auto& h : j["heads"]) {
+    const Vec3 t = truth.at(h["id"].get<int>());
+    for (int a = 0; a < 3; ++a) {
+      ASSERT_TRUE(h["observable"][a].get<bool>()) << h.dump();
+      const double est = h["error_angles_arcsec"][a], sg = h["sigma_arcsec"][a], crlb = h["crlb_arcsec"][a];
+      // The excitation determines every axis to tens of arcsec; the truth is hundreds of arcsec away
+      // from zero (the accelerometer's 250-680" misalignment is a common rotation of all heads).
+      EXPECT_LT(sg, 60.0);
+      EXPECT_LT(sg, 1.5 * crlb);
+      EXPECT_LT(std::abs(est - t[a]), 3.0 * sg) << "head " << h["id"] << " axis " << a << ": " << est << " vs "
+                                                 << t[a] << " +- " << sg;
+      chi2 += (est - t[a]) * (est - t[a]) / (sg * sg);
+    }
+  }
+  // Nine correlated components (a common rotation dominates): loose, but a wrong convention (sign,
+  // frame) is off by many sigmas.
+  EXPECT_LT(chi2, 40.0);
+  // The hidden 15 ms time offset of the accelerometer.
+  ASSERT_TRUE(j["time_offset_s"].is_number());
+  EXPECT_LT(std::abs(j["time_offset_s"].get<double>() - 0.015), 3.0 * j["time_offset_sigma_s"].get<double>());
+  EXPECT_EQ(j["covariance_arcsec2"].size(), 81u);
+  EXPECT_GT(j["epochs"].get<int>(), 50);
+  EXPECT_NEAR(j["span_s"].get<double>(), 860.0, 100.0);
+  EXPECT_TRUE(j["accelerometer"].contains("bias_radps2"));
+  EXPECT_TRUE(j.contains("thermal"));
+  // The YAML copy carries the same numbers.
+  const YAML::Node y = YAML::LoadFile(out + "/r.yaml");
+  EXPECT_NEAR(y["heads"][1]["error_angles_arcsec"][2].as<double>(), j["heads"][1]["error_angles_arcsec"][2].get<double>(),
+              1e-6);
+  EXPECT_EQ(y["epochs"].as<int>(), j["epochs"].get<int>());
+  // The report and its plots.
+  const std::string md = testutil::slurp(out + "/rep/report.md");
+  EXPECT_NE(md.find("| 3 | z |"), std::string::npos) << md;
+  for (const char* f : {"residuals.svg", "excitation.svg", "estimates.svg"})
+    EXPECT_NE(testutil::slurp(out + "/rep/" + f).find("</svg>"), std::string::npos) << f;
+}
+
+TEST(Calibrate, HardConstraintAndPriorAgreeAndTheLcmLogGivesTheLevel1Result) {
+  const std::string out = testutil::makeTempDir("calibrate_variants");
+  ASSERT_EQ(run("calibrate --config " + kConfig + " " + level1() + " --json " + out + "/hard.json").status, 0);
+  ASSERT_EQ(run("calibrate --config " + kConfig + " " + level1() + " --relative prior --json " + out + "/prior.json")
+                .status,
+            0);
+  const CliRun l = run("calibrate --config " + kConfig + " " + sim().lcm + " " + sim().qsa + " --json " + out + "/lcm.json");
+  ASSERT_EQ(l.status, 0) << l.out;
+  const auto h = readJson(out + "/hard.json"), p = readJson(out + "/prior.json"), c = readJson(out + "/lcm.json");
+  EXPECT_EQ(p["options"]["relative"], "prior");
+  for (std::size_t k = 0; k < 3; ++k)
+    for (int a = 0; a < 3; ++a) {
+      const double sg = h["heads"][k]["sigma_arcsec"][a];
+      EXPECT_NEAR(h["heads"][k]["error_angles_arcsec"][a].get<double>(),
+                  p["heads"][k]["error_angles_arcsec"][a].get<double>(), 0.1 * sg);
+      EXPECT_NEAR(h["heads"][k]["error_angles_arcsec"][a].get<double>(),
+                  c["heads"][k]["error_angles_arcsec"][a].get<double>(), 1e-6 * sg);
+    }
+}
+
+TEST(Calibrate, ASpanShorterThanTheCrnIsRefusedWithWhatWouldBeNeeded) {
+  const std::string d = testutil::makeTempDir("calibrate_short");
+  ASSERT_EQ(run("simulate --scenario " + kSrc + "/config/sim_gracefo_calibration_short.yaml --seed 2 --duration 50 " +
+                "--out " + d + " --quiet --no-lcm")
+                .status,
+            0);
+  const CliRun r = run("calibrate --config " + kConfig + " " + glob1(d, "SCA1A") + " " + glob1(d, "ACC1A") + " " +
+                       glob1(d, "QSA1B") + " --json " + d + "/r.json");
+  EXPECT_EQ(r.status, 1) << r.out;
+  EXPECT_NE(r.out.find("refused: the span is too short"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("Tf = 70.7 s"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("Needed: the CRN gives an angular acceleration only with"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find(" h) of excited data"), std::string::npos) << r.out;  // the bound's span
+  EXPECT_TRUE(testutil::slurp(d + "/r.json").empty());  // nothing written on refusal
+}
+
+TEST(Calibrate, AQuietSpanIsRefusedWithWhatWouldBeNeeded) {
+  // The calibration day's first 15 minutes: no manoeuvre yet, only thrusters and torquers.
+  const std::string d = testutil::makeTempDir("calibrate_quiet");
+  ASSERT_EQ(run("simulate --scenario " + kSrc + "/config/sim_gracefo_calibration.yaml --seed 3 --duration 860 " +
+                "--out " + d + " --quiet --no-lcm")
+                .status,
+            0);
+  const CliRun r = run("calibrate --config " + kConfig + " " + glob1(d, "SCA1A") + " " + glob1(d, "ACC1A") + " " +
+                       glob1(d, "QSA1B") + " --json " + d + "/r.json");
+  EXPECT_EQ(r.status, 1) << r.out;
+  EXPECT_NE(r.out.find("refused: too quiet"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("Needed: the Cramer-Rao bound needs about"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("at this span's weakest-axis excitation"), std::string::npos) << r.out;
+  EXPECT_TRUE(testutil::slurp(d + "/r.json").empty());
+}
+
+TEST(Calibrate, OneManoeuvreAxisLeavesThatBodyDirectionNotObservable) {
+  // Excitation about body x only: a common rotation about x does not change the angular acceleration
+  // (it is along x), so body x is reported as not observable and no axis gets a small sigma there.
+  const std::string d = testutil::makeTempDir("calibrate_one_axis");
+  {
+    std::ofstream o(d + "/one_axis.yaml");
+    o << "base: " << kSrc << "/config/sim_gracefo_calibration_short.yaml\n"
+      << "attitude:\n  manoeuvres:\n"
+      << "    - {amplitude_deg: [5.0, 0, 0], period_s: 40, start_s: 60, duration_s: 600}\n";
+  }
+  ASSERT_EQ(run("simulate --scenario " + d + "/one_axis.yaml --seed 4 --duration 760 --out " + d + " --quiet --no-lcm").status, 0);
+  const CliRun r = run("calibrate --config " + kConfig + " " + glob1(d, "SCA1A") + " " + glob1(d, "ACC1A") + " " +
+                       glob1(d, "QSA1B") + " --json " + d + "/r.json --report " + d + "/rep");
+  ASSERT_EQ(r.status, 0) << r.out;
+  const auto j = readJson(d + "/r.json");
+  ASSERT_EQ(j["unobservable_directions_B"].size(), 1u) << j.dump();
+  const auto& u = j["unobservable_directions_B"][0];
+  EXPECT_GT(std::abs(u[0].get<double>()), 0.99) << u.dump();
+  int undetermined = 0;
+  for (const auto& h : j["heads"])
+    for (int a = 0; a < 3; ++a) {
+      const bool obs = h["observable"][a];
+      EXPECT_EQ(obs, !h["sigma_arcsec"][a].is_null()) << h.dump();
+      undetermined += !obs;
+    }
+  EXPECT_GT(undetermined, 0) << j.dump();
+  EXPECT_NE(r.out.find("not observable"), std::string::npos) << r.out;
+  EXPECT_NE(testutil::slurp(d + "/rep/report.md").find("**Not observable**"), std::string::npos);
+}
+
+TEST(Calibrate, BadInputIsAClearErrorNotACrash) {
+  const std::string d = testutil::makeTempDir("calibrate_bad");
+  const std::string j = " --json " + d + "/r.json";
+  // No accelerometer, no QSA1B (the platform takes the mountings from it), a file that is not there.
+  CliRun r = run("calibrate --config " + kConfig + " " + sim().sca + " " + sim().qsa + j);
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.out.find("no accelerometer input"), std::string::npos) << r.out;
+  r = run("calibrate --config " + kConfig + " " + sim().sca + " " + sim().acc + j);
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.out.find("QSA1B"), std::string::npos) << r.out;
+  r = run("calibrate --config " + kConfig + " " + level1() + " " + d + "/missing.txt" + j);
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.out.find("missing.txt"), std::string::npos) << r.out;
+  // Head ids that are not in the configuration (head 3's samples relabelled 7).
+  {
+    std::istringstream in(testutil::slurp(sim().sca));
+    std::ofstream o(d + "/SCA1A_ids.txt");
+    std::string line;
+    while (std::getline(in, line)) {
+      const auto p = line.find(" C 3 ");
+      if (p != std::string::npos && p < 30) line.replace(p, 5, " C 7 ");
+      o << line << "\n";
+    }
+  }
+  r = run("calibrate --config " + kConfig + " " + d + "/SCA1A_ids.txt " + sim().acc + " " + sim().qsa + j);
+  EXPECT_EQ(r.status, 1) << r.out;
+  EXPECT_NE(r.out.find("inconsistent head ids"), std::string::npos) << r.out;
+  // NaN in quaternions and accelerometer values: rejected and counted (file:line), never a crash;
+  // the rest of the span still calibrates.
+  {
+    std::istringstream in(testutil::slurp(sim().sca));
+    std::ofstream o(d + "/SCA1A_nan.txt");
+    std::string line;
+    int k = 0;
+    while (std::getline(in, line)) {
+      if (line.rfind("738849", 0) == 0 && ++k % 500 == 0) {
+        const auto p = line.find(" P ");
+        if (p != std::string::npos) line = line.substr(0, p + 3) + "nan" + line.substr(line.find(' ', p + 3));
+      }
+      o << line << "\n";
+    }
+  }
+  r = run("calibrate --config " + kConfig + " " + d + "/SCA1A_nan.txt " + sim().acc + " " + sim().qsa + j);
+  EXPECT_EQ(r.status, 0) << r.out;
+  EXPECT_NE(r.out.find("4 malformed"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("SCA1A_nan.txt:"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("non-finite number: 'nan'"), std::string::npos) << r.out;
+  // --strict: the first bad line stops the run, with its place.
+  r = run("calibrate --strict --config " + kConfig + " " + d + "/SCA1A_nan.txt " + sim().acc + " " + sim().qsa + j);
+  EXPECT_EQ(r.status, 1) << r.out;
+  EXPECT_NE(r.out.find("non-finite number"), std::string::npos) << r.out;
+}
