@@ -78,52 +78,77 @@ class EpochCost {
   const bool hard_;
 };
 
-// Pair mean residual: with C_Sa_B = Exp(r_a) M_a, the model relative attitude C_Si_Sj = C_Si_B C_B_Sj
-// against the measured mean B_ij: e = Log(B_ij^T C_Si_Sj) in Sj, weighted by the mean's covariance.
-class PairCost {
+// Relative alignment prior (prior mode). The estimate of RelativeNormal says C_Sh_B = A_h Exp(-dhat_h)
+// Exp(-phi) for every linked head with one common phi and dhat_datum = 0. With C_Sh_B = Exp(r_h) M_h the
+// same quantity of the parameters is delta_h(r) = -Log(A_h^T C_Sh_B(r) C_B_Sd(r) A_d) (exact, no
+// small-angle step between heads); residual L (delta(r) - dhat) over the linked heads h != d.
+class RelativeCost {
  public:
-  PairCost(const Quat& q_meas_Si_Sj, const Quat& q_Mi, const Quat& q_Mj, const Mat3& sqrt_info)
-      : qb_(q_meas_Si_Sj), qi_(q_Mi), qj_(q_Mj), L_(sqrt_info) {}
+  static constexpr int kRes = 3 * (kMaxHeads - 1);
+  RelativeCost(const std::array<Quat, kMaxHeads>& M, const std::array<Quat, kMaxHeads>& A, const std::vector<int>& heads,
+               int datum, const Eigen::VectorXd& dhat, const Eigen::MatrixXd& L)
+      : M_(M), A_(A), heads_(heads), datum_(datum), dhat_(dhat), L_(L) {}
+
+  // q = C_Sh_B(r_h) C_B_Sd(r_d) A_d as a quaternion, then A_h^T q
+  template <typename T>
+  void delta(const T* rh, const T* rd, int h, T out[3]) const {
+    const auto hs = static_cast<std::size_t>(h), ds = static_cast<std::size_t>(datum_);
+    T eh[4], ed[4];
+    rot::quatExp(rh, eh);
+    const T mrd[3] = {-rd[0], -rd[1], -rd[2]};
+    rot::quatExp(mrd, ed);
+    const T ac[4] = {T(A_[hs].w()), T(-A_[hs].x()), T(-A_[hs].y()), T(-A_[hs].z())};
+    const T mh[4] = {T(M_[hs].w()), T(M_[hs].x()), T(M_[hs].y()), T(M_[hs].z())};
+    const T mdc[4] = {T(M_[ds].w()), T(-M_[ds].x()), T(-M_[ds].y()), T(-M_[ds].z())};
+    const T ad[4] = {T(A_[ds].w()), T(A_[ds].x()), T(A_[ds].y()), T(A_[ds].z())};
+    T q[4];
+    rot::quatProduct(ac, eh, q);
+    rot::quatProduct(q, mh, q);
+    rot::quatProduct(q, mdc, q);
+    rot::quatProduct(q, ed, q);
+    rot::quatProduct(q, ad, q);
+    rot::quatLog(q, out);
+    out[0] = -out[0];
+    out[1] = -out[1];
+    out[2] = -out[2];
+  }
 
   template <typename T>
-  bool operator()(const T* ri, const T* rj, T* res) const {
-    T ei[4], ej[4];
-    rot::quatExp(ri, ei);
-    rot::quatExp(rj, ej);
-    const T bc[4] = {T(qb_.w()), T(-qb_.x()), T(-qb_.y()), T(-qb_.z())};
-    const T mi[4] = {T(qi_.w()), T(qi_.x()), T(qi_.y()), T(qi_.z())};
-    const T mjc[4] = {T(qj_.w()), T(-qj_.x()), T(-qj_.y()), T(-qj_.z())};
-    T ejc[4];
-    rot::quatConjugate(ej, ejc);
-    T a[4];
-    rot::quatProduct(bc, ei, a);
-    rot::quatProduct(a, mi, a);
-    rot::quatProduct(a, mjc, a);
-    rot::quatProduct(a, ejc, a);
-    T e[3];
-    rot::quatLog(a, e);
-    for (int i = 0; i < 3; ++i) res[i] = T(L_(i, 0)) * e[0] + T(L_(i, 1)) * e[1] + T(L_(i, 2)) * e[2];
+  bool operator()(const T* r0, const T* r1, const T* r2, const T* r3, T* res) const {
+    const T* r[4] = {r0, r1, r2, r3};
+    static_assert(kMaxHeads == 4, "RelativeCost takes kMaxHeads rotation blocks");
+    T v[kRes];
+    for (int i = 0; i < kRes; ++i) v[i] = T(0.0);
+    for (std::size_t k = 0; k < heads_.size(); ++k) {
+      T dh[3];
+      delta(r[heads_[k]], r[datum_], heads_[k], dh);
+      for (int i = 0; i < 3; ++i)
+        v[3 * k + static_cast<std::size_t>(i)] = dh[i] - T(dhat_[static_cast<Eigen::Index>(3 * k) + i]);
+    }
+    const int nr = static_cast<int>(L_.rows());
+    for (int i = 0; i < kRes; ++i) {
+      res[i] = T(0.0);
+      if (i >= nr) continue;
+      for (int j = 0; j < nr; ++j) res[i] += T(L_(i, j)) * v[j];
+    }
     return true;
   }
 
-  static ceres::CostFunction* create(const Quat& qb, const Quat& qi, const Quat& qj, const Mat3& L) {
-    return new ceres::AutoDiffCostFunction<PairCost, 3, 3, 3>(new PairCost(qb, qi, qj, L));
+  static ceres::CostFunction* create(const std::array<Quat, kMaxHeads>& M, const std::array<Quat, kMaxHeads>& A,
+                                     const std::vector<int>& heads, int datum, const Eigen::VectorXd& dhat,
+                                     const Eigen::MatrixXd& L) {
+    return new ceres::AutoDiffCostFunction<RelativeCost, kRes, 3, 3, 3, 3>(new RelativeCost(M, A, heads, datum, dhat, L));
   }
 
  private:
-  const Quat qb_, qi_, qj_;
-  const Mat3 L_;
+  const std::array<Quat, kMaxHeads> M_, A_;
+  const std::vector<int> heads_;
+  const int datum_;
+  const Eigen::VectorXd dhat_;
+  const Eigen::MatrixXd L_;
 };
 
 // ---- helpers --------------------------------------------------------------------------------------
-
-Mat3 sqrtInformation(const Mat3& cov) {
-  Mat3 W;
-  if (!core::invertSpd3(cov, W)) return Mat3::Zero();
-  Eigen::LLT<Mat3> llt(W);
-  if (llt.info() != Eigen::Success) return Mat3::Zero();
-  return llt.matrixU();  // U^T U = W
-}
 
 Mat3 rotM(const Quat& q) { return q.normalized().toRotationMatrix(); }
 
@@ -217,71 +242,83 @@ struct Model {
   bool hard = true;
   int n = 0;
   std::array<Mat3, kMaxHeads> M{};       // nominal C_Sh_B
-  std::array<Vec3, kMaxHeads> psi{};     // hard: relative alignment (psi_0 = 0)
-  Eigen::MatrixXd P_psi;                 // hard: covariance of psi_1..psi_{n-1} (rad^2)
+  std::array<Quat, kMaxHeads> qM{};
+  // relative alignment (RelativeNormal): anchors, the estimate delta_h (B, delta_datum = 0), its
+  // covariance over `rel_heads` (the linked heads other than the datum), the reduced sqrt information
+  std::array<Quat, kMaxHeads> qA{};
+  std::array<Vec3, kMaxHeads> delta{};
+  int datum = 0;
+  std::vector<int> rel_heads;
+  Eigen::VectorXd dhat;
+  Eigen::MatrixXd P_delta, L_delta;
   std::array<std::array<double, 3>, kMaxHeads> rot{};  // hard: rot[0] = phi; prior: r_h
   std::array<double, 3> bias{}, scale{}, nonorth{};
   double tau = 0;
   Whitened data;
 };
 
-// Fits psi (hard mode) to the pair means. false with *msg when some head is not linked to slot 0.
+// The relative alignment of the heads from the span's normal equations. false with *msg when the
+// hard mode needs a head that is not linked to the others.
 bool fitRelative(const CalibrationSpan& span, Model& m, std::string* msg) {
-  m.psi.fill(Vec3::Zero());
-  m.P_psi = Eigen::MatrixXd::Zero(3 * (m.n - 1 > 0 ? m.n - 1 : 0), 3 * (m.n - 1 > 0 ? m.n - 1 : 0));
-  if (m.n == 1) return true;
-  // linked to slot 0 through pairs?
+  const RelativeNormal& rn = span.relative_normal;
+  m.delta.fill(Vec3::Zero());
+  m.rel_heads.clear();
+  for (int h = 0; h < m.n; ++h)
+    m.qA[static_cast<std::size_t>(h)] = rn.anchored[static_cast<std::size_t>(h)] ? rn.q_S_B_anchor[static_cast<std::size_t>(h)]
+                                                                                  : m.qM[static_cast<std::size_t>(h)];
+  m.datum = 0;
+  while (m.datum < m.n && !rn.anchored[static_cast<std::size_t>(m.datum)]) ++m.datum;
+  if (m.datum >= m.n) m.datum = 0;
+  // heads linked to the datum through epochs with both
   std::vector<bool> linked(static_cast<std::size_t>(m.n), false);
-  linked[0] = true;
+  linked[static_cast<std::size_t>(m.datum)] = true;
   for (int pass = 0; pass < m.n; ++pass)
-    for (const RelativeMean& r : span.relative)
-      if (linked[static_cast<std::size_t>(r.slot_i)] || linked[static_cast<std::size_t>(r.slot_j)])
-        linked[static_cast<std::size_t>(r.slot_i)] = linked[static_cast<std::size_t>(r.slot_j)] = true;
-  for (int h = 1; h < m.n; ++h)
-    if (!linked[static_cast<std::size_t>(h)]) {
+    for (int a = 0; a < m.n; ++a)
+      for (int b = 0; b < m.n; ++b)
+        if (linked[static_cast<std::size_t>(a)] && rn.together[static_cast<std::size_t>(a)][static_cast<std::size_t>(b)])
+          linked[static_cast<std::size_t>(b)] = true;
+  for (int h = 0; h < m.n; ++h) {
+    if (h == m.datum) continue;
+    if (linked[static_cast<std::size_t>(h)]) {
+      m.rel_heads.push_back(h);
+    } else if (m.hard) {
       if (msg)
         *msg = "head " + std::to_string(span.head_ids[static_cast<std::size_t>(h)]) +
-               " has no pair mean linking it to the other heads (never observed together): the hard relative "
-               "constraint needs one; use the prior mode";
+               " was never observed together with the other heads: the hard relative constraint needs every head "
+               "linked to the others (use the prior mode)";
       return false;
     }
-  std::array<std::array<double, 3>, kMaxHeads> p{};
-  ceres::Problem::Options po;
-  ceres::Problem prob(po);
-  for (int h = 0; h < m.n; ++h) prob.AddParameterBlock(p[static_cast<std::size_t>(h)].data(), 3);
-  prob.SetParameterBlockConstant(p[0].data());
-  for (const RelativeMean& r : span.relative) {
-    const Mat3 L = sqrtInformation(r.cov_Sj);
-    prob.AddResidualBlock(PairCost::create(r.q_Si_Sj, span.q_S_B_nominal[static_cast<std::size_t>(r.slot_i)],
-                                           span.q_S_B_nominal[static_cast<std::size_t>(r.slot_j)], L),
-                          nullptr, p[static_cast<std::size_t>(r.slot_i)].data(), p[static_cast<std::size_t>(r.slot_j)].data());
   }
-  ceres::Solver::Options so;
-  so.linear_solver_type = ceres::DENSE_QR;
-  so.max_num_iterations = 50;
-  so.function_tolerance = 1e-14;
-  so.parameter_tolerance = 1e-14;
-  so.gradient_tolerance = 1e-16;
-  ceres::Solver::Summary sum;
-  ceres::Solve(so, &prob, &sum);
-  if (!sum.IsSolutionUsable()) {
-    if (msg) *msg = "the relative alignment of the heads from the pair means failed: " + sum.BriefReport();
+  const int nr = 3 * static_cast<int>(m.rel_heads.size());
+  Eigen::MatrixXd I(nr, nr);
+  Eigen::VectorXd b(nr);
+  for (std::size_t a = 0; a < m.rel_heads.size(); ++a) {
+    b.segment<3>(static_cast<Eigen::Index>(3 * a)) = rn.info_x.segment<3>(3 * m.rel_heads[a]);
+    for (std::size_t c = 0; c < m.rel_heads.size(); ++c)
+      I.block<3, 3>(static_cast<Eigen::Index>(3 * a), static_cast<Eigen::Index>(3 * c)) =
+          rn.info.block<3, 3>(3 * m.rel_heads[a], 3 * m.rel_heads[c]);
+  }
+  m.dhat = Eigen::VectorXd::Zero(nr);
+  m.P_delta = Eigen::MatrixXd::Zero(nr, nr);
+  m.L_delta = Eigen::MatrixXd::Zero(nr, nr);
+  if (nr == 0) return true;
+  Eigen::LLT<Eigen::MatrixXd> llt(I);
+  if (llt.info() != Eigen::Success) {
+    if (msg) *msg = "the relative alignment of the heads is singular (heads never observed together long enough)";
     return false;
   }
-  ceres::Problem::EvaluateOptions eo;
-  for (int h = 1; h < m.n; ++h) eo.parameter_blocks.push_back(p[static_cast<std::size_t>(h)].data());
-  ceres::CRSMatrix J;
-  prob.Evaluate(eo, nullptr, nullptr, nullptr, &J);
-  Eigen::MatrixXd Jd = Eigen::MatrixXd::Zero(J.num_rows, J.num_cols);
-  for (int r = 0; r < J.num_rows; ++r)
-    for (int k = J.rows[static_cast<std::size_t>(r)]; k < J.rows[static_cast<std::size_t>(r) + 1]; ++k)
-      Jd(r, J.cols[static_cast<std::size_t>(k)]) = J.values[static_cast<std::size_t>(k)];
-  const Eigen::MatrixXd I = Jd.transpose() * Jd;
-  m.P_psi = I.ldlt().solve(Eigen::MatrixXd::Identity(I.rows(), I.cols()));
-  for (int h = 1; h < m.n; ++h)
-    m.psi[static_cast<std::size_t>(h)] = Vec3(p[static_cast<std::size_t>(h)][0], p[static_cast<std::size_t>(h)][1],
-                                              p[static_cast<std::size_t>(h)][2]);
+  m.dhat = llt.solve(b);
+  m.P_delta = llt.solve(Eigen::MatrixXd::Identity(nr, nr));
+  m.L_delta = llt.matrixU();
+  for (std::size_t a = 0; a < m.rel_heads.size(); ++a)
+    m.delta[static_cast<std::size_t>(m.rel_heads[a])] = m.dhat.segment<3>(static_cast<Eigen::Index>(3 * a));
   return true;
+}
+
+// Relative mounting of head h in hard mode: G_h = A_h Exp(-delta_h) (C_Sh_B up to the common rotation).
+Mat3 relativeMounting(const Model& m, int h) {
+  const auto hs = static_cast<std::size_t>(h);
+  return m.qA[hs].toRotationMatrix() * core::so3Exp(-m.delta[hs]);
 }
 
 // Head angles r_h (rad, S_h) of the model's current parameters.
@@ -289,8 +326,8 @@ Vec3 headAngle(const Model& m, int h) {
   const auto hs = static_cast<std::size_t>(h);
   if (!m.hard) return Vec3(m.rot[hs][0], m.rot[hs][1], m.rot[hs][2]);
   const Vec3 phi(m.rot[0][0], m.rot[0][1], m.rot[0][2]);
-  // C_Sh_B = Exp(psi_h) M_h Exp(-phi) = Exp(r_h) M_h  ->  Exp(r_h) = Exp(psi_h) Exp(-M_h phi)
-  return core::quatLog(core::quatExp(m.psi[hs]) * core::quatExp(-(m.M[hs] * phi)));
+  // C_Sh_B = G_h Exp(-phi) = Exp(r_h) M_h
+  return core::so3Log(relativeMounting(m, h) * core::so3Exp(-phi) * m.M[hs].transpose());
 }
 
 // The problem over the model's parameter blocks. Blocks not estimated are constant.
@@ -316,7 +353,7 @@ Built buildProblem(const CalibrationSpan& span, const SolveOptions& opt, Model& 
   P.AddParameterBlock(&m.tau, 1);
   for (int h = 0; h < m.n; ++h) {
     const auto hs = static_cast<std::size_t>(h);
-    const Mat3 G = m.hard ? Mat3(core::so3Exp(m.psi[hs]) * m.M[hs]) : m.M[hs];
+    const Mat3 G = m.hard ? relativeMounting(m, h) : m.M[hs];
     double* rot = m.hard ? m.rot[0].data() : m.rot[hs].data();
     for (const WhitenedRow& row : m.data.rows[hs]) {
       ceres::LossFunction* loss = robust && opt.huber_sigma > 0 ? new ceres::HuberLoss(opt.huber_sigma) : nullptr;
@@ -324,12 +361,15 @@ Built buildProblem(const CalibrationSpan& span, const SolveOptions& opt, Model& 
                                                   m.bias.data(), m.scale.data(), m.nonorth.data(), &m.tau));
     }
   }
-  if (!m.hard)
-    for (const RelativeMean& r : span.relative)
-      P.AddResidualBlock(PairCost::create(r.q_Si_Sj, span.q_S_B_nominal[static_cast<std::size_t>(r.slot_i)],
-                                          span.q_S_B_nominal[static_cast<std::size_t>(r.slot_j)], sqrtInformation(r.cov_Sj)),
-                         nullptr, m.rot[static_cast<std::size_t>(r.slot_i)].data(),
-                         m.rot[static_cast<std::size_t>(r.slot_j)].data());
+  if (!m.hard && !m.rel_heads.empty()) {
+    // unused rotation blocks (fewer than kMaxHeads heads) are constant dummies
+    for (int h = m.n; h < kMaxHeads; ++h) {
+      P.AddParameterBlock(m.rot[static_cast<std::size_t>(h)].data(), 3);
+      P.SetParameterBlockConstant(m.rot[static_cast<std::size_t>(h)].data());
+    }
+    P.AddResidualBlock(RelativeCost::create(m.qM, m.qA, m.rel_heads, m.datum, m.dhat, m.L_delta), nullptr,
+                       m.rot[0].data(), m.rot[1].data(), m.rot[2].data(), m.rot[3].data());
+  }
   for (int h = 0; h < nrot; ++h) {
     b.free_blocks.push_back(m.rot[static_cast<std::size_t>(h)].data());
     b.free_sizes.push_back(3);
@@ -393,9 +433,8 @@ HeadCovariance headCovariance(const Model& m, const Eigen::MatrixXd& I, const So
   // head angles as linear functions of the rotation parameters (and psi in hard mode)
   const int n3 = 3 * m.n;
   Eigen::MatrixXd T = Eigen::MatrixXd::Zero(n3, np);
-  Eigen::MatrixXd Tpsi = Eigen::MatrixXd::Zero(n3, m.P_psi.rows());
+  Eigen::MatrixXd Td = Eigen::MatrixXd::Zero(n3, m.P_delta.rows());
   if (m.hard) {
-    Model mm = m;
     const double h = 1e-7;
     for (int c = 0; c < 3; ++c) {
       Model a = m, b = m;
@@ -403,19 +442,20 @@ HeadCovariance headCovariance(const Model& m, const Eigen::MatrixXd& I, const So
       b.rot[0][static_cast<std::size_t>(c)] -= h;
       for (int k = 0; k < m.n; ++k) T.block<3, 1>(3 * k, c) = (headAngle(a, k) - headAngle(b, k)) / (2 * h);
     }
-    for (int k = 1; k < m.n; ++k)
+    for (std::size_t j = 0; j < m.rel_heads.size(); ++j) {
+      const int k = m.rel_heads[j];
       for (int c = 0; c < 3; ++c) {
         Model a = m, b = m;
-        a.psi[static_cast<std::size_t>(k)][c] += h;
-        b.psi[static_cast<std::size_t>(k)][c] -= h;
-        Tpsi.block<3, 1>(3 * k, 3 * (k - 1) + c) = (headAngle(a, k) - headAngle(b, k)) / (2 * h);
+        a.delta[static_cast<std::size_t>(k)][c] += h;
+        b.delta[static_cast<std::size_t>(k)][c] -= h;
+        Td.block<3, 1>(3 * k, static_cast<Eigen::Index>(3 * j) + c) = (headAngle(a, k) - headAngle(b, k)) / (2 * h);
       }
-    (void)mm;
+    }
   } else {
     T.leftCols(nr) = Eigen::MatrixXd::Identity(n3, nr);
   }
   out.P = T * Pp * T.transpose();
-  if (m.hard && m.P_psi.size() > 0) out.P += Tpsi * m.P_psi * Tpsi.transpose();
+  if (m.hard && m.P_delta.size() > 0) out.P += Td * m.P_delta * Td.transpose();
   out.determined.assign(static_cast<std::size_t>(n3), true);
   const double thr = opt.unobservable_sigma_arcsec * kRadPerArcsec;
   for (int i = 0; i < n3; ++i) {
@@ -466,7 +506,10 @@ Whitened prepare(const CalibrationSpan& span, const SolveOptions& opt) {
 void initModel(const CalibrationSpan& span, const SolveOptions& opt, Model& m) {
   m.hard = opt.relative == RelativeMode::kHardConstraint;
   m.n = span.n_heads;
-  for (int h = 0; h < m.n; ++h) m.M[static_cast<std::size_t>(h)] = rotM(span.q_S_B_nominal[static_cast<std::size_t>(h)]);
+  for (int h = 0; h < m.n; ++h) {
+    m.qM[static_cast<std::size_t>(h)] = span.q_S_B_nominal[static_cast<std::size_t>(h)].normalized();
+    m.M[static_cast<std::size_t>(h)] = rotM(span.q_S_B_nominal[static_cast<std::size_t>(h)]);
+  }
 }
 
 void setParameters(Model& m, const ModelParameters& p) {
@@ -477,8 +520,9 @@ void setParameters(Model& m, const ModelParameters& p) {
   }
   m.tau = p.time_offset_s;
   if (m.hard) {
-    // phi from head 0: Exp(r_0) = Exp(-M_0 phi)  ->  phi = -M_0^T r_0
-    const Vec3 phi = -m.M[0].transpose() * p.r_S[0];
+    // phi from the datum head: G_d Exp(-phi) = Exp(r_d) M_d
+    const auto d = static_cast<std::size_t>(m.datum);
+    const Vec3 phi = -core::so3Log(relativeMounting(m, m.datum).transpose() * core::so3Exp(p.r_S[d]) * m.M[d]);
     for (int i = 0; i < 3; ++i) m.rot[0][static_cast<std::size_t>(i)] = phi[i];
   } else {
     for (int h = 0; h < m.n; ++h)
@@ -497,7 +541,7 @@ HeadCovariance cramerRao(const CalibrationSpan& span, const SolveOptions& opt, c
   }
   Model m;
   initModel(span, opt, m);
-  if (m.hard && !fitRelative(span, m, message)) return {};
+  if (!fitRelative(span, m, message)) return {};
   setParameters(m, at);
   m.data = prepare(span, opt);
   Built b = buildProblem(span, opt, m, false);
@@ -529,10 +573,17 @@ SolveResult solve(const CalibrationSpan& span, const SolveOptions& opt) {
   Model m;
   initModel(span, opt, m);
   std::string msg;
-  if (m.hard && !fitRelative(span, m, &msg)) {
+  if (!fitRelative(span, m, &msg)) {
     res.message = msg;
     return res;
   }
+  // closure of the pair means (three or more heads): Log(B_ik^T B_ij B_jk), largest over triples
+  for (const RelativeMean& a : span.relative)
+    for (const RelativeMean& b : span.relative)
+      for (const RelativeMean& c : span.relative)
+        if (a.slot_i == c.slot_i && a.slot_j == b.slot_i && b.slot_j == c.slot_j)
+          res.closure_arcsec = std::max(res.closure_arcsec,
+                                        core::quatLog(c.q_Si_Sj.conjugate() * a.q_Si_Sj * b.q_Si_Sj).norm() * kArcsecPerRad);
   m.data = prepare(span, opt);
   Built b = buildProblem(span, opt, m, true);
   ceres::Solver::Options so;

@@ -57,8 +57,12 @@ bool SpanBuilder::configure(const core::PipelineConfig& cfg, const SpanOptions& 
   const double g2 = sumSquares(kh, 2), g0 = sumSquares(ka, 0);
   for (int s = 0; s < cfg.heads.n_heads; ++s) {
     const auto& h = cfg.heads.head[static_cast<std::size_t>(s)];
-    cov_head_unit_[static_cast<std::size_t>(s)] =
-        g2 * core::headCovariance(h.sigma_cross_rad, h.sigma_roll_rad, h.boresight_Si.normalized());
+    const Mat3 Sig = core::headCovariance(h.sigma_cross_rad, h.sigma_roll_rad, h.boresight_Si.normalized());
+    cov_head_unit_[static_cast<std::size_t>(s)] = g2 * Sig;
+    const Mat3 M = h.q_Si_B.normalized().toRotationMatrix();
+    Mat3 W;
+    if (!core::invertSpd3(M.transpose() * Sig * M, W)) return fail("span builder: head covariance not invertible");
+    W_B_[static_cast<std::size_t>(s)] = W;
   }
   cov_acc_ = g0 * opt.acc_white_noise_radps2.cwiseAbs2().asDiagonal();
 
@@ -105,6 +109,7 @@ void SpanBuilder::pushHeads(const core::HeadEpoch& e) {
   span_.t_last = v.t;
   ++span_.head_epochs;
   means_.step(v);
+  relativeStep(v);
   for (int s = 0; s < cfg_.heads.n_heads; ++s) {
     if (!v.has(s)) continue;
     core::AttitudeRates& r = rates_[static_cast<std::size_t>(s)];
@@ -112,6 +117,69 @@ void SpanBuilder::pushHeads(const core::HeadEpoch& e) {
     for (int i = 0; i < r.numOutputs(); ++i) addHeadOutput(s, r.output(i));
   }
   resolve();
+}
+
+void SpanBuilder::relativeStep(const core::ValidHeads& v) {
+  RelativeNormal& rn = span_.relative_normal;
+  const int n = cfg_.heads.n_heads;
+  // reference: the first anchored head present
+  int ref = -1;
+  for (int h = 0; h < n && ref < 0; ++h)
+    if (v.has(h) && rn.anchored[static_cast<std::size_t>(h)]) ref = h;
+  if (ref < 0) {  // nobody anchored is here: anchor the first present head at its nominal mounting
+    for (int h = 0; h < n && ref < 0; ++h)
+      if (v.has(h)) ref = h;
+    if (ref < 0) return;
+    rn.anchored[static_cast<std::size_t>(ref)] = true;
+    rn.q_S_B_anchor[static_cast<std::size_t>(ref)] = cfg_.heads.head[static_cast<std::size_t>(ref)].q_Si_B.normalized();
+  }
+  const auto rs = static_cast<std::size_t>(ref);
+  const Quat R_ref = v.q_I_Si[rs] * rn.q_S_B_anchor[rs];  // q_I_B implied by the reference head
+  int present[kMaxHeads];
+  int m = 0;
+  for (int h = 0; h < n; ++h) {
+    if (!v.has(h)) continue;
+    const auto hs = static_cast<std::size_t>(h);
+    if (!rn.anchored[hs]) {  // first seen with an anchored head: anchor so that R_h = R_ref now
+      rn.anchored[hs] = true;
+      rn.q_S_B_anchor[hs] = (v.q_I_Si[hs].conjugate() * R_ref).normalized();
+    }
+    present[m++] = h;
+  }
+  if (m < 2) return;
+  for (int a = 0; a < m; ++a)
+    for (int b = 0; b < m; ++b)
+      rn.together[static_cast<std::size_t>(present[a])][static_cast<std::size_t>(present[b])] = true;
+  // x_h, W_h; eliminate the epoch's common offset: P^T W P = W - W 1 (sum W)^-1 1^T W
+  std::array<Vec3, kMaxHeads> x{};
+  std::array<Mat3, kMaxHeads> W{};
+  Mat3 Ws = Mat3::Zero();
+  Vec3 Wx = Vec3::Zero();
+  for (int a = 0; a < m; ++a) {
+    const auto hs = static_cast<std::size_t>(present[a]);
+    const Quat R_h = v.q_I_Si[hs] * rn.q_S_B_anchor[hs];
+    x[hs] = core::quatLog(R_ref.conjugate() * R_h);
+    const double sc = v.sigma_scale[hs] > 0 ? v.sigma_scale[hs] : 1.0;
+    W[hs] = W_B_[hs] / (sc * sc);
+    Ws += W[hs];
+    Wx += W[hs] * x[hs];
+  }
+  Mat3 Wsi;
+  if (!core::invertSpd3(Ws, Wsi)) return;
+  const Vec3 theta = Wsi * Wx;
+  for (int a = 0; a < m; ++a) {
+    const int ha = present[a];
+    const auto as = static_cast<std::size_t>(ha);
+    rn.info_x.segment<3>(3 * ha) += W[as] * (x[as] - theta);
+    for (int b = 0; b < m; ++b) {
+      const int hb = present[b];
+      const auto bs = static_cast<std::size_t>(hb);
+      Mat3 blk = -W[as] * Wsi * W[bs];
+      if (a == b) blk += W[as];
+      rn.info.block<3, 3>(3 * ha, 3 * hb) += blk;
+    }
+  }
+  ++rn.epochs;
 }
 
 void SpanBuilder::addHeadOutput(int slot, const core::RateOutput& o) {

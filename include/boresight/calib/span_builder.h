@@ -56,6 +56,7 @@ class SpanBuilder {
 
  private:
   void addHeadOutput(int slot, const core::RateOutput& o);
+  void relativeStep(const core::ValidHeads& v);
   void resolve();
   void emit(Observation&& ob);
 
@@ -67,6 +68,7 @@ class SpanBuilder {
   core::AccAngularFilter acc_{};
   core::RelativeAttitudeMeans means_{};
   std::array<Mat3, kMaxHeads> cov_head_unit_{};  ///< CRN acceleration noise per head at sigma_scale 1
+  std::array<Mat3, kMaxHeads> W_B_{};            ///< head attitude information in B at sigma_scale 1
   Mat3 cov_acc_ = Mat3::Zero();
   std::deque<Observation> pending_;               ///< head outputs waiting for the accelerometer
   bool have_head_ = false;
