@@ -354,6 +354,11 @@ ThermalFitResult ThermalCollector::fit() {
     h.chi2_per_dof = dof > 0 ? chi2 / dof : 0.0;
     const double scale = cfg_.scale_sigmas_by_chi2 ? std::max(1.0, h.chi2_per_dof) : 1.0;
     const MatX cov = scale * Ninv;
+    h.n_params = 3 * P;
+    h.covariance_arcsec2.resize(static_cast<std::size_t>(9 * P * P));
+    for (int i = 0; i < 3 * P; ++i)
+      for (int j = 0; j < 3 * P; ++j)
+        h.covariance_arcsec2[static_cast<std::size_t>(i * 3 * P + j)] = cov(i, j) * kArcsecPerRad * kArcsecPerRad;
     const double nd = static_cast<double>(S.n);
     Mat3 excess = Mat3::Zero();
     for (int a = 0; a < 3; ++a) {

@@ -98,6 +98,11 @@ struct ThermalHeadFit {
   std::array<ThermalAxisFit, 3> axis{};  ///< x, y, z of S1 (the datum head's frame)
   bool beta_determined = false;  ///< the beta modulation was fitted (the span let beta move)
   double chi2_per_dof = 0;       ///< weighted residual chi2 / degrees of freedom (1 when the noise model holds)
+  /// Full covariance of the coefficients (the sigmas above are the roots of its diagonal), arcsec^2,
+  /// row-major, n_params x n_params, parameters ordered axis by axis (x, y, z), each axis as
+  /// [constant, cos h1, sin h1, cos h2, sin h2, ..., then the beta terms in the same order when fitted].
+  int n_params = 0;
+  std::vector<double> covariance_arcsec2;
   /// Covariance of the predicted deformation (fit uncertainty averaged over u plus the variance left
   /// beyond the head noise), rad^2, in S1 (goes to the core with the coefficients).
   Mat3 prediction_cov_rad2 = Mat3::Zero();
