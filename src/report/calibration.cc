@@ -176,6 +176,69 @@ json calibrationJson(const calib::SolveResult& r, const CalibrationContext& c) {
   return j;
 }
 
+namespace {
+
+json termsJson(const std::vector<calib::ThermalHarmonicTerm>& terms) {
+  json a = json::array();
+  for (const auto& t : terms)
+    a.push_back({{"harmonic", t.harmonic},
+                 {"cos_arcsec", num(t.cos_arcsec)},
+                 {"sin_arcsec", num(t.sin_arcsec)},
+                 {"sigma_cos_arcsec", num(t.sigma_cos_arcsec)},
+                 {"sigma_sin_arcsec", num(t.sigma_sin_arcsec)}});
+  return a;
+}
+
+}  // namespace
+
+json thermalJson(const calib::ThermalFitResult& t) {
+  json j;
+  j["status"] = t.ok ? "fitted" : "not determined: " + t.error;
+  j["datum"] = t.datum_note;
+  j["u_source"] = t.u_from_earth_fixed ? "GNV1B (Earth-fixed) rotated by the Earth rotation angle (about 0.1 deg)"
+                                       : "GNI1B (inertial)";
+  j["harmonics"] = t.harmonics;
+  j["span_s"] = num(t.span_s);
+  j["revolutions"] = num(t.revolutions);
+  j["beta"] = {{"modulation", t.beta_determined ? "fitted" : "not determined"},
+               {"note", t.beta_note},
+               {"min_deg", num(t.beta_min_deg)},
+               {"max_deg", num(t.beta_max_deg)}};
+  j["counts"] = {{"head_epochs", t.head_epochs},
+                 {"head_epochs_rejected", t.head_epochs_rejected},
+                 {"epochs_without_orbit", t.epochs_without_orbit},
+                 {"orbit_records", t.orbit_records},
+                 {"orbit_records_rejected", t.orbit_records_rejected}};
+  json heads = json::array();
+  for (const auto& h : t.heads) {
+    json jh;
+    jh["id"] = h.id;
+    jh["datum_head"] = h.datum_id;
+    jh["determined"] = h.determined;
+    if (!h.determined) jh["reason"] = h.reason;
+    jh["epochs"] = h.epochs;
+    jh["chi2_per_dof"] = num(h.chi2_per_dof);
+    if (h.determined) {
+      json axes;
+      const char* names[3] = {"x", "y", "z"};
+      for (std::size_t a = 0; a < 3; ++a) {
+        const calib::ThermalAxisFit& f = h.axis[a];
+        axes[names[a]] = {{"constant_arcsec", num(f.constant_arcsec)},
+                          {"sigma_constant_arcsec", num(f.sigma_constant_arcsec)},
+                          {"harmonics", termsJson(f.terms)},
+                          {"beta_modulation", h.beta_determined ? termsJson(f.beta_terms) : json("not determined")},
+                          {"rms_before_arcsec", num(f.rms_before_arcsec)},
+                          {"rms_after_arcsec", num(f.rms_after_arcsec)},
+                          {"noise_rms_arcsec", num(f.noise_rms_arcsec)}};
+      }
+      jh["axes_of_datum_head_frame"] = axes;
+    }
+    heads.push_back(jh);
+  }
+  j["heads"] = heads;
+  return j;
+}
+
 std::string toYaml(const json& j) {
   std::ostringstream o;
   yamlNode(o, j, 0);
@@ -326,10 +389,28 @@ bool writeCalibrationReport(const std::string& dir, const calib::CalibrationSpan
   if (r.time_offset_s)
     md << "Time offset (accelerometer tags late by): " << fmt("%.4f", *r.time_offset_s) << " s +- "
        << (r.time_offset_sigma_s ? fmt("%.4f", *r.time_offset_sigma_s) : "-") << " s.\n\n";
-  md << "Thermal (orbit-periodic, relative to the datum head): ";
+  md << "## Thermal (orbit-periodic deformation relative to the datum head)\n\n";
   const json& th = result["thermal"];
-  if (th.contains("status")) md << th["status"].get<std::string>() << "\n\n";
-  else md << "see `thermal` in the JSON result.\n\n";
+  md << (th.contains("status") ? th["status"].get<std::string>() : std::string("-")) << "\n\n";
+  if (th.contains("heads")) {
+    md << th["datum"].get<std::string>() << " Argument of latitude from " << th["u_source"].get<std::string>()
+       << "; beta modulation " << th["beta"]["modulation"].get<std::string>() << " (" << th["beta"]["note"].get<std::string>()
+       << ").\n\n";
+    md << "| head | axis | harmonic | cos [\"] | sin [\"] | RMS before [\"] | RMS after [\"] |\n|---|---|---|---|---|---|---|\n";
+    for (const auto& h : th["heads"]) {
+      if (!h["determined"].get<bool>()) {
+        md << "| " << h["id"] << " | - | - | not determined: " << h["reason"].get<std::string>() << " | | | |\n";
+        continue;
+      }
+      for (const auto& [axn, f] : h["axes_of_datum_head_frame"].items())
+        for (const auto& term : f["harmonics"])
+          md << "| " << h["id"] << " | " << axn << " | " << term["harmonic"] << " | " << fmtJ("%.2f", term["cos_arcsec"])
+             << " +- " << fmtJ("%.2f", term["sigma_cos_arcsec"]) << " | " << fmtJ("%.2f", term["sin_arcsec"]) << " +- "
+             << fmtJ("%.2f", term["sigma_sin_arcsec"]) << " | " << fmtJ("%.2f", f["rms_before_arcsec"]) << " | "
+             << fmtJ("%.2f", f["rms_after_arcsec"]) << " |\n";
+    }
+    md << "\n";
+  }
   md << "## Plots\n\n"
         "![residuals](residuals.svg)\n\n"
         "Residuals per head axis under the estimate: alpha_S - Exp([r]x) C_S_B(nominal) C_B_A K^-1 "

@@ -4,6 +4,8 @@
 // observer, calib::solve() estimates, report:: writes.
 #include <boresight/calib/solver.h>
 #include <boresight/calib/span_builder.h>
+#include <boresight/calib/thermal_fit.h>
+#include <boresight/io/product_stream.h>
 #include <boresight/io/core_config.h>
 #include <boresight/report/calibration.h>
 #include <boresight/stream/engine.h>
@@ -71,11 +73,15 @@ const char* kUsage =
     "Exit status: 0 calibrated; 1 refused (span too short or too quiet: the reason and what would be\n"
     "needed) or bad input (the reason); 2 usage error.\n";
 
-/// Forwards the engine's inputs to the span builder (head epochs as the core's validator leaves them).
+/// Forwards the engine's inputs to the span builder and, when there is an orbit, the thermal collector
+/// (head epochs as the core's validator leaves them).
 class SpanFeed final : public stream::InputObserver {
  public:
-  explicit SpanFeed(calib::SpanBuilder& b) : b_(b) {}
-  void onHeads(const core::HeadEpoch& e, core::Status) override { b_.pushHeads(e); }
+  SpanFeed(calib::SpanBuilder& b, calib::ThermalCollector* thermal) : b_(b), thermal_(thermal) {}
+  void onHeads(const core::HeadEpoch& e, core::Status) override {
+    b_.pushHeads(e);
+    if (thermal_) thermal_->pushHeads(e);
+  }
   void onAcc(TimeUs t, const Vec3& a_A, core::Status st) override {
     if (core::accepted(st)) b_.pushAcc(t, a_A);
   }
@@ -83,7 +89,25 @@ class SpanFeed final : public stream::InputObserver {
 
  private:
   calib::SpanBuilder& b_;
+  calib::ThermalCollector* thermal_;
 };
+
+/// Reads the orbit files (GNI1B / GNV1B, small: 1 Hz) into the thermal collector before the replay
+/// (orbit first: no head epoch waits for its orbit). False with *error (file:line: reason).
+bool pushOrbitFiles(const std::vector<std::string>& files, const io::ReadOptions& opt, calib::ThermalCollector& c,
+                    std::string* error) {
+  for (const auto& f : files) {
+    io::ProductStream<io::GnvRecord> st;
+    if (!st.open(f, opt, error)) return false;
+    io::GnvRecord r;
+    while (st.next(r)) c.pushOrbit(r);
+    if (!st.ok()) {
+      *error = st.error();
+      return false;
+    }
+  }
+  return true;
+}
 
 int fail(const std::string& msg) {
   std::fprintf(stderr, "boresight calibrate: %s\n", msg.c_str());
@@ -148,12 +172,10 @@ int runCalibrate(int argc, char** argv) {
   if (!io::loadPlatformConfig(config, pc, &err)) return fail(err);
   stream::ReplayInputs in;
   if (!stream::classifyInputs(files, in, &err)) return fail(err);
-  for (const auto& [f, product] : in.ignored) {
-    const bool orbit = product == "GNV1B" || product == "GNI1B";
-    std::printf("%s: %s %s: ignored\n", f.c_str(), product.c_str(),
-                orbit ? "(orbit, for the thermal fit: not built into calibrate yet)"
-                      : "is not an input of calibrate (SCA1A, ACC1A, QSA1B, GNI1B/GNV1B, LCM log)");
-  }
+  for (const auto& [f, product] : in.ignored)
+    if (product != "GNV1B" && product != "GNI1B")
+      std::printf("%s: %s is not an input of calibrate (SCA1A, ACC1A, QSA1B, GNI1B/GNV1B, LCM log): ignored\n",
+                  f.c_str(), product.c_str());
   io::ReadOptions opt;
   if (strict) opt.on_error = io::OnError::Stop;
   if (!stream::prepareConfig(in, opt, pc, &err)) return fail(err);
@@ -170,7 +192,15 @@ int runCalibrate(int argc, char** argv) {
   spo.decimation_s = decimation;
   spo.max_observations = max_obs;
   if (!builder.configure(pc.pipeline, spo, &err)) return fail(err);
-  SpanFeed feed(builder);
+  // The thermal harmonic fit of the heads' relative deformation needs the argument of latitude: only
+  // with an orbit among the inputs.
+  calib::ThermalCollector thermal;
+  const bool with_thermal = !in.orbit.empty() && pc.pipeline.heads.n_heads >= 2;
+  if (with_thermal && (!thermal.configure(pc.pipeline.heads, calib::ThermalFitConfig{}, &err) ||
+                       !pushOrbitFiles(in.orbit, opt, thermal, &err)))
+    return fail(err);
+  for (const auto& f : in.orbit) std::printf("%s: orbit for the thermal harmonic fit\n", f.c_str());
+  SpanFeed feed(builder, with_thermal ? &thermal : nullptr);
   engine.addObserver(&feed);
   if (engine.run() != stream::Engine::Result::kDone) return fail(engine.error());
   printSourceCounters(engine);
@@ -229,15 +259,27 @@ int runCalibrate(int argc, char** argv) {
                 (weakest > 0 ? needText(weakest, "this span") : std::string("(none)")) + ".");
   }
 
+  std::string thermal_text;
   report::CalibrationContext ctx;
   ctx.config = config;
   ctx.inputs = in.sca;
   ctx.inputs.insert(ctx.inputs.end(), in.acc.begin(), in.acc.end());
   ctx.inputs.insert(ctx.inputs.end(), in.qsa.begin(), in.qsa.end());
   ctx.inputs.insert(ctx.inputs.end(), in.lcm.begin(), in.lcm.end());
-  ctx.ignored = in.ignored;
   ctx.options = so;
-  ctx.thermal = {{"status", "pending: the thermal harmonic fit is not built into calibrate yet"}};
+  if (with_thermal) {
+    const calib::ThermalFitResult tf = thermal.fit();
+    ctx.thermal = report::thermalJson(tf);
+    thermal_text = calib::formatThermalFit(tf);
+    for (const auto& f : in.orbit) ctx.inputs.push_back(f);
+  } else {
+    ctx.thermal = {{"status", in.orbit.empty() ? "not computed: no GNI1B or GNV1B among the inputs (the harmonic "
+                                                 "model needs the argument of latitude)"
+                                               : "not computed: one head"}};
+  }
+  ctx.ignored.clear();
+  for (const auto& ig : in.ignored)
+    if (ig.second != "GNV1B" && ig.second != "GNI1B") ctx.ignored.push_back(ig);
   const report::Json j = report::calibrationJson(r, ctx);
   if (!writeText(json_path, j.dump(2) + "\n", &err)) return fail(err);
   if (!yaml_path.empty() && !writeText(yaml_path, report::toYaml(j), &err)) return fail(err);
@@ -258,6 +300,8 @@ int runCalibrate(int argc, char** argv) {
   if (r.time_offset_s)
     std::printf("  time offset %.4f s +- %.4f s (accelerometer tags late)\n", *r.time_offset_s,
                 r.time_offset_sigma_s.value_or(NAN));
+  if (!thermal_text.empty()) std::printf("\nthermal harmonic model:\n%s", thermal_text.c_str());
+  else std::printf("thermal: %s\n", ctx.thermal["status"].get<std::string>().c_str());
   std::printf("-> %s%s%s%s%s\n", json_path.c_str(), yaml_path.empty() ? "" : ", ", yaml_path.c_str(),
               report_dir.empty() ? "" : ", ", report_dir.empty() ? "" : (report_dir + "/report.md").c_str());
   return 0;

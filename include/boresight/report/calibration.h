@@ -14,6 +14,7 @@
 
 #include <boresight/calib/problem.h>
 #include <boresight/calib/solver.h>
+#include <boresight/calib/thermal_fit.h>
 #include <boresight/core/pipeline.h>
 
 #include <nlohmann/json.hpp>
@@ -37,6 +38,13 @@ struct CalibrationContext {
 };
 
 Json calibrationJson(const calib::SolveResult& r, const CalibrationContext& c);
+
+/// The `thermal` section from the harmonic fit (calib/thermal_fit.h): the datum head, where u came from,
+/// the harmonics, beta (its modulation "not determined" unless the span let beta move), and per non-datum
+/// head: datum_head, determined (reason when not), epochs, chi2_per_dof, and per axis x, y, z of the
+/// datum head's frame the constant and per harmonic the cosine and sine amplitudes with sigmas (arcsec),
+/// the beta modulation terms or "not determined", RMS before and after the model (arcsec).
+Json thermalJson(const calib::ThermalFitResult& t);
 
 /// The JSON tree as block YAML (same keys, same values; number arrays in flow style).
 std::string toYaml(const Json& j);

@@ -1,0 +1,54 @@
+#!/usr/bin/env bash
+# End-to-end time and peak memory of `boresight calibrate` (method A) on simulated Level-1 spans:
+# 3 heads at 2 Hz, ACC1A at 10 Hz, QSA1B; the calibration scenario with its manoeuvres in the first
+# 15 minutes (config/sim_gracefo_calibration_short.yaml), 1 h, 6 h, 1 day and 3 days by default.
+#
+#   tools/bench_calibrate.sh [--runs N] [--spans "3600 21600 86400 259200"] [-- EXTRA CALIBRATE OPTIONS]
+#
+# Each span is simulated once (seed 7, no LCM log) into $BORESIGHT_BENCH_DIR (default
+# ${TMPDIR:-/tmp}/boresight-bench; 3 days take about a minute and 1 GB) and reused; then calibrate runs
+# N times (default 5) under GNU time (/usr/bin/time): wall time and peak RSS per run, then the range.
+set -euo pipefail
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+runs=5
+spans="3600 21600 86400 259200"
+extra=()
+while [[ $# -gt 0 ]]; do
+  case "$1" in
+    --runs) runs="$2"; shift 2 ;;
+    --spans) spans="$2"; shift 2 ;;
+    --) shift; extra=("$@"); break ;;
+    -h|--help) sed -n '2,10p' "$0"; exit 0 ;;
+    *) echo "bench_calibrate.sh: unknown argument $1" >&2; exit 2 ;;
+  esac
+done
+cli="$root/build/tools/boresight"
+[[ -x "$cli" ]] || { echo "bench_calibrate.sh: build first (tools/build.sh)" >&2; exit 1; }
+"$cli" calibrate --help >/dev/null 2>&1 || { echo "bench_calibrate.sh: this build has no calibrate command" >&2; exit 1; }
+[[ -x /usr/bin/time ]] || { echo "bench_calibrate.sh: needs GNU time (/usr/bin/time)" >&2; exit 1; }
+dir="${BORESIGHT_BENCH_DIR:-${TMPDIR:-/tmp}/boresight-bench}"
+mkdir -p "$dir"
+for s in $spans; do
+  out="$dir/calibrate_$s"
+  if [[ ! -f "$out/truth.yaml" ]]; then
+    "$cli" simulate --scenario "$root/config/sim_gracefo_calibration_short.yaml" --seed 7 --duration "$s" \
+      --out "$out" --quiet --no-lcm
+  fi
+done
+for s in $spans; do
+  d="$dir/calibrate_$s"
+  times=()
+  for ((i = 1; i <= runs; i++)); do
+    /usr/bin/time -f "%e %M" -o "$dir/time.txt" "$cli" calibrate --config "$root/config/gracefo.yaml" \
+      "$d"/SCA1A_*.txt "$d"/ACC1A_*.txt "$d"/QSA1B_*.txt --json "$dir/calibrate.json" ${extra[@]+"${extra[@]}"} \
+      >"$dir/calibrate.log" 2>&1 || { echo "calibrate ${s} s failed:"; tail -5 "$dir/calibrate.log"; exit 1; }
+    read -r secs kb <"$dir/time.txt"
+    awk -v s="$s" -v i="$i" -v t="$secs" -v kb="$kb" \
+      'BEGIN { printf "calibrate %6d s (%5.1f h) run %d: %.2f s, peak RSS %.1f MB\n", s, s / 3600, i, t, kb / 1024 }'
+    times+=("$secs $kb")
+  done
+  printf '%s\n' "${times[@]}" | awk -v s="$s" -v h="$(grep -o '"epochs": [0-9]*' "$dir/calibrate.json")" '
+    NR == 1 { tmin = tmax = $1; mmin = mmax = $2 }
+    { if ($1 < tmin) tmin = $1; if ($1 > tmax) tmax = $1; if ($2 < mmin) mmin = $2; if ($2 > mmax) mmax = $2 }
+    END { printf "calibrate %6d s: %.2f-%.2f s, peak RSS %.1f-%.1f MB (%s)\n", s, tmin, tmax, mmin / 1024, mmax / 1024, h }'
+done
