@@ -7,7 +7,9 @@
 #
 # Each span is simulated once (seed 7, no LCM log) into $BORESIGHT_BENCH_DIR (default
 # ${TMPDIR:-/tmp}/boresight-bench; 3 days take about a minute and 1 GB) and reused; then calibrate runs
-# N times (default 5) under GNU time (/usr/bin/time): wall time and peak RSS per run, then the range.
+# N times (default 5) under GNU time (/usr/bin/time): wall time, CPU time (user + system, all threads) and
+# peak RSS per run, then the ranges, and calibrate's own stage line (replay and span / solve / output,
+# wall time and peak RSS after each) of the last run.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 runs=5
@@ -39,16 +41,20 @@ for s in $spans; do
   d="$dir/calibrate_$s"
   times=()
   for ((i = 1; i <= runs; i++)); do
-    /usr/bin/time -f "%e %M" -o "$dir/time.txt" "$cli" calibrate --config "$root/config/gracefo.yaml" \
+    /usr/bin/time -f "%e %M %U %S" -o "$dir/time.txt" "$cli" calibrate --config "$root/config/gracefo.yaml" \
       "$d"/SCA1A_*.txt "$d"/ACC1A_*.txt "$d"/QSA1B_*.txt --json "$dir/calibrate.json" ${extra[@]+"${extra[@]}"} \
       >"$dir/calibrate.log" 2>&1 || { echo "calibrate ${s} s failed:"; tail -5 "$dir/calibrate.log"; exit 1; }
-    read -r secs kb <"$dir/time.txt"
-    awk -v s="$s" -v i="$i" -v t="$secs" -v kb="$kb" \
-      'BEGIN { printf "calibrate %6d s (%5.1f h) run %d: %.2f s, peak RSS %.1f MB\n", s, s / 3600, i, t, kb / 1024 }'
-    times+=("$secs $kb")
+    read -r secs kb usr sys <"$dir/time.txt"
+    cpu=$(awk -v u="$usr" -v s="$sys" 'BEGIN { print u + s }')
+    awk -v s="$s" -v i="$i" -v t="$secs" -v kb="$kb" -v c="$cpu" \
+      'BEGIN { printf "calibrate %6d s (%5.1f h) run %d: %.2f s wall, %.2f s CPU, peak RSS %.1f MB\n", s, s / 3600, i, t, c, kb / 1024 }'
+    times+=("$secs $kb $cpu")
   done
   printf '%s\n' "${times[@]}" | awk -v s="$s" -v h="$(grep -o '"epochs": [0-9]*' "$dir/calibrate.json")" '
-    NR == 1 { tmin = tmax = $1; mmin = mmax = $2 }
-    { if ($1 < tmin) tmin = $1; if ($1 > tmax) tmax = $1; if ($2 < mmin) mmin = $2; if ($2 > mmax) mmax = $2 }
-    END { printf "calibrate %6d s: %.2f-%.2f s, peak RSS %.1f-%.1f MB (%s)\n", s, tmin, tmax, mmin / 1024, mmax / 1024, h }'
+    NR == 1 { tmin = tmax = $1; mmin = mmax = $2; cmin = cmax = $3 }
+    { if ($1 < tmin) tmin = $1; if ($1 > tmax) tmax = $1; if ($2 < mmin) mmin = $2; if ($2 > mmax) mmax = $2
+      if ($3 < cmin) cmin = $3; if ($3 > cmax) cmax = $3 }
+    END { printf "calibrate %6d s: %.2f-%.2f s wall, %.2f-%.2f s CPU, peak RSS %.1f-%.1f MB (%s)\n", s, tmin, tmax,
+                 cmin, cmax, mmin / 1024, mmax / 1024, h }'
+  grep '^stages:' "$dir/calibrate.log" | sed "s/^/calibrate ${s} s /"
 done

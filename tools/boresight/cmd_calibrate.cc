@@ -15,11 +15,14 @@
 #include "commands.h"
 #include "replay_summary.h"
 
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <string>
 #include <vector>
+
+#include <sys/resource.h>
 
 namespace boresight::cli {
 namespace {
@@ -123,6 +126,22 @@ bool writeText(const std::string& path, const std::string& text, std::string* er
   return true;
 }
 
+/// Wall time since `t0` in seconds, and the peak resident memory so far in MB (the stage summary).
+struct Stages {
+  std::chrono::steady_clock::time_point t0 = std::chrono::steady_clock::now();
+  std::string text;
+  void mark(const char* stage) {
+    const auto now = std::chrono::steady_clock::now();
+    rusage ru{};
+    getrusage(RUSAGE_SELF, &ru);
+    char b[128];
+    std::snprintf(b, sizeof b, "%s%s %.3f s (peak RSS %.1f MB)", text.empty() ? "" : ", ", stage,
+                  std::chrono::duration<double>(now - t0).count(), double(ru.ru_maxrss) / 1024.0);
+    text += b;
+    t0 = now;
+  }
+};
+
 std::string fmt(const char* f, double v) {
   char b[64];
   std::snprintf(b, sizeof b, f, v);
@@ -167,6 +186,7 @@ int runCalibrate(int argc, char** argv) {
   so.huber_sigma = huber;
   so.unobservable_sigma_arcsec = unobs;
 
+  Stages stages;
   io::PlatformConfig pc;
   std::string err;
   if (!io::loadPlatformConfig(config, pc, &err)) return fail(err);
@@ -203,6 +223,7 @@ int runCalibrate(int argc, char** argv) {
   SpanFeed feed(builder, with_thermal ? &thermal : nullptr);
   engine.addObserver(&feed);
   if (engine.run() != stream::Engine::Result::kDone) return fail(engine.error());
+  stages.mark("replay and span");
   printSourceCounters(engine);
   const core::Health h = engine.health();
   printCoreHealth(h);
@@ -247,6 +268,7 @@ int runCalibrate(int argc, char** argv) {
                 " of excited data.");
 
   calib::SolveResult r = calib::solve(span, so);
+  stages.mark("solve");
   if (!r.ok) {
     // This span's own excitation: RMS about the mean of the accelerometer's angular acceleration in B,
     // weakest axis.
@@ -271,6 +293,7 @@ int runCalibrate(int argc, char** argv) {
     const calib::ThermalFitResult tf = thermal.fit();
     ctx.thermal = report::thermalJson(tf);
     thermal_text = calib::formatThermalFit(tf);
+    stages.mark("thermal fit");
     for (const auto& f : in.orbit) ctx.inputs.push_back(f);
   } else {
     ctx.thermal = {{"status", in.orbit.empty() ? "not computed: no GNI1B or GNV1B among the inputs (the harmonic "
@@ -284,6 +307,7 @@ int runCalibrate(int argc, char** argv) {
   if (!writeText(json_path, j.dump(2) + "\n", &err)) return fail(err);
   if (!yaml_path.empty() && !writeText(yaml_path, report::toYaml(j), &err)) return fail(err);
   if (!report_dir.empty() && !report::writeCalibrationReport(report_dir, span, r, j, &err)) return fail(err);
+  stages.mark("output");
 
   std::printf("\n%s (%zu epochs over %.1f s, residual RMS %.3e rad/s^2, relative attitude as a %s)\n",
               r.message.c_str(), r.epochs, r.span_s, r.residual_rms_radps2,
@@ -302,6 +326,7 @@ int runCalibrate(int argc, char** argv) {
                 r.time_offset_sigma_s.value_or(NAN));
   if (!thermal_text.empty()) std::printf("\nthermal harmonic model:\n%s", thermal_text.c_str());
   else std::printf("thermal: %s\n", ctx.thermal["status"].get<std::string>().c_str());
+  std::printf("stages: %s\n", stages.text.c_str());
   std::printf("-> %s%s%s%s%s\n", json_path.c_str(), yaml_path.empty() ? "" : ", ", yaml_path.c_str(),
               report_dir.empty() ? "" : ", ", report_dir.empty() ? "" : (report_dir + "/report.md").c_str());
   return 0;
