@@ -99,10 +99,12 @@ TEST(Calibrate, HelpNamesInputsKeysAndVariants) {
 
 TEST(Calibrate, SimulatedSpanAgreesWithTheTruthWithinTheReportedSigmas) {
   const std::string out = testutil::makeTempDir("calibrate_out");
-  const CliRun r = run("calibrate --config " + kConfig + " " + level1() + " " + sim().gnv + " --time-offset --json " +
+  const CliRun r = run("calibrate --config " + kConfig + " " + level1() + " " + sim().gnv + " " +
+                       glob1(sim().dir, "SCV1A") + " --time-offset --json " +
                        out + "/r.json --yaml " + out + "/r.yaml --report " + out + "/rep");
   ASSERT_EQ(r.status, 0) << r.out;
   EXPECT_NE(r.out.find("GNV1B_2023-06-01_C_04.txt: orbit for the thermal harmonic fit"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("SCV1A_2023-06-01_C_04.txt: SCV1A is not an input of calibrate"), std::string::npos) << r.out;
   const auto j = readJson(out + "/r.json");
   const auto truth = expectedAngles(sim().dir + "/truth.yaml");
   ASSERT_EQ(j["heads"].size(), 3u);
@@ -131,6 +133,7 @@ TEST(Calibrate, SimulatedSpanAgreesWithTheTruthWithinTheReportedSigmas) {
   EXPECT_GT(j["epochs"].get<int>(), 50);
   EXPECT_NEAR(j["span_s"].get<double>(), 860.0, 100.0);
   EXPECT_TRUE(j["accelerometer"].contains("bias_radps2"));
+  EXPECT_EQ(j["ignored"][0]["product"], "SCV1A");
   // 15 minutes are 0.15 revolutions: the thermal model is not determined, and says what it needs.
   EXPECT_NE(j["thermal"]["status"].get<std::string>().find("not determined"), std::string::npos) << j["thermal"].dump();
   EXPECT_NE(j["thermal"]["heads"][0]["reason"].get<std::string>().find("revolutions"), std::string::npos);

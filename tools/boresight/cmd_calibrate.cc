@@ -196,6 +196,13 @@ int runCalibrate(int argc, char** argv) {
     if (product != "GNV1B" && product != "GNI1B")
       std::printf("%s: %s is not an input of calibrate (SCA1A, ACC1A, QSA1B, GNI1B/GNV1B, LCM log): ignored\n",
                   f.c_str(), product.c_str());
+  // Star vectors (SCV1A) feed the multi-head Wahba solution, which method A does not use.
+  for (const auto& f : in.scv) {
+    std::printf("%s: SCV1A is not an input of calibrate (SCA1A, ACC1A, QSA1B, GNI1B/GNV1B, LCM log): ignored\n",
+                f.c_str());
+    in.ignored.emplace_back(f, "SCV1A");
+  }
+  in.scv.clear();
   io::ReadOptions opt;
   if (strict) opt.on_error = io::OnError::Stop;
   if (!stream::prepareConfig(in, opt, pc, &err)) return fail(err);
