@@ -167,6 +167,7 @@ json calibrationJson(const calib::SolveResult& r, const CalibrationContext& c) {
                   {"estimate_acc_nonorthogonality", c.options.estimate_acc_nonorthogonality},
                   {"estimate_time_offset", c.options.estimate_time_offset},
                   {"huber_sigma", c.options.huber_sigma},
+                  {"whiten", c.options.whiten},
                   {"unobservable_sigma_arcsec", c.options.unobservable_sigma_arcsec}};
   j["config"] = c.config;
   j["inputs"] = c.inputs;

@@ -319,6 +319,23 @@ TEST(Calibrate, BadInputIsAClearErrorNotACrash) {
   r = run("calibrate --config " + kConfig + " " + d + "/SCA1A_ids.txt " + sim().acc + " " + sim().qsa + j);
   EXPECT_EQ(r.status, 1) << r.out;
   EXPECT_NE(r.out.find("inconsistent head ids"), std::string::npos) << r.out;
+  // A configured head with no samples at all: refused with the solver's reason and remedy, nothing
+  // about excitation.
+  {
+    std::istringstream in(testutil::slurp(sim().sca));
+    std::ofstream o(d + "/SCA1A_no3.txt");
+    std::string line;
+    while (std::getline(in, line)) {
+      const auto p = line.find(" C 3 ");
+      if (p != std::string::npos && p < 30) continue;
+      o << line << "\n";
+    }
+  }
+  r = run("calibrate --config " + kConfig + " " + d + "/SCA1A_no3.txt " + sim().acc + " " + sim().qsa + j);
+  EXPECT_EQ(r.status, 1) << r.out;
+  EXPECT_NE(r.out.find("refused: "), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("head 3"), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find("Needed:"), std::string::npos) << r.out;
   // NaN in quaternions and accelerometer values: rejected and counted (file:line), never a crash;
   // the rest of the span still calibrates.
   {

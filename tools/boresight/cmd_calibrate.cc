@@ -30,7 +30,7 @@ namespace {
 const char* kUsage =
     "usage: boresight calibrate --config FILE INPUT... --json FILE [--yaml FILE] [--report DIR]\n"
     "                           [--relative hard|prior] [--no-acc-bias] [--acc-scale] [--acc-nonorthogonality]\n"
-    "                           [--time-offset] [--huber S] [--decimation S] [--max-observations N]\n"
+    "                           [--time-offset] [--huber S] [--no-whiten] [--decimation S] [--max-observations N]\n"
     "                           [--unobservable-sigma ARCSEC] [--plan-excitation RADPS2] [--plan-sigma ARCSEC]\n"
     "                           [--lookahead S] [--strict]\n"
     "\n"
@@ -63,6 +63,8 @@ const char* kUsage =
     "  --acc-nonorthogonality   estimate the accelerometer axes' non-orthogonality\n"
     "  --time-offset            estimate the time offset (positive: the accelerometer's tags are late)\n"
     "  --huber S                robust loss threshold in whitened residual units (default 5; 0: none)\n"
+    "  --no-whiten              treat the epochs as independent (default: whiten each head's epochs in time\n"
+    "                           with the CRN noise correlation; without it the sigmas are optimistic)\n"
     "  --decimation S           one observation per S seconds (default 10: the CRN correlation length)\n"
     "  --max-observations N     keep at most N observations (0: no limit)\n"
     "  --unobservable-sigma A   an axis whose sigma would exceed A arcsec is not determined (default 3600)\n"
@@ -154,7 +156,7 @@ int runCalibrate(int argc, char** argv) {
   CLI::App app{"boresight calibrate"};
   std::string config, json_path, yaml_path, report_dir, relative = "hard";
   std::vector<std::string> files;
-  bool no_bias = false, acc_scale = false, acc_nonorth = false, time_offset = false, strict = false;
+  bool no_whiten = false, no_bias = false, acc_scale = false, acc_nonorth = false, time_offset = false, strict = false;
   double huber = 5.0, decimation = 10.0, unobs = 3600.0, lookahead_s = 2.0, plan_exc = 4.9e-5, plan_sigma = 30.0;
   std::size_t max_obs = 0;
   app.add_option("--config", config)->required();
@@ -166,6 +168,7 @@ int runCalibrate(int argc, char** argv) {
   app.add_flag("--acc-scale", acc_scale);
   app.add_flag("--acc-nonorthogonality", acc_nonorth);
   app.add_flag("--time-offset", time_offset);
+  app.add_flag("--no-whiten", no_whiten);
   app.add_option("--huber", huber)->check(CLI::Range(0.0, 1e6));
   app.add_option("--decimation", decimation)->check(CLI::Range(0.1, 3600.0));
   app.add_option("--max-observations", max_obs);
@@ -184,6 +187,7 @@ int runCalibrate(int argc, char** argv) {
   so.estimate_acc_nonorthogonality = acc_nonorth;
   so.estimate_time_offset = time_offset;
   so.huber_sigma = huber;
+  so.whiten = !no_whiten;
   so.unobservable_sigma_arcsec = unobs;
 
   Stages stages;
@@ -284,6 +288,11 @@ int runCalibrate(int argc, char** argv) {
     mean /= double(span.obs.size());
     for (const auto& ob : span.obs) sq += (span.C_B_A * ob.alpha_A - mean).cwiseAbs2();
     const double weakest = std::sqrt(sq.minCoeff() / double(span.obs.size()));
+    // What the bound needs is said for the refusals about the data's length or excitation (the solver's
+    // "too few epochs" and "too quiet"); other refusals (a head never seen with the others, ...) carry
+    // their own remedy.
+    const bool about_span = r.message.find("too few") != std::string::npos || r.message.find("too quiet") != std::string::npos;
+    if (!about_span) return fail("refused: " + r.message);
     return fail("refused: " + r.message + "\nNeeded: " + plan_need + "; at this span's weakest-axis excitation " +
                 (weakest > 0 ? needText(weakest, "this span") : std::string("(none)")) + ".");
   }
