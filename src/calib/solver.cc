@@ -9,6 +9,7 @@
 
 #include <Eigen/Eigenvalues>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -495,12 +496,12 @@ HeadCovariance headCovariance(const Model& m, const Eigen::MatrixXd& I, const So
   return out;
 }
 
-Whitened prepare(const CalibrationSpan& span, const SolveOptions& opt) {
+Whitened prepare(const CalibrationSpan& span, const SolveOptions& opt, const std::vector<std::uint8_t>* reject = nullptr) {
   std::array<Mat3, kMaxHeads> R{};
   for (int h = 0; h < span.n_heads; ++h)
     R[static_cast<std::size_t>(h)] = rotM(span.q_S_B_nominal[static_cast<std::size_t>(h)]) * span.C_B_A;
   const std::vector<double> unit{1.0};
-  return whiten(span, R, opt.whiten ? span.noise_correlation : unit);
+  return whiten(span, R, opt.whiten ? span.noise_correlation : unit, reject);
 }
 
 void initModel(const CalibrationSpan& span, const SolveOptions& opt, Model& m) {
@@ -584,6 +585,18 @@ SolveResult solve(const CalibrationSpan& span, const SolveOptions& opt) {
         if (a.slot_i == c.slot_i && a.slot_j == b.slot_i && b.slot_j == c.slot_j)
           res.closure_arcsec = std::max(res.closure_arcsec,
                                         core::quatLog(c.q_Si_Sj.conjugate() * a.q_Si_Sj * b.q_Si_Sj).norm() * kArcsecPerRad);
+  // robust start for the bias: the median of the accelerometer's values (the angular acceleration of a
+  // span averages to about zero; the bias is often far larger than the manoeuvres)
+  if (opt.estimate_acc_bias) {
+    for (int i = 0; i < 3; ++i) {
+      std::vector<double> v;
+      v.reserve(span.obs.size());
+      for (const Observation& o : span.obs) v.push_back(o.alpha_A[i]);
+      std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
+      m.bias[static_cast<std::size_t>(i)] = v[v.size() / 2];
+    }
+  }
+  std::vector<std::uint8_t> reject(span.obs.size(), 0);
   m.data = prepare(span, opt);
   Built b = buildProblem(span, opt, m, true);
   ceres::Solver::Options so;
@@ -594,7 +607,39 @@ SolveResult solve(const CalibrationSpan& span, const SolveOptions& opt) {
   so.parameter_tolerance = 1e-12;
   ceres::Solver::Summary sum;
   ceres::Solve(so, b.problem.get(), &sum);
-  res.iterations = static_cast<int>(sum.iterations.size());
+  int total_iterations = static_cast<int>(sum.iterations.size());
+  for (int round = 0; round < opt.outlier_rounds && opt.outlier_sigma > 0 && sum.IsSolutionUsable(); ++round) {
+    // raw residual of every head epoch at the current parameters, normalised by its covariance
+    Mat3 K;
+    K << 1 + m.scale[0], m.nonorth[2], m.nonorth[1], m.nonorth[2], 1 + m.scale[1], m.nonorth[0], m.nonorth[1],
+        m.nonorth[0], 1 + m.scale[2];
+    const Mat3 Kinv = K.inverse();
+    const Vec3 bias(m.bias[0], m.bias[1], m.bias[2]);
+    std::size_t added = 0;
+    for (std::size_t k = 0; k < span.obs.size(); ++k) {
+      const Observation& o = span.obs[k];
+      const Vec3 w = span.C_B_A * Kinv * (o.alpha_A + m.tau * o.jerk_A - bias);
+      for (int h = 0; h < m.n; ++h) {
+        const auto hs = static_cast<std::size_t>(h);
+        if (!o.has_head[hs] || ((reject[k] >> h) & 1u)) continue;
+        const Mat3 C = core::so3Exp(headAngle(m, h)) * m.M[hs];
+        const Vec3 e = o.alpha_S[hs] - C * w;
+        const Mat3 R = C * span.C_B_A;
+        const Mat3 cov = o.cov_alpha_S[hs] + R * o.cov_alpha_A * R.transpose();
+        if (e.dot(cov.ldlt().solve(e)) > opt.outlier_sigma * opt.outlier_sigma) {
+          reject[k] = static_cast<std::uint8_t>(reject[k] | (1u << h));
+          ++added;
+        }
+      }
+    }
+    if (added == 0) break;
+    res.rejected_head_epochs += added;
+    m.data = prepare(span, opt, &reject);
+    b = buildProblem(span, opt, m, true);  // starts from the current parameters
+    ceres::Solve(so, b.problem.get(), &sum);
+    total_iterations += static_cast<int>(sum.iterations.size());
+  }
+  res.iterations = total_iterations;
   if (!sum.IsSolutionUsable()) {
     res.message = "the solver failed: " + sum.BriefReport();
     return res;
