@@ -91,6 +91,15 @@ inline std::vector<Case> cases() {
   }
   {
     Case c = v.front();
+    c.name = "manoeuvre_crn005";
+    c.what = "as manoeuvre_hard with the calibration CRN of SpanOptions: B 0.05 Hz, Tf 100 s, decimation 20 s";
+    c.cfg.crn_bandwidth_hz = 0.05;
+    c.cfg.crn_length_s = 100.0;
+    c.cfg.decimation_s = 20.0;
+    v.push_back(c);
+  }
+  {
+    Case c = v.front();
     c.name = "manoeuvre_no_whitening";
     c.what = "as manoeuvre_hard but epochs treated as independent (no temporal whitening): optimistic";
     c.opt.whiten = false;
@@ -132,6 +141,13 @@ inline std::vector<Case> cases() {
     v.push_back(c);
   }
   return v;
+}
+
+/// The committed case of that name (an empty name when there is none).
+inline Case caseNamed(const std::string& name) {
+  for (const Case& c : cases())
+    if (c.name == name) return c;
+  return {};
 }
 
 inline CalibrationSpan makeSpan(const synth::Config& c) {

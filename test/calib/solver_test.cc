@@ -369,8 +369,7 @@ TEST(CalibSolver, CramerRaoAtTruthMatchesTheBoundAtTheEstimate) {
 // The small Monte Carlo (the bench tool's cases with few runs): the reported covariance is neither
 // optimistic nor pessimistic, and without the temporal whitening it is optimistic.
 TEST(CalibMonteCarlo, SmallManoeuvreCaseIsConsistent) {
-  auto cs = mc::cases();
-  const mc::Result r = mc::run(cs[0], 40, 2000);
+  const mc::Result r = mc::run(mc::caseNamed("manoeuvre_hard"), 40, 2000);
   EXPECT_EQ(r.failed, 0);
   double ratio2 = 0;
   for (const mc::AxisStats& a : r.axes) {
@@ -383,7 +382,7 @@ TEST(CalibMonteCarlo, SmallManoeuvreCaseIsConsistent) {
   // NEES of 40 runs x 9: a wider band than the 95 % one (this test must not fail 1 in 20)
   EXPECT_GT(r.nees_mean, chi2Lo(r));
   EXPECT_LT(r.nees_mean, chi2Hi(r));
-  const mc::Result w = mc::run(cs[2], 40, 2000);  // manoeuvre_no_whitening
+  const mc::Result w = mc::run(mc::caseNamed("manoeuvre_no_whitening"), 40, 2000);
   double wr2 = 0;
   for (const mc::AxisStats& a : w.axes) wr2 += (a.rms_arcsec / a.crlb_arcsec) * (a.rms_arcsec / a.crlb_arcsec);
   EXPECT_GT(std::sqrt(wr2 / static_cast<double>(w.axes.size())), 1.15);

@@ -49,6 +49,7 @@ struct Config {
   TimeUs t0 = 738849600LL * kUsPerSecond;  ///< 2023-06-01 00:00 GPS
   Mat3 C_B_A = accToBodyDefault();
   double decimation_s = 10.0;
+  double crn_bandwidth_hz = 0.0, crn_length_s = 0.0;  ///< SpanOptions' calibration CRN (0: the pipeline's)
 };
 
 /// GRACE-FO-like head geometry (config/sim_gracefo.yaml).
@@ -178,6 +179,8 @@ inline bool generate(const Config& c, SpanBuilder& builder, std::string* error, 
   if (span_opt) so = *span_opt;
   so.decimation_s = c.decimation_s;
   so.acc_white_noise_radps2 = c.acc_white;
+  so.crn_bandwidth_hz = c.crn_bandwidth_hz;
+  so.crn_length_s = c.crn_length_s;
   if (!builder.configure(pipelineConfig(c), so, error)) return false;
   stream(c, builder);
   builder.finish();
