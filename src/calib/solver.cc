@@ -9,6 +9,7 @@
 
 #include <Eigen/Eigenvalues>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -29,8 +30,10 @@ using Vec3T = Eigen::Matrix<double, 3, 1>;
 // residual = sqrt_info (zS - y).
 class EpochCost {
  public:
-  EpochCost(const WhitenedRow& row, const Mat3& G, const Mat3& C_B_A, bool hard)
-      : row_(row), G_(G), C_B_A_(C_B_A), hard_(hard) {}
+  // Pointers (not copies): the rows and matrices live in the solver's Model for the problem's lifetime;
+  // a functor is then 32 bytes (a day at 10 s with three heads: 26 000 of them).
+  EpochCost(const WhitenedRow* row, const Mat3* G, const Mat3* C_B_A, bool hard)
+      : row_(*row), G_(*G), C_B_A_(*C_B_A), hard_(hard) {}
 
   template <typename T>
   bool operator()(const T* rot, const T* bias, const T* scale, const T* nonorth, const T* tau, T* res) const {
@@ -67,14 +70,14 @@ class EpochCost {
     return true;
   }
 
-  static ceres::CostFunction* create(const WhitenedRow& row, const Mat3& G, const Mat3& C_B_A, bool hard) {
+  static ceres::CostFunction* create(const WhitenedRow* row, const Mat3* G, const Mat3* C_B_A, bool hard) {
     return new ceres::AutoDiffCostFunction<EpochCost, 3, 3, 3, 3, 3, 1>(new EpochCost(row, G, C_B_A, hard));
   }
 
  private:
-  const WhitenedRow row_;
-  const Mat3 G_;
-  const Mat3 C_B_A_;
+  const WhitenedRow& row_;
+  const Mat3& G_;
+  const Mat3& C_B_A_;
   const bool hard_;
 };
 
@@ -255,6 +258,8 @@ struct Model {
   std::array<double, 3> bias{}, scale{}, nonorth{};
   double tau = 0;
   Whitened data;
+  std::array<Mat3, kMaxHeads> G{};       // per head, the constant matrix of EpochCost (it points here)
+  Mat3 C_B_A = Mat3::Identity();
 };
 
 // The relative alignment of the heads from the span's normal equations. false with *msg when the
@@ -353,11 +358,12 @@ Built buildProblem(const CalibrationSpan& span, const SolveOptions& opt, Model& 
   P.AddParameterBlock(&m.tau, 1);
   for (int h = 0; h < m.n; ++h) {
     const auto hs = static_cast<std::size_t>(h);
-    const Mat3 G = m.hard ? relativeMounting(m, h) : m.M[hs];
+    m.G[hs] = m.hard ? relativeMounting(m, h) : m.M[hs];
+    m.C_B_A = span.C_B_A;
     double* rot = m.hard ? m.rot[0].data() : m.rot[hs].data();
     for (const WhitenedRow& row : m.data.rows[hs]) {
       ceres::LossFunction* loss = robust && opt.huber_sigma > 0 ? new ceres::HuberLoss(opt.huber_sigma) : nullptr;
-      b.epoch_blocks.push_back(P.AddResidualBlock(EpochCost::create(row, G, span.C_B_A, m.hard), loss, rot,
+      b.epoch_blocks.push_back(P.AddResidualBlock(EpochCost::create(&row, &m.G[hs], &m.C_B_A, m.hard), loss, rot,
                                                   m.bias.data(), m.scale.data(), m.nonorth.data(), &m.tau));
     }
   }
@@ -389,20 +395,52 @@ Built buildProblem(const CalibrationSpan& span, const SolveOptions& opt, Model& 
   return b;
 }
 
-// J^T J of the free blocks (loss applied or not).
+// J^T J of the free blocks (loss applied or not), accumulated residual block by residual block (no
+// Jacobian of the whole problem in memory).
 Eigen::MatrixXd information(Built& b, bool apply_loss) {
-  ceres::Problem::EvaluateOptions eo;
-  eo.parameter_blocks = b.free_blocks;
-  eo.apply_loss_function = apply_loss;
-  ceres::CRSMatrix J;
-  b.problem->Evaluate(eo, nullptr, nullptr, nullptr, &J);
-  Eigen::MatrixXd I = Eigen::MatrixXd::Zero(J.num_cols, J.num_cols);
-  for (int r = 0; r < J.num_rows; ++r) {
-    const int k0 = J.rows[static_cast<std::size_t>(r)], k1 = J.rows[static_cast<std::size_t>(r) + 1];
-    for (int a = k0; a < k1; ++a)
-      for (int c = k0; c < k1; ++c)
-        I(J.cols[static_cast<std::size_t>(a)], J.cols[static_cast<std::size_t>(c)]) +=
-            J.values[static_cast<std::size_t>(a)] * J.values[static_cast<std::size_t>(c)];
+  std::vector<std::pair<const double*, int>> off;
+  int np = 0;
+  for (std::size_t i = 0; i < b.free_blocks.size(); ++i) {
+    off.emplace_back(b.free_blocks[i], np);
+    np += b.free_sizes[i];
+  }
+  auto offsetOf = [&](const double* p) {
+    for (const auto& o : off)
+      if (o.first == p) return o.second;
+    return -1;
+  };
+  Eigen::MatrixXd I = Eigen::MatrixXd::Zero(np, np);
+  std::vector<ceres::ResidualBlockId> ids;
+  b.problem->GetResidualBlocks(&ids);
+  std::vector<double*> params;
+  std::vector<std::vector<double>> jac;
+  std::vector<double*> jp;
+  std::vector<double> res;
+  Eigen::MatrixXd Jr;
+  for (ceres::ResidualBlockId id : ids) {
+    b.problem->GetParameterBlocksForResidualBlock(id, &params);
+    const ceres::CostFunction* cf = b.problem->GetCostFunctionForResidualBlock(id);
+    const int nres = cf->num_residuals();
+    const std::vector<int32_t>& sizes = cf->parameter_block_sizes();
+    jac.resize(params.size());
+    jp.assign(params.size(), nullptr);
+    std::vector<int> offs(params.size(), -1);
+    for (std::size_t k = 0; k < params.size(); ++k) {
+      offs[k] = offsetOf(params[k]);
+      if (offs[k] < 0) continue;
+      jac[k].resize(static_cast<std::size_t>(nres * sizes[k]));
+      jp[k] = jac[k].data();
+    }
+    res.resize(static_cast<std::size_t>(nres));
+    double cost = 0;
+    b.problem->EvaluateResidualBlock(id, apply_loss, &cost, res.data(), jp.data());
+    Jr.setZero(nres, np);
+    for (std::size_t k = 0; k < params.size(); ++k) {
+      if (offs[k] < 0) continue;
+      for (int r = 0; r < nres; ++r)
+        for (int c = 0; c < sizes[k]; ++c) Jr(r, offs[k] + c) = jac[k][static_cast<std::size_t>(r * sizes[k] + c)];
+    }
+    I.noalias() += Jr.transpose() * Jr;
   }
   return I;
 }
@@ -495,12 +533,12 @@ HeadCovariance headCovariance(const Model& m, const Eigen::MatrixXd& I, const So
   return out;
 }
 
-Whitened prepare(const CalibrationSpan& span, const SolveOptions& opt) {
+Whitened prepare(const CalibrationSpan& span, const SolveOptions& opt, const std::vector<std::uint8_t>* reject = nullptr) {
   std::array<Mat3, kMaxHeads> R{};
   for (int h = 0; h < span.n_heads; ++h)
     R[static_cast<std::size_t>(h)] = rotM(span.q_S_B_nominal[static_cast<std::size_t>(h)]) * span.C_B_A;
   const std::vector<double> unit{1.0};
-  return whiten(span, R, opt.whiten ? span.noise_correlation : unit);
+  return whiten(span, R, opt.whiten ? span.noise_correlation : unit, reject);
 }
 
 void initModel(const CalibrationSpan& span, const SolveOptions& opt, Model& m) {
@@ -584,6 +622,18 @@ SolveResult solve(const CalibrationSpan& span, const SolveOptions& opt) {
         if (a.slot_i == c.slot_i && a.slot_j == b.slot_i && b.slot_j == c.slot_j)
           res.closure_arcsec = std::max(res.closure_arcsec,
                                         core::quatLog(c.q_Si_Sj.conjugate() * a.q_Si_Sj * b.q_Si_Sj).norm() * kArcsecPerRad);
+  // robust start for the bias: the median of the accelerometer's values (the angular acceleration of a
+  // span averages to about zero; the bias is often far larger than the manoeuvres)
+  if (opt.estimate_acc_bias) {
+    for (int i = 0; i < 3; ++i) {
+      std::vector<double> v;
+      v.reserve(span.obs.size());
+      for (const Observation& o : span.obs) v.push_back(o.alpha_A[i]);
+      std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
+      m.bias[static_cast<std::size_t>(i)] = v[v.size() / 2];
+    }
+  }
+  std::vector<std::uint8_t> reject(span.obs.size(), 0);
   m.data = prepare(span, opt);
   Built b = buildProblem(span, opt, m, true);
   ceres::Solver::Options so;
@@ -594,7 +644,39 @@ SolveResult solve(const CalibrationSpan& span, const SolveOptions& opt) {
   so.parameter_tolerance = 1e-12;
   ceres::Solver::Summary sum;
   ceres::Solve(so, b.problem.get(), &sum);
-  res.iterations = static_cast<int>(sum.iterations.size());
+  int total_iterations = static_cast<int>(sum.iterations.size());
+  for (int round = 0; round < opt.outlier_rounds && opt.outlier_sigma > 0 && sum.IsSolutionUsable(); ++round) {
+    // raw residual of every head epoch at the current parameters, normalised by its covariance
+    Mat3 K;
+    K << 1 + m.scale[0], m.nonorth[2], m.nonorth[1], m.nonorth[2], 1 + m.scale[1], m.nonorth[0], m.nonorth[1],
+        m.nonorth[0], 1 + m.scale[2];
+    const Mat3 Kinv = K.inverse();
+    const Vec3 bias(m.bias[0], m.bias[1], m.bias[2]);
+    std::size_t added = 0;
+    for (std::size_t k = 0; k < span.obs.size(); ++k) {
+      const Observation& o = span.obs[k];
+      const Vec3 w = span.C_B_A * Kinv * (o.alpha_A + m.tau * o.jerk_A - bias);
+      for (int h = 0; h < m.n; ++h) {
+        const auto hs = static_cast<std::size_t>(h);
+        if (!o.has_head[hs] || ((reject[k] >> h) & 1u)) continue;
+        const Mat3 C = core::so3Exp(headAngle(m, h)) * m.M[hs];
+        const Vec3 e = o.alpha_S[hs] - C * w;
+        const Mat3 R = C * span.C_B_A;
+        const Mat3 cov = o.cov_alpha_S[hs] + R * o.cov_alpha_A * R.transpose();
+        if (e.dot(cov.ldlt().solve(e)) > opt.outlier_sigma * opt.outlier_sigma) {
+          reject[k] = static_cast<std::uint8_t>(reject[k] | (1u << h));
+          ++added;
+        }
+      }
+    }
+    if (added == 0) break;
+    res.rejected_head_epochs += added;
+    m.data = prepare(span, opt, &reject);
+    b = buildProblem(span, opt, m, true);  // starts from the current parameters
+    ceres::Solve(so, b.problem.get(), &sum);
+    total_iterations += static_cast<int>(sum.iterations.size());
+  }
+  res.iterations = total_iterations;
   if (!sum.IsSolutionUsable()) {
     res.message = "the solver failed: " + sum.BriefReport();
     return res;
