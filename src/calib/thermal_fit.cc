@@ -496,6 +496,15 @@ std::string formatThermalFit(const ThermalFitResult& r) {
       std::snprintf(buf, sizeof buf, " | rms %.2f -> %.2f\" (noise %.2f\")\n", A.rms_before_arcsec, A.rms_after_arcsec,
                     A.noise_rms_arcsec);
       o << buf;
+      if (!A.beta_terms.empty()) {
+        o << "       beta terms (per unit of cos(beta) - cos(beta_ref))";
+        for (const ThermalHarmonicTerm& t : A.beta_terms) {
+          std::snprintf(buf, sizeof buf, " | %d/rev cos %7.2f +- %.2f sin %7.2f +- %.2f", t.harmonic, t.cos_arcsec,
+                        t.sigma_cos_arcsec, t.sin_arcsec, t.sigma_sin_arcsec);
+          o << buf;
+        }
+        o << "\n";
+      }
     }
   }
   return o.str();
