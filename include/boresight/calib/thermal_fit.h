@@ -130,8 +130,8 @@ struct ThermalFitResult {
   std::uint64_t pending_dropped = 0;        ///< head epochs dropped because max_pending was reached
 
   /// The coefficients for the core (datum slot 0, orders, per head c, A, B (and A', B'), the
-  /// prediction covariance), with the given prediction mode. Heads not determined have no model.
-  core::ThermalHarmonicModel coreModel(core::ThermalPredictionMode mode = core::ThermalPredictionMode::kAbsolute) const;
+  /// prediction covariance), with the given prediction mode (core/thermal_harmonics.h: anchored by default). Heads not determined have no model.
+  core::ThermalHarmonicModel coreModel(core::ThermalPredictionMode mode = core::ThermalPredictionMode::kAnchored) const;
 };
 
 /// Streaming collector and fit. Not for the real-time loop (allocates).
