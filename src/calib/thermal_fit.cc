@@ -320,16 +320,22 @@ ThermalFitResult ThermalCollector::fit() {
       h.reason = why;
       r.heads.push_back(h);
     };
-    if (S.n < cfg_.min_epochs) {
-      refuse(std::to_string(S.n) + " epochs with head " + std::to_string(datum_id) + " and u known, " +
-             std::to_string(cfg_.min_epochs) + " needed");
-      continue;
-    }
+    std::string why;
     if (r.revolutions < cfg_.min_revolutions) {
-      char buf[160];
-      std::snprintf(buf, sizeof buf, "u covers %.3f revolutions, %.2f needed (about %.0f s of data per revolution)",
-                    r.revolutions, cfg_.min_revolutions, 5400.0);
-      refuse(buf);
+      // the revolution period from the data itself when it moved at all
+      const double period = r.revolutions > 0 ? r.span_s / r.revolutions : 5400.0;
+      char buf[200];
+      std::snprintf(buf, sizeof buf, "u covers %.4f revolutions in %.0f s, %.2f needed: at least %.0f s of data",
+                    r.revolutions, r.span_s, cfg_.min_revolutions, cfg_.min_revolutions * period);
+      why = buf;
+    }
+    if (S.n < cfg_.min_epochs) {
+      if (!why.empty()) why += "; ";
+      why += std::to_string(S.n) + " epochs with head " + std::to_string(datum_id) + " and u known, " +
+             std::to_string(cfg_.min_epochs) + " needed";
+    }
+    if (!why.empty()) {
+      refuse(why);
       continue;
     }
     const int Pf = S.P;
