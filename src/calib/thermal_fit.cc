@@ -144,9 +144,10 @@ void ThermalCollector::use(const Sample& smp, double u, double beta) {
   u_max_ = std::max(u_max_, u);
   beta_min_ = std::min(beta_min_, beta);
   beta_max_ = std::max(beta_max_, beta);
-  VecX f;
+  VecX& f = f_;
   regressors(cfg_.harmonics, u, std::cos(beta) - cos_beta_ref_, f);
-  const MatX ff = f * f.transpose();
+  MatX& ff = ff_;
+  ff.noalias() = f * f.transpose();
   for (int k = 1; k < heads_.n_heads; ++k) {
     if (!((smp.mask >> k) & 1u)) continue;
     Sums& S = sums_[static_cast<std::size_t>(k)];
@@ -154,7 +155,7 @@ void ThermalCollector::use(const Sample& smp, double u, double beta) {
     const Vec3& y = smp.delta[i];
     ++S.n;
     S.S_all += ff;
-    S.Y_all += f * y.transpose();
+    S.Y_all.noalias() += f * y.transpose();
     S.y_sum += y;
     S.y2_sum += y.cwiseProduct(y);
     S.cov_sum += smp.cov[i];
@@ -166,7 +167,7 @@ void ThermalCollector::use(const Sample& smp, double u, double beta) {
     }
     if (smp.nominal[i]) {
       S.S_nom += ff;
-      S.Y_nom += f * y.transpose();
+      S.Y_nom.noalias() += f * y.transpose();
       S.yy_nom += y * y.transpose();
     } else {
       const int P = S.P;

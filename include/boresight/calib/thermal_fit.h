@@ -36,6 +36,8 @@
 #include "boresight/io/level1.h"
 #include "boresight/model/orbit_context.h"
 
+#include <Eigen/Core>
+
 #include <array>
 #include <cstdint>
 #include <deque>
@@ -176,6 +178,8 @@ class ThermalCollector {
   std::vector<Node> track_;
   std::deque<Sample> pending_;
   std::vector<Sums> sums_;  ///< by slot
+  Eigen::VectorXd f_;       ///< regressors of the epoch being used (reused: no allocation per epoch)
+  Eigen::MatrixXd ff_;      ///< f f^T
   bool have_beta_ref_ = false;
   double cos_beta_ref_ = 1, beta_ref_ = 0;
   double t_min_ = 0, t_max_ = 0, u_min_ = 0, u_max_ = 0, beta_min_ = 0, beta_max_ = 0;
