@@ -24,7 +24,8 @@
 //
 // Use (streaming, bounded memory apart from the decimated orbit track of ~30 bytes per 10 s):
 //   ThermalCollector c;  c.configure(pipeline_cfg.heads, ThermalFitConfig{}, &err);
-//   c.pushOrbit(gnv_record) ...;  c.pushHeads(head_epoch) ...   (any interleaving, each stream in time order)
+//   c.pushOrbit(gnv_record) ...;  c.pushHeads(head_epoch) ...   (each stream in time order; interleaved
+//   freely as long as head epochs wait for a later orbit record at most max_pending at a time)
 //   const ThermalFitResult r = c.fit();   // r.ok, r.error; r.heads[i] ...
 //   pipeline.setThermalModel(r.coreModel());
 // or in one call: fitThermal(heads, cfg, epochs, orbit_records).
