@@ -144,9 +144,10 @@ void ThermalCollector::use(const Sample& smp, double u, double beta) {
   u_max_ = std::max(u_max_, u);
   beta_min_ = std::min(beta_min_, beta);
   beta_max_ = std::max(beta_max_, beta);
-  VecX f;
+  VecX& f = f_;
   regressors(cfg_.harmonics, u, std::cos(beta) - cos_beta_ref_, f);
-  const MatX ff = f * f.transpose();
+  MatX& ff = ff_;
+  ff.noalias() = f * f.transpose();
   for (int k = 1; k < heads_.n_heads; ++k) {
     if (!((smp.mask >> k) & 1u)) continue;
     Sums& S = sums_[static_cast<std::size_t>(k)];
@@ -154,7 +155,7 @@ void ThermalCollector::use(const Sample& smp, double u, double beta) {
     const Vec3& y = smp.delta[i];
     ++S.n;
     S.S_all += ff;
-    S.Y_all += f * y.transpose();
+    S.Y_all.noalias() += f * y.transpose();
     S.y_sum += y;
     S.y2_sum += y.cwiseProduct(y);
     S.cov_sum += smp.cov[i];
@@ -166,7 +167,7 @@ void ThermalCollector::use(const Sample& smp, double u, double beta) {
     }
     if (smp.nominal[i]) {
       S.S_nom += ff;
-      S.Y_nom += f * y.transpose();
+      S.Y_nom.noalias() += f * y.transpose();
       S.yy_nom += y * y.transpose();
     } else {
       const int P = S.P;
@@ -320,16 +321,22 @@ ThermalFitResult ThermalCollector::fit() {
       h.reason = why;
       r.heads.push_back(h);
     };
-    if (S.n < cfg_.min_epochs) {
-      refuse(std::to_string(S.n) + " epochs with head " + std::to_string(datum_id) + " and u known, " +
-             std::to_string(cfg_.min_epochs) + " needed");
-      continue;
-    }
+    std::string why;
     if (r.revolutions < cfg_.min_revolutions) {
-      char buf[160];
-      std::snprintf(buf, sizeof buf, "u covers %.3f revolutions, %.2f needed (about %.0f s of data per revolution)",
-                    r.revolutions, cfg_.min_revolutions, 5400.0);
-      refuse(buf);
+      // the revolution period from the data itself when it moved at all
+      const double period = r.revolutions > 0 ? r.span_s / r.revolutions : 5400.0;
+      char buf[200];
+      std::snprintf(buf, sizeof buf, "u covers %.4f revolutions in %.0f s, %.2f needed: at least %.0f s of data",
+                    r.revolutions, r.span_s, cfg_.min_revolutions, cfg_.min_revolutions * period);
+      why = buf;
+    }
+    if (S.n < cfg_.min_epochs) {
+      if (!why.empty()) why += "; ";
+      why += std::to_string(S.n) + " epochs with head " + std::to_string(datum_id) + " and u known, " +
+             std::to_string(cfg_.min_epochs) + " needed";
+    }
+    if (!why.empty()) {
+      refuse(why);
       continue;
     }
     const int Pf = S.P;
@@ -496,6 +503,15 @@ std::string formatThermalFit(const ThermalFitResult& r) {
       std::snprintf(buf, sizeof buf, " | rms %.2f -> %.2f\" (noise %.2f\")\n", A.rms_before_arcsec, A.rms_after_arcsec,
                     A.noise_rms_arcsec);
       o << buf;
+      if (!A.beta_terms.empty()) {
+        o << "       beta terms (per unit of cos(beta) - cos(beta_ref))";
+        for (const ThermalHarmonicTerm& t : A.beta_terms) {
+          std::snprintf(buf, sizeof buf, " | %d/rev cos %7.2f +- %.2f sin %7.2f +- %.2f", t.harmonic, t.cos_arcsec,
+                        t.sigma_cos_arcsec, t.sin_arcsec, t.sigma_sin_arcsec);
+          o << buf;
+        }
+        o << "\n";
+      }
     }
   }
   return o.str();

@@ -376,6 +376,7 @@ TEST(AllocGuard, ThermalModelPredictionWhileAHeadIsBlindIsAllocationFree) {
   {
     NoHeap guard;
     const bool ok = pipe->configure(pc) == Status::kOk && anchored->configure(pc) == Status::kOk;
+    m.mode = ThermalPredictionMode::kAbsolute;
     set_abs = pipe->setThermalModel(m);
     m.mode = ThermalPredictionMode::kAnchored;
     set_anch = anchored->setThermalModel(m);

@@ -24,7 +24,8 @@
 //
 // Use (streaming, bounded memory apart from the decimated orbit track of ~30 bytes per 10 s):
 //   ThermalCollector c;  c.configure(pipeline_cfg.heads, ThermalFitConfig{}, &err);
-//   c.pushOrbit(gnv_record) ...;  c.pushHeads(head_epoch) ...   (any interleaving, each stream in time order)
+//   c.pushOrbit(gnv_record) ...;  c.pushHeads(head_epoch) ...   (each stream in time order; interleaved
+//   freely as long as head epochs wait for a later orbit record at most max_pending at a time)
 //   const ThermalFitResult r = c.fit();   // r.ok, r.error; r.heads[i] ...
 //   pipeline.setThermalModel(r.coreModel());
 // or in one call: fitThermal(heads, cfg, epochs, orbit_records).
@@ -35,6 +36,8 @@
 #include "boresight/core/thermal_harmonics.h"
 #include "boresight/io/level1.h"
 #include "boresight/model/orbit_context.h"
+
+#include <Eigen/Core>
 
 #include <array>
 #include <cstdint>
@@ -130,8 +133,8 @@ struct ThermalFitResult {
   std::uint64_t pending_dropped = 0;        ///< head epochs dropped because max_pending was reached
 
   /// The coefficients for the core (datum slot 0, orders, per head c, A, B (and A', B'), the
-  /// prediction covariance), with the given prediction mode. Heads not determined have no model.
-  core::ThermalHarmonicModel coreModel(core::ThermalPredictionMode mode = core::ThermalPredictionMode::kAbsolute) const;
+  /// prediction covariance), with the given prediction mode (core/thermal_harmonics.h: anchored by default). Heads not determined have no model.
+  core::ThermalHarmonicModel coreModel(core::ThermalPredictionMode mode = core::ThermalPredictionMode::kAnchored) const;
 };
 
 /// Streaming collector and fit. Not for the real-time loop (allocates).
@@ -176,6 +179,8 @@ class ThermalCollector {
   std::vector<Node> track_;
   std::deque<Sample> pending_;
   std::vector<Sums> sums_;  ///< by slot
+  Eigen::VectorXd f_;       ///< regressors of the epoch being used (reused: no allocation per epoch)
+  Eigen::MatrixXd ff_;      ///< f f^T
   bool have_beta_ref_ = false;
   double cos_beta_ref_ = 1, beta_ref_ = 0;
   double t_min_ = 0, t_max_ = 0, u_min_ = 0, u_max_ = 0, beta_min_ = 0, beta_max_ = 0;
