@@ -168,7 +168,10 @@ json calibrationJson(const calib::SolveResult& r, const CalibrationContext& c) {
                   {"estimate_time_offset", c.options.estimate_time_offset},
                   {"huber_sigma", c.options.huber_sigma},
                   {"whiten", c.options.whiten},
-                  {"unobservable_sigma_arcsec", c.options.unobservable_sigma_arcsec}};
+                  {"unobservable_sigma_arcsec", c.options.unobservable_sigma_arcsec},
+                  {"decimation_s", c.span_options.decimation_s},
+                  {"calibration_crn_bandwidth_hz", num(c.span_options.crn_bandwidth_hz > 0 ? c.span_options.crn_bandwidth_hz : NAN)},
+                  {"calibration_crn_length_s", num(c.span_options.crn_length_s > 0 ? c.span_options.crn_length_s : NAN)}};
   j["config"] = c.config;
   j["inputs"] = c.inputs;
   json ign = json::array();

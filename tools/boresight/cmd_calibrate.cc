@@ -31,6 +31,7 @@ const char* kUsage =
     "usage: boresight calibrate --config FILE INPUT... --json FILE [--yaml FILE] [--report DIR]\n"
     "                           [--relative hard|prior] [--no-acc-bias] [--acc-scale] [--acc-nonorthogonality]\n"
     "                           [--time-offset] [--huber S] [--no-whiten] [--decimation S] [--max-observations N]\n"
+    "                           [--crn-bandwidth HZ --crn-length S]\n"
     "                           [--unobservable-sigma ARCSEC] [--plan-excitation RADPS2] [--plan-sigma ARCSEC]\n"
     "                           [--lookahead S] [--strict]\n"
     "\n"
@@ -67,6 +68,11 @@ const char* kUsage =
     "                           with the CRN noise correlation; without it the sigmas are optimistic)\n"
     "  --decimation S           one observation per S seconds (default 10: the CRN correlation length)\n"
     "  --max-observations N     keep at most N observations (0: no limit)\n"
+    "  --crn-bandwidth HZ, --crn-length S\n"
+    "                           a calibration CRN for the heads and the accelerometer instead of the\n"
+    "                           platform's (e.g. 0.05 Hz, 100 s: the acceleration noise grows as B^5 while\n"
+    "                           100 s manoeuvres pass any B above ~0.02 Hz; length x accelerometer rate\n"
+    "                           <= 1023 taps)\n"
     "  --unobservable-sigma A   an axis whose sigma would exceed A arcsec is not determined (default 3600)\n"
     "  --plan-excitation R      for a refused span: the excitation (rad/s^2 RMS per axis) assumed when\n"
     "                           saying what span the bound would need (default 4.9e-5: a 1 deg, 100 s\n"
@@ -159,6 +165,7 @@ int runCalibrate(int argc, char** argv) {
   bool no_whiten = false, no_bias = false, acc_scale = false, acc_nonorth = false, time_offset = false, strict = false;
   double huber = 5.0, decimation = 10.0, unobs = 3600.0, lookahead_s = 2.0, plan_exc = 4.9e-5, plan_sigma = 30.0;
   std::size_t max_obs = 0;
+  double crn_bw = 0.0, crn_len = 0.0;
   app.add_option("--config", config)->required();
   app.add_option("--json", json_path)->required();
   app.add_option("--yaml", yaml_path);
@@ -172,6 +179,8 @@ int runCalibrate(int argc, char** argv) {
   app.add_option("--huber", huber)->check(CLI::Range(0.0, 1e6));
   app.add_option("--decimation", decimation)->check(CLI::Range(0.1, 3600.0));
   app.add_option("--max-observations", max_obs);
+  app.add_option("--crn-bandwidth", crn_bw)->check(CLI::Range(1e-4, 10.0));
+  app.add_option("--crn-length", crn_len)->check(CLI::Range(1.0, 1e4));
   app.add_option("--unobservable-sigma", unobs)->check(CLI::Range(1e-6, 1e9));
   app.add_option("--plan-excitation", plan_exc)->check(CLI::Range(1e-12, 1.0));
   app.add_option("--plan-sigma", plan_sigma)->check(CLI::Range(1e-6, 1e9));
@@ -222,6 +231,9 @@ int runCalibrate(int argc, char** argv) {
   calib::SpanOptions spo;
   spo.decimation_s = decimation;
   spo.max_observations = max_obs;
+  if ((crn_bw > 0) != (crn_len > 0)) return fail("--crn-bandwidth and --crn-length go together");
+  spo.crn_bandwidth_hz = crn_bw;
+  spo.crn_length_s = crn_len;
   if (!builder.configure(pc.pipeline, spo, &err)) return fail(err);
   // The thermal harmonic fit of the heads' relative deformation needs the argument of latitude: only
   // with an orbit among the inputs.
@@ -260,8 +272,15 @@ int runCalibrate(int argc, char** argv) {
 
   // What a refused span would need: the CRN's length, and the bound's span at the planning excitation
   // (and, when the span has observations, at its own weakest-axis excitation).
+  core::PipelineConfig need_cfg = pc.pipeline;  // with the calibration CRN when one is given
+  if (crn_bw > 0) {
+    for (core::CrnConfig* c : {&need_cfg.crn_attitude, &need_cfg.crn_acc}) {
+      c->bandwidth_hz = crn_bw;
+      c->length_s = crn_len;
+    }
+  }
   auto needText = [&](double excitation, const char* what) {
-    const report::SpanNeed n = report::spanNeed(pc.pipeline, decimation, excitation, plan_sigma);
+    const report::SpanNeed n = report::spanNeed(need_cfg, decimation, excitation, plan_sigma);
     return "the Cramer-Rao bound needs about " + fmt("%.0f", n.observations) + " decorrelated observations (one per " +
            fmt("%g", decimation) + " s) to reach " + fmt("%g", plan_sigma) + "\" with " + fmt("%.2g", excitation) +
            " rad/s^2 RMS excitation per axis (" + what + "; head noise through the CRN " +
@@ -269,7 +288,7 @@ int runCalibrate(int argc, char** argv) {
            (n.bound_s < 86400.0 * 365 ? fmt("%.0f", n.bound_s) + " s (" + fmt("%.1f", n.bound_s / 3600) + " h)"
                                       : fmt("%.2g", n.bound_s / (86400.0 * 365.25)) + " years");
   };
-  const report::SpanNeed need = report::spanNeed(pc.pipeline, decimation, plan_exc, plan_sigma);
+  const report::SpanNeed need = report::spanNeed(need_cfg, decimation, plan_exc, plan_sigma);
   const std::string crn_need = "the CRN gives an angular acceleration only with Tf = " + fmt("%.1f", need.crn_s) +
                                " s of head and accelerometer data centred on it";
   const std::string plan_need = needText(plan_exc, "--plan-excitation");
@@ -305,6 +324,7 @@ int runCalibrate(int argc, char** argv) {
   ctx.inputs.insert(ctx.inputs.end(), in.qsa.begin(), in.qsa.end());
   ctx.inputs.insert(ctx.inputs.end(), in.lcm.begin(), in.lcm.end());
   ctx.options = so;
+  ctx.span_options = spo;
   if (with_thermal) {
     const calib::ThermalFitResult tf = thermal.fit();
     ctx.thermal = report::thermalJson(tf);

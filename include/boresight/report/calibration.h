@@ -14,6 +14,7 @@
 
 #include <boresight/calib/problem.h>
 #include <boresight/calib/solver.h>
+#include <boresight/calib/span_builder.h>
 #include <boresight/calib/thermal_fit.h>
 #include <boresight/core/pipeline.h>
 
@@ -34,6 +35,7 @@ struct CalibrationContext {
   std::vector<std::string> inputs;                           ///< files used
   std::vector<std::pair<std::string, std::string>> ignored;  ///< (file, product) not used
   calib::SolveOptions options;
+  calib::SpanOptions span_options;
   Json thermal;  ///< the `thermal` section as built by the caller (null: not computed)
 };
 
