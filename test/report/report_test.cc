@@ -266,3 +266,51 @@ TEST(SpanNeed, CrnNoiseAndTheBoundsScaling) {
   EXPECT_NEAR(n3.observations / n.observations, 0.25, 0.01);
   EXPECT_NEAR(n.bound_s, n.crn_s + n.observations * 10.0, 1e-6);
 }
+
+TEST(ThermalJson, PerNonDatumHeadAxisAndHarmonicWithBetaNotDeterminedOnShortSpans) {
+  bc::ThermalFitResult t;
+  t.ok = true;
+  t.datum_note = "head 1 (slot 0) is the datum";
+  t.harmonics = {1, 3};
+  t.beta_note = "beta moved 0.1 deg";
+  bc::ThermalHeadFit h;
+  h.id = 2;
+  h.datum_id = 1;
+  h.determined = true;
+  h.epochs = 1000;
+  for (std::size_t a = 0; a < 3; ++a) {
+    h.axis[a].terms = {{1, 4.0 + double(a), -3.0, 0.5, 0.6}, {3, 0.1, 0.2, 0.4, 0.4}};
+    h.axis[a].rms_before_arcsec = 10;
+    h.axis[a].rms_after_arcsec = 6;
+  }
+  bc::ThermalHeadFit h3;
+  h3.id = 3;
+  h3.datum_id = 1;
+  h3.reason = "u covers 0.2 revolutions";
+  t.heads = {h, h3};
+  Json j = br::thermalJson(t);
+  EXPECT_EQ(j["status"], "fitted");
+  EXPECT_EQ(j["beta"]["modulation"], "not determined");
+  const auto& y = j["heads"][0]["axes_of_datum_head_frame"]["y"];
+  EXPECT_EQ(y["beta_modulation"], "not determined");
+  EXPECT_EQ(y["harmonics"][0]["harmonic"], 1);
+  EXPECT_DOUBLE_EQ(y["harmonics"][0]["cos_arcsec"].get<double>(), 5.0);
+  EXPECT_DOUBLE_EQ(y["harmonics"][0]["sigma_sin_arcsec"].get<double>(), 0.6);
+  EXPECT_EQ(y["harmonics"][1]["harmonic"], 3);
+  EXPECT_DOUBLE_EQ(y["rms_after_arcsec"].get<double>(), 6.0);
+  EXPECT_EQ(j["heads"][0]["datum_head"], 1);
+  EXPECT_FALSE(j["heads"][1]["determined"].get<bool>());
+  EXPECT_EQ(j["heads"][1]["reason"], "u covers 0.2 revolutions");
+  EXPECT_FALSE(j["heads"][1].contains("axes_of_datum_head_frame"));
+  // Weeks of data: the beta terms are written.
+  t.beta_determined = true;
+  t.heads[0].beta_determined = true;
+  for (auto& ax : t.heads[0].axis) ax.beta_terms = {{1, 0.7, -0.2, 0.1, 0.1}, {3, 0.0, 0.0, 0.1, 0.1}};
+  j = br::thermalJson(t);
+  EXPECT_EQ(j["beta"]["modulation"], "fitted");
+  EXPECT_DOUBLE_EQ(j["heads"][0]["axes_of_datum_head_frame"]["z"]["beta_modulation"][0]["cos_arcsec"].get<double>(), 0.7);
+  // Not fitted at all: the reason in the status.
+  t.ok = false;
+  t.error = "no orbit records";
+  EXPECT_EQ(br::thermalJson(t)["status"], "not determined: no orbit records");
+}
