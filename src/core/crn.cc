@@ -94,13 +94,15 @@ BORESIGHT_CLONES void crnDot4x3(const double* g0, const double* g1, const double
     a[10] += k1 * y3;
     a[11] += k2 * y3;
   }
+  for (int i = 0; i < 12; ++i) out[i] = hsum(a[i]);
+  if (j == n) return;  // the streams call with n a multiple of 8 (crnPaddedTaps): no scalar tail
   const double* g[3] = {g0, g1, g2};
   const double* x[4] = {x0, x1, x2, x3};
   for (int c = 0; c < 4; ++c)
     for (int o = 0; o < 3; ++o) {
       double r = 0;
       for (int jj = j; jj < n; ++jj) r += g[o][jj] * x[c][jj];
-      out[3 * c + o] = hsum(a[3 * c + o]) + r;
+      out[3 * c + o] += r;
     }
 }
 

@@ -61,12 +61,17 @@ struct CrnKernel {
   int nb = 0;          ///< NB, bins of half-width B
   double fs_hz = 0;
   double tf_s = 0;     ///< Nf / fs
-  std::array<std::array<double, kMaxCrnTaps>, 3> g{};  ///< g[order][n + M]
+  /// g[order][n + M]; zero beyond nf (up to kCrnKernelStride), so that a dot product may run over
+  /// crnPaddedTaps(nf) taps: the padding adds exact zeros (the stream's ring holds only finite values)
+  std::array<std::array<double, kCrnKernelStride>, 3> g{};
 
   /// Frequency response of the designed kernel of `order` at f (Hz): the real gain for order 0 and 2,
   /// the gain of the quadrature part for order 1 (ideal: 1, 2 pi f, -(2 pi f)^2 times the low-pass).
   double response(int order, double f_hz) const;
 };
+
+/// nf rounded up to a multiple of 8 (the vector loops of crnDot* then have no scalar tail).
+constexpr int crnPaddedTaps(int nf) { return (nf + 7) & ~7; }
 
 /// Designs the kernels; kInvalidConfig when the parameters are out of range.
 Status designCrn(const CrnConfig& cfg, CrnKernel& out);
@@ -123,8 +128,27 @@ class CrnStream {
   /// Pushes one sample. Outputs completed by it are output(0..numOutputs()-1) until the next step.
   Status step(TimeUs t, const VecN& x) {
     n_out_ = 0;
+    // the usual case first (small, inlined): the next slot, within the jitter tolerance (d > 0)
+    const TimeUs d = t - last_t_;
+    if (have_last_ && d >= dt_us_ - tol_us_ && d <= dt_us_ + tol_us_ && configured_ && finite(x)) {
+      push(t, x, true);
+      health_.record(Status::kOk);
+      return Status::kOk;
+    }
+    return stepGeneral(t, x);
+  }
+
+ private:
+  static bool finite(const VecN& x) {
+    bool ok = true;
+    for (int ch = 0; ch < N; ++ch) ok = ok && std::isfinite(x[ch]);
+    return ok;
+  }
+
+  // Every other case: first sample, bad input, time errors, gaps (bridged or restarting).
+  __attribute__((noinline)) Status stepGeneral(TimeUs t, const VecN& x) {
     if (!configured_) return record(Status::kNotConfigured);
-    if (!x.allFinite()) return record(Status::kNonFinite);
+    if (!finite(x)) return record(Status::kNonFinite);
     Status result = Status::kOk;
     if (have_last_) {
       const TimeUs d = t - last_t_;
@@ -132,8 +156,7 @@ class CrnStream {
       if (d == 0) return record(Status::kDuplicateTime);
       // The step in whole sampling intervals, rounded to the nearest; it is on the grid when its
       // intervals deviate from dt by at most the tolerance each (n intervals: n * tol in all).
-      const bool regular = d >= dt_us_ - tol_us_ && d <= dt_us_ + tol_us_;  // the usual case: n = 1
-      const TimeUs n = regular ? 1 : (d + dt_us_ / 2) / dt_us_;
+      const TimeUs n = (d + dt_us_ / 2) / dt_us_;
       const TimeUs dev = d - n * dt_us_;
       const bool on_grid = n >= 1 && dev <= n * tol_us_ && -dev <= n * tol_us_;
       if (n <= 1 && !on_grid) return record(Status::kIrregularTime);  // too early or too late for its slot
@@ -159,6 +182,7 @@ class CrnStream {
     return record(result);
   }
 
+ public:
   /// Evaluates the filter at tag tau from the current history (no allocation).
   /// kNotReady: not enough samples after tau yet; kUnavailable: tau is not covered (too old, in a
   /// restarted gap, or before the first sample).
@@ -194,7 +218,8 @@ class CrnStream {
       if (cfg_.max_order >= 1) {
         double r[3];
         crnDotTaylor3(kernel_.g[0].data(), kernel_.g[1].data(), dts, &buf_[0][static_cast<std::size_t>(c - M)],
-                      &buf_[1][static_cast<std::size_t>(c - M)], &buf_[2][static_cast<std::size_t>(c - M)], L, r);
+                      &buf_[1][static_cast<std::size_t>(c - M)], &buf_[2][static_cast<std::size_t>(c - M)],
+                      crnPaddedTaps(L), r);
         y = VecN(r[0], r[1], r[2]);
         return Status::kOk;
       }
@@ -293,7 +318,7 @@ class CrnStream {
         double r[12];
         const auto b = static_cast<std::size_t>(c - M);
         crnDot4x3(kernel_.g[0].data(), kernel_.g[1].data(), kernel_.g[2].data(), &buf_[0][b], &buf_[1][b], &buf_[2][b],
-                  &buf_[3][b], L, r);
+                  &buf_[3][b], crnPaddedTaps(L), r);
         for (int ch = 0; ch < 4; ++ch)
           for (int order = 0; order < 3; ++order) o.y[static_cast<std::size_t>(order)][ch] = r[3 * ch + order];
         return;
@@ -311,7 +336,9 @@ class CrnStream {
   CrnKernel kernel_{};
   bool configured_ = false;
   TimeUs dt_us_ = 0, tol_us_ = 0;
-  std::array<std::array<double, 2 * kCrnRing>, static_cast<std::size_t>(N)> buf_{};
+  // + 8: a window ending at the newest sample may be read on to its padded length (crnPaddedTaps;
+  // the kernel's padding taps are zero and every value here is finite, so they add exact zeros)
+  std::array<std::array<double, 2 * kCrnRing + 8>, static_cast<std::size_t>(N)> buf_{};
   std::array<TimeUs, kCrnRing> times_{};
   int pos_ = 0;
   int count_ = 0;
