@@ -106,6 +106,36 @@ BORESIGHT_CLONES void crnDot4x3(const double* g0, const double* g1, const double
     }
 }
 
+BORESIGHT_CLONES void crnDotFolded4x3(const double* h0, const double* h1, const double* h2, const double centre[3],
+                                      const double* const xp[4], const double* const xm[4], const double xc[4], int m,
+                                      double out[12]) {
+  // per channel the sum and the difference of the mirrored samples, then the even kernels on the sum
+  // and the odd one on the difference: 2 loads, an add, a subtraction and 3 multiply-adds per 4 tap
+  // pairs and channel (12 accumulators; the kernels are read from memory)
+  V4 a[12];
+  for (auto& v : a) v = V4{0, 0, 0, 0};
+  int i = 0;
+  for (; i + 4 <= m; i += 4) {
+    for (int c = 0; c < 4; ++c) {
+      const V4 p = load4(xp[c] + i), q = load4(xm[c] + i);
+      const V4 sum = p + q, dif = p - q;
+      a[3 * c] += load4(h0 + i) * sum;
+      a[3 * c + 1] += load4(h1 + i) * dif;
+      a[3 * c + 2] += load4(h2 + i) * sum;
+    }
+  }
+  for (int c = 0; c < 4; ++c)
+    for (int o = 0; o < 3; ++o) out[3 * c + o] = hsum(a[3 * c + o]) + centre[o] * xc[c];
+  if (i == m) return;  // the stream calls with m a multiple of 4: no scalar tail
+  for (int c = 0; c < 4; ++c)
+    for (int j = i; j < m; ++j) {
+      const double sum = xp[c][j] + xm[c][j], dif = xp[c][j] - xm[c][j];
+      out[3 * c] += h0[j] * sum;
+      out[3 * c + 1] += h1[j] * dif;
+      out[3 * c + 2] += h2[j] * sum;
+    }
+}
+
 BORESIGHT_CLONES void crnAxpy(const double* a, const double* b, double s, double* out, int n) {
   for (int j = 0; j < n; ++j) out[j] = a[j] + s * b[j];
 }
