@@ -51,16 +51,22 @@ BORESIGHT_CLONES void crnDotTaylor3(const double* g0, const double* g1, double s
   const V4 sv = {s, s, s, s};
   V4 a0 = {0, 0, 0, 0}, a1 = a0, a2 = a0, b0 = a0, b1 = a0, b2 = a0;
   int j = 0;
-  for (; j + 8 <= n; j += 8) {
-    const V4 k = load4(g0 + j) + sv * load4(g1 + j);
-    const V4 kk = load4(g0 + j + 4) + sv * load4(g1 + j + 4);
-    a0 += k * load4(x0 + j);
-    a1 += k * load4(x1 + j);
-    a2 += k * load4(x2 + j);
-    b0 += kk * load4(x0 + j + 4);
-    b1 += kk * load4(x1 + j + 4);
-    b2 += kk * load4(x2 + j + 4);
+  // one block of 8 taps: a* take its first four, b* its last four
+  auto block = [&](int i) __attribute__((always_inline)) {
+    const V4 k = load4(g0 + i) + sv * load4(g1 + i);
+    const V4 kk = load4(g0 + i + 4) + sv * load4(g1 + i + 4);
+    a0 += k * load4(x0 + i);
+    a1 += k * load4(x1 + i);
+    a2 += k * load4(x2 + i);
+    b0 += kk * load4(x0 + i + 4);
+    b1 += kk * load4(x1 + i + 4);
+    b2 += kk * load4(x2 + i + 4);
+  };
+  for (; j + 16 <= n; j += 16) {  // two blocks per pass (less loop overhead; the same sums in the same order)
+    block(j);
+    block(j + 8);
   }
+  for (; j + 8 <= n; j += 8) block(j);
   double r0 = 0, r1 = 0, r2 = 0;
   for (; j < n; ++j) {
     const double k = g0[j] + s * g1[j];
