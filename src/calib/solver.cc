@@ -185,11 +185,12 @@ std::string checkSpan(const CalibrationSpan& span, const SolveOptions& opt) {
     return "the span has no decimation interval or noise correlation (not built by SpanBuilder?)";
   const double need_each_side = span.crn_half_length_s > 0 ? span.crn_half_length_s : 35.4;
   const double span_s = toSeconds(span.t_last - span.t_first);
-  if (span.obs.size() < opt.min_epochs) {
+  const std::size_t min_epochs = std::max<std::size_t>(opt.min_epochs, 3);  // 0 would let an empty span through
+  if (span.obs.size() < min_epochs) {
     m << "too few epochs: " << span.obs.size() << " calibration epochs (one per " << span.decimation_s
       << " s with head and accelerometer data) from " << span_s << " s of head data; at least "
-      << opt.min_epochs << " are needed, i.e. "
-      << 2.0 * need_each_side + static_cast<double>(opt.min_epochs) * span.decimation_s
+      << min_epochs << " are needed, i.e. "
+      << 2.0 * need_each_side + static_cast<double>(min_epochs) * span.decimation_s
       << " s of continuous head and accelerometer data (the CRN needs " << need_each_side
       << " s each side of an epoch), and excitation (manoeuvres or thruster activity) during it";
     return m.str();

@@ -108,6 +108,9 @@ TEST(CalibSolver, RefusesTooFewEpochs) {
   EXPECT_FALSE(r.ok);
   EXPECT_NE(r.message.find("too few epochs"), std::string::npos) << r.message;
   EXPECT_NE(r.message.find("each side"), std::string::npos) << r.message;
+  SolveOptions zero;
+  zero.min_epochs = 0;  // an empty span is still refused, never solved
+  EXPECT_FALSE(solve(s, zero).ok);
 }
 
 
@@ -327,6 +330,18 @@ TEST(CalibSolver, HardModeRefusesAHeadNeverSeenWithTheOthers) {
   SolveResult r = solve(s, SolveOptions{});
   EXPECT_FALSE(r.ok);
   EXPECT_NE(r.message.find("never observed together"), std::string::npos) << r.message;
+  // the prior mode calibrates the two heads it has and says that it knows nothing of the third
+  SolveOptions p;
+  p.relative = RelativeMode::kPrior;
+  r = solve(s, p);
+  ASSERT_TRUE(r.ok) << r.message;
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_TRUE(r.heads[0].observable[static_cast<std::size_t>(i)]);
+    EXPECT_TRUE(r.heads[1].observable[static_cast<std::size_t>(i)]);
+    EXPECT_FALSE(r.heads[2].observable[static_cast<std::size_t>(i)]);
+    EXPECT_FALSE(r.heads[2].sigma_arcsec[static_cast<std::size_t>(i)].has_value());
+    EXPECT_TRUE(std::isinf(r.heads[2].crlb_arcsec[static_cast<std::size_t>(i)]));
+  }
 }
 
 TEST(CalibSolver, RobustLossAgainstAccelerometerTransients) {
