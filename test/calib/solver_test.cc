@@ -49,6 +49,22 @@ TEST(CalibSpanBuilder, OneObservationPerDecimationWithAllHeads) {
   EXPECT_NEAR(s.noise_correlation[1], 0.40, 0.02);  // the CRN second-derivative kernel at 10 s
 }
 
+TEST(CalibSpanBuilder, MaxObservationsKeepsTheNewest) {
+  const synth::Config c = manoeuvreCase(15);
+  SpanBuilder b;
+  std::string err;
+  SpanOptions so;
+  so.max_observations = 100;
+  ASSERT_TRUE(synth::generate(c, b, &err, &so)) << err;
+  const CalibrationSpan& s = b.span();
+  EXPECT_LE(s.obs.size(), 100u);
+  EXPECT_GE(s.obs.size(), 100u - 100u / 16);
+  // the newest epoch is the last one the full span has
+  const CalibrationSpan full = build(c);
+  EXPECT_EQ(s.obs.back().t, full.obs.back().t);
+  EXPECT_GT(s.obs.front().t, full.obs.front().t);
+}
+
 TEST(CalibSpanBuilder, HeadAccelerationMatchesTruthInHeadFrame) {
   // noise-free heads: alpha_S of the CRN equals the filtered truth C_Sh_B C_B_A K^-1 (a_A - b)
   synth::Config c = manoeuvreCase(2);
