@@ -218,7 +218,7 @@ std::string checkSpan(const CalibrationSpan& span, const SolveOptions& opt) {
     return "C_B_A is not a proper rotation";
   if (!(span.decimation_s > 0) || span.noise_correlation.empty() || span.noise_correlation[0] != 1.0)
     return "the span has no decimation interval or noise correlation (not built by SpanBuilder?)";
-  const double need_each_side = span.crn_half_length_s > 0 ? span.crn_half_length_s : 35.4;
+  const double need_each_side = span.crn_half_length_s > 0 ? span.crn_half_length_s : 35.3;
   const double span_s = toSeconds(span.t_last - span.t_first);
   const std::size_t min_epochs = std::max<std::size_t>(opt.min_epochs, 3);  // 0 would let an empty span through
   if (span.obs.size() < min_epochs) {
