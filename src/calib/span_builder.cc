@@ -2,6 +2,7 @@
 
 #include "boresight/core/rotation.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace boresight::calib {
@@ -229,7 +230,11 @@ void SpanBuilder::resolve() {
 }
 
 void SpanBuilder::emit(Observation&& ob) {
-  if (opt_.max_observations > 0 && span_.obs.size() >= opt_.max_observations) span_.obs.erase(span_.obs.begin());
+  if (opt_.max_observations > 0 && span_.obs.size() >= opt_.max_observations) {
+    // drop the oldest in blocks of 1/16 of the limit (one move of the vector per block, not per epoch)
+    const std::size_t n = std::min(span_.obs.size(), std::max<std::size_t>(1, opt_.max_observations / 16));
+    span_.obs.erase(span_.obs.begin(), span_.obs.begin() + static_cast<std::ptrdiff_t>(n));
+  }
   span_.obs.push_back(std::move(ob));
 }
 

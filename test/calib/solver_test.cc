@@ -49,6 +49,22 @@ TEST(CalibSpanBuilder, OneObservationPerDecimationWithAllHeads) {
   EXPECT_NEAR(s.noise_correlation[1], 0.40, 0.02);  // the CRN second-derivative kernel at 10 s
 }
 
+TEST(CalibSpanBuilder, MaxObservationsKeepsTheNewest) {
+  const synth::Config c = manoeuvreCase(15);
+  SpanBuilder b;
+  std::string err;
+  SpanOptions so;
+  so.max_observations = 100;
+  ASSERT_TRUE(synth::generate(c, b, &err, &so)) << err;
+  const CalibrationSpan& s = b.span();
+  EXPECT_LE(s.obs.size(), 100u);
+  EXPECT_GE(s.obs.size(), 100u - 100u / 16);
+  // the newest epoch is the last one the full span has
+  const CalibrationSpan full = build(c);
+  EXPECT_EQ(s.obs.back().t, full.obs.back().t);
+  EXPECT_GT(s.obs.front().t, full.obs.front().t);
+}
+
 TEST(CalibSpanBuilder, HeadAccelerationMatchesTruthInHeadFrame) {
   // noise-free heads: alpha_S of the CRN equals the filtered truth C_Sh_B C_B_A K^-1 (a_A - b)
   synth::Config c = manoeuvreCase(2);
@@ -108,6 +124,9 @@ TEST(CalibSolver, RefusesTooFewEpochs) {
   EXPECT_FALSE(r.ok);
   EXPECT_NE(r.message.find("too few epochs"), std::string::npos) << r.message;
   EXPECT_NE(r.message.find("each side"), std::string::npos) << r.message;
+  SolveOptions zero;
+  zero.min_epochs = 0;  // an empty span is still refused, never solved
+  EXPECT_FALSE(solve(s, zero).ok);
 }
 
 
@@ -327,6 +346,18 @@ TEST(CalibSolver, HardModeRefusesAHeadNeverSeenWithTheOthers) {
   SolveResult r = solve(s, SolveOptions{});
   EXPECT_FALSE(r.ok);
   EXPECT_NE(r.message.find("never observed together"), std::string::npos) << r.message;
+  // the prior mode calibrates the two heads it has and says that it knows nothing of the third
+  SolveOptions p;
+  p.relative = RelativeMode::kPrior;
+  r = solve(s, p);
+  ASSERT_TRUE(r.ok) << r.message;
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_TRUE(r.heads[0].observable[static_cast<std::size_t>(i)]);
+    EXPECT_TRUE(r.heads[1].observable[static_cast<std::size_t>(i)]);
+    EXPECT_FALSE(r.heads[2].observable[static_cast<std::size_t>(i)]);
+    EXPECT_FALSE(r.heads[2].sigma_arcsec[static_cast<std::size_t>(i)].has_value());
+    EXPECT_TRUE(std::isinf(r.heads[2].crlb_arcsec[static_cast<std::size_t>(i)]));
+  }
 }
 
 TEST(CalibSolver, RobustLossAgainstAccelerometerTransients) {

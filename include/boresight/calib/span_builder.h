@@ -32,7 +32,7 @@ namespace boresight::calib {
 
 struct SpanOptions {
   double decimation_s = 10.0;          ///< one observation per this interval, s (>= the head interval)
-  std::size_t max_observations = 0;    ///< 0 = no limit; else the oldest are dropped
+  std::size_t max_observations = 0;    ///< 0 = no limit; else the oldest are dropped (1/16 of it at a time)
   /// White noise of the accelerometer's angular acceleration per sample and A axis, rad/s^2
   /// (GRACE-FO ACC1A at 10 Hz, as config/sim_gracefo.yaml).
   Vec3 acc_white_noise_radps2 = Vec3(1.5e-7, 3.0e-8, 5.0e-8);
