@@ -9,5 +9,7 @@ int runConvert(int argc, char** argv);
 int runProcess(int argc, char** argv);
 int runSimulate(int argc, char** argv);
 int runPlot(int argc, char** argv);
+int runGround(int argc, char** argv);
+int runSimulateGround(int argc, char** argv);
 
 }  // namespace boresight::cli

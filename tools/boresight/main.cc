@@ -25,6 +25,10 @@ const Command kCommands[] = {
 #ifdef BORESIGHT_HAVE_SIMULATE
     {"simulate", "simulate real-format telemetry with known truth and injected effects", boresight::cli::runSimulate},
 #endif
+#ifdef BORESIGHT_HAVE_GROUND
+    {"ground", "star sensor to IMU mounting from a ground measurement (method C)", boresight::cli::runGround},
+    {"simulate-ground", "simulate a method C ground measurement with its truth", boresight::cli::runSimulateGround},
+#endif
 };
 
 void usage(std::FILE* out) {

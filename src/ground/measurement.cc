@@ -1,0 +1,305 @@
+// Reader, validator and writer of the method C measurement file (format in measurement.h).
+#include <boresight/ground/measurement.h>
+
+#include <boresight/core/rotation.h>
+
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <initializer_list>
+#include <sstream>
+
+namespace boresight::ground {
+namespace {
+
+/// A located parse error, thrown inside this file only and turned into "name:line: reason".
+struct Located {
+  int line;  // 1-based, 0 = unknown
+  std::string what;
+};
+
+int lineOf(const YAML::Node& n) { return n.Mark().line >= 0 ? n.Mark().line + 1 : 0; }
+
+[[noreturn]] void fail(const YAML::Node& n, const std::string& what) { throw Located{lineOf(n), what}; }
+
+void checkKeys(const YAML::Node& map, const char* where, std::initializer_list<const char*> allowed) {
+  if (!map.IsMap()) fail(map, std::string(where) + ": expected a map");
+  for (const auto& kv : map) {
+    const std::string k = kv.first.Scalar();
+    if (std::none_of(allowed.begin(), allowed.end(), [&](const char* a) { return k == a; }))
+      fail(kv.first, std::string(where) + ": unknown key '" + k + "'");
+  }
+}
+
+YAML::Node need(const YAML::Node& map, const char* key, const char* where) {
+  const YAML::Node n = map[key];
+  if (!n) fail(map, std::string(where) + ": missing key '" + key + "'");
+  return n;
+}
+
+double number(const YAML::Node& n, const std::string& what) {
+  if (!n.IsScalar()) fail(n, what + ": expected a number");
+  double x = 0;
+  try {
+    x = n.as<double>();
+  } catch (const YAML::Exception&) {
+    fail(n, what + ": '" + n.Scalar() + "' is not a number");
+  }
+  if (!std::isfinite(x)) fail(n, what + ": not a finite number ('" + n.Scalar() + "')");
+  return x;
+}
+
+std::vector<double> numbers(const YAML::Node& n, std::size_t count, const std::string& what) {
+  if (!n.IsSequence() || n.size() != count)
+    fail(n, what + ": expected a list of " + std::to_string(count) + " numbers");
+  std::vector<double> v;
+  for (std::size_t i = 0; i < count; ++i) v.push_back(number(n[i], what));
+  return v;
+}
+
+double positive(const YAML::Node& n, const std::string& what) {
+  const double x = number(n, what);
+  if (!(x > 0)) fail(n, what + ": must be positive");
+  return x;
+}
+
+/// The two theodolite angles of a prism or target map, either convention, in radians.
+void readAngles(const YAML::Node& m, const std::string& where, double& az, double& el) {
+  const bool ccw = bool(m["azimuth_deg"]), cw = bool(m["azimuth_cw_deg"]);
+  const bool elev = bool(m["elevation_deg"]), zen = bool(m["zenith_deg"]);
+  if (ccw == cw) fail(m, where + (ccw ? ": both azimuth_deg and azimuth_cw_deg given" : ": missing key 'azimuth_deg'"));
+  if (elev == zen) fail(m, where + (elev ? ": both elevation_deg and zenith_deg given" : ": missing key 'elevation_deg'"));
+  az = ccw ? number(m["azimuth_deg"], where + ": azimuth_deg") : -number(m["azimuth_cw_deg"], where + ": azimuth_cw_deg");
+  el = elev ? number(m["elevation_deg"], where + ": elevation_deg") : 90.0 - number(m["zenith_deg"], where + ": zenith_deg");
+  if (el < -90.0 || el > 90.0) fail(m, where + ": elevation outside [-90, 90] deg");
+  az *= kRadPerDeg;
+  el *= kRadPerDeg;
+}
+
+void readCamera(const YAML::Node& c, CameraPrior& cam) {
+  checkKeys(c, "camera", {"focal_length_px", "principal_point_px", "pixel_aspect", "focal_length_sigma_px",
+                          "principal_point_sigma_px", "pixel_aspect_sigma", "detector_px", "radial_k1",
+                          "radial_k1_sigma"});
+  cam.nominal.f = positive(need(c, "focal_length_px", "camera"), "camera: focal_length_px");
+  const auto pp = numbers(need(c, "principal_point_px", "camera"), 2, "camera: principal_point_px");
+  cam.nominal.u0 = pp[0];
+  cam.nominal.v0 = pp[1];
+  cam.nominal.sx = positive(need(c, "pixel_aspect", "camera"), "camera: pixel_aspect");
+  cam.f_sigma_px = positive(need(c, "focal_length_sigma_px", "camera"), "camera: focal_length_sigma_px");
+  cam.pp_sigma_px = positive(need(c, "principal_point_sigma_px", "camera"), "camera: principal_point_sigma_px");
+  cam.sx_sigma = positive(need(c, "pixel_aspect_sigma", "camera"), "camera: pixel_aspect_sigma");
+  if (c["detector_px"]) {
+    const auto d = numbers(c["detector_px"], 2, "camera: detector_px");
+    if (!(d[0] > 0 && d[1] > 0)) fail(c["detector_px"], "camera: detector_px must be positive");
+    cam.width_px = d[0];
+    cam.height_px = d[1];
+  }
+  if (c["radial_k1"]) cam.nominal.k1 = number(c["radial_k1"], "camera: radial_k1");
+  if (c["radial_k1_sigma"]) {
+    cam.k1_sigma = positive(c["radial_k1_sigma"], "camera: radial_k1_sigma");
+    cam.estimate_k1 = true;
+  }
+}
+
+void readPosition(const YAML::Node& p, std::size_t index, Position& pos) {
+  const std::string where = "position " + std::to_string(index + 1);
+  checkKeys(p, where.c_str(), {"name", "prisms", "accel_mps2", "targets"});
+  pos.line = lineOf(p);
+  pos.name = p["name"] ? p["name"].Scalar() : where;
+  const YAML::Node prisms = need(p, "prisms", where.c_str());
+  if (!prisms.IsSequence()) fail(prisms, where + ": prisms: expected a list");
+  for (std::size_t i = 0; i < prisms.size(); ++i) {
+    const YAML::Node& q = prisms[i];
+    const std::string w = where + " prism " + std::to_string(i + 1);
+    checkKeys(q, w.c_str(), {"axis_t", "azimuth_deg", "elevation_deg", "azimuth_cw_deg", "zenith_deg"});
+    PrismReading r;
+    r.line = lineOf(q);
+    const auto a = numbers(need(q, "axis_t", w.c_str()), 3, w + ": axis_t");
+    r.axis_t = Vec3(a[0], a[1], a[2]);
+    if (std::abs(r.axis_t.norm() - 1.0) > 1e-3) fail(q["axis_t"], w + ": axis_t is not a unit vector");
+    r.axis_t.normalize();
+    readAngles(q, w, r.az_rad, r.el_rad);
+    pos.prisms.push_back(r);
+  }
+  const YAML::Node acc = need(p, "accel_mps2", where.c_str());
+  if (!acc.IsSequence()) fail(acc, where + ": accel_mps2: expected a list of [fx, fy, fz]");
+  pos.accel_mps2.reserve(acc.size());
+  for (std::size_t i = 0; i < acc.size(); ++i) {
+    const auto f = numbers(acc[i], 3, where + ": accel_mps2 sample " + std::to_string(i + 1));
+    pos.accel_mps2.emplace_back(f[0], f[1], f[2]);
+  }
+  const YAML::Node tg = need(p, "targets", where.c_str());
+  if (!tg.IsSequence()) fail(tg, where + ": targets: expected a list");
+  for (std::size_t i = 0; i < tg.size(); ++i) {
+    const YAML::Node& t = tg[i];
+    const std::string w = where + " target " + std::to_string(i + 1);
+    checkKeys(t, w.c_str(), {"azimuth_deg", "elevation_deg", "azimuth_cw_deg", "zenith_deg", "centroid_px"});
+    TargetReading r;
+    r.line = lineOf(t);
+    readAngles(t, w, r.az_rad, r.el_rad);
+    const auto c = numbers(need(t, "centroid_px", w.c_str()), 2, w + ": centroid_px");
+    r.u_px = c[0];
+    r.v_px = c[1];
+    pos.targets.push_back(r);
+  }
+}
+
+std::string at(const std::string& name, int line) {
+  return line > 0 ? name + ":" + std::to_string(line) + ": " : name + ": ";
+}
+
+}  // namespace
+
+bool validateMeasurement(const Measurement& m, const std::string& name, std::string* error) {
+  auto bad = [&](int line, const std::string& what) {
+    if (error) *error = at(name, line) + what;
+    return false;
+  };
+  if (!(m.gravity_mps2 > 1.0 && m.gravity_mps2 < 30.0)) return bad(0, "gravity_mps2 out of range");
+  if (m.positions.empty()) return bad(0, "no positions");
+  const CameraPrior& c = m.camera;
+  for (std::size_t k = 0; k < m.positions.size(); ++k) {
+    const Position& p = m.positions[k];
+    const std::string where = "position '" + p.name + "'";
+    if (p.prisms.empty()) return bad(p.line, where + ": no prism reading (the yaw needs at least one face)");
+    if (p.accel_mps2.empty()) return bad(p.line, where + ": no accelerometer samples");
+    for (const auto& f : p.accel_mps2)
+      if (!core::allFinite(f)) return bad(p.line, where + ": non-finite accelerometer sample");
+    Vec3 mean = Vec3::Zero();
+    for (const auto& f : p.accel_mps2) mean += f;
+    mean /= static_cast<double>(p.accel_mps2.size());
+    if (std::abs(mean.norm() / m.gravity_mps2 - 1.0) > 0.05)
+      return bad(p.line, where + ": mean specific force " + std::to_string(mean.norm()) +
+                             " m/s^2 differs from gravity_mps2 by more than 5 % (units? not at rest?)");
+    if (p.targets.size() < 4)
+      return bad(p.line, where + ": " + std::to_string(p.targets.size()) + " targets, at least 4 are needed");
+    for (const auto& t : p.targets) {
+      if (!std::isfinite(t.u_px) || !std::isfinite(t.v_px) || !std::isfinite(t.az_rad) || !std::isfinite(t.el_rad))
+        return bad(t.line, "non-finite target value");
+      if (t.u_px < 0 || t.u_px > c.width_px || t.v_px < 0 || t.v_px > c.height_px) {
+        char buf[160];
+        std::snprintf(buf, sizeof buf, "centroid (%.3f, %.3f) px outside the detector (0..%g, 0..%g)", t.u_px, t.v_px,
+                      c.width_px, c.height_px);
+        return bad(t.line, buf);
+      }
+    }
+    // Targets on a line: the centroid scatter must have a second principal direction. (The same
+    // test on the theodolite directions would be equivalent for a working sensor.)
+    double su = 0, sv = 0;
+    for (const auto& t : p.targets) {
+      su += t.u_px;
+      sv += t.v_px;
+    }
+    const double n = static_cast<double>(p.targets.size());
+    su /= n;
+    sv /= n;
+    double a = 0, b = 0, d = 0;
+    for (const auto& t : p.targets) {
+      a += (t.u_px - su) * (t.u_px - su);
+      b += (t.u_px - su) * (t.v_px - sv);
+      d += (t.v_px - sv) * (t.v_px - sv);
+    }
+    const double tr = a + d, det = a * d - b * b;
+    const double lmin = 0.5 * (tr - std::sqrt(std::max(0.0, tr * tr - 4 * det)));
+    const double lmax = tr - lmin;
+    // thickness below 1 % of the length (or all targets within 1 px): a line, not an area
+    if (lmax <= 1.0 * n || lmin < 1e-4 * lmax)
+      return bad(p.line, where + ": the targets lie on a line (or one point) in the image; the mounting needs "
+                             "targets spread over an area");
+  }
+  return true;
+}
+
+bool parseMeasurement(const std::string& yaml_text, const std::string& name, Measurement& out, std::string* error) {
+  Measurement m;
+  try {
+    const YAML::Node root = YAML::Load(yaml_text);
+    if (!root || !root.IsMap()) throw Located{0, "not a YAML map (is this a measurement file?)"};
+    checkKeys(root, "file", {"gravity_mps2", "camera", "design_q_s_t", "noise", "positions"});
+    m.gravity_mps2 = positive(need(root, "gravity_mps2", "file"), "gravity_mps2");
+    readCamera(need(root, "camera", "file"), m.camera);
+    const YAML::Node qn = need(root, "design_q_s_t", "file");
+    const auto q = numbers(qn, 4, "design_q_s_t");
+    const double qn2 = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+    if (std::abs(qn2 - 1.0) > 1e-6) fail(qn, "design_q_s_t: not a unit quaternion (norm " + std::to_string(qn2) + ")");
+    m.q_s_t_design = quatFromScalarFirst(q[0] / qn2, q[1] / qn2, q[2] / qn2, q[3] / qn2);
+    if (const YAML::Node nz = root["noise"]) {
+      checkKeys(nz, "noise", {"centroid_sigma_px", "theodolite_sigma_arcsec", "accel_sigma_mps2"});
+      if (nz["centroid_sigma_px"]) m.noise.centroid_sigma_px = positive(nz["centroid_sigma_px"], "noise: centroid_sigma_px");
+      if (nz["theodolite_sigma_arcsec"])
+        m.noise.theodolite_sigma_rad = positive(nz["theodolite_sigma_arcsec"], "noise: theodolite_sigma_arcsec") * kRadPerArcsec;
+      if (nz["accel_sigma_mps2"]) m.noise.accel_sigma_mps2 = positive(nz["accel_sigma_mps2"], "noise: accel_sigma_mps2");
+    }
+    const YAML::Node ps = need(root, "positions", "file");
+    if (!ps.IsSequence() || ps.size() == 0) fail(ps, "positions: expected a non-empty list");
+    m.positions.resize(ps.size());
+    for (std::size_t k = 0; k < ps.size(); ++k) readPosition(ps[k], k, m.positions[k]);
+  } catch (const Located& e) {
+    if (error) *error = at(name, e.line) + e.what;
+    return false;
+  } catch (const YAML::Exception& e) {
+    if (error) *error = at(name, e.mark.line >= 0 ? e.mark.line + 1 : 0) + e.msg;
+    return false;
+  }
+  if (!validateMeasurement(m, name, error)) return false;
+  out = std::move(m);
+  return true;
+}
+
+bool loadMeasurement(const std::string& path, Measurement& out, std::string* error) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) {
+    if (error) *error = path + ": cannot open";
+    return false;
+  }
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return parseMeasurement(ss.str(), path, out, error);
+}
+
+bool writeMeasurement(const std::string& path, const Measurement& m, std::string* error) {
+  std::FILE* f = std::fopen(path.c_str(), "w");
+  if (!f) {
+    if (error) *error = path + ": cannot write";
+    return false;
+  }
+  const CameraPrior& c = m.camera;
+  double q[4];
+  quatToScalarFirst(m.q_s_t_design, q);
+  std::fprintf(f, "# method C ground measurement: angles in degrees, pixels, m/s^2 (boresight measurement file)\n");
+  std::fprintf(f, "gravity_mps2: %.9g\n", m.gravity_mps2);
+  std::fprintf(f,
+               "camera: {focal_length_px: %.10g, principal_point_px: [%.10g, %.10g], pixel_aspect: %.12g,\n"
+               "         focal_length_sigma_px: %.6g, principal_point_sigma_px: %.6g, pixel_aspect_sigma: %.6g,\n"
+               "         detector_px: [%.10g, %.10g]",
+               c.nominal.f, c.nominal.u0, c.nominal.v0, c.nominal.sx, c.f_sigma_px, c.pp_sigma_px, c.sx_sigma,
+               c.width_px, c.height_px);
+  if (c.nominal.k1 != 0.0) std::fprintf(f, ", radial_k1: %.10g", c.nominal.k1);
+  if (c.estimate_k1) std::fprintf(f, ", radial_k1_sigma: %.6g", c.k1_sigma);
+  std::fprintf(f, "}\n");
+  std::fprintf(f, "design_q_s_t: [%.15g, %.15g, %.15g, %.15g]\n", q[0], q[1], q[2], q[3]);
+  std::fprintf(f, "noise: {centroid_sigma_px: %.6g, theodolite_sigma_arcsec: %.6g", m.noise.centroid_sigma_px,
+               m.noise.theodolite_sigma_rad * kArcsecPerRad);
+  if (m.noise.accel_sigma_mps2 > 0) std::fprintf(f, ", accel_sigma_mps2: %.6g", m.noise.accel_sigma_mps2);
+  std::fprintf(f, "}\npositions:\n");
+  for (const Position& p : m.positions) {
+    std::fprintf(f, "  - name: \"%s\"\n    prisms:\n", p.name.c_str());
+    for (const PrismReading& r : p.prisms)
+      std::fprintf(f, "      - {axis_t: [%.15g, %.15g, %.15g], azimuth_deg: %.12f, elevation_deg: %.12f}\n",
+                   r.axis_t.x(), r.axis_t.y(), r.axis_t.z(), r.az_rad / kRadPerDeg, r.el_rad / kRadPerDeg);
+    std::fprintf(f, "    targets:\n");
+    for (const TargetReading& t : p.targets)
+      std::fprintf(f, "      - {azimuth_deg: %.12f, elevation_deg: %.12f, centroid_px: [%.6f, %.6f]}\n",
+                   t.az_rad / kRadPerDeg, t.el_rad / kRadPerDeg, t.u_px, t.v_px);
+    std::fprintf(f, "    accel_mps2:\n");
+    for (const Vec3& a : p.accel_mps2) std::fprintf(f, "      - [%.9f, %.9f, %.9f]\n", a.x(), a.y(), a.z());
+  }
+  const bool ok = std::fclose(f) == 0;
+  if (!ok && error) *error = path + ": write failed";
+  return ok;
+}
+
+}  // namespace boresight::ground
