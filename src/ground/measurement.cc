@@ -161,6 +161,12 @@ bool validateMeasurement(const Measurement& m, const std::string& name, std::str
   if (!(m.gravity_mps2 > 1.0 && m.gravity_mps2 < 30.0)) return bad(0, "gravity_mps2 out of range");
   if (m.positions.empty()) return bad(0, "no positions");
   const CameraPrior& c = m.camera;
+  if (!(c.f_sigma_px > 0 && c.pp_sigma_px > 0 && c.sx_sigma > 0 && (!c.estimate_k1 || c.k1_sigma > 0)))
+    return bad(0, "camera: every prior sigma must be positive");
+  if (!(c.nominal.f > 0 && c.nominal.sx > 0 && c.width_px > 0 && c.height_px > 0))
+    return bad(0, "camera: focal length, pixel aspect and detector size must be positive");
+  if (!(m.noise.centroid_sigma_px > 0 && m.noise.theodolite_sigma_rad > 0 && m.noise.accel_sigma_mps2 >= 0))
+    return bad(0, "noise: the centroid and theodolite sigmas must be positive");
   for (std::size_t k = 0; k < m.positions.size(); ++k) {
     const Position& p = m.positions[k];
     const std::string where = "position '" + p.name + "'";

@@ -277,18 +277,15 @@ bool solveGround(const Measurement& m, const RefineOptions& opt, GroundResult& o
   out = GroundResult{};
   if (!validateMeasurement(m, opt.source_name, error)) return false;
   if (!solveSeed(m, out.seed, error)) return false;
-  // A target far from the seed's boresight means a convention error, not a measurement.
-  for (std::size_t k = 0; k < m.positions.size(); ++k)
-    for (const TargetReading& t : m.positions[k].targets) {
-      const Vec3 d = out.seed.C_s_m[k] * directionFromAzEl(t.az_rad, t.el_rad);
-      if (d.z() < std::cos(45.0 * kRadPerDeg)) {
-        if (error)
-          *error = opt.source_name + ":" + std::to_string(t.line) + ": target " +
-                   std::to_string(std::acos(std::max(-1.0, std::min(1.0, d.z()))) / kRadPerDeg) +
-                   " deg from the boresight found by the seed (azimuth convention or prism axis wrong?)";
-        return false;
-      }
-    }
+  // The error angles are a small rotation from the design: a seed far from it means a convention
+  // error (design_q_s_t transposed, azimuths clockwise, a wrong prism axis), not a measurement.
+  const double dev_deg = out.seed.error_angles_rad.norm() / kRadPerDeg;
+  if (dev_deg > opt.max_design_deviation_deg) {
+    if (error)
+      *error = opt.source_name + ": the seed mounting is " + std::to_string(dev_deg) +
+               " deg from design_q_s_t (is it C_s_t, IMU to sensor? azimuths counterclockwise? the prism axis_t?)";
+    return false;
+  }
 
   Problem pr(m, out.seed);
   const double ba = opt.assumed_bias_mps2;

@@ -102,7 +102,8 @@ bool solveSeed(const Measurement& m, SeedResult& out, std::string* error) {
     }
     Mat3 P, C_s_m;
     if (!coefficientMatrix(r, xy, P) || !orthonormalise(P, C_s_m)) {
-      if (error) *error = "position '" + p.name + "': the coefficient matrix P is degenerate (targets?)";
+      if (error) *error = "position '" + p.name + "': the coefficient matrix P is degenerate or a mirror image (targets on a line? azimuths "
+                 "clockwise? use azimuth_cw_deg for those)";
       return false;
     }
     out.C_t_m.push_back(C_t_m);

@@ -88,8 +88,9 @@ bool simulateGround(const SimConfig& cfg, Measurement& m, SimTruth& truth, std::
   m.gravity_mps2 = g;
   m.camera = cfg.camera;
   m.q_s_t_design = cfg.q_s_t_design;
-  m.noise.centroid_sigma_px = cfg.centroid_sigma_px;
-  m.noise.theodolite_sigma_rad = th;
+  // the file's noise block states the simulated noise; noise-free data keep the default weights
+  if (cfg.centroid_sigma_px > 0) m.noise.centroid_sigma_px = cfg.centroid_sigma_px;
+  if (th > 0) m.noise.theodolite_sigma_rad = th;
   truth = SimTruth{};
 
   // truth: mounting, bias, intrinsics

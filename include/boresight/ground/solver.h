@@ -64,6 +64,7 @@ struct RefineOptions {
   double assumed_bias_mps2 = 100e-6 * 9.80665;  ///< the bias an unseparated axis may hide (100 ug)
   double separation_ratio = 3.0;  ///< an axis is separated when sigma_b <= assumed / ratio
   int max_iterations = 50;
+  double max_design_deviation_deg = 5.0;    ///< a seed further from the design is a convention error
   std::string source_name = "measurement";  ///< the file name in "name:line: reason" messages
 };
 
