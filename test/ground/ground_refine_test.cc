@@ -146,6 +146,11 @@ TEST(GroundRefine, RadialDistortionUnderItsPrior) {
   EXPECT_LT(r.camera_sigma.k1, 0.005);
   EXPECT_NEAR(r.camera.k1, 0.02, 0.02 * std::pow(r.camera_sigma.k1 / 0.05, 2) * 1.5 + 1e-9);
   EXPECT_LT(errArcsec(r, t), 0.05);
+  // a tight prior wins over the data: k1 stays near its prior mean and the fit degrades
+  cfg.camera.k1_sigma = 1e-5;
+  const GroundResult tight = solve(cfg, t);
+  EXPECT_LT(std::abs(tight.camera.k1), 1e-3);
+  EXPECT_LE(tight.camera_sigma.k1, 1e-5);
   // the same data with k1 held at 0: the model cannot fit (residuals of tenths of a pixel)
   cfg.camera.estimate_k1 = false;
   const GroundResult held = solve(cfg, t);
