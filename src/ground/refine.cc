@@ -11,6 +11,7 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <memory>
 
 namespace boresight::ground {
@@ -313,8 +314,8 @@ bool solveGround(const Measurement& m, const RefineOptions& opt, GroundResult& o
     out.rank = 0;
     for (int i = 0; i < nb; ++i)
       if (es.eigenvalues()[i] > 1e-10 * lmax) ++out.rank;
-    const double lmin = std::max(es.eigenvalues().minCoeff(), 1e-300);
-    out.condition = lmax / lmin;
+    // rank deficient: infinite; otherwise the ratio of the extreme eigenvalues
+    out.condition = out.rank < nb ? std::numeric_limits<double>::infinity() : lmax / es.eigenvalues().minCoeff();
   }
   Eigen::MatrixXd Hreg = H;
   for (int j = 0; j < 3; ++j) Hreg(ib + j, ib + j) += 1.0 / (ba * ba);

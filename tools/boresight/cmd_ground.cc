@@ -119,8 +119,13 @@ bool writeReport(const std::string& dir, const std::string& input, const ground:
                r.bias_sigma_mps2.y() / ug, r.bias_sigma_mps2.z() / ug);
   std::fprintf(f, "%-10s %12s %12s %12s\n\n", "separated", r.bias_observable[0] ? "yes" : "NO",
                r.bias_observable[1] ? "yes" : "NO", r.bias_observable[2] ? "yes" : "NO");
-  std::fprintf(f, "Information matrix (data and intrinsic priors, bias free, Jacobi-scaled): %d parameters, rank %d, "
-                  "condition %.3g\n", r.parameters, r.rank, r.condition);
+  std::fprintf(f, "Information matrix (data and intrinsic priors, bias free, Jacobi-scaled): %d parameters, rank %d, ",
+               r.parameters, r.rank);
+  if (r.rank < r.parameters)
+    std::fprintf(f, "condition infinite (%d direction%s not determined by the data)\n", r.parameters - r.rank,
+                 r.parameters - r.rank > 1 ? "s" : "");
+  else
+    std::fprintf(f, "condition %.3g\n", r.condition);
   for (const auto& n : r.notes) std::fprintf(f, "NOTE: %s\n", n.c_str());
   std::fprintf(f, "\nCamera (lab prior -> refined +- sigma):\n");
   const auto& c0 = m.camera.nominal;

@@ -94,7 +94,7 @@ struct GroundResult {
   std::vector<PositionResult> positions;
   // information-matrix diagnostics (data and intrinsic priors, bias unconstrained; Jacobi-scaled)
   int parameters = 0, rank = 0;
-  double condition = 0;
+  double condition = 0;  ///< infinity when rank < parameters
   std::vector<std::string> notes;  ///< plain-language observability statements
   int iterations = 0;
   bool converged = false;
