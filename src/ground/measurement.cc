@@ -297,7 +297,12 @@ bool writeMeasurement(const std::string& path, const Measurement& m, std::string
   if (m.noise.accel_sigma_mps2 > 0) std::fprintf(f, ", accel_sigma_mps2: %.6g", m.noise.accel_sigma_mps2);
   std::fprintf(f, "}\npositions:\n");
   for (const Position& p : m.positions) {
-    std::fprintf(f, "  - name: \"%s\"\n    prisms:\n", p.name.c_str());
+    std::string name;  // a double-quoted YAML scalar: escape backslashes and quotes
+    for (char ch : p.name) {
+      if (ch == '"' || ch == '\\') name += '\\';
+      name += ch;
+    }
+    std::fprintf(f, "  - name: \"%s\"\n    prisms:\n", name.c_str());
     for (const PrismReading& r : p.prisms)
       std::fprintf(f, "      - {axis_t: [%.15g, %.15g, %.15g], azimuth_deg: %.12f, elevation_deg: %.12f}\n",
                    r.axis_t.x(), r.axis_t.y(), r.axis_t.z(), r.az_rad / kRadPerDeg, r.el_rad / kRadPerDeg);

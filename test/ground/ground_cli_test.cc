@@ -141,6 +141,7 @@ TEST_F(GroundCli, BadFileIsALocatedErrorNotACrash) {
   EXPECT_EQ(run("ground --input " + p("m.yaml"), dir_).status, 2);
   EXPECT_EQ(run("simulate-ground --out " + p("x.yaml"), dir_).status, 2);
   EXPECT_EQ(run("simulate-ground --seed 1 --setup sideways --out " + p("x.yaml"), dir_).status, 2);
+  EXPECT_EQ(run("simulate-ground --seed -1 --out " + p("x.yaml"), dir_).status, 2);
   r = run("ground --help", dir_);
   EXPECT_EQ(r.status, 0);
   EXPECT_NE(r.out.find("hidden_tilt_arcsec"), std::string::npos);

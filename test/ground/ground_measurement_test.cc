@@ -77,6 +77,7 @@ TEST(GroundMeasurement, RoundTrip) {
   Measurement m, back;
   SimTruth t;
   ASSERT_TRUE(simulateGround(cfg, m, t, nullptr));
+  m.positions[1].name = "table \"B\" \\ 20 deg: tilted";
   const auto path = std::filesystem::temp_directory_path() / "boresight_ground_rt.yaml";
   ASSERT_TRUE(writeMeasurement(path.string(), m, nullptr));
   std::string err;
@@ -85,6 +86,7 @@ TEST(GroundMeasurement, RoundTrip) {
   EXPECT_EQ(back.gravity_mps2, m.gravity_mps2);
   EXPECT_NEAR(back.q_s_t_design.angularDistance(m.q_s_t_design), 0, 1e-14);
   EXPECT_EQ(back.camera.width_px, 1024);
+  EXPECT_EQ(back.positions[1].name, m.positions[1].name);
   ASSERT_EQ(back.positions.size(), 2u);
   for (std::size_t k = 0; k < 2; ++k) {
     ASSERT_EQ(back.positions[k].targets.size(), 7u);

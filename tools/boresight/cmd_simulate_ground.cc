@@ -4,7 +4,9 @@
 
 #include <boresight/ground/simulate.h>
 
+#include <cerrno>
 #include <cstdio>
+#include <cstdlib>
 #include <sstream>
 #include <string>
 
@@ -39,8 +41,8 @@ int runSimulateGround(int argc, char** argv) {
                "boresight simulate-ground"};
   ground::SimConfig cfg;
   std::string out, truth_path, setup = "single", bias_s;
-  unsigned long long seed = 0;
-  app.add_option("--seed", seed, "random seed (unsigned); the same seed gives identical files")
+  std::string seed_s;
+  app.add_option("--seed", seed_s, "random seed (unsigned); the same seed gives identical files")
       ->type_name("N");
   app.add_option("--out", out, "measurement file to write (YAML)")->type_name("FILE");
   app.add_option("--truth", truth_path, "truth file (default: beside --out, .truth.yaml)")->type_name("FILE");
@@ -86,7 +88,13 @@ int runSimulateGround(int argc, char** argv) {
   if (app.count("--tilt-deg")) base.tilt_deg = cfg.tilt_deg;
   if (app.count("--prism-faces")) base.prism_faces = cfg.prism_faces;
   cfg = base;
-  cfg.seed = seed;
+  char* end = nullptr;
+  errno = 0;
+  cfg.seed = std::strtoull(seed_s.c_str(), &end, 10);
+  if (seed_s.empty() || *end || errno || seed_s[0] == '-') {
+    std::fprintf(stderr, "boresight simulate-ground: --seed: '%s' is not an unsigned integer\n", seed_s.c_str());
+    return 2;
+  }
   if (!bias_s.empty()) {
     if (!parseVec3(bias_s, cfg.bias_ug)) {
       std::fprintf(stderr, "boresight simulate-ground: --bias-ug: expected X,Y,Z in ug, got '%s'\n", bias_s.c_str());
