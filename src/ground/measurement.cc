@@ -41,20 +41,24 @@ YAML::Node need(const YAML::Node& map, const char* key, const char* where) {
   return n;
 }
 
-double number(const YAML::Node& n, const std::string& what) {
-  if (!n.IsScalar()) fail(n, what + ": expected a number");
-  // strtod on the scalar (yaml-cpp's as<double> goes through a stringstream: 3x slower on files of
-  // thousands of samples); YAML's .nan / .inf spellings are refused like strtod's nan / inf.
-  const std::string& t = n.Scalar();
+/// A number from a scalar's text: strtod (yaml-cpp's as<double> goes through a stringstream, 3x
+/// slower); YAML's .nan / .inf spellings are refused like strtod's nan / inf. Shared by the node
+/// reader and the sample reader below, so both refuse the same texts with the same words.
+double numberText(const std::string& t, int line, const std::string& what) {
   const char* b = t.c_str();
   char* end = nullptr;
   const double x = std::strtod(b, &end);
   const bool special = t == ".nan" || t == ".NaN" || t == ".NAN" || t.find(".inf") != std::string::npos ||
                        t.find(".Inf") != std::string::npos || t.find(".INF") != std::string::npos;
   if (special || (end != b && *end == '\0' && !std::isfinite(x)))
-    fail(n, what + ": not a finite number ('" + t + "')");
-  if (end == b || *end != '\0') fail(n, what + ": '" + t + "' is not a number");
+    throw Located{line, what + ": not a finite number ('" + t + "')"};
+  if (end == b || *end != '\0') throw Located{line, what + ": '" + t + "' is not a number"};
   return x;
+}
+
+double number(const YAML::Node& n, const std::string& what) {
+  if (!n.IsScalar()) fail(n, what + ": expected a number");
+  return numberText(n.Scalar(), lineOf(n), what);
 }
 
 std::vector<double> numbers(const YAML::Node& n, std::size_t count, const std::string& what) {
@@ -69,6 +73,302 @@ double positive(const YAML::Node& n, const std::string& what) {
   const double x = number(n, what);
   if (!(x > 0)) fail(n, what + ": must be positive");
   return x;
+}
+
+// ---- The accelerometer samples --------------------------------------------------------------
+// yaml-cpp's scanner costs ~25 us per number, so a file of 3 x 2000 samples took ~60 ms to load
+// (its event parser alone ~57 ms: the scanner, not the node tree, is the cost). The samples are
+// therefore read by this reader and by nothing else: before yaml-cpp sees the text, the value of
+// every `accel_mps2:` key that starts a line (after its indentation and any "- ") is parsed here and
+// replaced by the placeholder `!boresight-accel K` plus the value's newlines, so yaml-cpp's line
+// numbers stay those of the file. readPosition takes block K; an accel_mps2 value yaml-cpp sees
+// without the placeholder (a quoted key, a key after "{" on its line) is refused, never parsed a
+// second way. Accepted values: a block list of flow triples (one "- [fx, fy, fz]" per item, an
+// item may continue on deeper lines) or a flow list of triples ("[[fx, fy, fz], ...]", across
+// lines), with comments. Numbers must be plain scalars (no quotes, anchors or tags).
+
+constexpr const char* kSampleTag = "!boresight-accel";
+
+struct SampleBlock {
+  int key_line = 0;
+  std::vector<Vec3> samples;
+  bool failed = false;
+  int err_line = 0;
+  std::string err;  // the message after "position N: "
+  bool used = false;
+};
+
+class SampleReader {
+ public:
+  explicit SampleReader(const std::string& t) : t_(t), n_(t.size()) {}
+
+  /// The text for yaml-cpp (the samples replaced by placeholders); fills `blocks`.
+  std::string run(std::vector<SampleBlock>& blocks) {
+    std::string out;
+    out.reserve(n_ / 8 + 256);
+    std::size_t i = 0, copied = 0;
+    int line = 1;
+    while (i < n_) {
+      std::size_t j = i;
+      while (j < n_ && t_[j] == ' ') ++j;
+      while (j + 1 < n_ && t_[j] == '-' && (t_[j + 1] == ' ' || t_[j + 1] == '\t')) {
+        j += 2;
+        while (j < n_ && (t_[j] == ' ' || t_[j] == '\t')) ++j;
+      }
+      static constexpr char kKey[] = "accel_mps2:";
+      constexpr std::size_t kLen = sizeof kKey - 1;
+      if (t_.compare(j, kLen, kKey) == 0 && (j + kLen == n_ || isBlank(t_[j + kLen]) || isEol(t_[j + kLen]))) {
+        SampleBlock b;
+        b.key_line = line;
+        const std::size_t v = j + kLen;
+        std::size_t end = v;
+        int end_line = line;
+        readValue(v, line, static_cast<int>(j - i), b, end, end_line);
+        out.append(t_, copied, v - copied);
+        out += ' ';
+        out += kSampleTag;
+        out += ' ';
+        out += std::to_string(blocks.size());
+        out.append(static_cast<std::size_t>(end_line - line), '\n');
+        blocks.push_back(std::move(b));
+        copied = end;
+        i = end;
+        line = end_line;
+        if (i > 0 && i < n_ && t_[i - 1] == '\n') continue;  // the value ended at a line start
+      }
+      const std::size_t nl = t_.find('\n', i);
+      if (nl == std::string::npos) break;
+      i = nl + 1;
+      ++line;
+    }
+    if (copied < n_) out.append(t_, copied, std::string::npos);
+    return out;
+  }
+
+ private:
+  static bool isBlank(char c) { return c == ' ' || c == '\t'; }
+  static bool isEol(char c) { return c == '\n' || c == '\r'; }
+
+  /// Skips blanks, '\r', comments (a '#' after a blank or at a line start) and, when `lines`, newlines.
+  void skipSpace(std::size_t& i, int& line, std::size_t lim, bool lines) const {
+    while (i < lim) {
+      const char c = t_[i];
+      if (isBlank(c) || c == '\r') {
+        ++i;
+      } else if (c == '\n' && lines) {
+        ++i;
+        ++line;
+      } else if (c == '#' && (i == 0 || isBlank(t_[i - 1]) || t_[i - 1] == '\n')) {
+        while (i < lim && t_[i] != '\n') ++i;
+      } else {
+        return;
+      }
+    }
+  }
+
+  /// End of the flow collection opening at `i` (index after its closing bracket; npos if unclosed).
+  std::size_t flowEnd(std::size_t i) const {
+    int depth = 0;
+    for (; i < n_; ++i) {
+      const char c = t_[i];
+      if (c == '[' || c == '{') {
+        ++depth;
+      } else if (c == ']' || c == '}') {
+        if (--depth == 0) return i + 1;
+      } else if (c == '#' && i > 0 && (isBlank(t_[i - 1]) || t_[i - 1] == '\n')) {
+        while (i + 1 < n_ && t_[i + 1] != '\n') ++i;
+      } else if (c == '"' || c == '\'') {
+        for (++i; i < n_ && t_[i] != c; ++i)
+          if (c == '"' && t_[i] == '\\') ++i;
+      }
+    }
+    return std::string::npos;
+  }
+
+  /// Sample `index` "[fx, fy, fz]" with `i` at its '['; throws Located.
+  Vec3 triple(std::size_t& i, int& line, std::size_t lim, std::size_t index) const {
+    const int line0 = line;
+    const auto what = [index] { return sampleWhat(index); };
+    const auto shape = [&] { return what() + ": expected a list of 3 numbers"; };
+    std::size_t tb[3] = {0, 0, 0}, te[3] = {0, 0, 0};
+    int tl[3] = {0, 0, 0};
+    int count = 0;
+    ++i;
+    for (;;) {
+      skipSpace(i, line, lim, true);
+      if (i >= lim) throw Located{line0, what() + ": the [ list is not closed"};
+      const char c = t_[i];
+      if (c == ']') {
+        ++i;
+        break;
+      }
+      if (c == '"' || c == '\'') throw Located{line, what() + ": a quoted value where a plain number belongs"};
+      if (c == ',' || c == '[' || c == '{' || c == '}') throw Located{line0, shape()};
+      const std::size_t b = i;
+      while (i < lim) {
+        const char d = t_[i];
+        if (d == ',' || d == ']' || d == '[' || d == '{' || d == '}' || isEol(d)) break;
+        if (d == '#' && isBlank(t_[i - 1])) break;
+        ++i;
+      }
+      std::size_t e = i;
+      while (e > b && isBlank(t_[e - 1])) --e;
+      if (count < 3) {
+        tb[count] = b;
+        te[count] = e;
+        tl[count] = line;
+      }
+      ++count;
+      skipSpace(i, line, lim, true);
+      if (i >= lim) throw Located{line0, what() + ": the [ list is not closed"};
+      if (t_[i] == ',') {
+        ++i;
+      } else if (t_[i] == ']') {
+        ++i;
+        break;
+      } else {
+        throw Located{line0, shape()};
+      }
+    }
+    if (count != 3) throw Located{line0, shape()};
+    Vec3 f;
+    for (int k = 0; k < 3; ++k) {
+      // strtod in place; anything it does not take whole as a finite number goes through numberText
+      // for the same verdict and message as every other number of the file
+      const char* b = t_.c_str() + tb[k];
+      char* e = nullptr;
+      f[k] = std::strtod(b, &e);
+      if (e != t_.c_str() + te[k] || e == b || !std::isfinite(f[k]))
+        f[k] = numberText(t_.substr(tb[k], te[k] - tb[k]), tl[k], what());
+    }
+    return f;
+  }
+
+  static std::string sampleWhat(std::size_t k) { return "accel_mps2 sample " + std::to_string(k + 1); }
+
+  /// Parses the value after the key at `v` (key column `keycol`): its extent [v, end) ends on line
+  /// end_line; the samples or the first error go to `b`.
+  void readValue(std::size_t v, int line, int keycol, SampleBlock& b, std::size_t& end, int& end_line) const {
+    std::size_t k = v;
+    while (k < n_ && isBlank(t_[k])) ++k;
+    try {
+      if (k < n_ && t_[k] == '[') {  // flow list [[fx, fy, fz], ...]
+        end = flowEnd(k);
+        const bool closed = end != std::string::npos;
+        if (!closed) end = n_;
+        end_line = line + static_cast<int>(std::count(t_.begin() + static_cast<long>(v), t_.begin() + static_cast<long>(end), '\n'));
+        if (!closed) throw Located{line, "accel_mps2: the [ list is not closed"};
+        std::size_t after = end;  // what may follow the list on its line (a flow map's ',' or '}')
+        while (after < n_ && (isBlank(t_[after]) || t_[after] == '\r')) ++after;
+        if (after < n_ && t_[after] != '\n' && t_[after] != '#' && t_[after] != ',' && t_[after] != '}' && t_[after] != ']') {
+          end = std::min(t_.find('\n', after), n_);  // the placeholder takes the tail too
+          throw Located{end_line, "accel_mps2: unexpected text after the list"};
+        }
+        std::size_t i = k + 1;
+        int ln = line;
+        for (;;) {
+          skipSpace(i, ln, end, true);
+          if (i >= end) throw Located{line, "accel_mps2: the [ list is not closed"};
+          if (t_[i] == ']') break;
+          if (t_[i] != '[') throw Located{ln, sampleWhat(b.samples.size()) + ": expected a list of 3 numbers"};
+          b.samples.push_back(triple(i, ln, end, b.samples.size()));
+          skipSpace(i, ln, end, true);
+          if (i < end && t_[i] == ',') {
+            ++i;
+          } else if (!(i < end && t_[i] == ']')) {
+            throw Located{ln, "accel_mps2: expected ',' or ']' after sample " + std::to_string(b.samples.size())};
+          }
+        }
+        return;
+      }
+      if (k < n_ && !isEol(t_[k]) && t_[k] != '#') {  // neither list form: refused where it stands
+        end = t_.find('\n', k);
+        if (end == std::string::npos) end = n_;
+        end_line = line;
+        throw Located{line, "accel_mps2: expected a list of [fx, fy, fz]"};
+      }
+      // block list: the items "- [...]" at one column >= the key's, deeper lines continue an item
+      std::size_t pos = t_.find('\n', k);
+      pos = pos == std::string::npos ? n_ : pos + 1;
+      int ln = line + (pos < n_ || (n_ > 0 && t_[n_ - 1] == '\n') ? 1 : 0);
+      end = pos;
+      end_line = ln;
+      int col = -1;
+      while (pos < n_) {
+        std::size_t f = pos;
+        while (f < n_ && t_[f] == ' ') ++f;
+        const int ind = static_cast<int>(f - pos);
+        const bool blank = f >= n_ || isEol(t_[f]) || t_[f] == '#';
+        const bool item = f < n_ && t_[f] == '-' && (f + 1 >= n_ || isBlank(t_[f + 1]) || isEol(t_[f + 1]));
+        if (!blank) {
+          if (col < 0 && item && ind >= keycol) {
+            col = ind;
+          } else if (col < 0 || !(ind > col || (ind == col && item))) {
+            break;
+          }
+        }
+        const std::size_t nl = t_.find('\n', pos);
+        pos = nl == std::string::npos ? n_ : nl + 1;
+        ++ln;
+        if (!blank) {
+          end = pos;
+          end_line = nl == std::string::npos ? ln - 1 : ln;
+        }
+      }
+      if (col < 0) {  // nothing below the key: a null value
+        end = k;
+        end_line = line;
+        throw Located{line, "accel_mps2: expected a list of [fx, fy, fz]"};
+      }
+      std::size_t i = t_.find('\n', k) + 1;
+      ln = line + 1;
+      while (i < end) {
+        skipSpace(i, ln, end, true);
+        if (i >= end) break;
+        std::size_t ls = t_.rfind('\n', i);
+        ls = ls == std::string::npos ? 0 : ls + 1;
+        const std::size_t index = b.samples.size();
+        if (static_cast<int>(i - ls) != col || t_[i] != '-')
+          throw Located{ln, "accel_mps2: unexpected text in the list of samples"};
+        ++i;
+        while (i < end && isBlank(t_[i])) ++i;
+        if (i >= end || t_[i] != '[') throw Located{ln, sampleWhat(index) + ": expected a list of 3 numbers"};
+        b.samples.push_back(triple(i, ln, end, index));
+        skipSpace(i, ln, end, false);
+        if (i < end && t_[i] != '\n') throw Located{ln, sampleWhat(index) + ": unexpected text after the list"};
+      }
+    } catch (const Located& e) {
+      b.failed = true;
+      b.err_line = e.line;
+      b.err = e.what;
+    }
+  }
+
+  const std::string& t_;
+  std::size_t n_;
+};
+
+/// The samples of position map `p` (its accel_mps2 value is a placeholder left by SampleReader).
+std::vector<Vec3> takeSamples(const YAML::Node& p, const std::string& where, std::vector<SampleBlock>& blocks) {
+  const YAML::Node n = need(p, "accel_mps2", where.c_str());
+  std::size_t k = blocks.size();
+  if (n.IsScalar() && n.Tag() == kSampleTag) {
+    const std::string& s = n.Scalar();
+    if (!s.empty() && s.size() < 10 && std::all_of(s.begin(), s.end(), [](char c) { return c >= '0' && c <= '9'; }))
+      k = static_cast<std::size_t>(std::stoul(s));
+  }
+  if (k >= blocks.size() || blocks[k].used) {
+    for (const auto& kv : p)  // point at the key: the value may start lines below it
+      if (kv.first.Scalar() == "accel_mps2")
+        fail(kv.first, where + ": accel_mps2: write it as a plain key at the start of its line (the samples' reader "
+                               "looks for it there), followed by '- [fx, fy, fz]' rows or a [[fx, fy, fz], ...] list");
+    fail(n, where + ": accel_mps2: write it as a plain key at the start of its line (the samples' reader looks "
+                    "for it there), followed by '- [fx, fy, fz]' rows or a [[fx, fy, fz], ...] list");
+  }
+  SampleBlock& b = blocks[k];
+  b.used = true;
+  if (b.failed) throw Located{b.err_line, where + ": " + b.err};
+  return std::move(b.samples);
 }
 
 /// The two theodolite angles of a prism or target map, either convention, in radians.
@@ -109,7 +409,7 @@ void readCamera(const YAML::Node& c, CameraPrior& cam) {
   }
 }
 
-void readPosition(const YAML::Node& p, std::size_t index, Position& pos) {
+void readPosition(const YAML::Node& p, std::size_t index, Position& pos, std::vector<SampleBlock>& blocks) {
   const std::string where = "position " + std::to_string(index + 1);
   checkKeys(p, where.c_str(), {"name", "prisms", "accel_mps2", "targets"});
   pos.line = lineOf(p);
@@ -129,13 +429,7 @@ void readPosition(const YAML::Node& p, std::size_t index, Position& pos) {
     readAngles(q, w, r.az_rad, r.el_rad);
     pos.prisms.push_back(r);
   }
-  const YAML::Node acc = need(p, "accel_mps2", where.c_str());
-  if (!acc.IsSequence()) fail(acc, where + ": accel_mps2: expected a list of [fx, fy, fz]");
-  pos.accel_mps2.reserve(acc.size());
-  for (std::size_t i = 0; i < acc.size(); ++i) {
-    const auto f = numbers(acc[i], 3, where + ": accel_mps2 sample " + std::to_string(i + 1));
-    pos.accel_mps2.emplace_back(f[0], f[1], f[2]);
-  }
+  pos.accel_mps2 = takeSamples(p, where, blocks);
   const YAML::Node tg = need(p, "targets", where.c_str());
   if (!tg.IsSequence()) fail(tg, where + ": targets: expected a list");
   for (std::size_t i = 0; i < tg.size(); ++i) {
@@ -227,7 +521,8 @@ bool validateMeasurement(const Measurement& m, const std::string& name, std::str
 bool parseMeasurement(const std::string& yaml_text, const std::string& name, Measurement& out, std::string* error) {
   Measurement m;
   try {
-    const YAML::Node root = YAML::Load(yaml_text);
+    std::vector<SampleBlock> blocks;
+    const YAML::Node root = YAML::Load(SampleReader(yaml_text).run(blocks));
     if (!root || !root.IsMap()) throw Located{0, "not a YAML map (is this a measurement file?)"};
     checkKeys(root, "file", {"gravity_mps2", "camera", "design_q_s_t", "noise", "positions"});
     m.gravity_mps2 = positive(need(root, "gravity_mps2", "file"), "gravity_mps2");
@@ -247,7 +542,9 @@ bool parseMeasurement(const std::string& yaml_text, const std::string& name, Mea
     const YAML::Node ps = need(root, "positions", "file");
     if (!ps.IsSequence() || ps.size() == 0) fail(ps, "positions: expected a non-empty list");
     m.positions.resize(ps.size());
-    for (std::size_t k = 0; k < ps.size(); ++k) readPosition(ps[k], k, m.positions[k]);
+    for (std::size_t k = 0; k < ps.size(); ++k) readPosition(ps[k], k, m.positions[k], blocks);
+    for (const SampleBlock& b : blocks)
+      if (!b.used) throw Located{b.key_line, "accel_mps2 here is not a position's key (inside a text value?)"};
   } catch (const Located& e) {
     if (error) *error = at(name, e.line) + e.what;
     return false;

@@ -230,4 +230,95 @@ TEST(GroundMeasurement, TruncatedFilesNeverCrash) {
   EXPECT_GT(refused, 0);
 }
 
+// The accelerometer samples have their own reader (yaml-cpp reads the rest of the file): every YAML
+// spelling of the list that reader takes gives the same samples, the line numbers of everything
+// after the samples stay right, and the spellings it does not take are refused with a located
+// message rather than read some other way.
+TEST(GroundMeasurement, SampleListSpellings) {
+  const std::string ok = validText();
+  Measurement ref;
+  std::string err;
+  ASSERT_TRUE(parseMeasurement(ok, kName, ref, &err)) << err;
+  const auto& want = ref.positions[0].accel_mps2;
+  ASSERT_EQ(want.size(), 3u);
+  const std::size_t key = ok.find("    accel_mps2:");
+  ASSERT_NE(key, std::string::npos);
+  const std::string head = ok.substr(0, key);
+  std::string rows[3];  // "fx, fy, fz" as written
+  for (int i = 0; i < 3; ++i) {
+    const std::string l = lineText(ok, "      - [", i);
+    rows[i] = l.substr(l.find('[') + 1, l.rfind(']') - l.find('[') - 1);
+  }
+  // the samples moved in front of the targets (with `lines` newlines), so the targets' lines check
+  // that the placeholder keeps the file's line numbering
+  const std::size_t tg = head.find("    targets:");
+  ASSERT_NE(tg, std::string::npos);
+  auto withSamples = [&](const std::string& block) { return head.substr(0, tg) + block + head.substr(tg); };
+  const std::vector<std::string> spellings = {
+      "    accel_mps2: [[" + rows[0] + "], [" + rows[1] + "], [" + rows[2] + "]]\n",
+      "    accel_mps2: [  # the flow list across lines\n      [" + rows[0] + "],\n\n      [" + rows[1] +
+          ",\n       ], # trailing comma\n      [" + rows[2] + "]\n    ]  # end\n",
+      "    accel_mps2:   # block list, items at the key's column, comments and blank lines\n    - [" + rows[0] +
+          "]\n\n    # a comment\n    - [" + rows[1] + "]   # c\n    - [" + rows[2] + "]\n",
+      "    accel_mps2:\n      - [" + rows[0] + "]\n      - [" + rows[1].substr(0, rows[1].rfind(',') + 1) +
+          "\n         " + rows[1].substr(rows[1].rfind(',') + 1) + "]\n      - [" + rows[2] + "]\n",
+  };
+  for (const std::string& sp : spellings) {
+    const std::string text = withSamples(sp);
+    Measurement m;
+    ASSERT_TRUE(parseMeasurement(text, kName, m, &err)) << err << "\n" << sp;
+    ASSERT_EQ(m.positions[0].accel_mps2.size(), 3u) << sp;
+    for (int i = 0; i < 3; ++i) EXPECT_EQ(m.positions[0].accel_mps2[i], want[i]) << sp;
+    for (int i = 0; i < 5; ++i) EXPECT_EQ(m.positions[0].targets[i].line, lineOf(text, "centroid_px", i)) << sp;
+    // Windows line ends
+    std::string crlf;
+    for (char c : text) crlf += c == '\n' ? std::string("\r\n") : std::string(1, c);
+    ASSERT_TRUE(parseMeasurement(crlf, kName, m, &err)) << err << "\n" << sp;
+    for (int i = 0; i < 3; ++i) EXPECT_EQ(m.positions[0].accel_mps2[i], want[i]) << sp;
+  }
+  // a position name that merely contains the key is a name
+  {
+    Measurement m;
+    ASSERT_TRUE(parseMeasurement(replaced(ok, "name: \"position 1\"", "name: \"accel_mps2: [[1, 2, 3]]\""), kName, m, &err))
+        << err;
+    EXPECT_EQ(m.positions[0].name, "accel_mps2: [[1, 2, 3]]");
+  }
+  // errors, each on its line: a word and a NaN inside a multi-line flow list, an unclosed list, a
+  // missing value, a quoted number, text after a row, four numbers, a number with a unit after it
+  {
+    const std::string t = withSamples("    accel_mps2: [\n      [" + rows[0] + "],\n      [" +
+                                      rows[1].substr(0, rows[1].find(',')) + ",\n       nine, 1.0]]\n");
+    const std::string e = errorOf(t);
+    EXPECT_EQ(e, at(lineOf(t, "nine")) + "position 1: accel_mps2 sample 2: 'nine' is not a number");
+    const std::string t2 = withSamples("    accel_mps2: [[" + rows[0] + "], [.nan, 1, 2]]\n");
+    EXPECT_EQ(errorOf(t2), at(lineOf(t2, "accel_mps2")) + "position 1: accel_mps2 sample 2: not a finite number ('.nan')");
+    const std::string t3 = withSamples("    accel_mps2: [[" + rows[0] + "],\n");
+    EXPECT_EQ(errorOf(t3), at(lineOf(t3, "accel_mps2")) + "position 1: accel_mps2: the [ list is not closed");
+    const std::string t4 = withSamples("    accel_mps2:\n");
+    EXPECT_EQ(errorOf(t4), at(lineOf(t4, "accel_mps2")) + "position 1: accel_mps2: expected a list of [fx, fy, fz]");
+    const std::string t5 = withSamples("    accel_mps2:\n      - [" + rows[0] + "]\n      - [\"9.8\", 0, 0]\n");
+    EXPECT_EQ(errorOf(t5), at(lineOf(t5, "\"9.8\"")) + "position 1: accel_mps2 sample 2: a quoted value where a plain number belongs");
+    const std::string t6 = withSamples("    accel_mps2:\n      - [" + rows[0] + "] x\n");
+    EXPECT_EQ(errorOf(t6), at(lineOf(t6, "] x")) + "position 1: accel_mps2 sample 1: unexpected text after the list");
+    const std::string t7 = withSamples("    accel_mps2:\n      - [" + rows[0] + "]\n      - [" + rows[1] + ", 1]\n");
+    EXPECT_EQ(errorOf(t7), at(lineOf(t7, ", 1]")) + "position 1: accel_mps2 sample 2: expected a list of 3 numbers");
+    const std::string t9 = withSamples("    accel_mps2: [[" + rows[0] + "]] tail\n");
+    EXPECT_EQ(errorOf(t9), at(lineOf(t9, "tail")) + "position 1: accel_mps2: unexpected text after the list");
+    const std::string t8 = withSamples("    accel_mps2:\n      - [0.1, -0.2, 9.8ms]\n");  // a number with a tail
+    EXPECT_EQ(errorOf(t8), at(lineOf(t8, "9.8ms")) + "position 1: accel_mps2 sample 1: '9.8ms' is not a number");
+  }
+  // spellings the sample reader does not take are refused, not read another way: a quoted key, a
+  // one-line { } position, the key inside a text value
+  {
+    const std::string e = errorOf(replaced(ok, "    accel_mps2:", "    \"accel_mps2\":"));
+    EXPECT_EQ(e.rfind(at(lineOf(ok, "accel_mps2")), 0), 0u) << e;
+    EXPECT_NE(e.find("write it as a plain key at the start of its line"), std::string::npos) << e;
+    const std::string one = "positions:\n  - {name: a, prisms: [], targets: [], accel_mps2: [[" + rows[0] + "]]}\n";
+    const std::string t = ok.substr(0, ok.find("positions:")) + one;
+    EXPECT_NE(errorOf(t).find("write it as a plain key"), std::string::npos) << errorOf(t);
+    const std::string t2 = replaced(ok, "name: \"position 1\"", "name: |\n      accel_mps2: [[1, 2, 3]]\n   ");
+    EXPECT_EQ(errorOf(t2), at(lineOf(t2, "accel_mps2")) + "accel_mps2 here is not a position's key (inside a text value?)");
+  }
+}
+
 }  // namespace

@@ -18,6 +18,10 @@
 // as azimuth_cw_deg (a = -a') and zenith_deg (e = 90 - z). The detector covers 0 <= u <= width,
 // 0 <= v <= height (pixel centres at half-integers); a centroid outside it is an error.
 // Unknown keys are errors (a misspelt key must not be ignored silently).
+// The accelerometer samples have a reader of their own (yaml-cpp's scanner is too slow for thousands
+// of numbers): `accel_mps2:` must be a plain key at the start of its line (after its indentation and
+// any "- "), its value a block list of "- [fx, fy, fz]" rows or a flow list [[fx, fy, fz], ...] (either
+// may run over several lines and carry comments) of plain numbers; other spellings are refused.
 #pragma once
 
 #include <boresight/core/conventions.h>
