@@ -157,6 +157,7 @@ class PushSource final : public stream::Source {
 struct ChannelState {
   bool have_seq = false;
   std::int32_t last_seq = 0;
+  std::uint64_t seen = 0;          ///< bit i: number last_seq - i arrived
   std::array<TimeUs, 8> recent{};  ///< tags accepted lately (duplicates)
   int n_recent = 0, recent_next = 0;
   TimeUs bucket = std::numeric_limits<TimeUs>::min();  ///< data second of the flood count
@@ -225,19 +226,30 @@ struct Node::Impl {
   // ---------------------------------------------------------------------------------------------
   void reject(Reason r) { ++c.rejected[static_cast<std::size_t>(r)]; }
 
+  /// Sequence gaps are lost messages. A message that arrives late (out of order, within 64 numbers)
+  /// takes back the loss counted for it; a repeat of a number already seen is no loss and no gain.
   void seqCheck(ChannelState& s, std::int32_t seq) {
     if (!s.have_seq) {
       s.have_seq = true;
       s.last_seq = seq;
+      s.seen = 1;
       return;
     }
-    const auto d = static_cast<std::int32_t>(static_cast<std::uint32_t>(seq) - static_cast<std::uint32_t>(s.last_seq) - 1u);
-    if (d >= 0 && d < (1 << 24)) {  // forward: d numbers never arrived
-      c.lost += static_cast<std::uint64_t>(d);
+    const auto d = static_cast<std::int32_t>(static_cast<std::uint32_t>(seq) - static_cast<std::uint32_t>(s.last_seq));
+    if (d > 0 && d < (1 << 24)) {  // forward: d - 1 numbers have not arrived (yet)
+      c.lost += static_cast<std::uint64_t>(d - 1);
+      s.seen = d < 64 ? (s.seen << d) | 1u : 1u;
       s.last_seq = seq;
-    } else if (d >= (1 << 24)) {  // a counter reset (sender restart): new start, nothing counted
+    } else if (d >= (1 << 24) || d <= -(1 << 24)) {  // a counter reset (sender restart): a new start
       s.last_seq = seq;
-    }  // d < 0: a repeat or an out-of-order message: the counter stays
+      s.seen = 1;
+    } else if (d < 0 && d > -64) {  // back: a late arrival of a number counted lost, or a repeat
+      const std::uint64_t bit = std::uint64_t{1} << static_cast<unsigned>(-d);
+      if (!(s.seen & bit)) {
+        s.seen |= bit;
+        if (c.lost > 0) --c.lost;
+      }
+    }
   }
 
   /// The time checks every input shares. True: accept (the caller goes on).
@@ -601,6 +613,10 @@ struct Node::Impl {
     }
   }
 
+  /// Replay publishes nothing that depends on the wall clock or thread timing (latency, ring fill):
+  /// those are in the summary only, so two replays publish identical payloads.
+  bool wallClockFree() const { return mode == Mode::kReplay; }
+
   void publishHealth(TimeUs t) {
     boresight_lcm::node_health_t h{};
     h.utime = t;
@@ -611,11 +627,11 @@ struct Node::Impl {
     h.lost = toI64(c.lost);
     h.epochs = toI64(c.head_epochs + c.accel_steps);
     h.calibrations_published = static_cast<int32_t>(c.calibrations_published);
-    h.ring_high_water = static_cast<int32_t>(c.ring_high_water);
+    h.ring_high_water = wallClockFree() ? 0 : static_cast<int32_t>(c.ring_high_water);
     h.ring_dropped = toI64(c.ring_dropped);
     const LatencySummary l = lat.summary();
     // Wall-clock figures differ run to run: a replay records them as 0 so its payloads are identical.
-    const bool wall = mode == Mode::kLive;
+    const bool wall = !wallClockFree();
     h.step_latency_us[0] = wall ? l.p50_us : 0;
     h.step_latency_us[1] = wall ? l.p99_us : 0;
     h.step_latency_us[2] = wall ? l.p999_us : 0;
