@@ -1,0 +1,11 @@
+# ctest: the flight_loop executable depends on no LCM, yaml-cpp, Ceres or glog shared library.
+execute_process(COMMAND ldd ${EXE} OUTPUT_VARIABLE libs RESULT_VARIABLE rc)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "ldd ${EXE} failed")
+endif()
+foreach(bad lcm yaml-cpp ceres glog)
+  if(libs MATCHES "lib${bad}")
+    message(FATAL_ERROR "flight_loop links lib${bad}:\n${libs}")
+  endif()
+endforeach()
+message(STATUS "flight_loop links: ${libs}")
