@@ -17,6 +17,8 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <condition_variable>
+#include <mutex>
 #include <cmath>
 #include <limits>
 #include <thread>
@@ -642,6 +644,19 @@ struct Node::Impl {
   }
 
   // ---------------------------------------------------------------------------------------------
+  // The worker keeps the span builder fed from the ring; a solve request copies the builder and hands
+  // the copy to the solver thread, so the ring keeps draining while Ceres runs (the real-time thread
+  // then rarely finds the ring full). One job at a time, in request order; both threads are not real
+  // time and may block on each other.
+  struct SolveJob {
+    std::unique_ptr<calib::SpanBuilder> sb;
+    RingItem req;
+  };
+  std::mutex job_m;
+  std::condition_variable job_cv;
+  std::unique_ptr<SolveJob> job;
+  bool job_stop = false;
+
   void workerLoop() {
     calib::SpanBuilder sb;
     calib::SpanOptions so;
@@ -649,6 +664,7 @@ struct Node::Impl {
     so.max_observations = cfg.calibration.max_observations;
     std::string err;
     const bool ok = sb.configure(pcfg, so, &err);
+    std::thread solver([this] { solverLoop(); });
     RingItem it;
     int idle = 0;
     for (;;) {
@@ -658,26 +674,56 @@ struct Node::Impl {
         continue;
       }
       idle = 0;
-      if (it.kind == RingItem::kStop) return;
+      if (it.kind == RingItem::kStop) break;
       if (!ok) continue;
       if (it.kind == RingItem::kHeads) {
         sb.pushHeads(it.heads);
       } else if (it.kind == RingItem::kAcc) {
         sb.pushAcc(it.t, it.a_A);
       } else {
-        calib::SpanBuilder copy = sb;
-        copy.finish();
-        calib::SolveOptions opt;
-        opt.threads = 1;
-        const calib::SolveResult r = calib::solve(copy.span(), opt);
-        // One slot: wait until the real-time thread has taken the previous result.
-        int expected = 0;
-        while (!mail.state.compare_exchange_weak(expected, 1, std::memory_order_acq_rel)) {
-          expected = 0;
-          std::this_thread::yield();
-        }
-        fillResult(copy.span(), r, it);
-        mail.state.store(2, std::memory_order_release);
+        auto j = std::make_unique<SolveJob>();
+        j->sb = std::make_unique<calib::SpanBuilder>(sb);
+        j->req = it;
+        std::unique_lock<std::mutex> lk(job_m);
+        job_cv.wait(lk, [this] { return !job; });
+        job = std::move(j);
+        job_cv.notify_all();
+      }
+    }
+    {
+      std::unique_lock<std::mutex> lk(job_m);
+      job_cv.wait(lk, [this] { return !job; });
+      job_stop = true;
+      job_cv.notify_all();
+    }
+    solver.join();
+    worker_done.store(true, std::memory_order_release);
+  }
+
+  void solverLoop() {
+    for (;;) {
+      std::unique_ptr<SolveJob> j;
+      {
+        std::unique_lock<std::mutex> lk(job_m);
+        job_cv.wait(lk, [this] { return job || job_stop; });
+        if (!job) return;
+        j = std::move(job);
+      }
+      j->sb->finish();
+      calib::SolveOptions opt;
+      opt.threads = 1;
+      const calib::SolveResult r = calib::solve(j->sb->span(), opt);
+      // One slot: wait until the real-time thread has taken the previous result.
+      int expected = 0;
+      while (!mail.state.compare_exchange_weak(expected, 1, std::memory_order_acq_rel)) {
+        expected = 0;
+        std::this_thread::sleep_for(std::chrono::microseconds(100));
+      }
+      fillResult(j->sb->span(), r, j->req);
+      mail.state.store(2, std::memory_order_release);
+      {
+        std::lock_guard<std::mutex> lk(job_m);  // the job slot is free once this one is published
+        job_cv.notify_all();
       }
     }
   }
@@ -719,17 +765,33 @@ struct Node::Impl {
     m.residual_rms_radps2 = r.residual_rms_radps2;
   }
 
-  void stopWorker() {
+  /// Stops the worker (and its solver). publish: results that arrive meanwhile are published (finish);
+  /// otherwise (destructor) they are discarded.
+  void stopWorker(bool publish) {
     if (!worker.joinable()) return;
+    auto serveMail = [&] {
+      if (mail.state.load(std::memory_order_acquire) != 2) return;
+      if (publish) takeMailbox();
+      else mail.state.store(0, std::memory_order_release);
+    };
     RingItem s;
     s.kind = RingItem::kStop;
-    while (!ring.push(s)) std::this_thread::yield();
+    while (!ring.push(s)) {
+      serveMail();
+      std::this_thread::yield();
+    }
+    while (!worker_done.load(std::memory_order_acquire)) {
+      serveMail();
+      std::this_thread::sleep_for(std::chrono::microseconds(200));
+    }
     worker.join();
+    serveMail();
   }
+  std::atomic<bool> worker_done{false};
 };
 
 Node::Node() : impl_(new Impl) {}
-Node::~Node() { impl_->stopWorker(); }
+Node::~Node() { impl_->stopWorker(false); }
 
 bool Node::configure(const NodeConfig& cfg, Mode mode, Output* out, std::string* error) {
   Impl& m = *impl_;
@@ -805,8 +867,7 @@ void Node::finish() {
       }
     }
   }
-  m.stopWorker();
-  if (m.cfg.calibration.enabled && m.mode == Node::Mode::kLive && m.mail.state.load() == 2) m.takeMailbox();
+  m.stopWorker(true);
   m.publishHealth(m.last_epoch_t);
 }
 

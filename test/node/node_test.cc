@@ -362,6 +362,7 @@ TEST(NodeReplay, TwoReplaysPublishIdenticalPayloadsWithTheWorkerInLockstep) {
                                    "config/sim_gracefo_calibration.yaml", &q_true, &q_nom);
   auto cfg = nodeConfig(3600, 7200);
   cfg.ring_capacity = 1u << 16;  // a ring that never fills: lockstep alone must make the runs agree
+  cfg.calibration.apply_lag_epochs = 20;
   const auto a = replay(log, cfg);
   const auto b = replay(log, cfg);
   ASSERT_EQ(a->out.msgs.size(), b->out.msgs.size());
