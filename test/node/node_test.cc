@@ -5,6 +5,7 @@
 // Golden file: test/node/golden/replay_short.txt. Regenerate (after a change made on purpose) with
 //   BORESIGHT_UPDATE_GOLDEN=1 ./build/test/node/node_test --gtest_filter='*Golden*'
 #include <boresight/io/lcm_log.h>
+#include <boresight/io/level1.h>
 #include <boresight/model/rotation.h>
 #include <boresight/node/node.h>
 #include <boresight/sim/output.h>
@@ -195,6 +196,57 @@ TEST(NodeReplay, SimulatedGapsAreLostBlindingIsNot) {
   EXPECT_EQ(r->out.all<boresight_lcm::fused_attitude_t>("BORESIGHT_ATTITUDE").size(), r->c.rows);
   EXPECT_GT(r->c.rows, 1700u);
 }
+
+#ifdef BORESIGHT_CLI
+// `boresight convert` puts the QSA1B mountings and the GNV1B orbit into the log: the node replays the
+// converted log with nothing but its configuration (mountings: log).
+TEST(NodeReplay, ConvertedLevel1LogCarriesMountingsAndOrbit) {
+  const std::string dir = makeTempDir("node_convert");
+  auto sim = testutil::runProgram(BORESIGHT_CLI, "simulate --scenario " + src("config/sim_gracefo.yaml") +
+                                                     " --seed 3 --duration 600 --quiet --no-lcm --out " + dir);
+  ASSERT_EQ(sim.status, 0) << sim.out;
+  const std::string l1 = dir + "/SCA1A_2023-06-01_C_04.txt " + dir + "/ACC1A_2023-06-01_C_04.txt " + dir +
+                         "/QSA1B_2023-06-01_C_04.txt " + dir + "/GNV1B_2023-06-01_C_04.txt";
+  auto conv = testutil::runProgram(BORESIGHT_CLI, "convert " + l1 + " --out " + dir + "/conv.lcm");
+  ASSERT_EQ(conv.status, 0) << conv.out;
+  EXPECT_NE(conv.out.find("NOMINAL_MOUNTINGS of 3 heads from QSA1B"), std::string::npos) << conv.out;
+  const auto qsa = io::readProduct<io::QsaRecord>(dir + "/QSA1B_2023-06-01_C_04.txt");
+  const auto gnv = io::readProduct<io::GnvRecord>(dir + "/GNV1B_2023-06-01_C_04.txt");
+  ASSERT_TRUE(qsa.ok && gnv.ok);
+  io::LcmLogReader r;
+  std::string err;
+  ASSERT_TRUE(r.open(dir + "/conv.lcm", &err)) << err;
+  io::LcmLogReader::RawEvent ev;
+  ASSERT_TRUE(r.nextRaw(ev));
+  ASSERT_EQ(*ev.channel, io::kMountingsChannel);  // first, before any sample
+  io::NominalMountings m;
+  ASSERT_TRUE(io::decodeNominalMountings(ev.data, ev.size, m));
+  ASSERT_EQ(m.n_heads, 3);
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_EQ(m.head_id[i], qsa.records[static_cast<std::size_t>(i)].sensor);
+    for (int k = 0; k < 4; ++k) EXPECT_EQ(m.q_Si_B[i][k], qsa.records[static_cast<std::size_t>(i)].q[k]);
+  }
+  std::size_t orbit = 0;
+  TimeUs last_t = 0;
+  while (r.nextRaw(ev)) {
+    if (*ev.channel != io::kOrbitChannel) continue;
+    io::OrbitSample o;
+    ASSERT_TRUE(io::decodeOrbit(ev.data, ev.size, o));
+    EXPECT_EQ(o.utime, gnv.records[orbit].t);
+    EXPECT_EQ(o.r_m[0], gnv.records[orbit].pos[0]);
+    EXPECT_EQ(o.seq, static_cast<std::int32_t>(orbit));
+    EXPECT_GE(o.utime, last_t);
+    last_t = o.utime;
+    ++orbit;
+  }
+  EXPECT_EQ(orbit, gnv.records.size());
+  const auto rep = replay(dir + "/conv.lcm", nodeConfig());
+  EXPECT_EQ(rep->c.received, rep->events);
+  EXPECT_EQ(rep->c.used, rep->c.received);
+  EXPECT_EQ(rep->c.lost, 0u);
+  EXPECT_GT(rep->c.rows, 550u);
+}
+#endif
 
 // ---- bad traffic ------------------------------------------------------------------------------
 
