@@ -192,7 +192,7 @@ struct Node::Impl {
   std::unique_ptr<core::StarEpoch> stars;
   core::HeadEpoch epoch{};
   Counters c;
-  LatencyHistogram lat;
+  LatencyHistogram lat, lat_heads;  ///< every core step; head epochs only
   std::uint64_t mounting_version = 0;
 
   // time state
@@ -489,7 +489,9 @@ struct Node::Impl {
     applyMailbox();
     const auto t0 = std::chrono::steady_clock::now();
     pipe.stepHeads(epoch);
-    lat.add(std::chrono::duration<double, std::nano>(std::chrono::steady_clock::now() - t0).count());
+    const double ns = std::chrono::duration<double, std::nano>(std::chrono::steady_clock::now() - t0).count();
+    lat.add(ns);
+    lat_heads.add(ns);
     ++c.head_epochs;
     ++head_epoch_index;
     last_epoch_t = epoch.t;
@@ -873,6 +875,7 @@ void Node::finish() {
 
 const Counters& Node::counters() const { return impl_->c; }
 LatencySummary Node::stepLatency() const { return impl_->lat.summary(); }
+LatencySummary Node::headStepLatency() const { return impl_->lat_heads.summary(); }
 core::Health Node::coreHealth() const { return impl_->pipe.health(); }
 const core::Pipeline& Node::pipeline() const { return impl_->pipe; }
 TimeUs Node::dataTime() const { return impl_->now; }

@@ -23,18 +23,18 @@ for i in $(seq 1 "$runs"); do
     --summary-json "$work/s.json" > /dev/null
   python3 - "$work/s.json" "$(cat "$work/rss")" <<'PY'
 import json, sys
-s = json.load(open(sys.argv[1])); l = s["step_latency_us"]
+s = json.load(open(sys.argv[1])); l = s["step_latency_us"]; h = s["head_step_latency_us"]
 print(f"day replay: {s['received']} messages in {s['wall_s']:.2f} s = {s['messages_per_s']:.0f} messages/s, "
       f"{s['calibrations_published']} calibrations, ring high water {s['ring_high_water']}, waits {s['ring_waits']}; "
-      f"step latency p50 {l['p50']:.2f} us, p99 {l['p99']:.2f} us, p99.9 {l['p99.9']:.2f} us, max {l['max']:.0f} us; "
+      f"step latency p50 {l['p50']:.2f} us, p99 {l['p99']:.2f} us, p99.9 {l['p99.9']:.2f} us, max {l['max']:.0f} us "
+      f"(head epochs p50 {h['p50']:.2f}, p99 {h['p99']:.2f}, p99.9 {h['p99.9']:.2f} us); "
       f"peak RSS {int(sys.argv[2]) / 1024:.1f} MB")
 PY
 done
 if [[ $days -gt 1 ]]; then
   "$cli" simulate --scenario "$here/config/sim_gracefo_calibration.yaml" --seed 6 --duration $((days * 86400)) \
-    --out "$work/long" --quiet --no-level1 2>/dev/null ||
-    "$cli" simulate --scenario "$here/config/sim_gracefo_calibration.yaml" --seed 6 --duration $((days * 86400)) --out "$work/long" --quiet
-  rm -f "$work"/long/*.txt
+    --out "$work/long" --quiet
+  rm -f "$work"/long/*.txt  # the Level-1 files are not needed
   /usr/bin/time -f "%M" -o "$work/rss" "$node" --config "$work/node.yaml" --replay "$work/long/sim.lcmlog" \
     --summary-json "$work/l.json" > /dev/null
   python3 - "$work/l.json" "$(cat "$work/rss")" "$days" <<'PY'

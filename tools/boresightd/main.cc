@@ -135,6 +135,8 @@ int main(int argc, char** argv) {
   j["ring_dropped"] = c.ring_dropped;
   j["ring_waits"] = c.ring_waits;
   j["step_latency_us"] = {{"p50", l.p50_us}, {"p99", l.p99_us}, {"p99.9", l.p999_us}, {"max", l.max_us}, {"n", l.n}};
+  const node::LatencySummary lh = n.headStepLatency();
+  j["head_step_latency_us"] = {{"p50", lh.p50_us}, {"p99", lh.p99_us}, {"p99.9", lh.p999_us}, {"max", lh.max_us}, {"n", lh.n}};
   j["wall_s"] = wall;
   j["messages_per_s"] = wall > 0 ? static_cast<double>(c.received) / wall : 0.0;
   j["head_epochs"] = c.head_epochs;
@@ -153,11 +155,12 @@ int main(int argc, char** argv) {
   j["accounted"] = balanced;
   std::printf("boresightd: %llu messages received, %llu used, %llu rejected, %llu lost; %llu head epochs, "
               "%llu calibrations; %.2f s wall (%.0f messages/s); step latency p50 %.2f us, p99 %.2f us, "
-              "p99.9 %.2f us, max %.1f us\n",
+              "p99.9 %.2f us, max %.1f us (head epochs: p50 %.2f us, p99 %.2f us, p99.9 %.2f us)\n",
               static_cast<unsigned long long>(c.received), static_cast<unsigned long long>(c.used),
               static_cast<unsigned long long>(c.rejectedTotal()), static_cast<unsigned long long>(c.lost),
               static_cast<unsigned long long>(c.head_epochs), static_cast<unsigned long long>(c.calibrations_published),
-              wall, wall > 0 ? static_cast<double>(c.received) / wall : 0.0, l.p50_us, l.p99_us, l.p999_us, l.max_us);
+              wall, wall > 0 ? static_cast<double>(c.received) / wall : 0.0, l.p50_us, l.p99_us, l.p999_us, l.max_us,
+              n.headStepLatency().p50_us, n.headStepLatency().p99_us, n.headStepLatency().p999_us);
   for (int r = 0; r < node::kReasonCount; ++r)
     if (c.rejected[std::size_t(r)])
       std::printf("  rejected %s: %llu\n", node::reasonName(node::Reason(r)),

@@ -142,7 +142,10 @@ class Node {
   void finish();
 
   const Counters& counters() const;
+  /// Wall time of each core step (head epochs, accelerometer samples, star epochs), and of the head
+  /// epochs alone (the expensive ones: fusion, monitor, rates).
   LatencySummary stepLatency() const;
+  LatencySummary headStepLatency() const;
   core::Health coreHealth() const;
   const core::Pipeline& pipeline() const;
   TimeUs dataTime() const;
