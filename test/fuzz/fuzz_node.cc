@@ -6,7 +6,7 @@
 // ACCEL, STAR_VECTORS, NOMINAL_MOUNTINGS, ORBIT, another channel, or bytes that are no event at all;
 // bit 7 set prefixes the payload with the channel type's fingerprint (so mutations reach the decoders'
 // fields, not only the fingerprint check). A short input runs in microseconds.
-// BORESIGHT_FUZZ_MAKE_SEED=FILE writes a seed: a minute of valid messages for three heads.
+// BORESIGHT_FUZZ_MAKE_SEED=FILE writes a seed: a minute of valid messages of every input channel.
 #include <boresight/node/node.h>
 
 #include "boresight_lcm/accel_sample_t.hpp"
@@ -67,8 +67,36 @@ int writeSeed(const char* path) {
   std::vector<std::uint8_t> out;
   const node::NodeConfig cfg = makeConfig();
   const std::int64_t t0 = 738849600LL * 1000000LL;
+  boresight_lcm::nominal_mountings_t nm{};
+  nm.utime = t0;
+  nm.n_heads = 3;
+  for (int k = 0; k < 3; ++k) {
+    const Quat q = cfg.pipeline.heads.head[static_cast<std::size_t>(k)].q_Si_B;
+    nm.head_id[k] = static_cast<int8_t>(k + 1);
+    nm.q_Si_B[k][0] = q.w(), nm.q_Si_B[k][1] = q.x(), nm.q_Si_B[k][2] = q.y(), nm.q_Si_B[k][3] = q.z();
+  }
+  frame(out, 3, nm);
   for (int i = 0; i < 600; ++i) {
     const std::int64_t t = t0 + i * 100000LL;
+    if (i % 100 == 0) {
+      boresight_lcm::orbit_sample_t o{};
+      o.utime = t;
+      o.frame = 'I';
+      o.r_m[0] = 6.868e6;
+      o.v_m_s[1] = 7.6e3;
+      o.seq = i / 100;
+      frame(out, 4, o);
+    }
+    if (i % 50 == 0) {
+      boresight_lcm::star_vectors_t sv{};
+      sv.utime = t;
+      sv.head_id = 1;
+      sv.seq = i / 50;
+      sv.n_stars = 3;
+      for (int j = 0; j < 3; ++j) sv.s_head[j][j] = sv.r_inertial[j][j] = 1.0;
+      sv.flags = 1;
+      frame(out, 2, sv);
+    }
     boresight_lcm::accel_sample_t a{};
     a.utime = t;
     a.ang_accel[0] = 1e-6;
