@@ -9,6 +9,7 @@
 
 #include <Eigen/Eigenvalues>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -29,20 +30,31 @@ using Vec3T = Eigen::Matrix<double, 3, 1>;
 // residual = sqrt_info (zS - y).
 class EpochCost {
  public:
-  EpochCost(const WhitenedRow& row, const Mat3& G, const Mat3& C_B_A, bool hard)
-      : row_(row), G_(G), C_B_A_(C_B_A), hard_(hard) {}
+  // References (not copies): the rows and matrices live in the solver's Model for the problem's
+  // lifetime; a functor is then 32 bytes (a day at 10 s with three heads: 26 000 of them).
+  EpochCost(const WhitenedRow* row, const Mat3* G, const Mat3* C_B_A, bool hard)
+      : row_(*row), G_(*G), C_B_A_(*C_B_A), hard_(hard) {}
 
   template <typename T>
   bool operator()(const T* rot, const T* bias, const T* scale, const T* nonorth, const T* tau, T* res) const {
-    using M3 = Eigen::Matrix<T, 3, 3>;
+    return eval(rot, bias, scale, nonorth, tau, res);
+  }
+
+  // T: the differentiated type of the rotation and the bias; S: T, or double for the accelerometer
+  // parameters that are held constant (EpochCostReduced: jets of 6 instead of 13 derivatives).
+  template <typename T, typename S>
+  bool eval(const T* rot, const T* bias, const S* scale, const S* nonorth, const S* tau, T* res) const {
+    using M3 = Eigen::Matrix<S, 3, 3>;
     using V3 = Eigen::Matrix<T, 3, 1>;
     V3 u;
-    for (int i = 0; i < 3; ++i) u[i] = T(row_.zA[i]) + tau[0] * T(row_.zJ[i]) - T(row_.zc) * bias[i];
+    for (int i = 0; i < 3; ++i) u[i] = T(row_.zA[i]) + T(tau[0]) * T(row_.zJ[i]) - T(row_.zc) * bias[i];
     M3 K;
-    K << T(1.0) + scale[0], nonorth[2], nonorth[1],  //
-        nonorth[2], T(1.0) + scale[1], nonorth[0],   //
-        nonorth[1], nonorth[0], T(1.0) + scale[2];
-    const V3 v = K.inverse() * u;
+    K << S(1.0) + scale[0], nonorth[2], nonorth[1],  //
+        nonorth[2], S(1.0) + scale[1], nonorth[0],   //
+        nonorth[1], nonorth[0], S(1.0) + scale[2];
+    const M3 Ki = K.inverse();
+    V3 v;
+    for (int i = 0; i < 3; ++i) v[i] = T(Ki(i, 0)) * u[0] + T(Ki(i, 1)) * u[1] + T(Ki(i, 2)) * u[2];
     const V3 w = C_B_A_.cast<T>() * v;
     T y[3];
     if (hard_) {
@@ -67,15 +79,41 @@ class EpochCost {
     return true;
   }
 
-  static ceres::CostFunction* create(const WhitenedRow& row, const Mat3& G, const Mat3& C_B_A, bool hard) {
+  static ceres::CostFunction* create(const WhitenedRow* row, const Mat3* G, const Mat3* C_B_A, bool hard) {
     return new ceres::AutoDiffCostFunction<EpochCost, 3, 3, 3, 3, 3, 1>(new EpochCost(row, G, C_B_A, hard));
   }
 
  private:
-  const WhitenedRow row_;
-  const Mat3 G_;
-  const Mat3 C_B_A_;
+  const WhitenedRow& row_;
+  const Mat3& G_;
+  const Mat3& C_B_A_;
   const bool hard_;
+};
+
+// The same residual when neither scale, non-orthogonality nor time offset is estimated: only the
+// rotation and the bias are parameter blocks, the others are read as constants (the model's values).
+class EpochCostReduced {
+ public:
+  EpochCostReduced(const WhitenedRow* row, const Mat3* G, const Mat3* C_B_A, bool hard, const double* scale,
+                   const double* nonorth, const double* tau)
+      : full_(row, G, C_B_A, hard), scale_(scale), nonorth_(nonorth), tau_(tau) {}
+
+  template <typename T>
+  bool operator()(const T* rot, const T* bias, T* res) const {
+    return full_.eval(rot, bias, scale_, nonorth_, tau_, res);
+  }
+
+  static ceres::CostFunction* create(const WhitenedRow* row, const Mat3* G, const Mat3* C_B_A, bool hard,
+                                     const double* scale, const double* nonorth, const double* tau) {
+    return new ceres::AutoDiffCostFunction<EpochCostReduced, 3, 3, 3>(
+        new EpochCostReduced(row, G, C_B_A, hard, scale, nonorth, tau));
+  }
+
+ private:
+  const EpochCost full_;
+  const double* scale_;
+  const double* nonorth_;
+  const double* tau_;
 };
 
 // Relative alignment prior (prior mode). The estimate of RelativeNormal says C_Sh_B = A_h Exp(-dhat_h)
@@ -180,13 +218,14 @@ std::string checkSpan(const CalibrationSpan& span, const SolveOptions& opt) {
     return "C_B_A is not a proper rotation";
   if (!(span.decimation_s > 0) || span.noise_correlation.empty() || span.noise_correlation[0] != 1.0)
     return "the span has no decimation interval or noise correlation (not built by SpanBuilder?)";
-  const double need_each_side = span.crn_half_length_s > 0 ? span.crn_half_length_s : 35.4;
+  const double need_each_side = span.crn_half_length_s > 0 ? span.crn_half_length_s : 35.3;
   const double span_s = toSeconds(span.t_last - span.t_first);
-  if (span.obs.size() < opt.min_epochs) {
+  const std::size_t min_epochs = std::max<std::size_t>(opt.min_epochs, 3);  // 0 would let an empty span through
+  if (span.obs.size() < min_epochs) {
     m << "too few epochs: " << span.obs.size() << " calibration epochs (one per " << span.decimation_s
       << " s with head and accelerometer data) from " << span_s << " s of head data; at least "
-      << opt.min_epochs << " are needed, i.e. "
-      << 2.0 * need_each_side + static_cast<double>(opt.min_epochs) * span.decimation_s
+      << min_epochs << " are needed, i.e. "
+      << 2.0 * need_each_side + static_cast<double>(min_epochs) * span.decimation_s
       << " s of continuous head and accelerometer data (the CRN needs " << need_each_side
       << " s each side of an epoch), and excitation (manoeuvres or thruster activity) during it";
     return m.str();
@@ -255,6 +294,8 @@ struct Model {
   std::array<double, 3> bias{}, scale{}, nonorth{};
   double tau = 0;
   Whitened data;
+  std::array<Mat3, kMaxHeads> G{};       // per head, the constant matrix of EpochCost (it points here)
+  Mat3 C_B_A = Mat3::Identity();
 };
 
 // The relative alignment of the heads from the span's normal equations. false with *msg when the
@@ -322,12 +363,17 @@ Mat3 relativeMounting(const Model& m, int h) {
 }
 
 // Head angles r_h (rad, S_h) of the model's current parameters.
+// Hard mode, head h at a given common rotation phi and relative correction delta_h.
+Vec3 hardHeadAngle(const Model& m, int h, const Vec3& phi, const Vec3& delta_h) {
+  const auto hs = static_cast<std::size_t>(h);
+  // C_Sh_B = A_h Exp(-delta_h) Exp(-phi) = Exp(r_h) M_h
+  return core::so3Log(m.qA[hs].toRotationMatrix() * core::so3Exp(-delta_h) * core::so3Exp(-phi) * m.M[hs].transpose());
+}
+
 Vec3 headAngle(const Model& m, int h) {
   const auto hs = static_cast<std::size_t>(h);
   if (!m.hard) return Vec3(m.rot[hs][0], m.rot[hs][1], m.rot[hs][2]);
-  const Vec3 phi(m.rot[0][0], m.rot[0][1], m.rot[0][2]);
-  // C_Sh_B = G_h Exp(-phi) = Exp(r_h) M_h
-  return core::so3Log(relativeMounting(m, h) * core::so3Exp(-phi) * m.M[hs].transpose());
+  return hardHeadAngle(m, h, Vec3(m.rot[0][0], m.rot[0][1], m.rot[0][2]), m.delta[hs]);
 }
 
 // The problem over the model's parameter blocks. Blocks not estimated are constant.
@@ -351,14 +397,21 @@ Built buildProblem(const CalibrationSpan& span, const SolveOptions& opt, Model& 
   P.AddParameterBlock(m.scale.data(), 3);
   P.AddParameterBlock(m.nonorth.data(), 3);
   P.AddParameterBlock(&m.tau, 1);
+  const bool reduced = !opt.estimate_acc_scale && !opt.estimate_acc_nonorthogonality && !opt.estimate_time_offset;
   for (int h = 0; h < m.n; ++h) {
     const auto hs = static_cast<std::size_t>(h);
-    const Mat3 G = m.hard ? relativeMounting(m, h) : m.M[hs];
+    m.G[hs] = m.hard ? relativeMounting(m, h) : m.M[hs];
+    m.C_B_A = span.C_B_A;
     double* rot = m.hard ? m.rot[0].data() : m.rot[hs].data();
     for (const WhitenedRow& row : m.data.rows[hs]) {
       ceres::LossFunction* loss = robust && opt.huber_sigma > 0 ? new ceres::HuberLoss(opt.huber_sigma) : nullptr;
-      b.epoch_blocks.push_back(P.AddResidualBlock(EpochCost::create(row, G, span.C_B_A, m.hard), loss, rot,
-                                                  m.bias.data(), m.scale.data(), m.nonorth.data(), &m.tau));
+      if (reduced)
+        b.epoch_blocks.push_back(P.AddResidualBlock(
+            EpochCostReduced::create(&row, &m.G[hs], &m.C_B_A, m.hard, m.scale.data(), m.nonorth.data(), &m.tau), loss,
+            rot, m.bias.data()));
+      else
+        b.epoch_blocks.push_back(P.AddResidualBlock(EpochCost::create(&row, &m.G[hs], &m.C_B_A, m.hard), loss, rot,
+                                                    m.bias.data(), m.scale.data(), m.nonorth.data(), &m.tau));
     }
   }
   if (!m.hard && !m.rel_heads.empty()) {
@@ -389,20 +442,52 @@ Built buildProblem(const CalibrationSpan& span, const SolveOptions& opt, Model& 
   return b;
 }
 
-// J^T J of the free blocks (loss applied or not).
+// J^T J of the free blocks (loss applied or not), accumulated residual block by residual block (no
+// Jacobian of the whole problem in memory).
 Eigen::MatrixXd information(Built& b, bool apply_loss) {
-  ceres::Problem::EvaluateOptions eo;
-  eo.parameter_blocks = b.free_blocks;
-  eo.apply_loss_function = apply_loss;
-  ceres::CRSMatrix J;
-  b.problem->Evaluate(eo, nullptr, nullptr, nullptr, &J);
-  Eigen::MatrixXd I = Eigen::MatrixXd::Zero(J.num_cols, J.num_cols);
-  for (int r = 0; r < J.num_rows; ++r) {
-    const int k0 = J.rows[static_cast<std::size_t>(r)], k1 = J.rows[static_cast<std::size_t>(r) + 1];
-    for (int a = k0; a < k1; ++a)
-      for (int c = k0; c < k1; ++c)
-        I(J.cols[static_cast<std::size_t>(a)], J.cols[static_cast<std::size_t>(c)]) +=
-            J.values[static_cast<std::size_t>(a)] * J.values[static_cast<std::size_t>(c)];
+  std::vector<std::pair<const double*, int>> off;
+  int np = 0;
+  for (std::size_t i = 0; i < b.free_blocks.size(); ++i) {
+    off.emplace_back(b.free_blocks[i], np);
+    np += b.free_sizes[i];
+  }
+  auto offsetOf = [&](const double* p) {
+    for (const auto& o : off)
+      if (o.first == p) return o.second;
+    return -1;
+  };
+  Eigen::MatrixXd I = Eigen::MatrixXd::Zero(np, np);
+  std::vector<ceres::ResidualBlockId> ids;
+  b.problem->GetResidualBlocks(&ids);
+  std::vector<double*> params;
+  std::vector<std::vector<double>> jac;
+  std::vector<double*> jp;
+  std::vector<double> res;
+  Eigen::MatrixXd Jr;
+  for (ceres::ResidualBlockId id : ids) {
+    b.problem->GetParameterBlocksForResidualBlock(id, &params);
+    const ceres::CostFunction* cf = b.problem->GetCostFunctionForResidualBlock(id);
+    const int nres = cf->num_residuals();
+    const std::vector<int32_t>& sizes = cf->parameter_block_sizes();
+    jac.resize(params.size());
+    jp.assign(params.size(), nullptr);
+    std::vector<int> offs(params.size(), -1);
+    for (std::size_t k = 0; k < params.size(); ++k) {
+      offs[k] = offsetOf(params[k]);
+      if (offs[k] < 0) continue;
+      jac[k].resize(static_cast<std::size_t>(nres * sizes[k]));
+      jp[k] = jac[k].data();
+    }
+    res.resize(static_cast<std::size_t>(nres));
+    double cost = 0;
+    b.problem->EvaluateResidualBlock(id, apply_loss, &cost, res.data(), jp.data());
+    Jr.setZero(nres, np);
+    for (std::size_t k = 0; k < params.size(); ++k) {
+      if (offs[k] < 0) continue;
+      for (int r = 0; r < nres; ++r)
+        for (int c = 0; c < sizes[k]; ++c) Jr(r, offs[k] + c) = jac[k][static_cast<std::size_t>(r * sizes[k] + c)];
+    }
+    I.noalias() += Jr.transpose() * Jr;
   }
   return I;
 }
@@ -435,20 +520,26 @@ HeadCovariance headCovariance(const Model& m, const Eigen::MatrixXd& I, const So
   Eigen::MatrixXd T = Eigen::MatrixXd::Zero(n3, np);
   Eigen::MatrixXd Td = Eigen::MatrixXd::Zero(n3, m.P_delta.rows());
   if (m.hard) {
+    // numerical derivatives of r_h(phi, delta_h) (no copy of the model: it holds the data)
     const double h = 1e-7;
+    const Vec3 phi(m.rot[0][0], m.rot[0][1], m.rot[0][2]);
     for (int c = 0; c < 3; ++c) {
-      Model a = m, b = m;
-      a.rot[0][static_cast<std::size_t>(c)] += h;
-      b.rot[0][static_cast<std::size_t>(c)] -= h;
-      for (int k = 0; k < m.n; ++k) T.block<3, 1>(3 * k, c) = (headAngle(a, k) - headAngle(b, k)) / (2 * h);
+      Vec3 pa = phi, pb = phi;
+      pa[c] += h;
+      pb[c] -= h;
+      for (int k = 0; k < m.n; ++k)
+        T.block<3, 1>(3 * k, c) = (hardHeadAngle(m, k, pa, m.delta[static_cast<std::size_t>(k)]) -
+                                   hardHeadAngle(m, k, pb, m.delta[static_cast<std::size_t>(k)])) /
+                                  (2 * h);
     }
     for (std::size_t j = 0; j < m.rel_heads.size(); ++j) {
       const int k = m.rel_heads[j];
       for (int c = 0; c < 3; ++c) {
-        Model a = m, b = m;
-        a.delta[static_cast<std::size_t>(k)][c] += h;
-        b.delta[static_cast<std::size_t>(k)][c] -= h;
-        Td.block<3, 1>(3 * k, static_cast<Eigen::Index>(3 * j) + c) = (headAngle(a, k) - headAngle(b, k)) / (2 * h);
+        Vec3 da = m.delta[static_cast<std::size_t>(k)], db = da;
+        da[c] += h;
+        db[c] -= h;
+        Td.block<3, 1>(3 * k, static_cast<Eigen::Index>(3 * j) + c) =
+            (hardHeadAngle(m, k, phi, da) - hardHeadAngle(m, k, phi, db)) / (2 * h);
       }
     }
   } else {
@@ -495,12 +586,12 @@ HeadCovariance headCovariance(const Model& m, const Eigen::MatrixXd& I, const So
   return out;
 }
 
-Whitened prepare(const CalibrationSpan& span, const SolveOptions& opt) {
+Whitened prepare(const CalibrationSpan& span, const SolveOptions& opt, const std::vector<std::uint8_t>* reject = nullptr) {
   std::array<Mat3, kMaxHeads> R{};
   for (int h = 0; h < span.n_heads; ++h)
     R[static_cast<std::size_t>(h)] = rotM(span.q_S_B_nominal[static_cast<std::size_t>(h)]) * span.C_B_A;
   const std::vector<double> unit{1.0};
-  return whiten(span, R, opt.whiten ? span.noise_correlation : unit);
+  return whiten(span, R, opt.whiten ? span.noise_correlation : unit, reject);
 }
 
 void initModel(const CalibrationSpan& span, const SolveOptions& opt, Model& m) {
@@ -584,6 +675,18 @@ SolveResult solve(const CalibrationSpan& span, const SolveOptions& opt) {
         if (a.slot_i == c.slot_i && a.slot_j == b.slot_i && b.slot_j == c.slot_j)
           res.closure_arcsec = std::max(res.closure_arcsec,
                                         core::quatLog(c.q_Si_Sj.conjugate() * a.q_Si_Sj * b.q_Si_Sj).norm() * kArcsecPerRad);
+  // robust start for the bias: the median of the accelerometer's values (the angular acceleration of a
+  // span averages to about zero; the bias is often far larger than the manoeuvres)
+  if (opt.estimate_acc_bias) {
+    for (int i = 0; i < 3; ++i) {
+      std::vector<double> v;
+      v.reserve(span.obs.size());
+      for (const Observation& o : span.obs) v.push_back(o.alpha_A[i]);
+      std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
+      m.bias[static_cast<std::size_t>(i)] = v[v.size() / 2];
+    }
+  }
+  std::vector<std::uint8_t> reject(span.obs.size(), 0);
   m.data = prepare(span, opt);
   Built b = buildProblem(span, opt, m, true);
   ceres::Solver::Options so;
@@ -594,7 +697,39 @@ SolveResult solve(const CalibrationSpan& span, const SolveOptions& opt) {
   so.parameter_tolerance = 1e-12;
   ceres::Solver::Summary sum;
   ceres::Solve(so, b.problem.get(), &sum);
-  res.iterations = static_cast<int>(sum.iterations.size());
+  int total_iterations = static_cast<int>(sum.iterations.size());
+  for (int round = 0; round < opt.outlier_rounds && opt.outlier_sigma > 0 && sum.IsSolutionUsable(); ++round) {
+    // raw residual of every head epoch at the current parameters, normalised by its covariance
+    Mat3 K;
+    K << 1 + m.scale[0], m.nonorth[2], m.nonorth[1], m.nonorth[2], 1 + m.scale[1], m.nonorth[0], m.nonorth[1],
+        m.nonorth[0], 1 + m.scale[2];
+    const Mat3 Kinv = K.inverse();
+    const Vec3 bias(m.bias[0], m.bias[1], m.bias[2]);
+    std::size_t added = 0;
+    for (std::size_t k = 0; k < span.obs.size(); ++k) {
+      const Observation& o = span.obs[k];
+      const Vec3 w = span.C_B_A * Kinv * (o.alpha_A + m.tau * o.jerk_A - bias);
+      for (int h = 0; h < m.n; ++h) {
+        const auto hs = static_cast<std::size_t>(h);
+        if (!o.has_head[hs] || ((reject[k] >> h) & 1u)) continue;
+        const Mat3 C = core::so3Exp(headAngle(m, h)) * m.M[hs];
+        const Vec3 e = o.alpha_S[hs] - C * w;
+        const Mat3 R = C * span.C_B_A;
+        const Mat3 cov = o.cov_alpha_S[hs] + R * o.cov_alpha_A * R.transpose();
+        if (e.dot(cov.ldlt().solve(e)) > opt.outlier_sigma * opt.outlier_sigma) {
+          reject[k] = static_cast<std::uint8_t>(reject[k] | (1u << h));
+          ++added;
+        }
+      }
+    }
+    if (added == 0) break;
+    res.rejected_head_epochs += added;
+    m.data = prepare(span, opt, &reject);
+    b = buildProblem(span, opt, m, true);  // starts from the current parameters
+    ceres::Solve(so, b.problem.get(), &sum);
+    total_iterations += static_cast<int>(sum.iterations.size());
+  }
+  res.iterations = total_iterations;
   if (!sum.IsSolutionUsable()) {
     res.message = "the solver failed: " + sum.BriefReport();
     return res;

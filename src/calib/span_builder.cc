@@ -2,6 +2,7 @@
 
 #include "boresight/core/rotation.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace boresight::calib {
@@ -43,11 +44,13 @@ bool SpanBuilder::configure(const core::PipelineConfig& cfg, const SpanOptions& 
   if (validator_.configure(cfg_.heads) != core::Status::kOk) return fail("span builder: head validator refused");
   if (means_.configure(cfg_.heads) != core::Status::kOk) return fail("span builder: pair means refused");
   core::CrnConfig ch = cfg.crn_attitude;
+  core::CrnConfig ca = cfg.crn_acc;
+  if (opt.crn_bandwidth_hz > 0) ch.bandwidth_hz = ca.bandwidth_hz = opt.crn_bandwidth_hz;
+  if (opt.crn_length_s > 0) ch.length_s = ca.length_s = opt.crn_length_s;
   ch.output_period_us = static_cast<TimeUs>(std::llround(opt.decimation_s * 1e6));
   for (int s = 0; s < cfg.heads.n_heads; ++s)
     if (rates_[static_cast<std::size_t>(s)].configure(ch) != core::Status::kOk)
       return fail("span builder: crn_attitude refused (rate, length or taps out of range)");
-  core::CrnConfig ca = cfg.crn_acc;
   ca.output_period_us = 0;  // evaluated on the heads' tags only
   if (acc_.configure(ca, Mat3::Identity()) != core::Status::kOk)
     return fail("span builder: crn_acc refused (rate, length or taps out of range)");
@@ -227,7 +230,11 @@ void SpanBuilder::resolve() {
 }
 
 void SpanBuilder::emit(Observation&& ob) {
-  if (opt_.max_observations > 0 && span_.obs.size() >= opt_.max_observations) span_.obs.erase(span_.obs.begin());
+  if (opt_.max_observations > 0 && span_.obs.size() >= opt_.max_observations) {
+    // drop the oldest in blocks of 1/16 of the limit (one move of the vector per block, not per epoch)
+    const std::size_t n = std::min(span_.obs.size(), std::max<std::size_t>(1, opt_.max_observations / 16));
+    span_.obs.erase(span_.obs.begin(), span_.obs.begin() + static_cast<std::ptrdiff_t>(n));
+  }
   span_.obs.push_back(std::move(ob));
 }
 

@@ -34,7 +34,8 @@ std::vector<double> bandedCholesky(const std::vector<TimeUs>& t, double D, const
   return L;
 }
 
-Whitened whiten(const CalibrationSpan& span, const std::array<Mat3, kMaxHeads>& C_S_A, const std::vector<double>& rho) {
+Whitened whiten(const CalibrationSpan& span, const std::array<Mat3, kMaxHeads>& C_S_A, const std::vector<double>& rho,
+                const std::vector<std::uint8_t>* reject) {
   Whitened out;
   const int K = static_cast<int>(rho.size()) - 1;
   const int W = K + 1;
@@ -43,7 +44,7 @@ Whitened whiten(const CalibrationSpan& span, const std::array<Mat3, kMaxHeads>& 
     std::vector<std::size_t> idx;
     std::vector<TimeUs> t;
     for (std::size_t k = 0; k < span.obs.size(); ++k)
-      if (span.obs[k].has_head[hs]) {
+      if (span.obs[k].has_head[hs] && !(reject && ((*reject)[k] >> h) & 1u)) {
         idx.push_back(k);
         t.push_back(span.obs[k].t);
       }

@@ -29,7 +29,11 @@ struct Whitened {
 };
 
 /// C_Sh_A by slot (nominal), rho as in CalibrationSpan::noise_correlation ({1} = independent epochs).
-Whitened whiten(const CalibrationSpan& span, const std::array<Mat3, kMaxHeads>& C_S_A, const std::vector<double>& rho);
+/// reject (optional, one byte per observation): bit h set leaves head h of that epoch out (an outlier:
+/// left out before the whitening, so that it does not leak into its neighbours; the correlation of the
+/// remaining epochs follows their time lags).
+Whitened whiten(const CalibrationSpan& span, const std::array<Mat3, kMaxHeads>& C_S_A, const std::vector<double>& rho,
+                const std::vector<std::uint8_t>* reject = nullptr);
 
 /// Banded Cholesky of the correlation matrix of epochs at tags t (us, increasing), spacing unit D (s):
 /// row k holds L(k, k-K..k) in L[k * (K+1) + (K - (k - m))]. Exposed for the tests.

@@ -49,6 +49,7 @@ struct Config {
   TimeUs t0 = 738849600LL * kUsPerSecond;  ///< 2023-06-01 00:00 GPS
   Mat3 C_B_A = accToBodyDefault();
   double decimation_s = 10.0;
+  double crn_bandwidth_hz = 0.0, crn_length_s = 0.0;  ///< SpanOptions' calibration CRN (0: the pipeline's)
 };
 
 /// GRACE-FO-like head geometry (config/sim_gracefo.yaml).
@@ -128,13 +129,9 @@ inline Mat3 accK(const ModelParameters& t) {
   return K;
 }
 
-/// Runs the synthetic data through `builder` (configured here). false with *error.
-inline bool generate(const Config& c, SpanBuilder& builder, std::string* error, const SpanOptions* span_opt = nullptr) {
-  SpanOptions so;
-  if (span_opt) so = *span_opt;
-  so.decimation_s = c.decimation_s;
-  so.acc_white_noise_radps2 = c.acc_white;
-  if (!builder.configure(pipelineConfig(c), so, error)) return false;
+/// Pushes the synthetic data in time order into `sink` (pushHeads(core::HeadEpoch), pushAcc(TimeUs, Vec3)).
+template <class Sink>
+void stream(const Config& c, Sink& sink) {
   Attitude att(c);
   std::mt19937_64 rng(c.seed);
   std::normal_distribution<double> N01(0.0, 1.0);
@@ -163,17 +160,29 @@ inline bool generate(const Config& c, SpanBuilder& builder, std::string* error, 
         s.head_id = h + 1;
         s.q_I_Si = (qb * q_S_B_true[static_cast<std::size_t>(h)].conjugate() * core::quatExp(n)).normalized();
       }
-      if (e.n > 0) builder.pushHeads(e);
+      if (e.n > 0) sink.pushHeads(e);
       ++ih;
     } else {
       const double t_true = ta - c.truth.time_offset_s;
       Vec3 a = K * (C_A_B * att.alpha(t_true)) + c.truth.acc_bias;
       for (int i = 0; i < 3; ++i) a[i] += c.acc_white[i] * N01(rng);
       if (c.acc_transient_every_s > 0 && std::fmod(ta, c.acc_transient_every_s) < 1.0) a[0] += c.acc_transient_radps2;
-      builder.pushAcc(c.t0 + static_cast<TimeUs>(std::llround(ta * 1e6)), a);
+      sink.pushAcc(c.t0 + static_cast<TimeUs>(std::llround(ta * 1e6)), a);
       ++ia;
     }
   }
+}
+
+/// Runs the synthetic data through `builder` (configured here, finished at the end). false with *error.
+inline bool generate(const Config& c, SpanBuilder& builder, std::string* error, const SpanOptions* span_opt = nullptr) {
+  SpanOptions so;
+  if (span_opt) so = *span_opt;
+  so.decimation_s = c.decimation_s;
+  so.acc_white_noise_radps2 = c.acc_white;
+  so.crn_bandwidth_hz = c.crn_bandwidth_hz;
+  so.crn_length_s = c.crn_length_s;
+  if (!builder.configure(pipelineConfig(c), so, error)) return false;
+  stream(c, builder);
   builder.finish();
   return true;
 }

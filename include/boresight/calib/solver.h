@@ -43,11 +43,17 @@ struct SolveOptions {
   bool estimate_acc_nonorthogonality = false;
   bool estimate_time_offset = false;
   double huber_sigma = 5.0;           ///< robust loss threshold in whitened residual units (0 = none)
-  int max_iterations = 50;
+  int max_iterations = 200;
   int threads = 1;                    ///< Ceres threads (1 = deterministic)
   /// A direction is "not determined" when its information gives a sigma above this, arcsec.
   double unobservable_sigma_arcsec = 3600.0;
   bool whiten = true;                 ///< temporal whitening with the CRN noise correlation
+  /// Outlier rounds: after a solve, head epochs whose raw residual exceeds this many sigma (the
+  /// Mahalanobis norm with the epoch's covariance) are left out and the problem is solved again (at
+  /// most outlier_rounds times; 0 = off). A transient on one sensor spreads over ~3 epochs in the
+  /// whitened residuals; leaving the raw epoch out keeps it from its neighbours.
+  double outlier_sigma = 6.0;
+  int outlier_rounds = 3;
   /// Fewest observations (decimated epochs with the accelerometer) accepted.
   std::size_t min_epochs = 20;
 };
@@ -99,6 +105,7 @@ struct SolveResult {
   HeadCovariance covariance;                      ///< with the robust weights (rad^2)
   HeadCovariance crlb;                            ///< Fisher information at the estimate, no loss
   int iterations = 0;
+  std::size_t rejected_head_epochs = 0;           ///< left out as outliers (outlier_sigma)
   double closure_arcsec = 0.0;                    ///< hard mode, 3+ heads: pair means' closure error
 };
 
