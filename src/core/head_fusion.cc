@@ -142,8 +142,8 @@ BORESIGHT_CLONES Status HeadFusion::step(const ValidHeads& in) {
   }
   std::array<Vec3, kMaxHeads> r;
   std::array<double, kMaxHeads> c{};
+  const Quat e0_inv = quatExp(-x0);  // Exp(x0)^-1 (its conjugate is Exp(x0) exactly: Exp(-x) = Exp(x)^*)
   {
-    const Quat e0_inv = quatExp(-x0);  // Exp(x0)^-1
     for (int k = ref; k < cfg_.n_heads; ++k) {
       if (!((mask >> k) & 1u)) continue;
       const auto u = static_cast<std::size_t>(k);
@@ -171,7 +171,7 @@ BORESIGHT_CLONES Status HeadFusion::step(const ValidHeads& in) {
       r[u] -= dx - 0.5 * rdx + c[u] * r[u].cross(rdx);  // J_l^-1(r) dx
     }
   }
-  Quat q = (q0 * quatExp(x0)) * quatExp(x);
+  Quat q = (q0 * e0_inv.conjugate()) * quatExp(x);
   // renormalise: a product of unit quaternions, |q|^2 = 1 + e with |e| ~ 1e-16, so one Newton step of
   // 1/sqrt, (3 - |q|^2)/2, is exact to e^2 (no sqrt, no division)
   q.coeffs() *= 0.5 * (3.0 - q.coeffs().squaredNorm());

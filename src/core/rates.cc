@@ -76,11 +76,6 @@ Status AccAngularFilter::configure(const CrnConfig& cfg, const Mat3& C_X_A) {
 
 void AccAngularFilter::reset() { crn_.reset(); }
 
-Status AccAngularFilter::step(TimeUs t, const Vec3& a_A) {
-  if (!configured_) return crn_.step(t, Vec3::Constant(std::nan("")));
-  return crn_.step(t, a_A);  // filtered in A (linear): rotated to X once per output, not per sample
-}
-
 AccOutput AccAngularFilter::output(int i) const {
   const auto& o = crn_.output(i);
   return AccOutput{o.t, C_X_A_ * o.y[0]};

@@ -96,23 +96,36 @@ void BoresightMonitor::reanchor(TimeUs t) {
   anchor_ = t;
 }
 
-void BoresightMonitor::updateFilter(Filt& F, TimeUs t, double g, bool nominal, const Mat3& W, const Vec3& delta) {
+BoresightMonitor::EpochWeights BoresightMonitor::epochWeights(TimeUs t) const {
   // growing weights g = exp((t - anchor) / tau) instead of decaying every sum each epoch (same
-  // estimate, less work); s = t - anchor is the time in the sums
+  // estimate, less work); s = t - anchor is the time in the sums. The same for every pair of the epoch.
+  EpochWeights w;
   const double sa = toSeconds(t - anchor_);
-  const double g2 = g * g;
+  w.g = std::exp(sa / fcfg_.tau_s);
+  w.g2 = w.g * w.g;
+  w.sa = sa;
+  w.gs = w.g * sa;
+  w.gss = w.gs * sa;
+  w.g2s = w.g2 * sa;
+  w.g2ss = w.g2s * sa;
+  return w;
+}
+
+void BoresightMonitor::updateFilter(Filt& F, TimeUs t, const EpochWeights& w, bool nominal, const Mat3& W,
+                                    const Vec3& delta) {
   if (nominal) {  // W = W1: scalar and vector sums only
-    F.a0 += g;
-    F.a1 += g * sa;
-    F.a2 += g * sa * sa;
-    F.b0 += g2;
-    F.b1 += g2 * sa;
-    F.b2 += g2 * sa * sa;
-    F.z0 += g * delta;
-    F.z1 += (g * sa) * delta;
+    F.a0 += w.g;
+    F.a1 += w.gs;
+    F.a2 += w.gss;
+    F.b0 += w.g2;
+    F.b1 += w.g2s;
+    F.b2 += w.g2ss;
+    F.z0 += w.g * delta;
+    F.z1 += w.gs * delta;
   } else {
-    const Mat3 gW = g * W;
-    const Mat3 g2W = g2 * W;
+    const double sa = w.sa;
+    const Mat3 gW = w.g * W;
+    const Mat3 g2W = w.g2 * W;
     F.S0 += gW;
     F.S1 += sa * gW;
     F.S2 += (sa * sa) * gW;
@@ -124,8 +137,8 @@ void BoresightMonitor::updateFilter(Filt& F, TimeUs t, double g, bool nominal, c
     F.y1 += sa * gWd;
     F.general = true;
   }
-  F.wsum += g;
-  F.w2sum += g2;
+  F.wsum += w.g;
+  F.w2sum += w.g2;
   F.seen = true;
   F.t = t;
   F.predicted = false;
@@ -220,7 +233,7 @@ BORESIGHT_CLONES Status BoresightMonitor::step(const ValidHeads& in, const PairR
       have_anchor_ = true;
     }
   }
-  const double g = std::exp(toSeconds(in.t - anchor_) / fcfg_.tau_s);
+  const EpochWeights w = epochWeights(in.t);
   for (int a = 0; a < cfg_.n_heads; ++a)
     for (int b = a + 1; b < cfg_.n_heads; ++b) {
       const auto p = static_cast<std::size_t>(pairIndex(a, b));
@@ -260,7 +273,7 @@ BORESIGHT_CLONES Status BoresightMonitor::step(const ValidHeads& in, const PairR
         ++A.n_nom;
         A.delta_nom += r.delta_Si;
         A.dev_sum += dev;
-        updateFilter(filt_[p], in.t, g, true, W1_[p], r.delta_Si);
+        updateFilter(filt_[p], in.t, w, true, W1_[p], r.delta_Si);
         continue;
       }
       const Mat3 Sa = headCovariance(cfg_.head[ua].sigma_cross_rad, cfg_.head[ua].sigma_roll_rad, ba);
@@ -277,7 +290,7 @@ BORESIGHT_CLONES Status BoresightMonitor::step(const ValidHeads& in, const PairR
       A.dev_sum += dev;
       sigma_iba2_[p] = n_[p].dot(r.cov_delta_Si * n_[p]);
       // filtered deformation: information-weighted fit with exponential forgetting
-      updateFilter(filt_[p], in.t, g, false, W, r.delta_Si);
+      updateFilter(filt_[p], in.t, w, false, W, r.delta_Si);
     }
   health_.record(Status::kOk);
   return Status::kOk;

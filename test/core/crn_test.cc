@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <random>
 #include <vector>
 
@@ -118,6 +119,105 @@ TEST(CrnStreamTest, SinusoidDerivativesAndCentreStamping) {
     EXPECT_LT(e1, 0.002) << "f " << f << " fs " << fs;
     EXPECT_LT(e2, 0.002) << "f " << f << " fs " << fs;
   }
+}
+
+// sum_j g[j] x[j] in long double and sum_j |g[j] x[j]| (the scale of the rounding of any order)
+void plainDot(const double* g, const double* x, int n, double& dot, double& scale) {
+  long double d = 0, a = 0;
+  for (int j = 0; j < n; ++j) {
+    d += static_cast<long double>(g[j]) * x[j];
+    a += std::abs(static_cast<long double>(g[j]) * x[j]);
+  }
+  dot = static_cast<double>(d);
+  scale = static_cast<double>(a);
+}
+
+TEST(CrnKernels, FoldedRateKernelEqualsThePlainDotProduct) {
+  // crnDotFolded4x3 (even kernels on x[c+n] + x[c-n], the odd one on the difference) against the
+  // plain full-window dot product, for the 2 Hz and 10 Hz designs and random windows of 4 channels;
+  // also with a half length that is not a multiple of 4 (the scalar tail). 1e-15 of sum |g x|.
+  std::mt19937_64 rng(5);
+  std::normal_distribution<double> nd(0, 1);
+  double worst = 0;
+  for (double fs : {2.0, 10.0}) {
+    CrnKernel k;
+    ASSERT_EQ(designCrn(grace(fs), k), Status::kOk);
+    const int M = k.half, L = 2 * M + 1;
+    std::vector<double> h[3];
+    for (int o = 0; o < 3; ++o)
+      for (int i = 0; i < M; ++i) h[o].push_back(k.g[static_cast<std::size_t>(o)][static_cast<std::size_t>(M + 1 + i)]);
+    for (int trial = 0; trial < 200; ++trial) {
+      std::vector<double> x[4], xp[4], xm[4];
+      for (int c = 0; c < 4; ++c) {
+        const double mean = 10.0 * nd(rng);  // an offset as a quaternion component has
+        for (int j = 0; j < L; ++j) x[c].push_back(mean + nd(rng));
+        for (int i = 0; i < M; ++i) {
+          xp[c].push_back(x[c][static_cast<std::size_t>(M + 1 + i)]);
+          xm[c].push_back(x[c][static_cast<std::size_t>(M - 1 - i)]);
+        }
+      }
+      const double* pp[4] = {xp[0].data(), xp[1].data(), xp[2].data(), xp[3].data()};
+      const double* pm[4] = {xm[0].data(), xm[1].data(), xm[2].data(), xm[3].data()};
+      const double xc[4] = {x[0][static_cast<std::size_t>(M)], x[1][static_cast<std::size_t>(M)],
+                            x[2][static_cast<std::size_t>(M)], x[3][static_cast<std::size_t>(M)]};
+      const auto um = static_cast<std::size_t>(M);
+      const double centre[3] = {k.g[0][um], k.g[1][um], k.g[2][um]};
+      double out[12];
+      crnDotFolded4x3(h[0].data(), h[1].data(), h[2].data(), centre, pp, pm, xc, M, out);
+      for (int c = 0; c < 4; ++c)
+        for (int o = 0; o < 3; ++o) {
+          double ref, scale;
+          plainDot(k.g[static_cast<std::size_t>(o)].data(), x[c].data(), L, ref, scale);
+          const double rel = std::abs(out[3 * c + o] - ref) / scale;
+          worst = std::max(worst, rel);
+          ASSERT_LT(rel, 1e-15) << "fs " << fs << " channel " << c << " order " << o;
+        }
+    }
+  }
+  std::printf("folded vs plain dot product: worst |difference| / sum|g x| = %.2e\n", worst);
+}
+
+TEST(CrnStreamTest, FoldedStreamOutputsEqualThePlainDotProductOverTheWindow) {
+  // the rate filter's stream (4 channels, orders 0-2, folded with the reversed ring) against the
+  // plain dot product over the window of the samples pushed, across three wraps of the ring
+  CrnConfig c = grace(2.0);
+  c.output_period_us = kUsPerSecond;
+  CrnStream<4> s;
+  ASSERT_EQ(s.configure(c), Status::kOk);
+  const CrnKernel& k = s.kernel();
+  const int M = k.half, L = 2 * M + 1;
+  std::mt19937_64 rng(9);
+  std::normal_distribution<double> nd(0, 1);
+  std::vector<Eigen::Vector4d> hist;
+  std::vector<TimeUs> tags;
+  int outputs = 0;
+  double worst = 0;
+  for (int i = 0; i < 3 * kCrnRing + 300; ++i) {
+    const TimeUs t = 1000 * kUsPerSecond + i * 500000;
+    const Eigen::Vector4d x(0.5 + 0.1 * nd(rng), -0.3 + 0.1 * nd(rng), nd(rng), 0.2 * nd(rng));
+    hist.push_back(x);
+    tags.push_back(t);
+    ASSERT_EQ(s.step(t, x), Status::kOk);
+    for (int o = 0; o < s.numOutputs(); ++o) {
+      const auto& out = s.output(o);
+      const int ci = i - M;  // the centre sample
+      ASSERT_EQ(out.t, tags[static_cast<std::size_t>(ci)]);
+      for (int ch = 0; ch < 4; ++ch) {
+        std::vector<double> w;
+        for (int j = ci - M; j <= ci + M; ++j) w.push_back(hist[static_cast<std::size_t>(j)][ch]);
+        for (int ord = 0; ord < 3; ++ord) {
+          double ref, scale;
+          plainDot(k.g[static_cast<std::size_t>(ord)].data(), w.data(), L, ref, scale);
+          const double rel = std::abs(out.y[static_cast<std::size_t>(ord)][ch] - ref) / scale;
+          worst = std::max(worst, rel);
+          ASSERT_LT(rel, 1e-15) << "sample " << i << " channel " << ch << " order " << ord;
+        }
+      }
+      ++outputs;
+    }
+  }
+  EXPECT_GT(outputs, (3 * kCrnRing + 300 - L) / 2 - 2);
+  std::printf("folded stream vs plain dot product over the window: worst %.2e (%d outputs)\n", worst, outputs);
 }
 
 TEST(CrnStreamTest, AboveTheBandIsSuppressed) {

@@ -20,6 +20,9 @@ constexpr int kMaxStars = 24;
 
 /// Longest CRN FIR (odd number of taps): fs * Tf rounded to odd; 707 for GRACE (10 Hz, 70.7 s).
 constexpr int kMaxCrnTaps = 1023;
+/// Length of a stored CRN kernel: kMaxCrnTaps rounded up to a multiple of 8, the taps beyond the
+/// design's zero (the dot products run over whole blocks of 8 taps, no scalar tail).
+constexpr int kCrnKernelStride = (kMaxCrnTaps + 7) & ~7;
 /// Ring length of a CRN stream (power of two, > kMaxCrnTaps).
 constexpr int kCrnRing = 1024;
 /// Most missing samples a CRN stream bridges by interpolation (longer gaps restart the filter).

@@ -61,12 +61,17 @@ struct CrnKernel {
   int nb = 0;          ///< NB, bins of half-width B
   double fs_hz = 0;
   double tf_s = 0;     ///< Nf / fs
-  std::array<std::array<double, kMaxCrnTaps>, 3> g{};  ///< g[order][n + M]
+  /// g[order][n + M]; zero beyond nf (up to kCrnKernelStride), so that a dot product may run over
+  /// crnPaddedTaps(nf) taps: the padding adds exact zeros (the stream's ring holds only finite values)
+  std::array<std::array<double, kCrnKernelStride>, 3> g{};
 
   /// Frequency response of the designed kernel of `order` at f (Hz): the real gain for order 0 and 2,
   /// the gain of the quadrature part for order 1 (ideal: 1, 2 pi f, -(2 pi f)^2 times the low-pass).
   double response(int order, double f_hz) const;
 };
+
+/// nf rounded up to a multiple of 8 (the vector loops of crnDot* then have no scalar tail).
+constexpr int crnPaddedTaps(int nf) { return (nf + 7) & ~7; }
 
 /// Designs the kernels; kInvalidConfig when the parameters are out of range.
 Status designCrn(const CrnConfig& cfg, CrnKernel& out);
@@ -80,6 +85,13 @@ void crnDotTaylor3(const double* g0, const double* g1, double s, const double* x
 /// Four channels times three kernels: out[3 c + o] = sum_j g_o[j] x_c[j] (the rate filter's q, q', q'').
 void crnDot4x3(const double* g0, const double* g1, const double* g2, const double* x0, const double* x1,
                const double* x2, const double* x3, int n, double out[12]);
+/// The same folded about the centre tap for kernels that are even (orders 0, 2) or odd (order 1):
+/// out[3 c + o] = centre[o] xc[c] + sum_{i < m} h_o[i] (xp_c[i] +- xm_c[i]) (+ for o = 0, 2; - for o = 1),
+/// with h_o[i] = g_o at tap M+1+i, xp_c[i] = x_c at the centre + 1 + i, xm_c[i] = x_c at the centre - 1 - i.
+/// Half the multiplies and kernel loads of crnDot4x3 (the stream keeps a reversed copy of its ring so
+/// that xm is contiguous).
+void crnDotFolded4x3(const double* h0, const double* h1, const double* h2, const double centre[3],
+                     const double* const xp[4], const double* const xm[4], const double xc[4], int m, double out[12]);
 /// out[j] = a[j] + s b[j], j < n.
 void crnAxpy(const double* a, const double* b, double s, double* out, int n);
 
@@ -102,6 +114,13 @@ class CrnStream {
     const Status s = designCrn(cfg, kernel_);
     if (s != Status::kOk) return s;
     cfg_ = cfg;
+    if constexpr (kFolded) {  // the half kernels of the folded evaluation (zero beyond M)
+      for (auto& h : half_) h.fill(0.0);
+      for (int o = 0; o < 3; ++o)
+        for (int i = 0; i < kernel_.half; ++i)
+          half_[static_cast<std::size_t>(o)][static_cast<std::size_t>(i)] =
+              kernel_.g[static_cast<std::size_t>(o)][static_cast<std::size_t>(kernel_.half + 1 + i)];
+    }
     dt_us_ = static_cast<TimeUs>(std::llround(1e6 / cfg.fs_hz));
     tol_us_ = cfg.jitter_tolerance_us > 0 ? cfg.jitter_tolerance_us : dt_us_ / 4;
     if (tol_us_ >= dt_us_ / 2) return Status::kInvalidConfig;
@@ -123,8 +142,27 @@ class CrnStream {
   /// Pushes one sample. Outputs completed by it are output(0..numOutputs()-1) until the next step.
   Status step(TimeUs t, const VecN& x) {
     n_out_ = 0;
+    // the usual case first (small, inlined): the next slot, within the jitter tolerance (d > 0)
+    const TimeUs d = t - last_t_;
+    if (have_last_ && d >= dt_us_ - tol_us_ && d <= dt_us_ + tol_us_ && configured_ && finite(x)) {
+      push(t, x, true);
+      health_.record(Status::kOk);
+      return Status::kOk;
+    }
+    return stepGeneral(t, x);
+  }
+
+ private:
+  static bool finite(const VecN& x) {
+    bool ok = true;
+    for (int ch = 0; ch < N; ++ch) ok = ok && std::isfinite(x[ch]);
+    return ok;
+  }
+
+  // Every other case: first sample, bad input, time errors, gaps (bridged or restarting).
+  __attribute__((noinline)) Status stepGeneral(TimeUs t, const VecN& x) {
     if (!configured_) return record(Status::kNotConfigured);
-    if (!x.allFinite()) return record(Status::kNonFinite);
+    if (!finite(x)) return record(Status::kNonFinite);
     Status result = Status::kOk;
     if (have_last_) {
       const TimeUs d = t - last_t_;
@@ -132,8 +170,7 @@ class CrnStream {
       if (d == 0) return record(Status::kDuplicateTime);
       // The step in whole sampling intervals, rounded to the nearest; it is on the grid when its
       // intervals deviate from dt by at most the tolerance each (n intervals: n * tol in all).
-      const bool regular = d >= dt_us_ - tol_us_ && d <= dt_us_ + tol_us_;  // the usual case: n = 1
-      const TimeUs n = regular ? 1 : (d + dt_us_ / 2) / dt_us_;
+      const TimeUs n = (d + dt_us_ / 2) / dt_us_;
       const TimeUs dev = d - n * dt_us_;
       const bool on_grid = n >= 1 && dev <= n * tol_us_ && -dev <= n * tol_us_;
       if (n <= 1 && !on_grid) return record(Status::kIrregularTime);  // too early or too late for its slot
@@ -159,6 +196,7 @@ class CrnStream {
     return record(result);
   }
 
+ public:
   /// Evaluates the filter at tag tau from the current history (no allocation).
   /// kNotReady: not enough samples after tau yet; kUnavailable: tau is not covered (too old, in a
   /// restarted gap, or before the first sample).
@@ -194,7 +232,8 @@ class CrnStream {
       if (cfg_.max_order >= 1) {
         double r[3];
         crnDotTaylor3(kernel_.g[0].data(), kernel_.g[1].data(), dts, &buf_[0][static_cast<std::size_t>(c - M)],
-                      &buf_[1][static_cast<std::size_t>(c - M)], &buf_[2][static_cast<std::size_t>(c - M)], L, r);
+                      &buf_[1][static_cast<std::size_t>(c - M)], &buf_[2][static_cast<std::size_t>(c - M)],
+                      crnPaddedTaps(L), r);
         y = VecN(r[0], r[1], r[2]);
         return Status::kOk;
       }
@@ -234,6 +273,10 @@ class CrnStream {
     for (int ch = 0; ch < N; ++ch) {
       buf_[static_cast<std::size_t>(ch)][static_cast<std::size_t>(pos_)] = x[ch];
       buf_[static_cast<std::size_t>(ch)][static_cast<std::size_t>(pos_ + kCrnRing)] = x[ch];
+      if constexpr (kFolded) {  // slot s also at kCrnRing-1-s and 2 kCrnRing-1-s: older samples follow
+        rev_[static_cast<std::size_t>(ch)][static_cast<std::size_t>(kCrnRing - 1 - pos_)] = x[ch];
+        rev_[static_cast<std::size_t>(ch)][static_cast<std::size_t>(2 * kCrnRing - 1 - pos_)] = x[ch];
+      }
     }
     times_[static_cast<std::size_t>(pos_)] = t;
     if (count_ < kCrnRing) ++count_;
@@ -288,12 +331,20 @@ class CrnStream {
   // order, vectorised; the doubled ring makes every window contiguous).
   void evaluate(int c, int top, Output& o) const {
     const int M = kernel_.half, L = 2 * M + 1;
-    if constexpr (N == 4) {
+    if constexpr (kFolded) {
       if (top == 2) {
         double r[12];
-        const auto b = static_cast<std::size_t>(c - M);
-        crnDot4x3(kernel_.g[0].data(), kernel_.g[1].data(), kernel_.g[2].data(), &buf_[0][b], &buf_[1][b], &buf_[2][b],
-                  &buf_[3][b], L, r);
+        // x at the centre + 1 + i (forward ring) and at the centre - 1 - i (reversed ring, slot s at
+        // kCrnRing - 1 - s: the sample before the centre's slot sc is at kCrnRing - sc)
+        const auto f = static_cast<std::size_t>(c + 1);
+        const auto b = static_cast<std::size_t>(kCrnRing - (c & (kCrnRing - 1)));
+        const double* xp[4] = {&buf_[0][f], &buf_[1][f], &buf_[2][f], &buf_[3][f]};
+        const double* xm[4] = {&rev_[0][b], &rev_[1][b], &rev_[2][b], &rev_[3][b]};
+        const auto uc = static_cast<std::size_t>(c);
+        const double xc[4] = {buf_[0][uc], buf_[1][uc], buf_[2][uc], buf_[3][uc]};
+        const auto um = static_cast<std::size_t>(M);
+        const double centre[3] = {kernel_.g[0][um], kernel_.g[1][um], kernel_.g[2][um]};
+        crnDotFolded4x3(half_[0].data(), half_[1].data(), half_[2].data(), centre, xp, xm, xc, (M + 3) & ~3, r);
         for (int ch = 0; ch < 4; ++ch)
           for (int order = 0; order < 3; ++order) o.y[static_cast<std::size_t>(order)][ch] = r[3 * ch + order];
         return;
@@ -311,7 +362,14 @@ class CrnStream {
   CrnKernel kernel_{};
   bool configured_ = false;
   TimeUs dt_us_ = 0, tol_us_ = 0;
-  std::array<std::array<double, 2 * kCrnRing>, static_cast<std::size_t>(N)> buf_{};
+  // + 8: a window ending at the newest sample may be read on to its padded length (crnPaddedTaps;
+  // the kernel's padding taps are zero and every value here is finite, so they add exact zeros)
+  std::array<std::array<double, 2 * kCrnRing + 8>, static_cast<std::size_t>(N)> buf_{};
+  // The rate filter (4 channels, orders 0-2) evaluates folded about the centre tap: its kernels are
+  // even, odd, even (half the multiplies and kernel loads) with a reversed copy of the ring.
+  static constexpr bool kFolded = N == 4;
+  std::array<std::array<double, kFolded ? 2 * kCrnRing + 8 : 1>, static_cast<std::size_t>(N)> rev_{};
+  std::array<std::array<double, kFolded ? kCrnKernelStride / 2 + 8 : 1>, 3> half_{};  ///< g_o at M+1+i
   std::array<TimeUs, kCrnRing> times_{};
   int pos_ = 0;
   int count_ = 0;

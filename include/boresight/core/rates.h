@@ -60,7 +60,10 @@ class AccAngularFilter {
   Status configure(const CrnConfig& cfg, const Mat3& C_X_A);
   void reset();
   /// One accelerometer sample a_A (rad/s^2 in A). Grid outputs (if cfg.output_period_us > 0).
-  Status step(TimeUs t, const Vec3& a_A);
+  Status step(TimeUs t, const Vec3& a_A) {  // inline: called at the accelerometer rate
+    if (!configured_) return crn_.step(t, Vec3::Constant(std::nan("")));  // counted by the stream
+    return crn_.step(t, a_A);  // filtered in A (linear): rotated to X once per output, not per sample
+  }
   int numOutputs() const { return crn_.numOutputs(); }
   AccOutput output(int i) const;
   Status evaluateAt(TimeUs t, AccOutput& out) const;

@@ -88,6 +88,9 @@ class RelativeAttitudeMeans {
   std::array<Mat3, kMaxPairs> W1_ = filled<Mat3, kMaxPairs>(Mat3::Zero());               ///< pair information at unit sigma scales
   std::array<Mat3, kMaxHeads> W_B_ = filled<Mat3, kMaxHeads>(Mat3::Zero());             ///< head information in B
   std::array<Acc, kMaxPairs> acc_{};
+  Mat3 P_all_ = Mat3::Zero();  ///< (sum_k W_k)^-1 over the configured heads (the datum)
+  Eigen::Matrix<double, 3 * kMaxHeads, 3 * kMaxHeads> H_datum_ =
+      Eigen::Matrix<double, 3 * kMaxHeads, 3 * kMaxHeads>::Zero();  ///< the datum's part of the alignment's normal matrix
   bool datumProject(HeadAlignment& a) const;
   Mat3 infoSum(const Acc& A, std::size_t p) const { return A.w_nom * W1_[p] + A.W_sum; }
   Vec3 infoEtaSum(const Acc& A, std::size_t p) const { return W1_[p] * A.eta_nom + A.W_eta; }

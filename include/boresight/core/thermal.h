@@ -178,7 +178,13 @@ class BoresightMonitor {
     Mat3 cov_pred = Mat3::Zero();
   };
   std::array<Filt, kMaxPairs> filt_{};
-  void updateFilter(Filt& F, TimeUs t, double g, bool nominal, const Mat3& W, const Vec3& delta);
+  /// The weights of one epoch (g = exp((t - anchor) / tau), s = t - anchor) and their products, shared by its pairs.
+  struct EpochWeights {
+    double g = 0, g2 = 0, sa = 0, gs = 0, gss = 0, g2s = 0, g2ss = 0;
+  };
+  EpochWeights epochWeights(TimeUs t) const;
+  __attribute__((always_inline)) inline void updateFilter(Filt& F, TimeUs t, const EpochWeights& w, bool nominal,
+                                                          const Mat3& W, const Vec3& delta);
   void reanchor(TimeUs t);
   /// Re-anchoring period of the filters' time origin, s (weights up to e^(kReanchorS / tau); the
   /// shift s -> s - d at a solve loses about (kReanchorS / tau)^2 of relative precision: fine).
