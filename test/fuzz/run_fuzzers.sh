@@ -33,7 +33,7 @@ declare -A seeds=(
   [sca1a]="SCA1A" [flagged]="ACC1A ACT1A AHK1A AHK1B" [acc1a]="ACC1A ACT1A" [sca1b]="SCA1B" [acc1b]="ACC1B ACT1B"
   [gnv]="GNV1B GNI1B" [qsa]="QSA1B QKS1B" [imu]="IMU1A IMU1B" [thr]="THR1A THR1B" [ihk]="IHK1A IHK1B"
   [hrt]="HRT1A HRT1B" [tim]="TIM1B" [clk]="CLK1A CLK1B"
-  [stream_sca1a]="SCA1A" [stream_acc1a]="ACC1A ACT1A" [lcmlog]="" [ground_yaml]=""
+  [stream_sca1a]="SCA1A" [stream_acc1a]="ACC1A ACT1A" [lcmlog]="" [ground_yaml]="" [lcmnode]=""
 )
 
 # mode byte: bit0 stop-on-error, bits1-2 kind (0 whole file, 1 ASCII header + body, 2 binary header + body)
@@ -54,6 +54,10 @@ make_corpus() {
   fi
   if [[ $reader == ground_yaml ]]; then
     make_ground_seeds "$dir"
+    return 0
+  fi
+  if [[ $reader == lcmnode ]]; then  # the node's own seed: a minute of valid messages of three heads
+    BORESIGHT_FUZZ_MAKE_SEED="$dir/own" "$fuzzdir/fuzz_node" >/dev/null 2>&1 || true
     return 0
   fi
   [[ -d $real ]] || return 0
@@ -157,17 +161,22 @@ make_ground_seeds() {
 }
 
 readers=("$@")
-[[ ${#readers[@]} -gt 0 ]] || readers=(header sca1a flagged acc1a sca1b acc1b gnv qsa imu thr ihk hrt tim clk generic summary stream_sca1a stream_acc1a lcmlog ground_yaml)
+[[ ${#readers[@]} -gt 0 ]] || readers=(header sca1a flagged acc1a sca1b acc1b gnv qsa imu thr ihk hrt tim clk generic summary stream_sca1a stream_acc1a lcmlog ground_yaml lcmnode)
 status=0
 summary=()
 for reader in "${readers[@]}"; do
   [[ -n ${seeds[$reader]+x} ]] || { echo "unknown reader '$reader'" >&2; exit 2; }
   name=fuzz_$reader
+  rexe=$exe
+  if [[ $reader == lcmnode ]]; then  # the node's handlers: their own executable (fuzz_node)
+    rexe=$fuzzdir/fuzz_node
+    [[ -x $rexe ]] || { summary+=("$name skipped: $rexe not built (needs the node library)"); continue; }
+  fi
   make_corpus "$reader"
   log=$work/$name.log
   mkdir -p "$work/artifacts_$reader"
   echo "== $name: ${secs}s, seeds: $(ls "$work/corpus_$reader" | wc -l)"
-  if BORESIGHT_FUZZ_READER=$reader "$exe" -seed="${BORESIGHT_FUZZ_SEED:-1}" -max_total_time="$secs" -timeout=10 -rss_limit_mb=2048 -max_len=65536 -print_final_stats=1 \
+  if BORESIGHT_FUZZ_READER=$reader "$rexe" -seed="${BORESIGHT_FUZZ_SEED:-1}" -max_total_time="$secs" -timeout=10 -rss_limit_mb=2048 -max_len=65536 -print_final_stats=1 \
       -artifact_prefix="$work/artifacts_$reader/" "$work/corpus_$reader" >"$log" 2>&1; then
     execs=$(grep -Eo 'stat::number_of_executed_units: *[0-9]+' "$log" | grep -Eo '[0-9]+$' || echo '?')
     summary+=("$name ok: $execs executions in ${secs}s")

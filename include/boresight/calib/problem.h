@@ -41,6 +41,24 @@ struct RelativeMean {
   std::uint64_t epochs = 0;
 };
 
+/// Joint relative alignment of all heads from every epoch with two or more heads (normal equations).
+/// Head h's attitude implies a body attitude R_h = C_I_Sh A_h (A_h the anchor mounting: M_0 for the
+/// first head, the others from the epoch where they were first seen with an anchored head); with
+/// x_h = Log(R_ref^T R_h) (in B) and C_B_Sh(true) A_h = Exp(delta_h), x_h = theta + delta_h + noise
+/// (theta the epoch's common offset). Eliminating theta per epoch (its information-weighted mean) gives
+/// info = sum P^T W P and info_x = sum P^T W x over the epochs, P the projector; the pair means of the
+/// core treat the three pairs of three heads as independent though they share the heads' noise (too
+/// optimistic by up to the number of pairs sharing a head), this does not. delta is found up to a
+/// common rotation (fix one head); first order in |delta| (the anchors make it the noise level).
+struct RelativeNormal {
+  std::array<Quat, kMaxHeads> q_S_B_anchor{};       ///< A_h, R = C_Sh_B
+  std::array<bool, kMaxHeads> anchored{};
+  std::array<std::array<bool, kMaxHeads>, kMaxHeads> together{};  ///< heads h, g seen in one epoch
+  Eigen::Matrix<double, 3 * kMaxHeads, 3 * kMaxHeads> info = Eigen::Matrix<double, 3 * kMaxHeads, 3 * kMaxHeads>::Zero();
+  Eigen::Matrix<double, 3 * kMaxHeads, 1> info_x = Eigen::Matrix<double, 3 * kMaxHeads, 1>::Zero();
+  std::uint64_t epochs = 0;
+};
+
 /// Everything the solver needs; bounded in memory by SpanOptions::max_observations.
 struct CalibrationSpan {
   int n_heads = 0;
@@ -48,10 +66,20 @@ struct CalibrationSpan {
   std::array<Quat, kMaxHeads> q_S_B_nominal{};      ///< nominal mountings, R = C_Si_B
   Mat3 C_B_A = Mat3::Identity();                    ///< configured accelerometer-to-body rotation
   std::vector<Observation> obs;                     ///< decimated epochs in time order
-  std::vector<RelativeMean> relative;               ///< one per head pair with data
-  TimeUs t_first = 0, t_last = 0;                   ///< span of head data actually used
+  std::vector<RelativeMean> relative;               ///< one per head pair with data (reports, closure)
+  RelativeNormal relative_normal;                   ///< what the solver uses for the relative attitude
+  TimeUs t_first = 0, t_last = 0;                   ///< first and last head epoch pushed
   std::uint64_t head_epochs = 0, acc_samples = 0;   ///< inputs that went into the span
-  double decimation_s = 0.0;                        ///< spacing of obs (the CRN correlation length)
+  double decimation_s = 0.0;                        ///< spacing of obs (multiples of it between epochs)
+  /// Correlation of one head's CRN acceleration noise between epochs k decimation intervals apart,
+  /// k = 0, 1, ... (entry 0 is 1; the list ends where the kernels no longer overlap or |rho| < 1e-4).
+  /// The head noise is white at the head rate, so this is sum_n g2[n] g2[n + k D fs] / sum_n g2[n]^2
+  /// of the CRN second-derivative kernel. The solver whitens each head's epochs with it.
+  std::vector<double> noise_correlation;
+  /// CRN outputs of the heads that never became observations (no accelerometer value at their tag:
+  /// accelerometer gap, start or end of its data), and head epochs the validator rejected.
+  std::uint64_t dropped_no_acc = 0, head_epochs_rejected = 0;
+  double crn_half_length_s = 0.0;                   ///< CRN data needed each side of an epoch, s
 };
 
 }  // namespace boresight::calib

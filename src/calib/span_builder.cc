@@ -1,0 +1,261 @@
+#include "boresight/calib/span_builder.h"
+
+#include "boresight/core/rotation.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace boresight::calib {
+
+namespace {
+
+double sumSquares(const core::CrnKernel& k, int order) {
+  double s = 0;
+  for (int j = 0; j < k.nf; ++j) s += k.g[static_cast<std::size_t>(order)][static_cast<std::size_t>(j)] *
+                                      k.g[static_cast<std::size_t>(order)][static_cast<std::size_t>(j)];
+  return s;
+}
+
+// Correlation of white noise through kernel `order` between outputs `lag` samples apart.
+double kernelCorrelation(const core::CrnKernel& k, int order, int lag) {
+  const auto& g = k.g[static_cast<std::size_t>(order)];
+  double s = 0;
+  for (int j = 0; j + lag < k.nf; ++j) s += g[static_cast<std::size_t>(j)] * g[static_cast<std::size_t>(j + lag)];
+  return s / sumSquares(k, order);
+}
+
+}  // namespace
+
+bool SpanBuilder::configure(const core::PipelineConfig& cfg, const SpanOptions& opt, std::string* error) {
+  configured_ = false;
+  auto fail = [&](const std::string& m) {
+    if (error) *error = m;
+    return false;
+  };
+  if (core::validate(cfg.heads) != core::Status::kOk) return fail("span builder: invalid head configuration");
+  const double head_dt = 1.0 / cfg.crn_attitude.fs_hz;
+  if (!(opt.decimation_s >= head_dt) || !std::isfinite(opt.decimation_s))
+    return fail("span builder: decimation_s must be at least the head sampling interval");
+  if (!opt.acc_white_noise_radps2.allFinite() || (opt.acc_white_noise_radps2.array() < 0).any())
+    return fail("span builder: acc_white_noise_radps2 must be finite and >= 0");
+  cfg_ = cfg;
+  cfg_.heads.relative_time_constant_s = 0.0;  // the batch mean keeps every epoch of the span
+  opt_ = opt;
+  if (validator_.configure(cfg_.heads) != core::Status::kOk) return fail("span builder: head validator refused");
+  if (means_.configure(cfg_.heads) != core::Status::kOk) return fail("span builder: pair means refused");
+  core::CrnConfig ch = cfg.crn_attitude;
+  core::CrnConfig ca = cfg.crn_acc;
+  if (opt.crn_bandwidth_hz > 0) ch.bandwidth_hz = ca.bandwidth_hz = opt.crn_bandwidth_hz;
+  if (opt.crn_length_s > 0) ch.length_s = ca.length_s = opt.crn_length_s;
+  ch.output_period_us = static_cast<TimeUs>(std::llround(opt.decimation_s * 1e6));
+  for (int s = 0; s < cfg.heads.n_heads; ++s)
+    if (rates_[static_cast<std::size_t>(s)].configure(ch) != core::Status::kOk)
+      return fail("span builder: crn_attitude refused (rate, length or taps out of range)");
+  ca.output_period_us = 0;  // evaluated on the heads' tags only
+  if (acc_.configure(ca, Mat3::Identity()) != core::Status::kOk)
+    return fail("span builder: crn_acc refused (rate, length or taps out of range)");
+
+  const core::CrnKernel& kh = rates_[0].stream().kernel();
+  const core::CrnKernel& ka = acc_.stream().kernel();
+  const double g2 = sumSquares(kh, 2), g0 = sumSquares(ka, 0);
+  for (int s = 0; s < cfg.heads.n_heads; ++s) {
+    const auto& h = cfg.heads.head[static_cast<std::size_t>(s)];
+    const Mat3 Sig = core::headCovariance(h.sigma_cross_rad, h.sigma_roll_rad, h.boresight_Si.normalized());
+    cov_head_unit_[static_cast<std::size_t>(s)] = g2 * Sig;
+    const Mat3 M = h.q_Si_B.normalized().toRotationMatrix();
+    Mat3 W;
+    if (!core::invertSpd3(M.transpose() * Sig * M, W)) return fail("span builder: head covariance not invertible");
+    W_B_[static_cast<std::size_t>(s)] = W;
+  }
+  cov_acc_ = g0 * opt.acc_white_noise_radps2.cwiseAbs2().asDiagonal();
+
+  span_ = CalibrationSpan{};
+  span_.n_heads = cfg.heads.n_heads;
+  for (int s = 0; s < cfg.heads.n_heads; ++s) {
+    span_.head_ids[static_cast<std::size_t>(s)] = cfg.heads.head[static_cast<std::size_t>(s)].id;
+    span_.q_S_B_nominal[static_cast<std::size_t>(s)] = cfg.heads.head[static_cast<std::size_t>(s)].q_Si_B.normalized();
+  }
+  span_.C_B_A = cfg.C_B_A;
+  span_.decimation_s = opt.decimation_s;
+  span_.crn_half_length_s = std::max(kh.half / kh.fs_hz, ka.half / ka.fs_hz);
+  const int lag = static_cast<int>(std::llround(opt.decimation_s * kh.fs_hz));
+  span_.noise_correlation.push_back(1.0);
+  for (int k = 1; k * lag < kh.nf; ++k) {
+    const double r = kernelCorrelation(kh, 2, k * lag);
+    if (std::abs(r) < 1e-4) break;
+    span_.noise_correlation.push_back(r);
+  }
+  pending_.clear();
+  have_head_ = false;
+  configured_ = true;
+  return true;
+}
+
+core::Health SpanBuilder::health() const {
+  core::Health h = validator_.health();
+  for (int s = 0; s < cfg_.heads.n_heads; ++s) h.add(rates_[static_cast<std::size_t>(s)].health());
+  h.add(acc_.health());
+  h.add(means_.health());
+  return h;
+}
+
+void SpanBuilder::pushHeads(const core::HeadEpoch& e) {
+  if (!configured_) return;
+  const core::Status st = validator_.step(e);
+  if (st != core::Status::kOk) {
+    ++span_.head_epochs_rejected;
+    return;
+  }
+  const core::ValidHeads& v = validator_.output();
+  if (!have_head_) span_.t_first = v.t;
+  have_head_ = true;
+  span_.t_last = v.t;
+  ++span_.head_epochs;
+  means_.step(v);
+  relativeStep(v);
+  for (int s = 0; s < cfg_.heads.n_heads; ++s) {
+    if (!v.has(s)) continue;
+    core::AttitudeRates& r = rates_[static_cast<std::size_t>(s)];
+    r.step(v.t, v.q_I_Si[static_cast<std::size_t>(s)]);
+    for (int i = 0; i < r.numOutputs(); ++i) addHeadOutput(s, r.output(i));
+  }
+  resolve();
+}
+
+void SpanBuilder::relativeStep(const core::ValidHeads& v) {
+  RelativeNormal& rn = span_.relative_normal;
+  const int n = cfg_.heads.n_heads;
+  // reference: the first anchored head present
+  int ref = -1;
+  for (int h = 0; h < n && ref < 0; ++h)
+    if (v.has(h) && rn.anchored[static_cast<std::size_t>(h)]) ref = h;
+  if (ref < 0) {  // nobody anchored is here: anchor the first present head at its nominal mounting
+    for (int h = 0; h < n && ref < 0; ++h)
+      if (v.has(h)) ref = h;
+    if (ref < 0) return;
+    rn.anchored[static_cast<std::size_t>(ref)] = true;
+    rn.q_S_B_anchor[static_cast<std::size_t>(ref)] = cfg_.heads.head[static_cast<std::size_t>(ref)].q_Si_B.normalized();
+  }
+  const auto rs = static_cast<std::size_t>(ref);
+  const Quat R_ref = v.q_I_Si[rs] * rn.q_S_B_anchor[rs];  // q_I_B implied by the reference head
+  int present[kMaxHeads];
+  int m = 0;
+  for (int h = 0; h < n; ++h) {
+    if (!v.has(h)) continue;
+    const auto hs = static_cast<std::size_t>(h);
+    if (!rn.anchored[hs]) {  // first seen with an anchored head: anchor so that R_h = R_ref now
+      rn.anchored[hs] = true;
+      rn.q_S_B_anchor[hs] = (v.q_I_Si[hs].conjugate() * R_ref).normalized();
+    }
+    present[m++] = h;
+  }
+  if (m < 2) return;
+  for (int a = 0; a < m; ++a)
+    for (int b = 0; b < m; ++b)
+      rn.together[static_cast<std::size_t>(present[a])][static_cast<std::size_t>(present[b])] = true;
+  // x_h, W_h; eliminate the epoch's common offset: P^T W P = W - W 1 (sum W)^-1 1^T W
+  std::array<Vec3, kMaxHeads> x{};
+  std::array<Mat3, kMaxHeads> W{};
+  Mat3 Ws = Mat3::Zero();
+  Vec3 Wx = Vec3::Zero();
+  for (int a = 0; a < m; ++a) {
+    const auto hs = static_cast<std::size_t>(present[a]);
+    const Quat R_h = v.q_I_Si[hs] * rn.q_S_B_anchor[hs];
+    x[hs] = core::quatLog(R_ref.conjugate() * R_h);
+    const double sc = v.sigma_scale[hs] > 0 ? v.sigma_scale[hs] : 1.0;
+    W[hs] = W_B_[hs] / (sc * sc);
+    Ws += W[hs];
+    Wx += W[hs] * x[hs];
+  }
+  Mat3 Wsi;
+  if (!core::invertSpd3(Ws, Wsi)) return;
+  const Vec3 theta = Wsi * Wx;
+  for (int a = 0; a < m; ++a) {
+    const int ha = present[a];
+    const auto as = static_cast<std::size_t>(ha);
+    rn.info_x.segment<3>(3 * ha) += W[as] * (x[as] - theta);
+    for (int b = 0; b < m; ++b) {
+      const int hb = present[b];
+      const auto bs = static_cast<std::size_t>(hb);
+      Mat3 blk = -W[as] * Wsi * W[bs];
+      if (a == b) blk += W[as];
+      rn.info.block<3, 3>(3 * ha, 3 * hb) += blk;
+    }
+  }
+  ++rn.epochs;
+}
+
+void SpanBuilder::addHeadOutput(int slot, const core::RateOutput& o) {
+  if (!o.alpha_X.allFinite()) return;
+  // pending_ is in time order; heads of one epoch share the tag, so the match is at the back
+  auto it = pending_.end();
+  while (it != pending_.begin() && std::prev(it)->t > o.t) --it;
+  if (it == pending_.begin() || std::prev(it)->t != o.t) {
+    Observation ob;
+    ob.t = o.t;
+    it = pending_.insert(it, ob);
+  } else {
+    --it;
+  }
+  const auto s = static_cast<std::size_t>(slot);
+  it->has_head[s] = true;
+  it->alpha_S[s] = o.alpha_X;
+  it->cov_alpha_S[s] = cov_head_unit_[s];
+  // fused context rate: the first head's rate rotated to B with its nominal mounting
+  if (it->w_B.isZero()) it->w_B = span_.q_S_B_nominal[s].conjugate() * o.w_X;
+}
+
+void SpanBuilder::pushAcc(TimeUs t, const Vec3& a_A) {
+  if (!configured_) return;
+  if (core::accepted(acc_.step(t, a_A))) ++span_.acc_samples;
+  resolve();
+}
+
+void SpanBuilder::resolve() {
+  while (!pending_.empty()) {
+    Observation& ob = pending_.front();
+    core::CrnStream<3>::Output o;
+    const core::Status s = acc_.stream().evaluateAt(ob.t, o);
+    if (s == core::Status::kNotReady) return;
+    if (s == core::Status::kOk && o.y[0].allFinite() && o.y[1].allFinite()) {
+      ob.alpha_A = o.y[0];
+      ob.jerk_A = o.y[1];
+      ob.cov_alpha_A = cov_acc_;
+      emit(std::move(ob));
+    } else {
+      ++span_.dropped_no_acc;
+    }
+    pending_.pop_front();
+  }
+}
+
+void SpanBuilder::emit(Observation&& ob) {
+  if (opt_.max_observations > 0 && span_.obs.size() >= opt_.max_observations) {
+    // drop the oldest in blocks of 1/16 of the limit (one move of the vector per block, not per epoch)
+    const std::size_t n = std::min(span_.obs.size(), std::max<std::size_t>(1, opt_.max_observations / 16));
+    span_.obs.erase(span_.obs.begin(), span_.obs.begin() + static_cast<std::ptrdiff_t>(n));
+  }
+  span_.obs.push_back(std::move(ob));
+}
+
+void SpanBuilder::finish() {
+  if (!configured_) return;
+  resolve();
+  span_.dropped_no_acc += pending_.size();
+  pending_.clear();
+  span_.relative.clear();
+  for (int a = 0; a < cfg_.heads.n_heads; ++a)
+    for (int b = a + 1; b < cfg_.heads.n_heads; ++b) {
+      const core::PairMean m = means_.mean(a, b);
+      if (!m.valid) continue;
+      RelativeMean r;
+      r.slot_i = a;
+      r.slot_j = b;
+      r.q_Si_Sj = m.q_Si_Sj;
+      r.cov_Sj = m.cov_mean_Sj;
+      r.epochs = m.n;
+      span_.relative.push_back(r);
+    }
+}
+
+}  // namespace boresight::calib
