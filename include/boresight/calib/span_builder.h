@@ -26,6 +26,7 @@
 #include "boresight/core/pipeline.h"
 
 #include <deque>
+#include <vector>
 #include <string>
 
 namespace boresight::calib {
@@ -43,6 +44,10 @@ struct SpanOptions {
   /// accelerometer's filter must fit kMaxCrnTaps: length_s * its rate <= 1023.
   double crn_bandwidth_hz = 0.0;
   double crn_length_s = 0.0;
+  /// false: observations are not stored, only the sufficient statistics (CalibrationSpan::moments):
+  /// memory constant in the span; the solver then works from the moments (no robust loss, no outlier
+  /// rounds: see SolveOptions::from_moments).
+  bool keep_observations = true;
 };
 
 class SpanBuilder {
@@ -66,7 +71,13 @@ class SpanBuilder {
   void relativeStep(const core::ValidHeads& v);
   void resolve();
   void emit(Observation&& ob);
-
+  void accumulate(const Observation& ob);
+  struct WhitenState {  ///< the streaming banded Cholesky of one head: the last K epochs
+    std::deque<TimeUs> t;
+    std::deque<std::vector<double>> L;                    ///< L(k, k-K..k) of those epochs
+    std::deque<Eigen::Matrix<double, 10, 1>> z;           ///< their whitened data vectors
+  };
+  std::array<WhitenState, kMaxHeads> wstate_{};
   bool configured_ = false;
   core::PipelineConfig cfg_{};
   SpanOptions opt_{};
