@@ -15,8 +15,10 @@
 //
 // Inputs in time order per stream, the two streams merged by time (the engine does): an epoch waits
 // until the accelerometer filter covers it (35 s later) and is dropped (dropped_no_acc) when the
-// accelerometer data does not cover it. Memory: the observations (about 0.5 kB each, 4 MB per day at
-// 10 s) plus the filters' fixed rings; max_observations bounds it.
+// accelerometer data does not cover it. Memory: the observations (about 0.7 kB each, 6 MB per day at
+// 10 s) plus the filters' fixed rings; max_observations bounds them. Every epoch also goes into the
+// per-head sufficient statistics (CalibrationSpan::moments, streaming whitening): with
+// keep_observations = false that is all the span holds, and its memory is constant.
 //
 // Producers: the replay engine (Level-1 files, LCM logs) via `boresight calibrate`, the node's worker,
 // the Monte Carlo bench. Owned by the solver's author; the CLI only calls it.
