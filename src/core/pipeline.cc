@@ -13,6 +13,7 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 Status Pipeline::configure(const PipelineConfig& cfg) {
   configured_ = false;
+  thermal_ = ThermalPredictor{};  // a thermal model belongs to the head set it was set for
   Status s = validator_.configure(cfg.heads);
   if (s == Status::kOk) s = fusion_.configure(cfg.heads);
   if (s == Status::kOk) s = means_.configure(cfg.heads);
@@ -46,6 +47,8 @@ void Pipeline::reset() {
   rates_.reset();
   acc_.reset();
   wahba_.reset();
+  thermal_.reset();
+  resetThermalAnchors();
   handed_ = false;
   align_countdown_ = 0;
   have_grid_ = false;
@@ -66,6 +69,7 @@ Health Pipeline::health() const {
   h.add(rates_.health());
   h.add(acc_.health());
   h.add(wahba_.health());
+  h.add(thermal_.health());
   return h;
 }
 
@@ -153,6 +157,7 @@ BORESIGHT_CLONES Status Pipeline::stepHeads(const HeadEpoch& in) {
   s = fusion_.step(v);
   if (s != Status::kOk) return s;
   if (cfg_.heads.n_heads >= 2) monitor_.step(v, rel);
+  if (thermal_.configured()) predictBlindPairs(v);
   const FusedAttitude& f = fusion_.output();
 
   // is this head epoch an output epoch? (same rule as the rate filter's centre taps)

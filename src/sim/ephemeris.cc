@@ -1,3 +1,4 @@
+#include <boresight/model/orbit_context.h>
 #include <boresight/sim/ephemeris.h>
 
 #include <cmath>
@@ -10,15 +11,8 @@ inline double deg(double d) { return d * kRadPerDeg; }
 inline double daysTT(double t) { return (t + kTtMinusGps) / 86400.0; }
 }  // namespace
 
-Vec3 sunPosition(double t) {
-  const double n = daysTT(t);
-  const double L = deg(280.460 + 0.9856474 * n);
-  const double g = deg(357.528 + 0.9856003 * n);
-  const double lam = L + deg(1.915) * std::sin(g) + deg(0.020) * std::sin(2 * g);
-  const double eps = deg(23.439 - 0.0000004 * n);
-  const double R = (1.00014 - 0.01671 * std::cos(g) - 0.00014 * std::cos(2 * g)) * kAu_m;
-  return R * Vec3(std::cos(lam), std::cos(eps) * std::sin(lam), std::sin(eps) * std::sin(lam));
-}
+// one implementation, shared with the orbit context of the batch thermal model and the audit
+Vec3 sunPosition(double t) { return model::sunPositionLowPrecision(t); }
 
 Vec3 earthVelocity(double t) {
   // Central difference of the Sun's geocentric position (the Earth moves opposite to it).

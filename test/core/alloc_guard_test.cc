@@ -336,5 +336,85 @@ TEST(AllocGuard, ConfigureReanchoringAlignmentAndRestartAreAllocationFree) {
   EXPECT_TRUE(aligned);
 }
 
+TEST(AllocGuard, ThermalModelPredictionWhileAHeadIsBlindIsAllocationFree) {
+  Rng rng(53);
+  const HeadSetConfig heads = test::graceLikeHeads(3);
+  ThermalHarmonicModel m;
+  m.n_harmonics = 3;
+  m.order = {1, 2, 3};
+  m.beta_terms = true;
+  m.cos_beta_ref = 0.8;
+  for (int k = 1; k < 3; ++k) {
+    ThermalHeadModel& h = m.head[static_cast<std::size_t>(k)];
+    h.valid = true;
+    h.constant_rad = Vec3(1e-5, -2e-5, 3e-5);
+    for (int n = 0; n < 3; ++n) {
+      h.cos_rad[static_cast<std::size_t>(n)] = Vec3(5e-5, 1e-5, -2e-5) / (n + 1);
+      h.sin_rad[static_cast<std::size_t>(n)] = Vec3(-3e-5, 2e-5, 1e-5) / (n + 1);
+      h.beta_cos_rad[static_cast<std::size_t>(n)] = Vec3(1e-6, 0, 0);
+    }
+    h.cov_rad2 = Mat3::Identity() * 1e-12;
+  }
+  constexpr int kEpochs = 1200;
+  std::vector<HeadEpoch> epochs;
+  for (int i = 0; i < kEpochs; ++i) {
+    const TimeUs t = 1000 + static_cast<TimeUs>(i) * 500000;
+    const Quat q = quatExp(Vec3(1e-3, 2e-3, -1.1e-3 * toSeconds(t)));
+    // head 3 blind for epochs 400..799, head 2 for 900..999 (pairs through and around the datum)
+    const std::uint32_t mask = (i >= 400 && i < 800) ? 3u : (i >= 900 && i < 1000) ? 5u : 7u;
+    epochs.push_back(epochOf(rng, heads, q, t, mask));
+  }
+  PipelineConfig pc;
+  pc.heads = heads;
+  pc.use_accelerometer = false;
+  auto pipe = std::make_unique<Pipeline>();
+  auto anchored = std::make_unique<Pipeline>();
+  auto predictor = std::make_unique<ThermalPredictor>();
+  long allocs = 0;
+  std::uint64_t predicted = 0, no_orbit = 0;
+  Status set_abs = Status::kNotConfigured, set_anch = Status::kNotConfigured, set_pred = Status::kNotConfigured;
+  {
+    NoHeap guard;
+    const bool ok = pipe->configure(pc) == Status::kOk && anchored->configure(pc) == Status::kOk;
+    m.mode = ThermalPredictionMode::kAbsolute;
+    set_abs = pipe->setThermalModel(m);
+    m.mode = ThermalPredictionMode::kAnchored;
+    set_anch = anchored->setThermalModel(m);
+    set_pred = predictor->configure(heads, m);
+    for (int i = 0; i < kEpochs && ok; ++i) {
+      const HeadEpoch& e = epochs[static_cast<std::size_t>(i)];
+      const double u = 1.1e-3 * toSeconds(e.t);
+      if (i % 2 == 0 && !(i >= 700 && i < 1000)) {  // orbit at 1 Hz, with a gap: the no-orbit path too
+        pipe->stepOrbit(e.t, u, 1.1e-3, 0.5);
+        anchored->stepOrbit(e.t, u, 1.1e-3, 0.5);
+        predictor->stepOrbit(e.t, u, 1.1e-3, 0.5);
+      }
+      pipe->stepHeads(e);
+      anchored->stepHeads(e);
+      PipelineRow row;
+      while (pipe->popRow(row)) {
+      }
+      while (anchored->popRow(row)) {
+      }
+      Vec3 d;
+      Mat3 P;
+      predictor->predictPair(1, 2, u, 0.7, d, P);
+      Mat3 C, Q;
+      pipe->monitor().relativeFor(0, 2, RelativeCorrection::kFilteredThreeAxis, e.t, C, Q);
+      if (pipe->monitor().filtered(0, 2).predicted) ++predicted;
+    }
+    no_orbit = pipe->health().count(Status::kUnavailable);
+    pipe->reset();
+    allocs = guard.disarm();
+    ASSERT_TRUE(ok);
+  }
+  EXPECT_EQ(allocs, 0);
+  EXPECT_EQ(set_abs, Status::kOk);
+  EXPECT_EQ(set_anch, Status::kOk);
+  EXPECT_EQ(set_pred, Status::kOk);
+  EXPECT_GT(predicted, 200u);  // the prediction path really ran
+  EXPECT_GT(no_orbit, 0u);     // and the one without orbit input
+}
+
 }  // namespace
 }  // namespace boresight::core

@@ -30,6 +30,9 @@ constexpr int kMaxBridgeSamples = 64;
 /// Most outputs one CRN step can produce (a bridged gap may complete several output epochs).
 constexpr int kMaxCrnOutputsPerStep = kMaxBridgeSamples + 1;
 
+/// Harmonics of the argument of latitude in the thermal model handed to the core (thermal_harmonics.h).
+constexpr int kMaxThermalHarmonics = 6;
+
 /// Output epochs the pipeline holds while the CRN filters (centre-stamped, ~35 s late) catch up.
 constexpr int kMaxPendingRows = 256;
 

@@ -20,6 +20,7 @@
 #include "boresight/core/rates.h"
 #include "boresight/core/relative_attitude.h"
 #include "boresight/core/thermal.h"
+#include "boresight/core/thermal_harmonics.h"
 #include "boresight/core/wahba.h"
 
 #include <limits>
@@ -72,6 +73,15 @@ class Pipeline {
   /// A full mounting set (e.g. the batch solver's, slots 0..n_heads-1) for the fusion from the next head
   /// epoch on, with the datum of HeadAlignment; replaces the running means until reset(). No allocation.
   Status handMountings(const std::array<Quat, kMaxHeads>& q_Si_B);
+  /// The batch thermal model (calib/thermal_fit.h: ThermalFitResult::coreModel()) after configure();
+  /// from then on every head epoch that does not see a pair sets the monitor's predicted deformation
+  /// of that pair (BoresightMonitor::setPredictedDeformation) from the model at the argument of
+  /// latitude of the last stepOrbit(). Kept by reset(); replaced by the next call. No allocation.
+  Status setThermalModel(const ThermalHarmonicModel& model);
+  /// Orbit input for the thermal model: argument of latitude (rad), its rate (rad/s), beta angle (rad)
+  /// at t. Without a thermal model: kOk and ignored. Time order as for the other streams.
+  Status stepOrbit(TimeUs t, double u_rad, double u_rate_rad_s, double beta_rad);
+  const ThermalPredictor& thermal() const { return thermal_; }
   /// End of data: every pending row is completed with what is available.
   void flush();
   bool popRow(PipelineRow& out);
@@ -95,6 +105,21 @@ class Pipeline {
   };
   void resolve();
   void emitOldest();
+  void predictBlindPairs(const ValidHeads& v);  ///< pipeline_thermal.cc
+  void resetThermalAnchors();
+
+  ThermalPredictor thermal_{};
+  /// Per pair (pairIndex): the orbit angle of the last epoch that saw it and, while it is not seen,
+  /// the anchor of ThermalPredictionMode::kAnchored (filter value minus model value at that epoch).
+  struct ThermalAnchor {
+    bool u_seen_ok = false;
+    double u_seen = 0, cos_beta_seen = 1;
+    bool blind = false;
+    bool anchor_ok = false;
+    Vec3 offset = Vec3::Zero();
+    Mat3 cov = Mat3::Zero();
+  };
+  std::array<ThermalAnchor, kMaxPairs> thermal_anchor_{};
 
   PipelineConfig cfg_{};
   bool configured_ = false;
