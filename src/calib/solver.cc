@@ -116,6 +116,61 @@ class EpochCostReduced {
   const double* tau_;
 };
 
+// All epochs of one head at once from their sufficient statistics (HeadMoments): with the 3x10 matrix
+// A = S [I, -W, -tau W, W b] (W = the epoch model's matrix from K^-1 to the head frame, S the epochs'
+// square-root information) the whitened residual of an epoch is A d, so sum |A d|^2 = |A L|_F^2 with
+// D = L L^T: residual vec(A L), 30 values, exactly the per-epoch least-squares cost.
+class MomentCost {
+ public:
+  MomentCost(const Eigen::Matrix<double, 10, 10>* L, const Mat3* S, const Mat3* G, const Mat3* C_B_A, bool hard)
+      : L_(*L), S_(*S), G_(*G), C_B_A_(*C_B_A), hard_(hard) {}
+
+  template <typename T>
+  bool operator()(const T* rot, const T* bias, const T* scale, const T* nonorth, const T* tau, T* res) const {
+    using M3 = Eigen::Matrix<T, 3, 3>;
+    M3 K;
+    K << T(1.0) + scale[0], nonorth[2], nonorth[1],  //
+        nonorth[2], T(1.0) + scale[1], nonorth[0],   //
+        nonorth[1], nonorth[0], T(1.0) + scale[2];
+    M3 R;  // rotation part: hard G Exp(-phi), prior Exp(r) M
+    T q[4], Rq[9];
+    if (hard_) {
+      const T mphi[3] = {-rot[0], -rot[1], -rot[2]};
+      rot::quatExp(mphi, q);
+    } else {
+      rot::quatExp(rot, q);
+    }
+    rot::quatToMatrix(q, Rq);
+    M3 E;
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) E(i, j) = Rq[3 * i + j];
+    R = hard_ ? M3(G_.cast<T>() * E) : M3(E * G_.cast<T>());
+    const M3 W = R * C_B_A_.cast<T>() * K.inverse();
+    const Eigen::Matrix<T, 3, 1> b(bias[0], bias[1], bias[2]);
+    Eigen::Matrix<T, 3, 10> A;
+    A.template block<3, 3>(0, 0) = M3::Identity();
+    A.template block<3, 3>(0, 3) = -W;
+    A.template block<3, 3>(0, 6) = -tau[0] * W;
+    A.template block<3, 1>(0, 9) = W * b;
+    const Eigen::Matrix<T, 3, 10> AL = S_.cast<T>() * A * L_.cast<T>();
+    for (int c = 0; c < 10; ++c)
+      for (int r = 0; r < 3; ++r) res[3 * c + r] = AL(r, c);
+    return true;
+  }
+
+  static ceres::CostFunction* create(const Eigen::Matrix<double, 10, 10>* L, const Mat3* S, const Mat3* G,
+                                     const Mat3* C_B_A, bool hard) {
+    return new ceres::AutoDiffCostFunction<MomentCost, 30, 3, 3, 3, 3, 1>(new MomentCost(L, S, G, C_B_A, hard));
+  }
+
+ private:
+  const Eigen::Matrix<double, 10, 10>& L_;
+  const Mat3& S_;
+  const Mat3& G_;
+  const Mat3& C_B_A_;
+  const bool hard_;
+};
+
 // Relative alignment prior (prior mode). The estimate of RelativeNormal says C_Sh_B = A_h Exp(-dhat_h)
 // Exp(-phi) for every linked head with one common phi and dhat_datum = 0. With C_Sh_B = Exp(r_h) M_h the
 // same quantity of the parameters is delta_h(r) = -Log(A_h^T C_Sh_B(r) C_B_Sd(r) A_d) (exact, no
@@ -190,6 +245,11 @@ class RelativeCost {
 
 Mat3 rotM(const Quat& q) { return q.normalized().toRotationMatrix(); }
 
+// The moment form: asked for, or the only data the span kept.
+bool useMoments(const CalibrationSpan& span, const SolveOptions& opt) {
+  return opt.from_moments || (span.obs.empty() && span.epochs_total > 0);
+}
+
 // Checks every input the solver relies on; an empty string when usable.
 std::string checkSpan(const CalibrationSpan& span, const SolveOptions& opt) {
   std::ostringstream m;
@@ -221,8 +281,10 @@ std::string checkSpan(const CalibrationSpan& span, const SolveOptions& opt) {
   const double need_each_side = span.crn_half_length_s > 0 ? span.crn_half_length_s : 35.3;
   const double span_s = toSeconds(span.t_last - span.t_first);
   const std::size_t min_epochs = std::max<std::size_t>(opt.min_epochs, 3);  // 0 would let an empty span through
-  if (span.obs.size() < min_epochs) {
-    m << "too few epochs: " << span.obs.size() << " calibration epochs (one per " << span.decimation_s
+  const bool moments = useMoments(span, opt);
+  const std::size_t n_epochs = moments ? static_cast<std::size_t>(span.epochs_total) : span.obs.size();
+  if (n_epochs < min_epochs) {
+    m << "too few epochs: " << n_epochs << " calibration epochs (one per " << span.decimation_s
       << " s with head and accelerometer data) from " << span_s << " s of head data; at least "
       << min_epochs << " are needed, i.e. "
       << 2.0 * need_each_side + static_cast<double>(min_epochs) * span.decimation_s
@@ -230,7 +292,16 @@ std::string checkSpan(const CalibrationSpan& span, const SolveOptions& opt) {
       << " s each side of an epoch), and excitation (manoeuvres or thruster activity) during it";
     return m.str();
   }
-  for (std::size_t k = 0; k < span.obs.size(); ++k) {
+  if (moments) {
+    for (int h = 0; h < span.n_heads; ++h) {
+      const HeadMoments& hm = span.moments[static_cast<std::size_t>(h)];
+      if (!hm.whitened.allFinite() || !hm.raw.allFinite() || !hm.cov.allFinite()) return "non-finite moments";
+      Mat3 inv;
+      if (hm.n > 0 && !core::invertSpd3(hm.cov, inv)) return "the moments' covariance is not positive definite";
+    }
+    if (!span.acc_moments.allFinite()) return "non-finite accelerometer moments";
+  }
+  for (std::size_t k = 0; k < (moments ? 0 : span.obs.size()); ++k) {
     const Observation& o = span.obs[k];
     if (k > 0 && o.t <= span.obs[k - 1].t) {
       m << "observation " << k << " (t = " << toSeconds(o.t) << " s) is not later than the one before";
@@ -295,6 +366,9 @@ struct Model {
   double tau = 0;
   Whitened data;
   std::array<Mat3, kMaxHeads> G{};       // per head, the constant matrix of EpochCost (it points here)
+  bool moments = false;                  // MomentCost from span.moments instead of the epochs
+  std::array<Eigen::Matrix<double, 10, 10>, kMaxHeads> Lm{};  // square roots of the whitened moments
+  std::array<Mat3, kMaxHeads> Sm{};      // their square-root information
   Mat3 C_B_A = Mat3::Identity();
 };
 
@@ -403,6 +477,13 @@ Built buildProblem(const CalibrationSpan& span, const SolveOptions& opt, Model& 
     m.G[hs] = m.hard ? relativeMounting(m, h) : m.M[hs];
     m.C_B_A = span.C_B_A;
     double* rot = m.hard ? m.rot[0].data() : m.rot[hs].data();
+    if (m.moments) {
+      if (span.moments[hs].n > 0)
+        b.epoch_blocks.push_back(P.AddResidualBlock(MomentCost::create(&m.Lm[hs], &m.Sm[hs], &m.G[hs], &m.C_B_A, m.hard),
+                                                    nullptr, rot, m.bias.data(), m.scale.data(), m.nonorth.data(),
+                                                    &m.tau));
+      continue;
+    }
     for (const WhitenedRow& row : m.data.rows[hs]) {
       ceres::LossFunction* loss = robust && opt.huber_sigma > 0 ? new ceres::HuberLoss(opt.huber_sigma) : nullptr;
       if (reduced)
@@ -594,9 +675,27 @@ Whitened prepare(const CalibrationSpan& span, const SolveOptions& opt, const std
   return whiten(span, R, opt.whiten ? span.noise_correlation : unit, reject);
 }
 
+// Square roots of the whitened moments (D = L L^T by eigen-decomposition: D may be rank-deficient,
+// e.g. the jerk columns of a quiet span) and the square-root information of each head's epochs.
+void prepareMoments(const CalibrationSpan& span, Model& m) {
+  for (int h = 0; h < m.n; ++h) {
+    const auto hs = static_cast<std::size_t>(h);
+    const HeadMoments& hm = span.moments[hs];
+    m.Lm[hs].setZero();
+    m.Sm[hs].setZero();
+    if (hm.n == 0) continue;
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 10, 10>> es(0.5 * (hm.whitened + hm.whitened.transpose()));
+    const Eigen::Matrix<double, 10, 1> lam = es.eigenvalues().cwiseMax(0.0);
+    m.Lm[hs] = es.eigenvectors() * lam.cwiseSqrt().asDiagonal();
+    Mat3 W;
+    if (core::invertSpd3(hm.cov, W)) m.Sm[hs] = Eigen::LLT<Mat3>(W).matrixU();
+  }
+}
+
 void initModel(const CalibrationSpan& span, const SolveOptions& opt, Model& m) {
   m.hard = opt.relative == RelativeMode::kHardConstraint;
   m.n = span.n_heads;
+  m.moments = useMoments(span, opt);
   for (int h = 0; h < m.n; ++h) {
     m.qM[static_cast<std::size_t>(h)] = span.q_S_B_nominal[static_cast<std::size_t>(h)].normalized();
     m.M[static_cast<std::size_t>(h)] = rotM(span.q_S_B_nominal[static_cast<std::size_t>(h)]);
@@ -634,7 +733,10 @@ HeadCovariance cramerRao(const CalibrationSpan& span, const SolveOptions& opt, c
   initModel(span, opt, m);
   if (!fitRelative(span, m, message)) return {};
   setParameters(m, at);
-  m.data = prepare(span, opt);
+  if (m.moments)
+    prepareMoments(span, m);
+  else
+    m.data = prepare(span, opt);
   Built b = buildProblem(span, opt, m, false);
   return headCovariance(m, information(b, false), opt);
 }
@@ -650,15 +752,21 @@ SolveResult solve(const CalibrationSpan& span, const SolveOptions& opt) {
   }
   // excitation: scatter of the accelerometer's acceleration in B about its mean
   {
-    Vec3 mean = Vec3::Zero();
-    for (const Observation& o : span.obs) mean += span.C_B_A * o.alpha_A;
-    mean /= static_cast<double>(span.obs.size());
+    const Eigen::Matrix4d& E = span.acc_moments;
     Mat3 S = Mat3::Zero();
-    for (const Observation& o : span.obs) {
-      const Vec3 a = span.C_B_A * o.alpha_A - mean;
-      S += a * a.transpose();
+    if (E(3, 3) > 0) {
+      const Vec3 sum = E.block<3, 1>(0, 3);
+      S = span.C_B_A * (E.block<3, 3>(0, 0) - sum * sum.transpose() / E(3, 3)) * span.C_B_A.transpose();
+    } else {  // a span made by hand: from the observations
+      Vec3 mean = Vec3::Zero();
+      for (const Observation& o : span.obs) mean += span.C_B_A * o.alpha_A;
+      mean /= static_cast<double>(std::max<std::size_t>(span.obs.size(), 1));
+      for (const Observation& o : span.obs) {
+        const Vec3 a = span.C_B_A * o.alpha_A - mean;
+        S += a * a.transpose();
+      }
     }
-    Eigen::SelfAdjointEigenSolver<Mat3> es(S);
+    Eigen::SelfAdjointEigenSolver<Mat3> es(0.5 * (S + S.transpose()));
     for (int i = 0; i < 3; ++i) res.excitation_eigenvalues.push_back(es.eigenvalues()[i]);
   }
   Model m;
@@ -677,7 +785,9 @@ SolveResult solve(const CalibrationSpan& span, const SolveOptions& opt) {
                                         core::quatLog(c.q_Si_Sj.conjugate() * a.q_Si_Sj * b.q_Si_Sj).norm() * kArcsecPerRad);
   // robust start for the bias: the median of the accelerometer's values (the angular acceleration of a
   // span averages to about zero; the bias is often far larger than the manoeuvres)
-  if (opt.estimate_acc_bias) {
+  if (opt.estimate_acc_bias && m.moments && span.acc_moments(3, 3) > 0) {
+    for (int i = 0; i < 3; ++i) m.bias[static_cast<std::size_t>(i)] = span.acc_moments(i, 3) / span.acc_moments(3, 3);
+  } else if (opt.estimate_acc_bias) {
     for (int i = 0; i < 3; ++i) {
       std::vector<double> v;
       v.reserve(span.obs.size());
@@ -687,7 +797,10 @@ SolveResult solve(const CalibrationSpan& span, const SolveOptions& opt) {
     }
   }
   std::vector<std::uint8_t> reject(span.obs.size(), 0);
-  m.data = prepare(span, opt);
+  if (m.moments)
+    prepareMoments(span, m);
+  else
+    m.data = prepare(span, opt);
   Built b = buildProblem(span, opt, m, true);
   ceres::Solver::Options so;
   so.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;
@@ -698,7 +811,8 @@ SolveResult solve(const CalibrationSpan& span, const SolveOptions& opt) {
   ceres::Solver::Summary sum;
   ceres::Solve(so, b.problem.get(), &sum);
   int total_iterations = static_cast<int>(sum.iterations.size());
-  for (int round = 0; round < opt.outlier_rounds && opt.outlier_sigma > 0 && sum.IsSolutionUsable(); ++round) {
+  for (int round = 0; round < opt.outlier_rounds && opt.outlier_sigma > 0 && !m.moments && sum.IsSolutionUsable();
+       ++round) {
     // raw residual of every head epoch at the current parameters, normalised by its covariance
     Mat3 K;
     K << 1 + m.scale[0], m.nonorth[2], m.nonorth[1], m.nonorth[2], 1 + m.scale[1], m.nonorth[0], m.nonorth[1],
@@ -822,7 +936,18 @@ SolveResult solve(const CalibrationSpan& span, const SolveOptions& opt) {
     K << 1 + m.scale[0], m.nonorth[2], m.nonorth[1], m.nonorth[2], 1 + m.scale[1], m.nonorth[0], m.nonorth[1],
         m.nonorth[0], 1 + m.scale[2];
     const Mat3 Kinv = K.inverse();
-    for (const Observation& o : span.obs) {
+    if (m.moments) {  // sum |A0 d|^2 = tr(A0 D_raw A0^T), A0 = [I, -W, -tau W, W b]
+      for (int h = 0; h < m.n; ++h) {
+        const auto hs = static_cast<std::size_t>(h);
+        const Mat3 W = core::so3Exp(res.estimate.r_S[hs]) * m.M[hs] * span.C_B_A * Kinv;
+        Eigen::Matrix<double, 3, 10> A0;
+        A0 << Mat3::Identity(), -W, -m.tau * W, W * res.estimate.acc_bias;
+        ss += (A0 * span.moments[hs].raw * A0.transpose()).trace();
+        n += 3 * span.moments[hs].n;
+      }
+    }
+    for (std::size_t k = 0; k < (m.moments ? 0 : span.obs.size()); ++k) {
+      const Observation& o = span.obs[k];
       const Vec3 w = span.C_B_A * Kinv * (o.alpha_A + m.tau * o.jerk_A - res.estimate.acc_bias);
       for (int h = 0; h < m.n; ++h) {
         if (!o.has_head[static_cast<std::size_t>(h)]) continue;

@@ -86,6 +86,7 @@ bool SpanBuilder::configure(const core::PipelineConfig& cfg, const SpanOptions& 
     span_.noise_correlation.push_back(r);
   }
   pending_.clear();
+  for (auto& w : wstate_) w = WhitenState{};
   have_head_ = false;
   configured_ = true;
   return true;
@@ -229,7 +230,66 @@ void SpanBuilder::resolve() {
   }
 }
 
+// Streaming version of whitening.cc's banded Cholesky (same recurrences, epoch by epoch): row k of L
+// from the last K rows, then z_k = (d_k - sum_m L(k,m) z_m) / L(k,k); moments of z and of d.
+void SpanBuilder::accumulate(const Observation& ob) {
+  const std::vector<double>& rho = span_.noise_correlation;
+  const int K = static_cast<int>(rho.size()) - 1;
+  ++span_.epochs_total;
+  Eigen::Vector4d a4;
+  a4 << ob.alpha_A, 1.0;
+  span_.acc_moments += a4 * a4.transpose();
+  for (int h = 0; h < cfg_.heads.n_heads; ++h) {
+    const auto hs = static_cast<std::size_t>(h);
+    if (!ob.has_head[hs]) continue;
+    WhitenState& w = wstate_[hs];
+    Eigen::Matrix<double, 10, 1> d;
+    d << ob.alpha_S[hs], ob.alpha_A, ob.jerk_A, 1.0;
+    const int m0 = static_cast<int>(w.t.size());  // previous epochs in the window: indices 0..m0-1
+    auto corr = [&](TimeUs ta, TimeUs tb) {
+      const long long lag = std::llround(std::abs(toSeconds(ta - tb)) / span_.decimation_s);
+      return lag < static_cast<long long>(rho.size()) ? rho[static_cast<std::size_t>(lag)] : 0.0;
+    };
+    // Lk[j] = L(k, k - m0 + j) for j < m0; L(k,k) last. Window row r holds L(r, r-K..r) (K+1 entries).
+    std::vector<double> Lk(static_cast<std::size_t>(K + 1), 0.0);
+    auto Lwin = [&](int r, int c) -> double {  // L(r, c) for window rows r, c (window indices, c <= r)
+      const int back = r - c;
+      if (back > K) return 0.0;
+      return w.L[static_cast<std::size_t>(r)][static_cast<std::size_t>(K - back)];
+    };
+    const int off = K + 1 - (m0 + 1);  // Lk index of window column j: off + j; of k itself: K
+    for (int j = 0; j < m0; ++j) {
+      double sum = corr(ob.t, w.t[static_cast<std::size_t>(j)]);
+      for (int p = 0; p < j; ++p) sum -= Lk[static_cast<std::size_t>(off + p)] * Lwin(j, p);
+      Lk[static_cast<std::size_t>(off + j)] = sum / Lwin(j, j);
+    }
+    double diag = 1.0;
+    for (int j = 0; j < m0; ++j) diag -= Lk[static_cast<std::size_t>(off + j)] * Lk[static_cast<std::size_t>(off + j)];
+    Lk[static_cast<std::size_t>(K)] = std::sqrt(std::max(diag, 1e-6));
+    Eigen::Matrix<double, 10, 1> z = d;
+    for (int j = 0; j < m0; ++j) z -= Lk[static_cast<std::size_t>(off + j)] * w.z[static_cast<std::size_t>(j)];
+    z /= Lk[static_cast<std::size_t>(K)];
+    HeadMoments& hm = span_.moments[hs];
+    ++hm.n;
+    hm.whitened += z * z.transpose();
+    hm.raw += d * d.transpose();
+    hm.cov = ob.cov_alpha_S[hs] + (span_.q_S_B_nominal[hs].toRotationMatrix() * span_.C_B_A) * ob.cov_alpha_A *
+                                      (span_.q_S_B_nominal[hs].toRotationMatrix() * span_.C_B_A).transpose();
+    // the window: rows re-indexed so that the newest is last; a row's entries refer to absolute lags
+    w.t.push_back(ob.t);
+    w.L.push_back(Lk);
+    w.z.push_back(z);
+    while (static_cast<int>(w.t.size()) > K) {
+      w.t.pop_front();
+      w.L.pop_front();
+      w.z.pop_front();
+    }
+  }
+}
+
 void SpanBuilder::emit(Observation&& ob) {
+  accumulate(ob);
+  if (!opt_.keep_observations) return;
   if (opt_.max_observations > 0 && span_.obs.size() >= opt_.max_observations) {
     // drop the oldest in blocks of 1/16 of the limit (one move of the vector per block, not per epoch)
     const std::size_t n = std::min(span_.obs.size(), std::max<std::size_t>(1, opt_.max_observations / 16));

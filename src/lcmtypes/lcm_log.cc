@@ -3,6 +3,8 @@
 
 #include "boresight_lcm/accel_sample_t.hpp"
 #include "boresight_lcm/star_head_sample_t.hpp"
+#include "boresight_lcm/nominal_mountings_t.hpp"
+#include "boresight_lcm/orbit_sample_t.hpp"
 #include "boresight_lcm/star_vectors_t.hpp"
 
 #include <lcm/lcm-cpp.hpp>
@@ -125,6 +127,83 @@ bool decodeStarVectors(const void* data, int size, StarVectors& out) {
     out.magnitude[i] = m.magnitude[i];
   }
   out.flags = m.flags;
+  return true;
+}
+
+bool LcmLogWriter::write(const NominalMountings& s) {
+  if (!impl_->log || s.n_heads < 1 || s.n_heads > NominalMountings::kCapacity) return false;
+  boresight_lcm::nominal_mountings_t m{};
+  m.utime = s.utime;
+  m.n_heads = static_cast<int8_t>(s.n_heads);
+  for (int i = 0; i < NominalMountings::kCapacity; ++i) {
+    const bool used = i < s.n_heads;
+    m.head_id[i] = static_cast<int8_t>(used ? s.head_id[i] : 0);
+    for (int k = 0; k < 4; ++k) m.q_Si_B[i][k] = used ? s.q_Si_B[i][k] : 0.0;
+  }
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) m.C_B_A[r][c] = s.C_B_A[r][c];
+  m.source = static_cast<int8_t>(s.source);
+  bool ok = writeMsg(*impl_->log, kMountingsChannel, s.utime, m, impl_->buf);
+  written_ += ok ? 1 : 0;
+  return ok;
+}
+
+bool LcmLogWriter::write(const OrbitSample& s) {
+  if (!impl_->log) return false;
+  boresight_lcm::orbit_sample_t m{};
+  m.utime = s.utime;
+  m.frame = static_cast<int8_t>(s.frame);
+  for (int k = 0; k < 3; ++k) {
+    m.r_m[k] = s.r_m[k];
+    m.v_m_s[k] = s.v_m_s[k];
+  }
+  m.seq = s.seq;
+  bool ok = writeMsg(*impl_->log, kOrbitChannel, s.utime, m, impl_->buf);
+  written_ += ok ? 1 : 0;
+  return ok;
+}
+
+bool LcmLogWriter::writeRaw(const std::string& channel, TimeUs utime, const void* data, int size) {
+  if (!impl_->log || size < 0) return false;
+  lcm::LogEvent ev;
+  ev.eventnum = 0;
+  ev.timestamp = utime + kUnixUsOfGraceEpoch;
+  ev.channel = channel;
+  ev.datalen = size;
+  ev.data = const_cast<void*>(data);
+  const bool ok = impl_->log->writeEvent(&ev) == 0;
+  written_ += ok ? 1 : 0;
+  return ok;
+}
+
+bool decodeNominalMountings(const void* data, int size, NominalMountings& out) {
+  boresight_lcm::nominal_mountings_t m{};
+  if (m.decode(data, 0, size) != size) return false;
+  if (m.n_heads < 1 || m.n_heads > NominalMountings::kCapacity) return false;
+  out = NominalMountings{};
+  out.utime = m.utime;
+  out.n_heads = m.n_heads;
+  for (int i = 0; i < m.n_heads; ++i) {
+    out.head_id[i] = m.head_id[i];
+    for (int k = 0; k < 4; ++k) out.q_Si_B[i][k] = m.q_Si_B[i][k];
+  }
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) out.C_B_A[r][c] = m.C_B_A[r][c];
+  out.source = m.source;
+  return true;
+}
+
+bool decodeOrbit(const void* data, int size, OrbitSample& out) {
+  boresight_lcm::orbit_sample_t m{};
+  if (m.decode(data, 0, size) != size) return false;
+  if (m.frame != 'I' && m.frame != 'E') return false;
+  out.utime = m.utime;
+  out.frame = static_cast<char>(m.frame);
+  for (int k = 0; k < 3; ++k) {
+    out.r_m[k] = m.r_m[k];
+    out.v_m_s[k] = m.v_m_s[k];
+  }
+  out.seq = m.seq;
   return true;
 }
 
@@ -270,6 +349,16 @@ bool LcmLogReader::open(const std::string& path, std::string* error) {
   }
   std::rewind(impl_->f);
   unknown_channel_ = decode_failures_ = 0;  // a reader opened again counts the new log only
+  return true;
+}
+
+bool LcmLogReader::nextRaw(RawEvent& out) {
+  const Impl::Event* ev = impl_->readNextEvent();
+  if (!ev) return false;
+  out.channel = &ev->channel;
+  out.data = ev->data;
+  out.size = ev->datalen;
+  out.timestamp = ev->timestamp;
   return true;
 }
 

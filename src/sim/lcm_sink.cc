@@ -8,9 +8,12 @@ namespace boresight::sim {
 
 struct LcmSink::Impl {
   io::LcmLogWriter w;
-  std::int32_t seq_head[16] = {};
-  std::int32_t seq_acc = 0;
+  // Sequence numbers count what a sender sent: a sample lost to the `gaps` effect consumes its number
+  // (seq = the sample index), a blinded head sends nothing and consumes none (blinded samples so far
+  // are subtracted). Star vectors: one counter for the channel.
+  std::uint64_t blinded[16] = {};
   std::int32_t seq_stars = 0;
+  std::int32_t seq_orbit = 0;
   bool open = false;
   bool failed = false;
 };
@@ -26,14 +29,18 @@ bool LcmSink::open(const std::string& path, std::string* error) {
 }
 
 void LcmSink::head(const HeadSampleOut& s) {
-  if (s.blind || !impl_->open) return;  // a blinded head delivers nothing
+  if (!impl_->open) return;
+  if (s.blind) {  // a blinded head delivers nothing
+    ++impl_->blinded[s.head & 15];
+    return;
+  }
   io::HeadSample m;
   m.utime = s.tag;
   m.head_id = s.head;
   quatToScalarFirst(s.q_I_Si, m.q);
   m.star_count = s.nstars;
   m.flags = 1;
-  m.seq = impl_->seq_head[s.head & 15]++;
+  m.seq = static_cast<std::int32_t>(static_cast<std::uint32_t>(s.index - impl_->blinded[s.head & 15]));
   impl_->failed |= !impl_->w.write(m);
 }
 
@@ -46,7 +53,7 @@ void LcmSink::accel(const AccSampleOut& a) {
     m.lin_accel[k] = a.lin_A[k];
   }
   m.flags = 3;
-  m.seq = impl_->seq_acc++;
+  m.seq = static_cast<std::int32_t>(static_cast<std::uint32_t>(a.index));
   impl_->failed |= !impl_->w.write(m);
 }
 
@@ -69,6 +76,38 @@ void LcmSink::stars(const StarVectorsOut& s) {
   }
   m.flags = 1;
   impl_->failed |= !impl_->w.write(m);
+}
+
+void LcmSink::orbit(const OrbitSampleOut& o) {
+  if (!impl_->open) return;
+  io::OrbitSample m;
+  m.utime = o.t;
+  m.frame = 'I';
+  for (int k = 0; k < 3; ++k) {
+    m.r_m[k] = o.r_I[k];
+    m.v_m_s[k] = o.v_I[k];
+  }
+  m.seq = impl_->seq_orbit++;
+  impl_->failed |= !impl_->w.write(m);
+}
+
+bool LcmSink::writeMountings(const Simulator& sim) {
+  if (!impl_->open) return false;
+  io::NominalMountings m;
+  m.utime = sim.scenario().start;
+  m.n_heads = static_cast<int>(std::min<std::size_t>(sim.heads().size(), io::NominalMountings::kCapacity));
+  for (int i = 0; i < m.n_heads; ++i) {
+    const auto& h = sim.heads()[static_cast<std::size_t>(i)].config();
+    m.head_id[i] = h.id;
+    quatToScalarFirst(h.q_Si_B, m.q_Si_B[i]);
+  }
+  const Mat3 C_B_A = sim.accel().config().C_A_B.transpose();  // nominal, as the configuration says
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) m.C_B_A[r][c] = C_B_A(r, c);
+  m.source = 2;
+  const bool ok = impl_->w.write(m);
+  impl_->failed |= !ok;
+  return ok;
 }
 
 bool LcmSink::close(std::string* error) {

@@ -100,6 +100,13 @@ inline std::vector<Case> cases() {
   }
   {
     Case c = v.front();
+    c.name = "manoeuvre_moments";
+    c.what = "as manoeuvre_hard solved from the sufficient statistics (constant memory, no robust loss)";
+    c.opt.from_moments = true;
+    v.push_back(c);
+  }
+  {
+    Case c = v.front();
     c.name = "manoeuvre_no_whitening";
     c.what = "as manoeuvre_hard but epochs treated as independent (no temporal whitening): optimistic";
     c.opt.whiten = false;

@@ -130,6 +130,46 @@ TEST(CalibSolver, RefusesTooFewEpochs) {
 }
 
 
+// The sufficient statistics (streaming whitening in the span builder, 10x10 moments per head) give the
+// same estimate and covariance as the epochs (no outlier in the data: the robust parts do nothing),
+// in both relative modes, also when the span keeps no observation.
+TEST(CalibSolver, MomentsGiveTheSameSolutionAsTheEpochs) {
+  synth::Config c = manoeuvreCase(16);
+  c.blind.push_back({1, 1500.0, 1700.0});  // a gap: the streaming whitening must follow the lags
+  SpanBuilder b1, b2;
+  std::string err;
+  SpanOptions keep, drop;
+  drop.keep_observations = false;
+  ASSERT_TRUE(synth::generate(c, b1, &err, &keep)) << err;
+  ASSERT_TRUE(synth::generate(c, b2, &err, &drop)) << err;
+  EXPECT_TRUE(b2.span().obs.empty());
+  EXPECT_EQ(b2.span().epochs_total, b1.span().obs.size());
+  for (RelativeMode mode : {RelativeMode::kHardConstraint, RelativeMode::kPrior}) {
+    SolveOptions o;
+    o.relative = mode;
+    o.estimate_time_offset = true;
+    const SolveResult a = solve(b1.span(), o);
+    SolveOptions om = o;
+    om.from_moments = true;
+    const SolveResult m1 = solve(b1.span(), om);
+    const SolveResult m2 = solve(b2.span(), o);  // forced: no observations kept
+    ASSERT_TRUE(a.ok && m1.ok && m2.ok) << a.message << m1.message << m2.message;
+    for (int h = 0; h < 3; ++h)
+      for (int i = 0; i < 3; ++i) {
+        const auto hs = static_cast<std::size_t>(h), is = static_cast<std::size_t>(i);
+        const double sig = *a.heads[hs].sigma_arcsec[is];
+        EXPECT_NEAR(m1.heads[hs].error_angles_arcsec[is], a.heads[hs].error_angles_arcsec[is], 1e-3 * sig);
+        EXPECT_NEAR(m2.heads[hs].error_angles_arcsec[is], a.heads[hs].error_angles_arcsec[is], 1e-3 * sig);
+        EXPECT_NEAR(*m2.heads[hs].sigma_arcsec[is], sig, 1e-3 * sig);
+      }
+    EXPECT_NEAR(*m2.time_offset_s, *a.time_offset_s, 1e-3 * *a.time_offset_sigma_s);
+    EXPECT_NEAR(m2.residual_rms_radps2, a.residual_rms_radps2, 1e-6 * a.residual_rms_radps2);
+    for (int i = 0; i < 3; ++i)
+      EXPECT_NEAR(m2.excitation_eigenvalues[static_cast<std::size_t>(i)], a.excitation_eigenvalues[static_cast<std::size_t>(i)],
+                  1e-9 * a.excitation_eigenvalues[2]);
+  }
+}
+
 TEST(CalibWhitening, BandedCholeskyEqualsDenseWithGaps) {
   // epochs on a 10 s grid with two missing (lags 2 and 3 appear at index distance 1)
   std::vector<TimeUs> t;

@@ -1,6 +1,6 @@
 // libFuzzer target for the Level-1 readers: one executable; the reader is chosen at run time by the
 // environment variable BORESIGHT_FUZZ_READER (header, sca1a, flagged, acc1a, sca1b, acc1b, gnv, qsa,
-// imu, thr, ihk, hrt, tim, clk, generic, summary, stream_sca1a, stream_acc1a, lcmlog), e.g.
+// imu, thr, ihk, hrt, tim, clk, generic, summary, stream_sca1a, stream_acc1a, lcmlog, ground_yaml), e.g.
 //   BORESIGHT_FUZZ_READER=sca1a build-fuzz/test/fuzz/fuzz_level1 -max_total_time=30 CORPUS
 //
 // Input layout: byte 0 selects the mode, the rest is the body.
@@ -23,10 +23,17 @@
 // star-vector or skipped event (skipped = other channel + undecodable); LcmLogSource through the
 // assembler counts every event once as used or rejected (a valid STAR_VECTORS message once per star),
 // with the reasons the reader's kinds imply.
+// The method C measurement reader (ground_yaml; boresight::ground::parseMeasurement, the sample
+// reader for accel_mps2 plus yaml-cpp for the rest) reads the body as the file (mode bits 1..2 = 0) or
+// behind a fixed valid measurement that ends with "accel_mps2:" (1) or "accel_mps2: [" (2), so the
+// mutations reach the sample reader: never a crash; a refusal is "fuzz.yaml:LINE: reason" with LINE
+// inside the text; an accepted file is written by writeMeasurement and reads back with the same
+// positions, readings and samples (to the writer's printed precision).
 //
 // BORESIGHT_FUZZ_MAKE_SEED=FILE (with BORESIGHT_FUZZ_READER=lcmlog): writes a small LCM log seed input
 // (heads valid and not, accelerometer samples with and without angular acceleration, star vectors, an
 // event on another channel) and exits; run_fuzzers.sh uses it when no `boresight` program is at hand.
+#include <boresight/ground/measurement.h>
 #include <boresight/io/any_product.h>
 #include <boresight/io/lcm_log.h>
 #include <boresight/io/level1.h>
@@ -34,6 +41,7 @@
 #include <boresight/stream/assembler.h>
 #include <boresight/stream/sources.h>
 
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
@@ -149,7 +157,7 @@ namespace fuzz_helpers {
 
 enum class Reader {
   Header, Sca1a, Flagged, Acc1a, Sca1b, Acc1b, Gnv, Qsa, Imu, Thr, Ihk, Hrt, Tim, Clk, Generic, Summary,
-  StreamSca1a, StreamAcc1a, LcmLog
+  StreamSca1a, StreamAcc1a, LcmLog, GroundYaml
 };
 struct NamedReader {
   const char* name;
@@ -161,6 +169,7 @@ constexpr NamedReader kReaders[] = {
     {"imu", Reader::Imu},       {"thr", Reader::Thr},     {"ihk", Reader::Ihk},         {"hrt", Reader::Hrt},
     {"tim", Reader::Tim},       {"clk", Reader::Clk},     {"generic", Reader::Generic}, {"summary", Reader::Summary},
     {"stream_sca1a", Reader::StreamSca1a}, {"stream_acc1a", Reader::StreamAcc1a}, {"lcmlog", Reader::LcmLog},
+    {"ground_yaml", Reader::GroundYaml},
 };
 Reader g_reader = Reader::Header;
 
@@ -407,6 +416,64 @@ void fuzzLcmLog(std::string_view body, std::uint8_t mode) {
   if (c.used() + rej(st::Reject::kLate) != heads_valid + acc_valid + star_vectors) fail("valid samples lost");
 }
 
+/// A valid measurement up to its samples (the ground_yaml reader's prefix for mode kinds 1 and 2).
+constexpr const char* kGroundHead =
+    "gravity_mps2: 9.80665\n"
+    "camera: {focal_length_px: 2800, principal_point_px: [512, 512], pixel_aspect: 1,\n"
+    "         focal_length_sigma_px: 0.5, principal_point_sigma_px: 0.05, pixel_aspect_sigma: 2e-05}\n"
+    "design_q_s_t: [1, 0, 0, 0]\n"
+    "positions:\n"
+    "  - name: p\n"
+    "    prisms:\n"
+    "      - {axis_t: [1, 0, 0], azimuth_deg: 0.1, elevation_deg: -0.05}\n"
+    "    targets:\n"
+    "      - {azimuth_deg: 30, elevation_deg: 60, centroid_px: [100, 100]}\n"
+    "      - {azimuth_cw_deg: -35, zenith_deg: 30, centroid_px: [900, 120]}\n"
+    "      - {azimuth_deg: 40, elevation_deg: 55, centroid_px: [880, 900]}\n"
+    "      - {azimuth_deg: 25, elevation_deg: 65, centroid_px: [150, 850]}\n"
+    "    accel_mps2:";
+
+bool near(double a, double b, double abs_tol) { return std::abs(a - b) <= abs_tol + 1e-12 * std::abs(a); }
+
+void fuzzGroundYaml(std::string_view body, std::uint8_t mode) {
+  namespace g = boresight::ground;
+  const int kind = (mode >> 1) & 3;
+  std::string text = kind == 0 ? std::string() : std::string(kGroundHead) + (kind == 2 ? " [" : "");
+  text.append(body.data(), body.size());
+  g::Measurement m;
+  std::string err;
+  if (!g::parseMeasurement(text, "fuzz.yaml", m, &err)) {
+    if (err.rfind("fuzz.yaml:", 0) != 0) fail("ground: an error without the file name");
+    const char* p = err.c_str() + 10;
+    if (*p >= '0' && *p <= '9') {
+      const unsigned long line = std::strtoul(p, nullptr, 10);
+      if (line < 1 || line > countLines(text) + 1) fail("ground: an error line outside the text");
+    }
+    return;
+  }
+  const std::string path = g_dir + "/ground.yaml";
+  if (!g::writeMeasurement(path, m, &err)) fail("ground: the writer failed");
+  g::Measurement back;
+  if (!g::loadMeasurement(path, back, &err)) {
+    std::fprintf(stderr, "%s\n", err.c_str());
+    fail("ground: an accepted file, written, does not read back");
+  }
+  if (back.positions.size() != m.positions.size()) fail("ground: positions lost in the round trip");
+  for (std::size_t k = 0; k < m.positions.size(); ++k) {
+    const g::Position &a = m.positions[k], &b = back.positions[k];
+    if (a.name != b.name) fail("ground: a position name changed in the round trip");
+    if (a.prisms.size() != b.prisms.size() || a.targets.size() != b.targets.size() ||
+        a.accel_mps2.size() != b.accel_mps2.size())
+      fail("ground: readings lost in the round trip");
+    for (std::size_t i = 0; i < a.accel_mps2.size(); ++i)
+      for (int j = 0; j < 3; ++j)
+        if (!near(a.accel_mps2[i][j], b.accel_mps2[i][j], 1e-9)) fail("ground: a sample changed in the round trip");
+    for (std::size_t i = 0; i < a.targets.size(); ++i)
+      if (!near(a.targets[i].u_px, b.targets[i].u_px, 1e-6) || !near(a.targets[i].v_px, b.targets[i].v_px, 1e-6))
+        fail("ground: a centroid changed in the round trip");
+  }
+}
+
 /// A small log for the seed corpus (BORESIGHT_FUZZ_MAKE_SEED).
 int writeLcmSeed(const char* path) {
   LcmLogWriter w;
@@ -456,7 +523,8 @@ extern "C" int LLVMFuzzerInitialize(int*, char***) {
     if (want == r.name) {
       g_reader = r.reader;
       if (const char* seed = std::getenv("BORESIGHT_FUZZ_MAKE_SEED")) std::exit(writeLcmSeed(seed));
-      if (g_reader == Reader::StreamSca1a || g_reader == Reader::StreamAcc1a || g_reader == Reader::LcmLog) {
+      if (g_reader == Reader::StreamSca1a || g_reader == Reader::StreamAcc1a || g_reader == Reader::LcmLog ||
+          g_reader == Reader::GroundYaml) {
         const char* tmp = std::getenv("TMPDIR");
         std::string tmpl = std::string(tmp && *tmp ? tmp : "/tmp") + "/boresight_fuzz_XXXXXX";
         if (!::mkdtemp(tmpl.data())) {
@@ -466,7 +534,7 @@ extern "C" int LLVMFuzzerInitialize(int*, char***) {
         g_dir = tmpl;
         std::atexit([] {
           for (const char* f : {"/SCA1A_2023-06-01_C_04.txt", "/ACC1A_2023-06-01_C_04.txt", "/ACT1A_2023-06-01_C_04.txt",
-                                "/input.lcmlog"})
+                                "/input.lcmlog", "/ground.yaml"})
             std::remove((g_dir + f).c_str());
           ::rmdir(g_dir.c_str());
         });
@@ -511,6 +579,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       break;
     }
     case Reader::LcmLog: fuzzLcmLog(body, mode); break;
+    case Reader::GroundYaml: fuzzGroundYaml(body, mode); break;
   }
   return 0;
 }

@@ -10,6 +10,9 @@
 # The LCM log reader's seeds: a small log the fuzz executable writes itself (BORESIGHT_FUZZ_MAKE_SEED),
 # and, when a `boresight` program is found ($BORESIGHT_CLI, BUILD_DIR/tools, build/tools), a log written
 # by `boresight convert` from the real SCA1A/ACC1A samples.
+# The method C measurement reader (ground_yaml) is seeded with small sample lists behind the fuzzer's own
+# valid prefix and, when a `boresight` program is found, small files from `boresight simulate-ground`
+# (and the same with the samples as one flow list).
 set -euo pipefail
 
 build=${1:?usage: run_fuzzers.sh BUILD_DIR [SECONDS_PER_READER] [READER...]}
@@ -30,7 +33,7 @@ declare -A seeds=(
   [sca1a]="SCA1A" [flagged]="ACC1A ACT1A AHK1A AHK1B" [acc1a]="ACC1A ACT1A" [sca1b]="SCA1B" [acc1b]="ACC1B ACT1B"
   [gnv]="GNV1B GNI1B" [qsa]="QSA1B QKS1B" [imu]="IMU1A IMU1B" [thr]="THR1A THR1B" [ihk]="IHK1A IHK1B"
   [hrt]="HRT1A HRT1B" [tim]="TIM1B" [clk]="CLK1A CLK1B"
-  [stream_sca1a]="SCA1A" [stream_acc1a]="ACC1A ACT1A" [lcmlog]=""
+  [stream_sca1a]="SCA1A" [stream_acc1a]="ACC1A ACT1A" [lcmlog]="" [ground_yaml]="" [lcmnode]=""
 )
 
 # mode byte: bit0 stop-on-error, bits1-2 kind (0 whole file, 1 ASCII header + body, 2 binary header + body)
@@ -47,6 +50,14 @@ make_corpus() {
   printf '\000' > "$dir/empty"
   if [[ $reader == lcmlog ]]; then
     make_lcm_seeds "$dir"
+    return 0
+  fi
+  if [[ $reader == ground_yaml ]]; then
+    make_ground_seeds "$dir"
+    return 0
+  fi
+  if [[ $reader == lcmnode ]]; then  # the node's own seed: a minute of valid messages of three heads
+    BORESIGHT_FUZZ_MAKE_SEED="$dir/own" "$fuzzdir/fuzz_node" >/dev/null 2>&1 || true
     return 0
   fi
   [[ -d $real ]] || return 0
@@ -122,18 +133,50 @@ make_lcm_seeds() {
   done
 }
 
+# Measurement-file seeds (mode byte 0: the whole file; 002 / 004: the samples behind the fuzzer's prefix
+# that ends with "accel_mps2:" / "accel_mps2: [").
+find_cli() {
+  local c
+  for c in "${BORESIGHT_CLI:-}" "$build/tools/boresight" "$here/../../build/tools/boresight"; do
+    [[ -n $c && -x $c ]] && { echo "$c"; return 0; }
+  done
+  return 0
+}
+make_ground_seeds() {
+  local dir=$1 cli setup k=0
+  printf '\002\n      - [0.01, -0.02, 9.80665]\n      - [0.011, -0.019, 9.8067]  # c\n' > "$dir/block"
+  printf '\004[0.01, -0.02, 9.80665],\n   [0.011, -0.019,\n    9.8067]]\n' > "$dir/flow"
+  cli=$(find_cli)
+  [[ -n $cli ]] || return 0
+  for setup in single two-faces tilted; do
+    k=$((k + 1))
+    if "$cli" simulate-ground --seed "$k" --setup "$setup" --targets 5 --accel-samples 8 --out "$work/g_$k.yaml" >/dev/null 2>&1; then
+      { printf '\000'; cat "$work/g_$k.yaml"; } > "$dir/sim_$k"
+      # the same samples as one flow list [[...], ...]
+      { printf '\000'; awk '/^    accel_mps2:/{print "    accel_mps2: ["; s=1; next}
+           s && /^      - \[/{sub(/^      - /, "      "); print $0 ","; next}
+           {if (s) {print "    ]"; s=0}; print} END{if (s) print "    ]"}' "$work/g_$k.yaml"; } > "$dir/sim_flow_$k"
+    fi
+  done
+}
+
 readers=("$@")
-[[ ${#readers[@]} -gt 0 ]] || readers=(header sca1a flagged acc1a sca1b acc1b gnv qsa imu thr ihk hrt tim clk generic summary stream_sca1a stream_acc1a lcmlog)
+[[ ${#readers[@]} -gt 0 ]] || readers=(header sca1a flagged acc1a sca1b acc1b gnv qsa imu thr ihk hrt tim clk generic summary stream_sca1a stream_acc1a lcmlog ground_yaml lcmnode)
 status=0
 summary=()
 for reader in "${readers[@]}"; do
   [[ -n ${seeds[$reader]+x} ]] || { echo "unknown reader '$reader'" >&2; exit 2; }
   name=fuzz_$reader
+  rexe=$exe
+  if [[ $reader == lcmnode ]]; then  # the node's handlers: their own executable (fuzz_node)
+    rexe=$fuzzdir/fuzz_node
+    [[ -x $rexe ]] || { summary+=("$name skipped: $rexe not built (needs the node library)"); continue; }
+  fi
   make_corpus "$reader"
   log=$work/$name.log
   mkdir -p "$work/artifacts_$reader"
   echo "== $name: ${secs}s, seeds: $(ls "$work/corpus_$reader" | wc -l)"
-  if BORESIGHT_FUZZ_READER=$reader "$exe" -seed="${BORESIGHT_FUZZ_SEED:-1}" -max_total_time="$secs" -timeout=10 -rss_limit_mb=2048 -max_len=65536 -print_final_stats=1 \
+  if BORESIGHT_FUZZ_READER=$reader "$rexe" -seed="${BORESIGHT_FUZZ_SEED:-1}" -max_total_time="$secs" -timeout=10 -rss_limit_mb=2048 -max_len=65536 -print_final_stats=1 \
       -artifact_prefix="$work/artifacts_$reader/" "$work/corpus_$reader" >"$log" 2>&1; then
     execs=$(grep -Eo 'stat::number_of_executed_units: *[0-9]+' "$log" | grep -Eo '[0-9]+$' || echo '?')
     summary+=("$name ok: $execs executions in ${secs}s")

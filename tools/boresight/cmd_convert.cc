@@ -15,6 +15,7 @@
 #include <cmath>
 #include <memory>
 #include <cstdio>
+#include <limits>
 #include <map>
 #include <string>
 #include <sys/stat.h>
@@ -29,7 +30,10 @@ const char* kUsage =
     "\n"
     "Level-1 to LCM: SCA1A records become star_head_sample_t messages on channel STAR_HEAD and ACC1A\n"
     "records accel_sample_t messages on channel ACCEL, merged in sensor-time order (ties: heads by id,\n"
-    "then the accelerometer). Other products are not node inputs: they are listed and skipped.\n"
+    "then the accelerometer). A QSA1B file becomes one nominal_mountings_t message (NOMINAL_MOUNTINGS)\n"
+    "at the start of the log, GNV1B / GNI1B files orbit_sample_t messages (ORBIT) in time order, so a\n"
+    "replay through boresightd needs nothing but its configuration and the log. Other products are\n"
+    "not node inputs: they are listed and skipped.\n"
     "Rejected lines are counted and reported per file; --strict stops at the first one. The files are\n"
     "streamed and merged with a bounded look-ahead (memory does not grow with the span): a record more\n"
     "than --lookahead seconds out of time order is rejected as late and counted.\n"
@@ -66,6 +70,8 @@ int toLcm(const Options& a) {
   if (a.strict) opt.on_error = io::OnError::Stop;
   std::vector<std::unique_ptr<stream::Source>> sources;
   std::vector<std::string> product_of;
+  std::vector<io::QsaRecord> qsa;   // QSA1B records (the latest per head is written)
+  std::vector<io::GnvRecord> orbit; // GNV1B/GNI1B records (small: one per second or slower)
   for (const auto& f : a.inputs) {
     stream::FileKind kind = stream::identifyFile(f);
     if (kind.type == stream::FileKind::Type::kUnknown) {
@@ -95,8 +101,22 @@ int toLcm(const Options& a) {
       s->keepWithoutAngular(true);  // written as messages with the angular bit clear
       sources.push_back(std::make_unique<stream::PrefetchSource>(std::move(s)));
       product_of.push_back(name);
+    } else if (kind.product == io::Product::QSA1B) {
+      auto pf = io::readProduct<io::QsaRecord>(f, opt);
+      if (!pf.ok || pf.records.empty()) {
+        std::fprintf(stderr, "boresight convert: %s: %s\n", f.c_str(), pf.ok ? "no QSA1B record" : pf.error.c_str());
+        return 1;
+      }
+      for (const auto& r : pf.records) qsa.push_back(r);
+    } else if (kind.product == io::Product::GNV1B || kind.product == io::Product::GNI1B) {
+      auto pf = io::readProduct<io::GnvRecord>(f, opt);
+      if (!pf.ok) {
+        std::fprintf(stderr, "boresight convert: %s: %s\n", f.c_str(), pf.error.c_str());
+        return 1;
+      }
+      for (const auto& r : pf.records) orbit.push_back(r);
     } else {
-      std::printf("%s: %s is not a node input (SCA1A, ACC1A): ignored\n", f.c_str(), name.c_str());
+      std::printf("%s: %s is not a node input (SCA1A, ACC1A, QSA1B, GNV1B, GNI1B): ignored\n", f.c_str(), name.c_str());
     }
   }
   stream::AssemblerConfig acfg;
@@ -111,6 +131,44 @@ int toLcm(const Options& a) {
     std::fprintf(stderr, "boresight convert: %s\n", err.c_str());
     return 1;
   }
+  // The nominal mountings first (the latest QSA1B record of each head), then the orbit merged by time.
+  if (!qsa.empty()) {
+    std::map<int, io::QsaRecord> last;
+    for (const auto& r : qsa)
+      if (!last.count(r.sensor) || last[r.sensor].t <= r.t) last[r.sensor] = r;
+    io::NominalMountings m;
+    m.source = 1;
+    for (const auto& kv : last) {
+      if (m.n_heads >= io::NominalMountings::kCapacity) break;
+      m.utime = std::max(m.utime, kv.second.t);
+      m.head_id[m.n_heads] = kv.first;
+      for (int k = 0; k < 4; ++k) m.q_Si_B[m.n_heads][k] = kv.second.q[k];
+      ++m.n_heads;
+    }
+    if (!w.write(m)) {
+      std::fprintf(stderr, "boresight convert: %s: write failed\n", out.c_str());
+      return 1;
+    }
+    std::printf("%s: NOMINAL_MOUNTINGS of %d heads from QSA1B\n", out.c_str(), m.n_heads);
+  }
+  std::stable_sort(orbit.begin(), orbit.end(), [](const io::GnvRecord& x, const io::GnvRecord& y) { return x.t < y.t; });
+  std::size_t orbit_next = 0;
+  std::int32_t orbit_seq = 0;
+  auto writeOrbitUpTo = [&](TimeUs t) {
+    for (; orbit_next < orbit.size() && orbit[orbit_next].t <= t; ++orbit_next) {
+      const auto& r = orbit[orbit_next];
+      io::OrbitSample o;
+      o.utime = r.t;
+      o.frame = r.coord_ref == 'I' ? 'I' : 'E';
+      for (int k = 0; k < 3; ++k) {
+        o.r_m[k] = r.pos[k];
+        o.v_m_s[k] = r.vel[k];
+      }
+      o.seq = orbit_seq++;
+      if (!w.write(o)) return false;
+    }
+    return true;
+  };
   std::map<int, std::int32_t> head_seq;
   std::int32_t acc_seq = 0;
   std::uint64_t n_heads = 0, n_accel = 0, without_ang = 0;
@@ -119,6 +177,7 @@ int toLcm(const Options& a) {
   // The samples of one time tag (heads first, as the assembler gives them): heads put in id order.
   std::vector<stream::Sample> group;
   auto flush = [&]() {
+    if (!group.empty() && !writeOrbitUpTo(group.front().t)) write_failed = true;
     auto heads_end = std::find_if(group.begin(), group.end(),
                                   [](const stream::Sample& x) { return x.kind != stream::Sample::Kind::kHead; });
     std::stable_sort(group.begin(), heads_end,
@@ -169,6 +228,7 @@ int toLcm(const Options& a) {
     if (write_failed) break;
   }
   flush();
+  if (!writeOrbitUpTo(std::numeric_limits<TimeUs>::max())) write_failed = true;
   w.close();
   if (write_failed) {
     std::fprintf(stderr, "boresight convert: %s: write failed\n", out.c_str());

@@ -24,7 +24,8 @@ const char* kFooter =
     "  SCA1A_<date>_<sat>_<ver>.txt  all star-camera heads (blinded samples are absent)\n"
     "  ACC1A_..., GNV1B_...          accelerometer (10 Hz, frame A) and orbit (Earth-fixed, 1 Hz)\n"
     "  QSA1B_...                     the NOMINAL head alignment (the true one is in truth.yaml)\n"
-    "  sim.lcmlog                    the node's input messages (STAR_HEAD, ACCEL)\n"
+    "  sim.lcmlog                    the node's input messages (NOMINAL_MOUNTINGS, STAR_HEAD, ACCEL,\n"
+    "                                STAR_VECTORS, ORBIT)\n"
     "  truth.yaml                    seed, every injected effect, true mountings, run statistics\n"
     "\n"
     "--effect SPEC: NAME[:key=value,...], repeatable, e.g.\n"
@@ -125,7 +126,8 @@ int runSimulate(int argc, char** argv) {
   sim::LcmSink log;
   sim::TeeSink tee;
   std::vector<std::string> files;
-  if (!l1.open(out, sc, &err) || (lcm && !log.open(out + "/sim.lcmlog", &err))) {
+  if (!l1.open(out, sc, &err) || (lcm && (!log.open(out + "/sim.lcmlog", &err) || !log.writeMountings(simulator)))) {
+    if (err.empty()) err = out + "/sim.lcmlog: cannot write the NOMINAL_MOUNTINGS message";
     std::fprintf(stderr, "boresight simulate: %s\n", err.c_str());
     return 1;
   }

@@ -10,5 +10,7 @@ int runProcess(int argc, char** argv);
 int runSimulate(int argc, char** argv);
 int runPlot(int argc, char** argv);
 int runCalibrate(int argc, char** argv);
+int runGround(int argc, char** argv);
+int runSimulateGround(int argc, char** argv);
 
 }  // namespace boresight::cli

@@ -59,6 +59,18 @@ struct RelativeNormal {
   std::uint64_t epochs = 0;
 };
 
+/// Sufficient statistics of one head's epochs (SpanBuilder, always accumulated): the model is linear
+/// in the data vector d = (alpha_S, alpha_A, jerk_A, 1) (10 values) for given parameters, so the
+/// least-squares cost over any number of epochs is exactly tr(A D A^T) with D = sum d d^T. `whitened`:
+/// d after the temporal whitening (streaming banded Cholesky, the same recurrences as the solver's);
+/// `raw`: d as observed (residual RMS). Constant memory: what SolveOptions::from_moments solves.
+struct HeadMoments {
+  std::uint64_t n = 0;
+  Eigen::Matrix<double, 10, 10> whitened = Eigen::Matrix<double, 10, 10>::Zero();
+  Eigen::Matrix<double, 10, 10> raw = Eigen::Matrix<double, 10, 10>::Zero();
+  Mat3 cov = Mat3::Zero();  ///< the epochs' covariance (the same for every epoch of the head)
+};
+
 /// Everything the solver needs; bounded in memory by SpanOptions::max_observations.
 struct CalibrationSpan {
   int n_heads = 0;
@@ -68,6 +80,9 @@ struct CalibrationSpan {
   std::vector<Observation> obs;                     ///< decimated epochs in time order
   std::vector<RelativeMean> relative;               ///< one per head pair with data (reports, closure)
   RelativeNormal relative_normal;                   ///< what the solver uses for the relative attitude
+  std::array<HeadMoments, kMaxHeads> moments{};     ///< per head, every epoch (also those not kept in obs)
+  Eigen::Matrix4d acc_moments = Eigen::Matrix4d::Zero();  ///< sum of (alpha_A, 1)(alpha_A, 1)^T
+  std::uint64_t epochs_total = 0;                   ///< epochs made (obs holds them unless not kept)
   TimeUs t_first = 0, t_last = 0;                   ///< first and last head epoch pushed
   std::uint64_t head_epochs = 0, acc_samples = 0;   ///< inputs that went into the span
   double decimation_s = 0.0;                        ///< spacing of obs (multiples of it between epochs)

@@ -54,6 +54,10 @@ struct SolveOptions {
   /// whitened residuals; leaving the raw epoch out keeps it from its neighbours.
   double outlier_sigma = 6.0;
   int outlier_rounds = 3;
+  /// Solve from CalibrationSpan::moments (the exact least-squares cost of all epochs in constant
+  /// memory) instead of the observations: no robust loss and no outlier rounds (huber_sigma and
+  /// outlier_sigma are ignored). Forced when the span kept no observations.
+  bool from_moments = false;
   /// Fewest observations (decimated epochs with the accelerometer) accepted.
   std::size_t min_epochs = 20;
 };

@@ -15,8 +15,10 @@
 //
 // Inputs in time order per stream, the two streams merged by time (the engine does): an epoch waits
 // until the accelerometer filter covers it (35 s later) and is dropped (dropped_no_acc) when the
-// accelerometer data does not cover it. Memory: the observations (about 0.5 kB each, 4 MB per day at
-// 10 s) plus the filters' fixed rings; max_observations bounds it.
+// accelerometer data does not cover it. Memory: the observations (about 0.7 kB each, 6 MB per day at
+// 10 s) plus the filters' fixed rings; max_observations bounds them. Every epoch also goes into the
+// per-head sufficient statistics (CalibrationSpan::moments, streaming whitening): with
+// keep_observations = false that is all the span holds, and its memory is constant.
 //
 // Producers: the replay engine (Level-1 files, LCM logs) via `boresight calibrate`, the node's worker,
 // the Monte Carlo bench. Owned by the solver's author; the CLI only calls it.
@@ -26,6 +28,7 @@
 #include "boresight/core/pipeline.h"
 
 #include <deque>
+#include <vector>
 #include <string>
 
 namespace boresight::calib {
@@ -43,6 +46,10 @@ struct SpanOptions {
   /// accelerometer's filter must fit kMaxCrnTaps: length_s * its rate <= 1023.
   double crn_bandwidth_hz = 0.0;
   double crn_length_s = 0.0;
+  /// false: observations are not stored, only the sufficient statistics (CalibrationSpan::moments):
+  /// memory constant in the span; the solver then works from the moments (no robust loss, no outlier
+  /// rounds: see SolveOptions::from_moments).
+  bool keep_observations = true;
 };
 
 class SpanBuilder {
@@ -66,7 +73,13 @@ class SpanBuilder {
   void relativeStep(const core::ValidHeads& v);
   void resolve();
   void emit(Observation&& ob);
-
+  void accumulate(const Observation& ob);
+  struct WhitenState {  ///< the streaming banded Cholesky of one head: the last K epochs
+    std::deque<TimeUs> t;
+    std::deque<std::vector<double>> L;                    ///< L(k, k-K..k) of those epochs
+    std::deque<Eigen::Matrix<double, 10, 1>> z;           ///< their whitened data vectors
+  };
+  std::array<WhitenState, kMaxHeads> wstate_{};
   bool configured_ = false;
   core::PipelineConfig cfg_{};
   SpanOptions opt_{};

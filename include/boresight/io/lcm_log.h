@@ -19,6 +19,10 @@ constexpr const char* kStarHeadChannel = "STAR_HEAD";
 constexpr const char* kAccelChannel = "ACCEL";
 /// boresight_lcm::star_vectors_t: one head's star vectors of one epoch (Wahba input).
 constexpr const char* kStarVectorsChannel = "STAR_VECTORS";
+/// boresight_lcm::nominal_mountings_t: the heads' nominal mountings (QSA1B, simulator, configuration).
+constexpr const char* kMountingsChannel = "NOMINAL_MOUNTINGS";
+/// boresight_lcm::orbit_sample_t: GNI1B / GNV1B orbit samples.
+constexpr const char* kOrbitChannel = "ORBIT";
 
 /// Plain mirrors of the LCM types (so users of this header need no generated code).
 struct HeadSample {
@@ -52,6 +56,28 @@ struct StarVectors {
   std::int32_t flags = 1;                ///< bit 0 valid
 };
 
+/// Mirror of nominal_mountings_t (units in src/lcmtypes/nominal_mountings_t.lcm).
+struct NominalMountings {
+  static constexpr int kCapacity = 4;
+  TimeUs utime = 0;
+  int n_heads = 0;                     ///< 1..kCapacity
+  int head_id[kCapacity] = {};
+  double q_Si_B[kCapacity][4] = {};    ///< scalar first, R = C_Si_B
+  double C_B_A[3][3] = {};             ///< row-major; all zero: not given
+  int source = 0;                      ///< 0 configuration, 1 QSA1B, 2 simulator
+};
+/// Mirror of orbit_sample_t.
+struct OrbitSample {
+  TimeUs utime = 0;
+  char frame = 'I';         ///< 'I' inertial (GNI1B), 'E' Earth-fixed (GNV1B)
+  double r_m[3] = {0, 0, 0};
+  double v_m_s[3] = {0, 0, 0};
+  std::int32_t seq = 0;
+};
+/// Decoders of one message's bytes (false: not decodable, or counts outside their range).
+bool decodeNominalMountings(const void* data, int size, NominalMountings& out);
+bool decodeOrbit(const void* data, int size, OrbitSample& out);
+
 class LcmLogWriter {
  public:
   LcmLogWriter();
@@ -63,6 +89,10 @@ class LcmLogWriter {
   bool write(const HeadSample& s);
   bool write(const AccelSample& s);
   bool write(const StarVectors& s);  ///< false also when n_stars is outside 0..kCapacity
+  bool write(const NominalMountings& m);  ///< false also when n_heads is outside 1..kCapacity
+  bool write(const OrbitSample& o);
+  /// Any encoded message on any channel, with the event time taken from `utime` (the node's outputs).
+  bool writeRaw(const std::string& channel, TimeUs utime, const void* data, int size);
   void close();
   std::uint64_t written() const { return written_; }
 
@@ -85,6 +115,16 @@ class LcmLogReader {
   Kind next(HeadSample& head, AccelSample& accel);
   /// After next() returned Kind::Stars: the star-vector message (STAR_VECTORS channel).
   const StarVectors& stars() const { return stars_; }
+  /// One event of the log as it is: channel and encoded bytes (valid until the next call). size -1:
+  /// bytes that are not an event (skipped up to the next sync word). False at the end. Use either
+  /// next() or nextRaw() on one reader (the node decodes the bytes itself, like live traffic).
+  struct RawEvent {
+    const std::string* channel = nullptr;
+    const void* data = nullptr;
+    int size = 0;
+    std::int64_t timestamp = 0;  ///< the log's event time, Unix us (not the measurement time)
+  };
+  bool nextRaw(RawEvent& ev);
   std::uint64_t unknownChannel() const { return unknown_channel_; }
   std::uint64_t decodeFailures() const { return decode_failures_; }
 

@@ -91,6 +91,11 @@ class LcmSink : public SimSink {
   void head(const HeadSampleOut& s) override;
   void accel(const AccSampleOut& a) override;
   void stars(const StarVectorsOut& s) override;
+  /// Orbit samples as ORBIT messages (inertial, GNI1B-like).
+  void orbit(const OrbitSampleOut& o) override;
+  /// The nominal mountings (what the QSA1B says) and C_B_A as one NOMINAL_MOUNTINGS message at the
+  /// scenario's start: call once after open(), before run().
+  bool writeMountings(const Simulator& sim);
   bool close(std::string* error);
   std::uint64_t written() const;
 

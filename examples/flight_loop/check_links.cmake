@@ -1,0 +1,18 @@
+# ctest: the flight_loop executable links no LCM, yaml-cpp, Ceres or glog: neither in its link
+# libraries (LINKS: the target's and boresight::core's, written at generation) nor as shared libraries.
+file(READ ${LINKS} links)
+foreach(bad lcm LCM yaml ceres Ceres glog boresight_io boresight_lcm boresight_node boresight_calib)
+  if(links MATCHES "${bad}")
+    message(FATAL_ERROR "flight_loop links ${bad}: ${links}")
+  endif()
+endforeach()
+execute_process(COMMAND ldd ${EXE} OUTPUT_VARIABLE libs RESULT_VARIABLE rc)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "ldd ${EXE} failed")
+endif()
+foreach(bad lcm yaml-cpp ceres glog)
+  if(libs MATCHES "lib${bad}")
+    message(FATAL_ERROR "flight_loop links lib${bad}:\n${libs}")
+  endif()
+endforeach()
+message(STATUS "flight_loop links: ${libs}")

@@ -1,0 +1,163 @@
+// boresight::node - the LCM node `boresightd`: message handlers (decode, validate, count), the epoch
+// assembler and the real-time core stepped per epoch, outputs published as LCM messages, and a worker
+// thread that runs the method A solver at a configured cadence and hands the mountings back.
+//
+//   live:    lcm::LCM subscriptions ---------\                            /--> publish (lcm::LCM)
+//   replay:  io::LcmLogReader::nextRaw() -----+-> Node::onMessage() ... core +--> record (LCM log)
+//                                             (same handlers)              \--> SPSC ring -> worker
+//
+// Threads: the caller's thread (the real-time one) runs the handlers, the assembler and the core;
+// after configure() it does not allocate (fixed-size messages decoded on the stack, a fixed ring, a
+// fixed latency histogram). The worker thread owns a calib::SpanBuilder fed from a bounded lock-free
+// single-producer/single-consumer ring (head epochs and accelerometer samples as the core got them);
+// at every `cadence_s` of data time the real-time thread puts a solve request into the ring, and the
+// worker solves a copy of the span (single-threaded Ceres) and leaves the result in a one-slot mailbox.
+// The real-time thread takes it at a head-epoch boundary and hands the mountings to the core
+// (Pipeline::handMountings keeps the datum: only the relative, head-to-head part changes the fusion,
+// so the published attitude does not jump; the common rotation to the accelerometer frame is
+// published in the calibration message, never applied).
+//   Live: ring full -> the item is dropped and counted (ring_dropped); a result is applied at the first
+//   epoch after it is ready; the real-time thread never waits.
+//   Replay (lockstep): a full ring makes the reader wait (it is not real time), and a calibration
+//   started at head epoch k is applied at head epoch k + apply_lag_epochs (waiting for the worker if
+//   needed): every run publishes identical payloads.
+//
+// Accounting: every message received on a node channel is either used or rejected with one reason,
+// so received == used + sum(rejected). `lost` counts what the senders' sequence numbers say was sent
+// and never arrived (per head, accelerometer, star-vector and orbit channel). Time: a message whose tag
+// is more than max_time_jump_s away from the node's data time is rejected (time_jump), unless
+// time_jump_confirm messages in a row on its channel agree on the new time (a real jump: resync), so
+// one corrupt tag never turns every later message into "time backwards". The first message sets the
+// data time.
+#pragma once
+
+#include <boresight/core/pipeline.h>
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <string>
+
+namespace boresight::node {
+
+/// Reasons a message is rejected (index into Counters::rejected; node_health_t.rejected uses the same).
+enum class Reason : std::uint8_t {
+  kUndecodable = 0,  ///< bytes that do not decode as the channel's type (or a wrong fingerprint)
+  kInvalidFlag,      ///< the message says it is not valid (or has no stars / no angular acceleration)
+  kNonFinite,        ///< NaN or Inf in a value
+  kNonUnit,          ///< quaternion or direction not unit within tolerance
+  kUnknownHead,      ///< head id not in the configuration
+  kDuplicate,        ///< the same head / sample tag again
+  kLate,             ///< older than what the assembler already handed to the core
+  kTimeJump,         ///< tag far from the node's data time (not confirmed by the channel)
+  kFlood,            ///< more messages per second of data time than the channel's limit
+  kNoMountings,      ///< input before the nominal mountings are known (mountings: log)
+  kOtherChannel,     ///< a channel the node does not read (replay: e.g. earlier outputs)
+  kAssembler,        ///< the assembler refused it (should stay 0: the handlers check first)
+  kCount
+};
+constexpr int kReasonCount = static_cast<int>(Reason::kCount);
+const char* reasonName(Reason r);
+
+struct Channels {
+  std::string star_head = "STAR_HEAD", accel = "ACCEL", star_vectors = "STAR_VECTORS";
+  std::string mountings = "NOMINAL_MOUNTINGS", orbit = "ORBIT";
+  std::string attitude = "BORESIGHT_ATTITUDE", monitor = "BORESIGHT_MONITOR";
+  std::string calibration = "BORESIGHT_CALIBRATION", health = "BORESIGHT_HEALTH";
+};
+
+struct CalibrationConfig {
+  bool enabled = true;
+  double cadence_s = 6 * 3600.0;    ///< data time between solves, s
+  double min_span_s = 3 * 3600.0;   ///< first solve only after this much data, s
+  int apply_lag_epochs = 20;        ///< replay: a result started at head epoch k is applied at k + this
+  double decimation_s = 10.0;       ///< calib::SpanOptions::decimation_s, s
+  std::size_t max_observations = 0; ///< 0: the whole run (memory: ~0.5 kB per observation)
+  bool apply = true;                ///< hand the relative part back to the core
+};
+
+struct NodeConfig {
+  std::string file;                 ///< the configuration file (for messages)
+  core::PipelineConfig pipeline;    ///< platform (heads, CRNs, C_B_A)
+  bool mountings_from_log = false;  ///< wait for a NOMINAL_MOUNTINGS message before stepping
+  std::string lcm_url = "udpm://239.255.76.67:7667?ttl=0";
+  Channels channels;
+  double lookahead_s = 2.0;         ///< assembler look-ahead, s
+  double health_period_s = 10.0;    ///< data time between health messages, s
+  double max_time_jump_s = 600.0;   ///< larger tag jumps need confirming, s
+  int time_jump_confirm = 3;        ///< messages in a row on a channel that confirm a jump
+  double max_head_rate_hz = 20.0;   ///< per head: more messages per data second are a flood
+  double max_accel_rate_hz = 50.0;
+  double max_star_rate_hz = 20.0;   ///< per head
+  std::size_t ring_capacity = 4096; ///< worker ring items (power of two)
+  CalibrationConfig calibration;
+};
+
+/// Parses and validates the node's YAML configuration (it names the platform file). False with
+/// *error as "FILE: KEY: reason".
+bool loadNodeConfig(const std::string& path, NodeConfig& out, std::string* error);
+
+/// Where the node's outputs go (an LCM instance, a log, a test's list).
+class Output {
+ public:
+  virtual ~Output() = default;
+  virtual void publish(const std::string& channel, TimeUs utime, const void* data, int size) = 0;
+};
+
+struct LatencySummary {
+  double p50_us = 0, p99_us = 0, p999_us = 0, max_us = 0;
+  std::uint64_t n = 0;
+};
+
+struct Counters {
+  std::uint64_t received = 0, used = 0, lost = 0;
+  std::array<std::uint64_t, kReasonCount> rejected{};
+  std::uint64_t head_epochs = 0, accel_steps = 0, star_epochs = 0, rows = 0;
+  std::uint64_t calibrations_published = 0, calibrations_applied = 0, calibrations_refused = 0;
+  std::uint64_t ring_high_water = 0, ring_dropped = 0, ring_waits = 0;
+  std::uint64_t stars_dropped = 0;  ///< star vectors (not messages) the assembler refused
+  std::uint64_t time_resyncs = 0;
+  std::uint64_t rejectedTotal() const {
+    std::uint64_t n = 0;
+    for (auto v : rejected) n += v;
+    return n;
+  }
+};
+
+class Node {
+ public:
+  enum class Mode : std::uint8_t { kLive, kReplay };
+  Node();
+  ~Node();
+  Node(const Node&) = delete;
+  Node& operator=(const Node&) = delete;
+
+  /// Sizes everything and starts the worker. False with *error.
+  bool configure(const NodeConfig& cfg, Mode mode, Output* out, std::string* error);
+  /// One message as received (channel name, encoded bytes). Never throws; counts everything.
+  void onMessage(const std::string& channel, const void* data, int size);
+  /// Bytes that are not even an LCM event (replay: damage in the log): counted as undecodable.
+  void onGarbage();
+  /// End of data: flushes the assembler and the core, stops the worker, publishes the final health.
+  void finish();
+
+  const Counters& counters() const;
+  /// Wall time of each core step (head epochs, accelerometer samples, star epochs), and of the head
+  /// epochs alone (the expensive ones: fusion, monitor, rates).
+  LatencySummary stepLatency() const;
+  LatencySummary headStepLatency() const;
+  core::Health coreHealth() const;
+  const core::Pipeline& pipeline() const;
+  TimeUs dataTime() const;
+  std::uint64_t mountingVersion() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+/// Replay: every event of the log into the node's handlers, as fast as possible (io::LcmLogReader,
+/// not LCM's file provider), then finish(). False with *error when the log cannot be read.
+bool replayLog(Node& node, const std::string& path, std::string* error);
+
+}  // namespace boresight::node

@@ -1,0 +1,163 @@
+// The node's configuration file: the platform file it names plus the node's own keys, validated at
+// start-up with "FILE: KEY: reason" errors. Unknown keys are errors (a typo never passes silently).
+#include <boresight/io/core_config.h>
+#include <boresight/node/node.h>
+
+#include <yaml-cpp/yaml.h>
+
+#include <cmath>
+#include <set>
+#include <sstream>
+
+namespace boresight::node {
+namespace {
+
+struct Reader {
+  std::string file;
+  std::string err;
+  bool fail(const std::string& key, const std::string& why) {
+    if (err.empty()) err = file + ": " + key + ": " + why;
+    return false;
+  }
+  bool keys(const YAML::Node& n, const std::string& where, const std::set<std::string>& allowed) {
+    if (!n.IsMap()) return fail(where.empty() ? "(top)" : where, "expected a map");
+    for (const auto& kv : n) {
+      const std::string k = kv.first.as<std::string>();
+      if (!allowed.count(k)) return fail(where.empty() ? k : where + "." + k, "unknown key");
+    }
+    return true;
+  }
+  bool num(const YAML::Node& n, const std::string& key, const std::string& path, double& v, double lo, double hi) {
+    if (!n[key]) return true;
+    try {
+      v = n[key].as<double>();
+    } catch (const YAML::Exception&) {
+      return fail(path, "expected a number");
+    }
+    if (!std::isfinite(v) || v < lo || v > hi) {
+      std::ostringstream s;
+      s << "must be within " << lo << " .. " << hi;
+      return fail(path, s.str());
+    }
+    return true;
+  }
+  bool str(const YAML::Node& n, const std::string& key, const std::string& path, std::string& v) {
+    if (!n[key]) return true;
+    if (!n[key].IsScalar() || n[key].as<std::string>().empty()) return fail(path, "expected a non-empty string");
+    v = n[key].as<std::string>();
+    return true;
+  }
+  bool boolean(const YAML::Node& n, const std::string& key, const std::string& path, bool& v) {
+    if (!n[key]) return true;
+    try {
+      v = n[key].as<bool>();
+    } catch (const YAML::Exception&) {
+      return fail(path, "expected true or false");
+    }
+    return true;
+  }
+};
+
+std::string dirOf(const std::string& p) {
+  const auto k = p.find_last_of('/');
+  return k == std::string::npos ? std::string(".") : p.substr(0, k);
+}
+
+}  // namespace
+
+bool loadNodeConfig(const std::string& path, NodeConfig& out, std::string* error) {
+  out = NodeConfig{};
+  out.file = path;
+  Reader r{path, {}};
+  YAML::Node top;
+  try {
+    top = YAML::LoadFile(path);
+  } catch (const YAML::BadFile&) {
+    if (error) *error = path + ": cannot read the file";
+    return false;
+  } catch (const YAML::ParserException& e) {
+    if (error) *error = path + ":" + std::to_string(e.mark.line + 1) + ":" + std::to_string(e.mark.column + 1) + ": " + e.msg;
+    return false;
+  }
+  auto done = [&](bool ok) {
+    if (!ok && error) *error = r.err;
+    return ok;
+  };
+  if (!r.keys(top, "", {"platform", "mountings", "lcm_url", "channels", "lookahead_s", "health_period_s",
+                        "max_time_jump_s", "time_jump_confirm", "max_rate_hz", "ring_capacity", "calibration"}))
+    return done(false);
+  if (!top["platform"]) return done(r.fail("platform", "required (the platform configuration file)"));
+  std::string platform;
+  if (!r.str(top, "platform", "platform", platform)) return done(false);
+  if (platform[0] != '/') platform = dirOf(path) + "/" + platform;
+  io::PlatformConfig pc;
+  std::string perr;
+  if (!io::loadPlatformConfig(platform, pc, &perr)) return done(r.fail("platform", perr));
+  out.pipeline = pc.pipeline;
+  std::string m = pc.mounting_from_qsa1b ? "log" : "config";
+  if (!r.str(top, "mountings", "mountings", m)) return done(false);
+  if (m != "log" && m != "config") return done(r.fail("mountings", "expected 'log' (NOMINAL_MOUNTINGS message) or 'config'"));
+  if (m == "config" && pc.mounting_from_qsa1b)
+    return done(r.fail("mountings", "the platform file takes its mountings from QSA1B: use 'log'"));
+  out.mountings_from_log = m == "log";
+  if (!r.str(top, "lcm_url", "lcm_url", out.lcm_url)) return done(false);
+  if (top["channels"]) {
+    const YAML::Node c = top["channels"];
+    if (!r.keys(c, "channels", {"star_head", "accel", "star_vectors", "mountings", "orbit", "attitude", "monitor",
+                                 "calibration", "health"}))
+      return done(false);
+    Channels& ch = out.channels;
+    for (auto p : {std::make_pair("star_head", &ch.star_head), std::make_pair("accel", &ch.accel),
+                   std::make_pair("star_vectors", &ch.star_vectors), std::make_pair("mountings", &ch.mountings),
+                   std::make_pair("orbit", &ch.orbit), std::make_pair("attitude", &ch.attitude),
+                   std::make_pair("monitor", &ch.monitor), std::make_pair("calibration", &ch.calibration),
+                   std::make_pair("health", &ch.health)})
+      if (!r.str(c, p.first, std::string("channels.") + p.first, *p.second)) return done(false);
+    std::set<std::string> names{ch.star_head, ch.accel, ch.star_vectors, ch.mountings, ch.orbit,
+                                ch.attitude, ch.monitor, ch.calibration, ch.health};
+    if (names.size() != 9) return done(r.fail("channels", "every channel needs its own name"));
+  }
+  double v = 0;
+  if (!r.num(top, "lookahead_s", "lookahead_s", out.lookahead_s, 0.001, 600)) return done(false);
+  if (!r.num(top, "health_period_s", "health_period_s", out.health_period_s, 0.01, 86400)) return done(false);
+  if (!r.num(top, "max_time_jump_s", "max_time_jump_s", out.max_time_jump_s, 1, 1e7)) return done(false);
+  v = out.time_jump_confirm;
+  if (!r.num(top, "time_jump_confirm", "time_jump_confirm", v, 1, 1000)) return done(false);
+  out.time_jump_confirm = static_cast<int>(v);
+  if (out.max_time_jump_s < 2 * out.lookahead_s)
+    return done(r.fail("max_time_jump_s", "must be at least twice lookahead_s"));
+  if (top["max_rate_hz"]) {
+    const YAML::Node c = top["max_rate_hz"];
+    if (!r.keys(c, "max_rate_hz", {"star_head", "accel", "star_vectors"})) return done(false);
+    if (!r.num(c, "star_head", "max_rate_hz.star_head", out.max_head_rate_hz, 0.1, 1e5) ||
+        !r.num(c, "accel", "max_rate_hz.accel", out.max_accel_rate_hz, 0.1, 1e5) ||
+        !r.num(c, "star_vectors", "max_rate_hz.star_vectors", out.max_star_rate_hz, 0.1, 1e5))
+      return done(false);
+  }
+  v = static_cast<double>(out.ring_capacity);
+  if (!r.num(top, "ring_capacity", "ring_capacity", v, 16, 1 << 24)) return done(false);
+  out.ring_capacity = static_cast<std::size_t>(v);
+  if ((out.ring_capacity & (out.ring_capacity - 1)) != 0 || static_cast<double>(out.ring_capacity) != v)
+    return done(r.fail("ring_capacity", "must be a power of two"));
+  if (top["calibration"]) {
+    const YAML::Node c = top["calibration"];
+    CalibrationConfig& k = out.calibration;
+    if (!r.keys(c, "calibration", {"enabled", "cadence_s", "min_span_s", "apply_lag_epochs", "decimation_s",
+                                    "max_observations", "apply"}))
+      return done(false);
+    if (!r.boolean(c, "enabled", "calibration.enabled", k.enabled) || !r.boolean(c, "apply", "calibration.apply", k.apply) ||
+        !r.num(c, "cadence_s", "calibration.cadence_s", k.cadence_s, 60, 1e8) ||
+        !r.num(c, "min_span_s", "calibration.min_span_s", k.min_span_s, 60, 1e8) ||
+        !r.num(c, "decimation_s", "calibration.decimation_s", k.decimation_s, 0.5, 3600))
+      return done(false);
+    v = k.apply_lag_epochs;
+    if (!r.num(c, "apply_lag_epochs", "calibration.apply_lag_epochs", v, 1, 1e6)) return done(false);
+    k.apply_lag_epochs = static_cast<int>(v);
+    v = static_cast<double>(k.max_observations);
+    if (!r.num(c, "max_observations", "calibration.max_observations", v, 0, 1e8)) return done(false);
+    k.max_observations = static_cast<std::size_t>(v);
+  }
+  return done(true);
+}
+
+}  // namespace boresight::node

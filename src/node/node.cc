@@ -1,0 +1,896 @@
+// boresight::node::Node - handlers, assembler, core, worker (see include/boresight/node/node.h).
+#include <boresight/node/node.h>
+
+#include <boresight/calib/solver.h>
+#include <boresight/calib/span_builder.h>
+#include <boresight/io/lcm_log.h>
+#include <boresight/stream/assembler.h>
+
+#include "boresight_lcm/accel_sample_t.hpp"
+#include "boresight_lcm/boresight_monitor_t.hpp"
+#include "boresight_lcm/calibration_t.hpp"
+#include "boresight_lcm/fused_attitude_t.hpp"
+#include "boresight_lcm/node_health_t.hpp"
+#include "boresight_lcm/star_head_sample_t.hpp"
+#include "boresight_lcm/star_vectors_t.hpp"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <mutex>
+#include <cmath>
+#include <limits>
+#include <thread>
+#include <vector>
+
+namespace boresight::node {
+using core::kMaxHeads;
+using core::kMaxPairs;
+using core::quatExp;
+using core::quatLog;
+
+const char* reasonName(Reason r) {
+  switch (r) {
+    case Reason::kUndecodable: return "undecodable";
+    case Reason::kInvalidFlag: return "invalid_flag";
+    case Reason::kNonFinite: return "non_finite";
+    case Reason::kNonUnit: return "non_unit";
+    case Reason::kUnknownHead: return "unknown_head";
+    case Reason::kDuplicate: return "duplicate";
+    case Reason::kLate: return "late";
+    case Reason::kTimeJump: return "time_jump";
+    case Reason::kFlood: return "flood";
+    case Reason::kNoMountings: return "no_mountings";
+    case Reason::kOtherChannel: return "other_channel";
+    case Reason::kAssembler: return "assembler";
+    case Reason::kCount: break;
+  }
+  return "?";
+}
+
+namespace {
+
+static_assert(kReasonCount <= 16, "node_health_t.rejected has 16 entries");
+static_assert(core::kStatusCount <= 20, "node_health_t.core_status has 20 entries");
+static_assert(core::kMaxHeads == 4 && core::kMaxPairs == 6, "the output types are sized for 4 heads");
+
+/// Step latency histogram: 64 bins per doubling from 10 ns (about 1 % resolution), fixed size.
+class LatencyHistogram {
+ public:
+  static constexpr int kPerOctave = 64, kOctaves = 32, kBins = kPerOctave * kOctaves;
+  void add(double ns) {
+    ++n_;
+    max_ns_ = std::max(max_ns_, ns);
+    int i = 0;
+    if (ns > 10.0) i = static_cast<int>(std::log2(ns / 10.0) * kPerOctave);
+    ++bins_[static_cast<std::size_t>(std::clamp(i, 0, kBins - 1))];
+  }
+  double quantileUs(double q) const {
+    if (n_ == 0) return 0;
+    const auto want = static_cast<std::uint64_t>(std::ceil(q * static_cast<double>(n_)));
+    std::uint64_t c = 0;
+    for (int i = 0; i < kBins; ++i) {
+      c += bins_[static_cast<std::size_t>(i)];
+      if (c >= want && c > 0) return std::min(10.0 * std::exp2((i + 1.0) / kPerOctave), max_ns_) * 1e-3;
+    }
+    return max_ns_ * 1e-3;
+  }
+  LatencySummary summary() const {
+    return LatencySummary{quantileUs(0.5), quantileUs(0.99), quantileUs(0.999), max_ns_ * 1e-3, n_};
+  }
+
+ private:
+  std::array<std::uint64_t, kBins> bins_{};
+  std::uint64_t n_ = 0;
+  double max_ns_ = 0;
+};
+
+/// What the real-time thread hands the worker.
+struct RingItem {
+  enum Kind : std::uint8_t { kHeads, kAcc, kSolve, kStop } kind = kHeads;
+  TimeUs t = 0;
+  core::HeadEpoch heads{};
+  Vec3 a_A = Vec3::Zero();
+  std::uint64_t solve_id = 0;
+};
+
+/// Bounded lock-free single-producer/single-consumer ring (capacity a power of two, sized once).
+class SpscRing {
+ public:
+  void init(std::size_t capacity) {
+    buf_.assign(capacity, RingItem{});
+    mask_ = capacity - 1;
+  }
+  bool push(const RingItem& it) {
+    const std::size_t h = head_.load(std::memory_order_relaxed);
+    if (h - tail_.load(std::memory_order_acquire) > mask_) return false;
+    buf_[h & mask_] = it;
+    head_.store(h + 1, std::memory_order_release);
+    return true;
+  }
+  bool pop(RingItem& it) {
+    const std::size_t t = tail_.load(std::memory_order_relaxed);
+    if (head_.load(std::memory_order_acquire) == t) return false;
+    it = buf_[t & mask_];
+    tail_.store(t + 1, std::memory_order_release);
+    return true;
+  }
+  std::size_t size() const { return head_.load(std::memory_order_acquire) - tail_.load(std::memory_order_acquire); }
+
+ private:
+  std::vector<RingItem> buf_;
+  std::size_t mask_ = 0;
+  alignas(64) std::atomic<std::size_t> head_{0};
+  alignas(64) std::atomic<std::size_t> tail_{0};
+};
+
+/// The node's input samples, pushed by the handlers, pulled by the assembler (kPending when empty,
+/// kEnd once closed and empty). Fixed capacity: the assembler pulls each sample right after its push.
+class PushSource final : public stream::Source {
+ public:
+  void init(std::size_t cap) {
+    buf_.assign(cap, stream::Sample{});
+  }
+  bool push(const stream::Sample& s) {
+    if (n_ == buf_.size()) return false;
+    buf_[(head_ + n_) % buf_.size()] = s;
+    ++n_;
+    return true;
+  }
+  void close() { closed_ = true; }
+  Next next(stream::Sample& out, stream::Reject&) override {
+    if (n_ == 0) return closed_ ? Next::kEnd : Next::kPending;
+    out = buf_[head_];
+    head_ = (head_ + 1) % buf_.size();
+    --n_;
+    return Next::kSample;
+  }
+  const std::string& name() const override { return name_; }
+
+ private:
+  std::vector<stream::Sample> buf_;
+  std::size_t head_ = 0, n_ = 0;
+  bool closed_ = false;
+  std::string name_ = "node";
+};
+
+/// Per channel (a head, the accelerometer, star vectors of a head, the orbit): sequence and time state.
+struct ChannelState {
+  bool have_seq = false;
+  std::int32_t last_seq = 0;
+  std::uint64_t seen = 0;          ///< bit i: number last_seq - i arrived
+  std::array<TimeUs, 8> recent{};  ///< tags accepted lately (duplicates)
+  int n_recent = 0, recent_next = 0;
+  TimeUs bucket = std::numeric_limits<TimeUs>::min();  ///< data second of the flood count
+  int in_bucket = 0;
+  int jump_votes = 0;
+  TimeUs jump_last = 0;
+};
+
+struct Mailbox {
+  std::atomic<int> state{0};  ///< 0 empty, 1 being written, 2 ready
+  std::uint64_t solve_id = 0;
+  bool ok = false;
+  std::array<Quat, kMaxHeads> q_Si_B{};
+  boresight_lcm::calibration_t msg{};
+};
+
+int64_t toI64(std::uint64_t v) { return static_cast<int64_t>(v); }
+
+}  // namespace
+
+struct Node::Impl {
+  NodeConfig cfg;
+  Mode mode = Mode::kLive;
+  Output* out = nullptr;
+  bool configured = false, core_ready = false, finished = false;
+  core::PipelineConfig pcfg;
+  core::Pipeline pipe;
+  std::unique_ptr<stream::EpochAssembler> asm_;
+  PushSource src;
+  std::unique_ptr<core::StarEpoch> stars;
+  core::HeadEpoch epoch{};
+  Counters c;
+  LatencyHistogram lat, lat_heads;  ///< every core step; head epochs only
+  std::uint64_t mounting_version = 0;
+
+  // time state
+  bool have_time = false;
+  TimeUs now = 0;          ///< data time: the latest accepted tag
+  bool emitted = false;    ///< the assembler's late rule, mirrored
+  TimeUs last_emit_t = 0;
+  stream::Sample::Kind last_emit_kind = stream::Sample::Kind::kHead;
+  TimeUs jump_us = 0, lookahead_us = 0;
+
+  std::array<ChannelState, kMaxHeads> ch_head{}, ch_stars{};
+  ChannelState ch_acc{}, ch_stars_seq{}, ch_orbit{};
+
+  // outputs (encode buffers sized once)
+  std::vector<std::uint8_t> enc;
+  std::int32_t seq_att = 0, seq_mon = 0, seq_cal = 0, seq_health = 0;
+  TimeUs next_health = std::numeric_limits<TimeUs>::min();
+  TimeUs last_epoch_t = 0;
+
+  // worker
+  SpscRing ring;
+  std::thread worker;
+  Mailbox mail;
+  std::uint64_t next_solve_id = 1;
+  TimeUs first_head_t = 0, next_cal_t = 0;
+  bool have_first_head = false;
+  std::uint64_t head_epoch_index = 0;
+  // replay lockstep: solve id -> epoch index at which it is applied (FIFO, at most a few)
+  std::array<std::pair<std::uint64_t, std::uint64_t>, 64> due{};
+  int due_head = 0, due_n = 0;
+  std::atomic<std::uint64_t> worker_published{0};
+
+  // ---------------------------------------------------------------------------------------------
+  void reject(Reason r) { ++c.rejected[static_cast<std::size_t>(r)]; }
+
+  /// Sequence gaps are lost messages. A message that arrives late (out of order, within 64 numbers)
+  /// takes back the loss counted for it; a repeat of a number already seen is no loss and no gain.
+  void seqCheck(ChannelState& s, std::int32_t seq) {
+    if (!s.have_seq) {
+      s.have_seq = true;
+      s.last_seq = seq;
+      s.seen = 1;
+      return;
+    }
+    const auto d = static_cast<std::int32_t>(static_cast<std::uint32_t>(seq) - static_cast<std::uint32_t>(s.last_seq));
+    if (d > 0 && d < (1 << 24)) {  // forward: d - 1 numbers have not arrived (yet)
+      c.lost += static_cast<std::uint64_t>(d - 1);
+      s.seen = d < 64 ? (s.seen << d) | 1u : 1u;
+      s.last_seq = seq;
+    } else if (d >= (1 << 24) || d <= -(1 << 24)) {  // a counter reset (sender restart): a new start
+      s.last_seq = seq;
+      s.seen = 1;
+    } else if (d < 0 && d > -64) {  // back: a late arrival of a number counted lost, or a repeat
+      const std::uint64_t bit = std::uint64_t{1} << static_cast<unsigned>(-d);
+      if (!(s.seen & bit)) {
+        s.seen |= bit;
+        if (c.lost > 0) --c.lost;
+      }
+    }
+  }
+
+  /// The time checks every input shares. True: accept (the caller goes on).
+  bool timeCheck(ChannelState& s, TimeUs t, bool head_like) {
+    if (!have_time) {
+      have_time = true;
+      now = t;
+    }
+    if (t > now + jump_us || t < now - jump_us) {
+      // A jump: confirmed when time_jump_confirm messages in a row on this channel agree.
+      if (s.jump_votes > 0 && std::abs(t - s.jump_last) <= jump_us) ++s.jump_votes;
+      else s.jump_votes = 1;
+      s.jump_last = t;
+      if (s.jump_votes < cfg.time_jump_confirm || t < last_emit_t) {
+        reject(Reason::kTimeJump);
+        return false;
+      }
+      ++c.time_resyncs;
+      now = t;
+    }
+    s.jump_votes = 0;
+    for (int i = 0; i < s.n_recent; ++i)
+      if (s.recent[static_cast<std::size_t>(i)] == t) {
+        reject(Reason::kDuplicate);
+        return false;
+      }
+    if (emitted && (t < last_emit_t || (t == last_emit_t && head_like))) {
+      reject(Reason::kLate);
+      return false;
+    }
+    const TimeUs sec = t >= 0 ? t / kUsPerSecond : (t - kUsPerSecond + 1) / kUsPerSecond;
+    if (sec != s.bucket) {
+      s.bucket = sec;
+      s.in_bucket = 0;
+    }
+    return true;
+  }
+  bool floodCheck(ChannelState& s, double max_hz) {
+    if (++s.in_bucket > static_cast<int>(std::ceil(max_hz))) {
+      reject(Reason::kFlood);
+      return false;
+    }
+    return true;
+  }
+  void remember(ChannelState& s, TimeUs t) {
+    s.recent[static_cast<std::size_t>(s.recent_next)] = t;
+    s.recent_next = (s.recent_next + 1) % static_cast<int>(s.recent.size());
+    s.n_recent = std::min(s.n_recent + 1, static_cast<int>(s.recent.size()));
+    now = std::max(now, t);
+  }
+  int slotOf(int head_id) const {
+    for (int k = 0; k < pcfg.heads.n_heads; ++k)
+      if (pcfg.heads.head[static_cast<std::size_t>(k)].id == head_id) return k;
+    return -1;
+  }
+
+  // ---------------------------------------------------------------------------------------------
+  void onHead(const void* data, int size) {
+    boresight_lcm::star_head_sample_t m;
+    if (m.decode(data, 0, size) != size) return reject(Reason::kUndecodable);
+    const int slot = slotOf(m.head_id);
+    if (slot < 0) return reject(Reason::kUnknownHead);
+    ChannelState& s = ch_head[static_cast<std::size_t>(slot)];
+    seqCheck(s, m.seq);
+    if (!core_ready) return reject(Reason::kNoMountings);
+    if (!(m.flags & 1)) return reject(Reason::kInvalidFlag);
+    const Quat q(m.q[0], m.q[1], m.q[2], m.q[3]);
+    if (!q.coeffs().allFinite()) return reject(Reason::kNonFinite);
+    if (std::abs(q.norm() - 1.0) > pcfg.heads.unit_norm_tolerance) return reject(Reason::kNonUnit);
+    if (!timeCheck(s, m.utime, true) || !floodCheck(s, cfg.max_head_rate_hz)) return;
+    stream::Sample x;
+    x.kind = stream::Sample::Kind::kHead;
+    x.t = m.utime;
+    x.head_id = m.head_id;
+    x.q_I_S = q;
+    if (!src.push(x)) return reject(Reason::kAssembler);
+    remember(s, m.utime);
+    ++c.used;
+    drain();
+  }
+
+  void onAccel(const void* data, int size) {
+    boresight_lcm::accel_sample_t m;
+    if (m.decode(data, 0, size) != size) return reject(Reason::kUndecodable);
+    seqCheck(ch_acc, m.seq);
+    if (!core_ready) return reject(Reason::kNoMountings);
+    if (!(m.flags & 1)) return reject(Reason::kInvalidFlag);
+    const Vec3 a(m.ang_accel[0], m.ang_accel[1], m.ang_accel[2]);
+    if (!a.allFinite()) return reject(Reason::kNonFinite);
+    if (!timeCheck(ch_acc, m.utime, false) || !floodCheck(ch_acc, cfg.max_accel_rate_hz)) return;
+    stream::Sample x;
+    x.kind = stream::Sample::Kind::kAccel;
+    x.t = m.utime;
+    x.a_A = a;
+    if (!src.push(x)) return reject(Reason::kAssembler);
+    remember(ch_acc, m.utime);
+    ++c.used;
+    drain();
+  }
+
+  void onStars(const void* data, int size) {
+    boresight_lcm::star_vectors_t m;
+    if (m.decode(data, 0, size) != size || m.n_stars < 0 || m.n_stars > 16) return reject(Reason::kUndecodable);
+    seqCheck(ch_stars_seq, m.seq);
+    const int slot = slotOf(m.head_id);
+    if (slot < 0) return reject(Reason::kUnknownHead);
+    if (!core_ready) return reject(Reason::kNoMountings);
+    if (!(m.flags & 1) || m.n_stars == 0) return reject(Reason::kInvalidFlag);
+    for (int i = 0; i < m.n_stars; ++i) {
+      const Vec3 sv(m.s_head[i][0], m.s_head[i][1], m.s_head[i][2]), r(m.r_inertial[i][0], m.r_inertial[i][1], m.r_inertial[i][2]);
+      if (!sv.allFinite() || !r.allFinite() || !std::isfinite(m.sigma_rad[i])) return reject(Reason::kNonFinite);
+      if (std::abs(sv.norm() - 1) > 1e-6 || std::abs(r.norm() - 1) > 1e-6) return reject(Reason::kNonUnit);
+    }
+    ChannelState& s = ch_stars[static_cast<std::size_t>(slot)];
+    if (!timeCheck(s, m.utime, last_emit_kind == stream::Sample::Kind::kStar) || !floodCheck(s, cfg.max_star_rate_hz)) return;
+    for (int i = 0; i < m.n_stars; ++i) {
+      stream::Sample x;
+      x.kind = stream::Sample::Kind::kStar;
+      x.t = m.utime;
+      x.star.head_id = m.head_id;
+      x.star.s_Sk = Vec3(m.s_head[i][0], m.s_head[i][1], m.s_head[i][2]);
+      x.star.r_I = Vec3(m.r_inertial[i][0], m.r_inertial[i][1], m.r_inertial[i][2]);
+      x.star.sigma_rad = m.sigma_rad[i];
+      if (!src.push(x)) {
+        ++stars_dropped_push;
+        continue;
+      }
+      drain();
+    }
+    remember(s, m.utime);
+    ++c.used;
+  }
+
+  void onMountings(const void* data, int size) {
+    io::NominalMountings m;
+    if (!io::decodeNominalMountings(data, size, m)) return reject(Reason::kUndecodable);
+    if (core_ready) {  // the first one configures the core; later ones are counted, not applied
+      ++c.used;
+      return;
+    }
+    core::PipelineConfig p = pcfg;
+    for (int k = 0; k < p.heads.n_heads; ++k) {
+      auto& h = p.heads.head[static_cast<std::size_t>(k)];
+      int j = 0;
+      while (j < m.n_heads && m.head_id[j] != h.id) ++j;
+      if (j == m.n_heads) return reject(Reason::kUnknownHead);
+      const Quat q(m.q_Si_B[j][0], m.q_Si_B[j][1], m.q_Si_B[j][2], m.q_Si_B[j][3]);
+      if (!q.coeffs().allFinite()) return reject(Reason::kNonFinite);
+      if (std::abs(q.norm() - 1) > 1e-6) return reject(Reason::kNonUnit);
+      h.q_Si_B = q.normalized();
+    }
+    pcfg = p;
+    if (!startCore()) return reject(Reason::kInvalidFlag);
+    ++c.used;
+  }
+
+  void onOrbit(const void* data, int size) {
+    io::OrbitSample o;
+    if (!io::decodeOrbit(data, size, o)) return reject(Reason::kUndecodable);
+    seqCheck(ch_orbit, o.seq);
+    for (int k = 0; k < 3; ++k)
+      if (!std::isfinite(o.r_m[k]) || !std::isfinite(o.v_m_s[k])) return reject(Reason::kNonFinite);
+    ++c.used;  // no consumer in the node yet: accepted and counted
+  }
+
+  // ---------------------------------------------------------------------------------------------
+  bool startCore() {
+    if (pipe.configure(pcfg) != core::Status::kOk) return false;
+    core_ready = true;
+    if (cfg.calibration.enabled) worker = std::thread([this] { workerLoop(); });
+    return true;
+  }
+
+  void pushRing(const RingItem& it) {
+    if (!cfg.calibration.enabled) return;
+    if (!ring.push(it)) {
+      if (mode == Mode::kLive) {
+        ++c.ring_dropped;
+        return;
+      }
+      ++c.ring_waits;  // replay is not real time: wait for the worker (deterministic input)
+      while (!ring.push(it)) std::this_thread::yield();
+    }
+    c.ring_high_water = std::max<std::uint64_t>(c.ring_high_water, ring.size());
+  }
+
+  /// Hands out everything the assembler may give now and steps the core with it.
+  void drain() {
+    for (;;) {
+      TimeUs t = 0;
+      Vec3 a = Vec3::Zero();
+      const auto o = asm_->next(epoch, t, a, stars.get());
+      if (o == stream::EpochAssembler::Out::kPending || o == stream::EpochAssembler::Out::kEnd ||
+          o == stream::EpochAssembler::Out::kError)
+        break;
+      emitted = true;
+      if (o == stream::EpochAssembler::Out::kHeads) {
+        last_emit_t = epoch.t;
+        last_emit_kind = stream::Sample::Kind::kHead;
+        stepHeads();
+      } else if (o == stream::EpochAssembler::Out::kAccel) {
+        last_emit_t = t;
+        last_emit_kind = stream::Sample::Kind::kAccel;
+        const auto t0 = std::chrono::steady_clock::now();
+        pipe.stepAcc(t, a);
+        lat.add(std::chrono::duration<double, std::nano>(std::chrono::steady_clock::now() - t0).count());
+        ++c.accel_steps;
+        RingItem it;
+        it.kind = RingItem::kAcc;
+        it.t = t;
+        it.a_A = a;
+        pushRing(it);
+      } else {
+        last_emit_t = stars->t;
+        last_emit_kind = stream::Sample::Kind::kStar;
+        pipe.stepStars(*stars);
+        ++c.star_epochs;
+      }
+      publishRows();
+    }
+    // Samples the assembler refused (kLate, kTooManyHeads, kTooManyStars): moved from used.
+    const auto& ac = asm_->counters();
+    const std::uint64_t refused = ac.rejected[static_cast<std::size_t>(stream::Reject::kLate)] +
+                                  ac.rejected[static_cast<std::size_t>(stream::Reject::kTooManyHeads)];
+    if (refused > asm_refused) {
+      c.used -= refused - asm_refused;
+      c.rejected[static_cast<std::size_t>(Reason::kAssembler)] += refused - asm_refused;
+      asm_refused = refused;
+    }
+    c.stars_dropped = stars_dropped_push + ac.rejected[static_cast<std::size_t>(stream::Reject::kTooManyStars)];
+  }
+  std::uint64_t asm_refused = 0, stars_dropped_push = 0;
+
+  void stepHeads() {
+    applyMailbox();
+    const auto t0 = std::chrono::steady_clock::now();
+    pipe.stepHeads(epoch);
+    const double ns = std::chrono::duration<double, std::nano>(std::chrono::steady_clock::now() - t0).count();
+    lat.add(ns);
+    lat_heads.add(ns);
+    ++c.head_epochs;
+    ++head_epoch_index;
+    last_epoch_t = epoch.t;
+    RingItem it;
+    it.kind = RingItem::kHeads;
+    it.t = epoch.t;
+    it.heads = epoch;
+    pushRing(it);
+    if (cfg.calibration.enabled) {
+      if (!have_first_head) {
+        have_first_head = true;
+        first_head_t = epoch.t;
+        next_cal_t = epoch.t + static_cast<TimeUs>(cfg.calibration.min_span_s * 1e6);
+      }
+      if (epoch.t >= next_cal_t) {
+        next_cal_t += static_cast<TimeUs>(cfg.calibration.cadence_s * 1e6);
+        RingItem s;
+        s.kind = RingItem::kSolve;
+        s.t = epoch.t;
+        s.solve_id = next_solve_id++;
+        if (mode == Mode::kReplay && due_n < static_cast<int>(due.size())) {
+          due[static_cast<std::size_t>((due_head + due_n) % static_cast<int>(due.size()))] = {
+              s.solve_id, head_epoch_index + static_cast<std::uint64_t>(cfg.calibration.apply_lag_epochs)};
+          ++due_n;
+        }
+        pushRing(s);
+      }
+    }
+    if (epoch.t >= next_health) {
+      if (next_health != std::numeric_limits<TimeUs>::min()) publishHealth(epoch.t);
+      next_health = epoch.t + static_cast<TimeUs>(cfg.health_period_s * 1e6);
+    }
+  }
+
+  /// At a head-epoch boundary: a finished calibration goes to the core. Replay: the one due at this
+  /// epoch is waited for; live: whatever is ready.
+  void applyMailbox() {
+    if (!cfg.calibration.enabled) return;
+    if (mode == Mode::kReplay) {
+      if (due_n == 0 || due[static_cast<std::size_t>(due_head)].second > head_epoch_index) return;
+      while (mail.state.load(std::memory_order_acquire) != 2) std::this_thread::yield();
+      due_head = (due_head + 1) % static_cast<int>(due.size());
+      --due_n;
+    } else if (mail.state.load(std::memory_order_acquire) != 2) {
+      return;
+    }
+    takeMailbox();
+  }
+
+  void takeMailbox() {
+    boresight_lcm::calibration_t& m = mail.msg;
+    m.applied = 0;
+    if (mail.ok && cfg.calibration.apply) {
+      if (pipe.handMountings(mail.q_Si_B) == core::Status::kOk) {
+        m.applied = 1;
+        ++mounting_version;
+        ++c.calibrations_applied;
+        // The common part the datum kept out: the handed rotation minus the correction in use (slot 0).
+        const auto& al = pipe.fusion().relativeAlignment();
+        const Vec3 raw = quatLog(mail.q_Si_B[0].conjugate() * pcfg.heads.head[0].q_Si_B);
+        const Vec3 common = raw - al.c_B[0];
+        for (int k = 0; k < 3; ++k) m.common_rotation_B_arcsec[k] = common[k] / kRadPerArcsec;
+      }
+    }
+    if (!mail.ok) ++c.calibrations_refused;
+    m.seq = seq_cal++;
+    publish(cfg.channels.calibration, m.utime, m);
+    ++c.calibrations_published;
+    mail.state.store(0, std::memory_order_release);
+  }
+
+  template <typename Msg>
+  void publish(const std::string& ch, TimeUs t, const Msg& m) {
+    const int n = m.getEncodedSize();
+    if (n <= 0 || static_cast<std::size_t>(n) > enc.size()) return;
+    if (m.encode(enc.data(), 0, n) != n) return;
+    if (out) out->publish(ch, t, enc.data(), n);
+  }
+
+  void publishRows() {
+    core::PipelineRow row;
+    while (pipe.popRow(row)) {
+      ++c.rows;
+      boresight_lcm::fused_attitude_t a{};
+      a.utime = row.t;
+      a.seq = seq_att++;
+      a.q_I_B[0] = row.q_I_B.w();
+      a.q_I_B[1] = row.q_I_B.x();
+      a.q_I_B[2] = row.q_I_B.y();
+      a.q_I_B[3] = row.q_I_B.z();
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) a.P_B[i][j] = row.P_B(i, j);
+      a.heads_used = static_cast<int8_t>(row.heads_used);
+      a.has_rates = row.has_rates ? 1 : 0;
+      a.has_acc = row.has_acc ? 1 : 0;
+      for (int k = 0; k < 3; ++k) {
+        a.w_B[k] = row.w_B[k];
+        a.alpha_sc_B[k] = row.a_sc_B[k];
+        a.alpha_acc_B[k] = row.a_acc_B[k];
+      }
+      a.mounting_version = static_cast<int32_t>(mounting_version);
+      publish(cfg.channels.attitude, row.t, a);
+      boresight_lcm::boresight_monitor_t mm{};
+      mm.utime = row.t;
+      mm.seq = seq_mon++;
+      mm.n_heads = static_cast<int8_t>(pcfg.heads.n_heads);
+      const auto& al = pipe.fusion().relativeAlignment();
+      for (int k = 0; k < kMaxHeads; ++k) {
+        const bool used = k < pcfg.heads.n_heads;
+        mm.head_id[k] = static_cast<int8_t>(used ? pcfg.heads.head[static_cast<std::size_t>(k)].id : 0);
+        const Quat q = used ? quatExp(al.c_B[static_cast<std::size_t>(k)]) : Quat::Identity();
+        mm.q_corr_B[k][0] = q.w();
+        mm.q_corr_B[k][1] = q.x();
+        mm.q_corr_B[k][2] = q.y();
+        mm.q_corr_B[k][3] = q.z();
+      }
+      for (int p = 0; p < kMaxPairs; ++p) {
+        mm.iba_rad[p] = row.iba_rad[static_cast<std::size_t>(p)];
+        mm.iba_dev_rad[p] = row.iba_dev_rad[static_cast<std::size_t>(p)];
+      }
+      mm.corrections_valid = al.mask != 0 ? 1 : 0;
+      publish(cfg.channels.monitor, row.t, mm);
+    }
+  }
+
+  /// Replay publishes nothing that depends on the wall clock or thread timing (latency, ring fill):
+  /// those are in the summary only, so two replays publish identical payloads.
+  bool wallClockFree() const { return mode == Mode::kReplay; }
+
+  void publishHealth(TimeUs t) {
+    boresight_lcm::node_health_t h{};
+    h.utime = t;
+    h.seq = seq_health++;
+    h.received = toI64(c.received);
+    h.used = toI64(c.used);
+    for (int r = 0; r < kReasonCount; ++r) h.rejected[r] = toI64(c.rejected[static_cast<std::size_t>(r)]);
+    h.lost = toI64(c.lost);
+    h.epochs = toI64(c.head_epochs + c.accel_steps);
+    h.calibrations_published = static_cast<int32_t>(c.calibrations_published);
+    h.ring_high_water = wallClockFree() ? 0 : static_cast<int32_t>(c.ring_high_water);
+    h.ring_dropped = toI64(c.ring_dropped);
+    const LatencySummary l = lat.summary();
+    // Wall-clock figures differ run to run: a replay records them as 0 so its payloads are identical.
+    const bool wall = !wallClockFree();
+    h.step_latency_us[0] = wall ? l.p50_us : 0;
+    h.step_latency_us[1] = wall ? l.p99_us : 0;
+    h.step_latency_us[2] = wall ? l.p999_us : 0;
+    h.step_latency_us[3] = wall ? l.max_us : 0;
+    const core::Health ch = pipe.health();
+    for (int s = 0; s < core::kStatusCount; ++s) h.core_status[s] = toI64(ch.by_status[static_cast<std::size_t>(s)]);
+    publish(cfg.channels.health, t, h);
+  }
+
+  // ---------------------------------------------------------------------------------------------
+  // The worker keeps the span builder fed from the ring; a solve request copies the builder and hands
+  // the copy to the solver thread, so the ring keeps draining while Ceres runs (the real-time thread
+  // then rarely finds the ring full). One job at a time, in request order; both threads are not real
+  // time and may block on each other.
+  struct SolveJob {
+    std::unique_ptr<calib::SpanBuilder> sb;
+    RingItem req;
+  };
+  std::mutex job_m;
+  std::condition_variable job_cv;
+  std::unique_ptr<SolveJob> job;
+  bool job_stop = false;
+
+  void workerLoop() {
+    calib::SpanBuilder sb;
+    calib::SpanOptions so;
+    so.decimation_s = cfg.calibration.decimation_s;
+    so.max_observations = cfg.calibration.max_observations;
+    std::string err;
+    const bool ok = sb.configure(pcfg, so, &err);
+    std::thread solver([this] { solverLoop(); });
+    RingItem it;
+    int idle = 0;
+    for (;;) {
+      if (!ring.pop(it)) {  // nothing to do: yield a while, then sleep (the worker is not real time)
+        if (++idle < 64) std::this_thread::yield();
+        else std::this_thread::sleep_for(std::chrono::microseconds(200));
+        continue;
+      }
+      idle = 0;
+      if (it.kind == RingItem::kStop) break;
+      if (!ok) continue;
+      if (it.kind == RingItem::kHeads) {
+        sb.pushHeads(it.heads);
+      } else if (it.kind == RingItem::kAcc) {
+        sb.pushAcc(it.t, it.a_A);
+      } else {
+        auto j = std::make_unique<SolveJob>();
+        j->sb = std::make_unique<calib::SpanBuilder>(sb);
+        j->req = it;
+        std::unique_lock<std::mutex> lk(job_m);
+        job_cv.wait(lk, [this] { return !job; });
+        job = std::move(j);
+        job_cv.notify_all();
+      }
+    }
+    {
+      std::unique_lock<std::mutex> lk(job_m);
+      job_cv.wait(lk, [this] { return !job; });
+      job_stop = true;
+      job_cv.notify_all();
+    }
+    solver.join();
+    worker_done.store(true, std::memory_order_release);
+  }
+
+  void solverLoop() {
+    for (;;) {
+      std::unique_ptr<SolveJob> j;
+      {
+        std::unique_lock<std::mutex> lk(job_m);
+        job_cv.wait(lk, [this] { return job || job_stop; });
+        if (!job) return;
+        j = std::move(job);
+      }
+      j->sb->finish();
+      calib::SolveOptions opt;
+      opt.threads = 1;
+      const calib::SolveResult r = calib::solve(j->sb->span(), opt);
+      // One slot: wait until the real-time thread has taken the previous result.
+      int expected = 0;
+      while (!mail.state.compare_exchange_weak(expected, 1, std::memory_order_acq_rel)) {
+        expected = 0;
+        std::this_thread::sleep_for(std::chrono::microseconds(100));
+      }
+      fillResult(j->sb->span(), r, j->req);
+      mail.state.store(2, std::memory_order_release);
+      {
+        std::lock_guard<std::mutex> lk(job_m);  // the job slot is free once this one is published
+        job_cv.notify_all();
+      }
+    }
+  }
+
+  void fillResult(const calib::CalibrationSpan& sp, const calib::SolveResult& r, const RingItem& it) {
+    boresight_lcm::calibration_t& m = mail.msg;
+    m = boresight_lcm::calibration_t{};
+    mail.solve_id = it.solve_id;
+    mail.ok = r.ok;
+    m.utime = it.t;
+    m.span_start_utime = sp.t_first;
+    m.span_end_utime = sp.t_last;
+    m.epochs = static_cast<int32_t>(r.epochs);
+    m.status = r.ok ? 0 : 1;
+    m.n_heads = static_cast<int8_t>(pcfg.heads.n_heads);
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    for (int k = 0; k < kMaxHeads; ++k) {
+      const auto u = static_cast<std::size_t>(k);
+      mail.q_Si_B[u] = pcfg.heads.head[u].q_Si_B;
+      if (k >= pcfg.heads.n_heads) continue;
+      m.head_id[k] = static_cast<int8_t>(pcfg.heads.head[u].id);
+      if (!r.ok) continue;
+      mail.q_Si_B[u] = (quatExp(r.estimate.r_S[u]) * pcfg.heads.head[u].q_Si_B).normalized();
+      if (u < r.heads.size()) {
+        const auto& h = r.heads[u];
+        for (int a = 0; a < 3; ++a) {
+          const auto ua = static_cast<std::size_t>(a);
+          m.error_angles_arcsec[k][a] = h.error_angles_arcsec[ua];
+          m.sigma_arcsec[k][a] = h.sigma_arcsec[ua] ? *h.sigma_arcsec[ua] : nan;
+          m.crlb_arcsec[k][a] = h.crlb_arcsec[ua];
+          m.observable[k][a] = h.observable[ua] ? 1 : 0;
+        }
+      }
+    }
+    const std::size_t n3 = static_cast<std::size_t>(3 * pcfg.heads.n_heads);
+    if (r.ok && r.covariance_arcsec2.size() == n3 * n3)
+      for (std::size_t i = 0; i < n3; ++i)
+        for (std::size_t j = 0; j < n3; ++j) m.covariance_arcsec2[i][j] = r.covariance_arcsec2[i * n3 + j];
+    m.residual_rms_radps2 = r.residual_rms_radps2;
+  }
+
+  /// Stops the worker (and its solver). publish: results that arrive meanwhile are published (finish);
+  /// otherwise (destructor) they are discarded.
+  void stopWorker(bool publish) {
+    if (!worker.joinable()) return;
+    auto serveMail = [&] {
+      if (mail.state.load(std::memory_order_acquire) != 2) return;
+      if (publish) takeMailbox();
+      else mail.state.store(0, std::memory_order_release);
+    };
+    RingItem s;
+    s.kind = RingItem::kStop;
+    while (!ring.push(s)) {
+      serveMail();
+      std::this_thread::yield();
+    }
+    while (!worker_done.load(std::memory_order_acquire)) {
+      serveMail();
+      std::this_thread::sleep_for(std::chrono::microseconds(200));
+    }
+    worker.join();
+    serveMail();
+  }
+  std::atomic<bool> worker_done{false};
+};
+
+Node::Node() : impl_(new Impl) {}
+Node::~Node() { impl_->stopWorker(false); }
+
+bool Node::configure(const NodeConfig& cfg, Mode mode, Output* out, std::string* error) {
+  Impl& m = *impl_;
+  if (m.configured) {
+    if (error) *error = "node: configure() twice";
+    return false;
+  }
+  if (cfg.calibration.enabled &&
+      cfg.calibration.apply_lag_epochs / cfg.pipeline.crn_attitude.fs_hz >= cfg.calibration.cadence_s) {
+    if (error) *error = cfg.file + ": calibration.apply_lag_epochs: must be shorter than cadence_s at the head rate";
+    return false;
+  }
+  m.cfg = cfg;
+  m.mode = mode;
+  m.out = out;
+  m.pcfg = cfg.pipeline;
+  stream::AssemblerConfig ac;
+  m.lookahead_us = static_cast<TimeUs>(std::llround(cfg.lookahead_s * 1e6));
+  m.jump_us = static_cast<TimeUs>(std::llround(cfg.max_time_jump_s * 1e6));
+  ac.lookahead_us = m.lookahead_us;
+  ac.max_buffered = 4096;  // the heap's reserve: no allocation while stepping
+  m.asm_ = std::make_unique<stream::EpochAssembler>(ac);
+  m.src.init(256);
+  m.asm_->addSource(&m.src);
+  m.stars = std::make_unique<core::StarEpoch>();
+  m.enc.assign(8192, 0);
+  m.ring.init(cfg.ring_capacity);
+  m.configured = true;
+  if (!cfg.mountings_from_log && !m.startCore()) {
+    if (error) *error = cfg.file + ": the core refuses the platform configuration";
+    return false;
+  }
+  return true;
+}
+
+void Node::onMessage(const std::string& ch, const void* data, int size) {
+  Impl& m = *impl_;
+  if (!m.configured || m.finished) return;
+  ++m.c.received;
+  const Channels& c = m.cfg.channels;
+  if (size < 0) m.reject(Reason::kUndecodable);
+  else if (ch == c.star_head) m.onHead(data, size);
+  else if (ch == c.accel) m.onAccel(data, size);
+  else if (ch == c.star_vectors) m.onStars(data, size);
+  else if (ch == c.mountings) m.onMountings(data, size);
+  else if (ch == c.orbit) m.onOrbit(data, size);
+  else m.reject(Reason::kOtherChannel);
+}
+
+void Node::onGarbage() {
+  Impl& m = *impl_;
+  if (!m.configured || m.finished) return;
+  ++m.c.received;
+  m.reject(Reason::kUndecodable);
+}
+
+void Node::finish() {
+  Impl& m = *impl_;
+  if (!m.configured || m.finished) return;
+  m.finished = true;
+  m.src.close();
+  if (m.core_ready) {
+    m.drain();
+    m.pipe.flush();
+    m.publishRows();
+    // Replay: calibrations still due are applied (published) at the end, in order.
+    if (m.cfg.calibration.enabled && m.mode == Node::Mode::kReplay) {
+      while (m.due_n > 0) {
+        while (m.mail.state.load(std::memory_order_acquire) != 2) std::this_thread::yield();
+        m.due_head = (m.due_head + 1) % static_cast<int>(m.due.size());
+        --m.due_n;
+        m.takeMailbox();
+      }
+    }
+  }
+  m.stopWorker(true);
+  m.publishHealth(m.last_epoch_t);
+}
+
+const Counters& Node::counters() const { return impl_->c; }
+LatencySummary Node::stepLatency() const { return impl_->lat.summary(); }
+LatencySummary Node::headStepLatency() const { return impl_->lat_heads.summary(); }
+core::Health Node::coreHealth() const { return impl_->pipe.health(); }
+const core::Pipeline& Node::pipeline() const { return impl_->pipe; }
+TimeUs Node::dataTime() const { return impl_->now; }
+std::uint64_t Node::mountingVersion() const { return impl_->mounting_version; }
+
+bool replayLog(Node& node, const std::string& path, std::string* error) {
+  io::LcmLogReader r;
+  if (!r.open(path, error)) return false;
+  io::LcmLogReader::RawEvent ev;
+  while (r.nextRaw(ev)) {
+    if (ev.size < 0) node.onGarbage();
+    else node.onMessage(*ev.channel, ev.data, ev.size);
+  }
+  node.finish();
+  return true;
+}
+
+}  // namespace boresight::node

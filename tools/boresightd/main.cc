@@ -1,0 +1,181 @@
+// boresightd: the LCM node. Live on an LCM URL, or replaying a log as fast as possible (lockstep,
+// deterministic). Parses options, runs boresight::node::Node, prints and writes the summary.
+#include <boresight/io/lcm_log.h>
+#include <boresight/node/node.h>
+
+#include <CLI/CLI.hpp>
+#include <lcm/lcm-cpp.hpp>
+#include <nlohmann/json.hpp>
+
+#include <atomic>
+#include <chrono>
+#include <csignal>
+#include <cstdio>
+#include <fstream>
+#include <memory>
+#include <string>
+
+namespace {
+
+std::atomic<bool> g_stop{false};
+extern "C" void onSignal(int) { g_stop.store(true); }
+
+const char* kHelp =
+    "boresightd: the boresight LCM node. Subscribes to the star-sensor head (STAR_HEAD), accelerometer\n"
+    "(ACCEL), star-vector (STAR_VECTORS), nominal-mounting (NOMINAL_MOUNTINGS) and orbit (ORBIT)\n"
+    "channels, steps the real-time core per epoch and publishes the fused attitude\n"
+    "(BORESIGHT_ATTITUDE), the inter-boresight monitor (BORESIGHT_MONITOR), each calibration of the\n"
+    "worker thread (BORESIGHT_CALIBRATION) and its health (BORESIGHT_HEALTH); channel names, rates and the\n"
+    "calibration cadence come from the configuration (config/boresightd.yaml).\n"
+    "\n"
+    "  --replay LOG  reads LOG as fast as possible into the same handlers, deterministically: the worker\n"
+    "                runs in lockstep on data time, so two runs publish identical payloads.\n"
+    "  --record OUT  writes every published message into the LCM log OUT (event time = data time).\n"
+    "  Live (no --replay): lcm::LCM on the configured URL (udpm://239.255.76.67:7667?ttl=0 by default);\n"
+    "  SIGINT / SIGTERM stop it cleanly. Played with `lcm-logplayer` faster than real time, multicast\n"
+    "  loses datagrams in the receive buffer: the `lost` counter (sequence gaps) shows how many.\n"
+    "\n"
+    "Exit status: 0 done, 1 a run-time error (unreadable log, configuration refused), 2 bad options.\n";
+
+class LcmOutput : public boresight::node::Output {
+ public:
+  lcm::LCM* lcm = nullptr;
+  std::unique_ptr<boresight::io::LcmLogWriter> rec;
+  std::uint64_t published = 0;
+  void publish(const std::string& ch, boresight::TimeUs t, const void* data, int size) override {
+    ++published;
+    if (lcm) lcm->publish(ch, data, static_cast<unsigned>(size));
+    if (rec) rec->writeRaw(ch, t, data, size);
+  }
+};
+
+/// Live: the raw bytes of every subscribed message go to the node's handlers (they decode).
+struct RawHandler {
+  boresight::node::Node* n;
+  void onMessage(const lcm::ReceiveBuffer* rbuf, const std::string& ch) {
+    n->onMessage(ch, rbuf->data, static_cast<int>(rbuf->data_size));
+  }
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{kHelp, "boresightd"};
+  std::string config, replay, record, summary_json;
+  app.add_option("--config", config, "node configuration (YAML; names the platform file)")->required();
+  app.add_option("--replay", replay, "replay this LCM log instead of subscribing");
+  app.add_option("--record", record, "write every published message into this LCM log");
+  app.add_option("--summary-json", summary_json, "write the final summary (counters, latency) here");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;
+  }
+  using namespace boresight;
+  node::NodeConfig cfg;
+  std::string err;
+  if (!node::loadNodeConfig(config, cfg, &err)) {
+    std::fprintf(stderr, "boresightd: %s\n", err.c_str());
+    return 1;
+  }
+  LcmOutput out;
+  std::unique_ptr<lcm::LCM> lcm;
+  if (replay.empty()) {
+    lcm = std::make_unique<lcm::LCM>(cfg.lcm_url);
+    if (!lcm->good()) {
+      std::fprintf(stderr, "boresightd: %s: lcm_url: cannot open '%s'\n", config.c_str(), cfg.lcm_url.c_str());
+      return 1;
+    }
+    out.lcm = lcm.get();
+  }
+  if (!record.empty()) {
+    out.rec = std::make_unique<io::LcmLogWriter>();
+    if (!out.rec->open(record, &err)) {
+      std::fprintf(stderr, "boresightd: %s\n", err.c_str());
+      return 1;
+    }
+  }
+  node::Node n;
+  if (!n.configure(cfg, replay.empty() ? node::Node::Mode::kLive : node::Node::Mode::kReplay, &out, &err)) {
+    std::fprintf(stderr, "boresightd: %s\n", err.c_str());
+    return 1;
+  }
+  std::signal(SIGINT, onSignal);
+  std::signal(SIGTERM, onSignal);
+  const auto t0 = std::chrono::steady_clock::now();
+  if (!replay.empty()) {
+    if (!node::replayLog(n, replay, &err)) {
+      std::fprintf(stderr, "boresightd: %s\n", err.c_str());
+      return 1;
+    }
+  } else {
+    RawHandler handler{&n};
+    for (const auto* ch : {&cfg.channels.star_head, &cfg.channels.accel, &cfg.channels.star_vectors,
+                           &cfg.channels.mountings, &cfg.channels.orbit})
+      lcm->subscribe(*ch, &RawHandler::onMessage, &handler);
+    std::fprintf(stderr, "boresightd: listening on %s (Ctrl-C stops)\n", cfg.lcm_url.c_str());
+    while (!g_stop.load()) lcm->handleTimeout(100);
+    n.finish();
+  }
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (out.rec) out.rec->close();
+
+  const node::Counters& c = n.counters();
+  const node::LatencySummary l = n.stepLatency();
+  nlohmann::ordered_json j;
+  j["received"] = c.received;
+  j["used"] = c.used;
+  nlohmann::ordered_json rej = nlohmann::ordered_json::object();
+  for (int r = 0; r < node::kReasonCount; ++r) rej[node::reasonName(node::Reason(r))] = c.rejected[std::size_t(r)];
+  j["rejected"] = rej;
+  j["lost"] = c.lost;
+  j["calibrations_published"] = c.calibrations_published;
+  j["calibrations_applied"] = c.calibrations_applied;
+  j["ring_high_water"] = c.ring_high_water;
+  j["ring_dropped"] = c.ring_dropped;
+  j["ring_waits"] = c.ring_waits;
+  j["step_latency_us"] = {{"p50", l.p50_us}, {"p99", l.p99_us}, {"p99.9", l.p999_us}, {"max", l.max_us}, {"n", l.n}};
+  const node::LatencySummary lh = n.headStepLatency();
+  j["head_step_latency_us"] = {{"p50", lh.p50_us}, {"p99", lh.p99_us}, {"p99.9", lh.p999_us}, {"max", lh.max_us}, {"n", lh.n}};
+  j["wall_s"] = wall;
+  j["messages_per_s"] = wall > 0 ? static_cast<double>(c.received) / wall : 0.0;
+  j["head_epochs"] = c.head_epochs;
+  j["accel_steps"] = c.accel_steps;
+  j["star_epochs"] = c.star_epochs;
+  j["rows"] = c.rows;
+  j["time_resyncs"] = c.time_resyncs;
+  j["stars_dropped"] = c.stars_dropped;
+  j["published"] = out.published;
+  const core::Health h = n.coreHealth();
+  nlohmann::ordered_json ch = nlohmann::ordered_json::object();
+  for (int s = 0; s < core::kStatusCount; ++s)
+    if (h.by_status[std::size_t(s)]) ch[core::statusName(core::Status(s))] = h.by_status[std::size_t(s)];
+  j["core_health"] = ch;
+  const bool balanced = c.received == c.used + c.rejectedTotal();
+  j["accounted"] = balanced;
+  std::printf("boresightd: %llu messages received, %llu used, %llu rejected, %llu lost; %llu head epochs, "
+              "%llu calibrations; %.2f s wall (%.0f messages/s); step latency p50 %.2f us, p99 %.2f us, "
+              "p99.9 %.2f us, max %.1f us (head epochs: p50 %.2f us, p99 %.2f us, p99.9 %.2f us)\n",
+              static_cast<unsigned long long>(c.received), static_cast<unsigned long long>(c.used),
+              static_cast<unsigned long long>(c.rejectedTotal()), static_cast<unsigned long long>(c.lost),
+              static_cast<unsigned long long>(c.head_epochs), static_cast<unsigned long long>(c.calibrations_published),
+              wall, wall > 0 ? static_cast<double>(c.received) / wall : 0.0, l.p50_us, l.p99_us, l.p999_us, l.max_us,
+              n.headStepLatency().p50_us, n.headStepLatency().p99_us, n.headStepLatency().p999_us);
+  for (int r = 0; r < node::kReasonCount; ++r)
+    if (c.rejected[std::size_t(r)])
+      std::printf("  rejected %s: %llu\n", node::reasonName(node::Reason(r)),
+                  static_cast<unsigned long long>(c.rejected[std::size_t(r)]));
+  if (!summary_json.empty()) {
+    std::ofstream f(summary_json);
+    f << j.dump(2) << "\n";
+    if (!f) {
+      std::fprintf(stderr, "boresightd: %s: cannot write the summary\n", summary_json.c_str());
+      return 1;
+    }
+  }
+  if (!balanced) {
+    std::fprintf(stderr, "boresightd: internal error: received != used + rejected\n");
+    return 1;
+  }
+  return 0;
+}
