@@ -168,6 +168,7 @@ json calibrationJson(const calib::SolveResult& r, const CalibrationContext& c) {
                   {"estimate_time_offset", c.options.estimate_time_offset},
                   {"huber_sigma", c.options.huber_sigma},
                   {"whiten", c.options.whiten},
+                  {"from_moments", c.options.from_moments},
                   {"unobservable_sigma_arcsec", c.options.unobservable_sigma_arcsec},
                   {"decimation_s", c.span_options.decimation_s},
                   {"calibration_crn_bandwidth_hz", num(c.span_options.crn_bandwidth_hz > 0 ? c.span_options.crn_bandwidth_hz : NAN)},
@@ -420,7 +421,10 @@ bool writeCalibrationReport(const std::string& dir, const calib::CalibrationSpan
         "Residuals per head axis under the estimate: alpha_S - Exp([r]x) C_S_B(nominal) C_B_A K^-1 "
         "(alpha_A + tau jerk_A - bias), K = I + scale + non-orthogonality (what was not estimated is zero).\n\n"
         "![excitation](excitation.svg)\n\n"
-        "![estimates](estimates.svg)\n\n"
+     << (span.obs.empty() ? "(No epochs were kept (constant-memory moments): the residual and excitation plots are "
+                            "empty.)\n\n"
+                          : "")
+     << "![estimates](estimates.svg)\n\n"
         "Estimates with their reported sigma (left bar) and the Cramer-Rao bound (right bar); an axis "
         "without a bar is not determined.\n\n";
   md << "## Inputs\n\n";

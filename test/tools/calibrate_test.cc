@@ -230,6 +230,27 @@ TEST(Calibrate, ACalibrationCrnStillAgreesWithTheTruth) {
   EXPECT_EQ(run("calibrate --config " + kConfig + " " + level1() + " --crn-bandwidth 0.05 --json " + out + "/x.json").status, 1);
 }
 
+TEST(Calibrate, TheConstantMemoryMomentsAgreeWithTheTruthAndTheKeptEpochs) {
+  // --moments: only each head's 10x10 moments are kept (no robust loss): on this clean span the same
+  // estimate as from the kept epochs within a fraction of a sigma, and the truth within 3 sigma.
+  const std::string out = testutil::makeTempDir("calibrate_moments");
+  const CliRun m = run("calibrate --config " + kConfig + " " + level1() + " --moments --json " + out + "/m.json --report " +
+                       out + "/rep");
+  ASSERT_EQ(m.status, 0) << m.out;
+  ASSERT_EQ(run("calibrate --config " + kConfig + " " + level1() + " --json " + out + "/o.json").status, 0);
+  const auto jm = readJson(out + "/m.json"), jo = readJson(out + "/o.json");
+  EXPECT_EQ(jm["options"]["from_moments"], true);
+  const auto truth = expectedAngles(sim().dir + "/truth.yaml");
+  for (std::size_t k = 0; k < 3; ++k)
+    for (int a = 0; a < 3; ++a) {
+      const double em = jm["heads"][k]["error_angles_arcsec"][a], eo = jo["heads"][k]["error_angles_arcsec"][a];
+      const double sm = jm["heads"][k]["sigma_arcsec"][a];
+      EXPECT_LT(std::abs(em - truth.at(jm["heads"][k]["id"].get<int>())[a]), 3.0 * sm);
+      EXPECT_LT(std::abs(em - eo), 0.5 * sm) << k << " " << a;
+    }
+  EXPECT_NE(testutil::slurp(out + "/rep/report.md").find("No epochs were kept"), std::string::npos);
+}
+
 TEST(Calibrate, HardConstraintAndPriorAgreeAndTheLcmLogGivesTheLevel1Result) {
   const std::string out = testutil::makeTempDir("calibrate_variants");
   ASSERT_EQ(run("calibrate --config " + kConfig + " " + level1() + " --json " + out + "/hard.json").status, 0);

@@ -31,7 +31,7 @@ const char* kUsage =
     "usage: boresight calibrate --config FILE INPUT... --json FILE [--yaml FILE] [--report DIR]\n"
     "                           [--relative hard|prior] [--no-acc-bias] [--acc-scale] [--acc-nonorthogonality]\n"
     "                           [--time-offset] [--huber S] [--no-whiten] [--decimation S] [--max-observations N]\n"
-    "                           [--crn-bandwidth HZ --crn-length S]\n"
+    "                           [--crn-bandwidth HZ --crn-length S] [--moments]\n"
     "                           [--unobservable-sigma ARCSEC] [--plan-excitation RADPS2] [--plan-sigma ARCSEC]\n"
     "                           [--lookahead S] [--strict]\n"
     "\n"
@@ -69,6 +69,9 @@ const char* kUsage =
     "                           with the CRN noise correlation; without it the sigmas are optimistic)\n"
     "  --decimation S           one observation per S seconds (default 10: the CRN correlation length)\n"
     "  --max-observations N     keep at most N observations (0: no limit)\n"
+    "  --moments                constant memory: keep only each head's sufficient statistics (10x10 moments of\n"
+    "                           the whitened epochs), not the epochs; the solver then has no robust loss and\n"
+    "                           no outlier rounds, and the report has no residual or excitation plot\n"
     "  --crn-bandwidth HZ, --crn-length S\n"
     "                           a calibration CRN for the heads and the accelerometer instead of the\n"
     "                           platform's (e.g. 0.05 Hz, 100 s: the acceleration noise grows as B^5 while\n"
@@ -163,7 +166,7 @@ int runCalibrate(int argc, char** argv) {
   CLI::App app{"boresight calibrate"};
   std::string config, json_path, yaml_path, report_dir, relative = "hard";
   std::vector<std::string> files;
-  bool no_whiten = false, no_bias = false, acc_scale = false, acc_nonorth = false, time_offset = false, strict = false;
+  bool moments = false, no_whiten = false, no_bias = false, acc_scale = false, acc_nonorth = false, time_offset = false, strict = false;
   double huber = 5.0, decimation = 10.0, unobs = 3600.0, lookahead_s = 2.0, plan_exc = 4.9e-5, plan_sigma = 30.0;
   std::size_t max_obs = 0;
   double crn_bw = 0.0, crn_len = 0.0;
@@ -177,6 +180,7 @@ int runCalibrate(int argc, char** argv) {
   app.add_flag("--acc-nonorthogonality", acc_nonorth);
   app.add_flag("--time-offset", time_offset);
   app.add_flag("--no-whiten", no_whiten);
+  app.add_flag("--moments", moments);
   app.add_option("--huber", huber)->check(CLI::Range(0.0, 1e6));
   app.add_option("--decimation", decimation)->check(CLI::Range(0.1, 3600.0));
   app.add_option("--max-observations", max_obs);
@@ -198,6 +202,7 @@ int runCalibrate(int argc, char** argv) {
   so.estimate_time_offset = time_offset;
   so.huber_sigma = huber;
   so.whiten = !no_whiten;
+  so.from_moments = moments;
   so.unobservable_sigma_arcsec = unobs;
 
   Stages stages;
@@ -235,6 +240,7 @@ int runCalibrate(int argc, char** argv) {
   if ((crn_bw > 0) != (crn_len > 0)) return fail("--crn-bandwidth and --crn-length go together");
   spo.crn_bandwidth_hz = crn_bw;
   spo.crn_length_s = crn_len;
+  spo.keep_observations = !moments;
   if (!builder.configure(pc.pipeline, spo, &err)) return fail(err);
   // The thermal harmonic fit of the heads' relative deformation needs the argument of latitude: only
   // with an orbit among the inputs.
@@ -269,7 +275,7 @@ int runCalibrate(int argc, char** argv) {
   const double span_s = toSeconds(engine.lastEpoch() - engine.firstEpoch());
   std::printf("span: %.1f s of head data, %llu head epochs, %llu accelerometer samples -> %zu observations\n",
               span_s, static_cast<unsigned long long>(span.head_epochs),
-              static_cast<unsigned long long>(span.acc_samples), span.obs.size());
+              static_cast<unsigned long long>(span.acc_samples), static_cast<std::size_t>(span.epochs_total));
 
   // What a refused span would need: the CRN's length, and the bound's span at the planning excitation
   // (and, when the span has observations, at its own weakest-axis excitation).
@@ -293,7 +299,7 @@ int runCalibrate(int argc, char** argv) {
   const std::string crn_need = "the CRN gives an angular acceleration only with Tf = " + fmt("%.1f", need.crn_s) +
                                " s of head and accelerometer data centred on it";
   const std::string plan_need = needText(plan_exc, "--plan-excitation");
-  if (span.obs.empty())
+  if (span.epochs_total == 0)
     return fail("refused: the span is too short (" + fmt("%.1f", span_s) +
                 " s of head data, no CRN angular acceleration in it).\nNeeded: " + crn_need + "; " + plan_need +
                 " of excited data.");
@@ -303,11 +309,15 @@ int runCalibrate(int argc, char** argv) {
   if (!r.ok) {
     // This span's own excitation: RMS about the mean of the accelerometer's angular acceleration in B,
     // weakest axis.
-    Vec3 mean = Vec3::Zero(), sq = Vec3::Zero();
-    for (const auto& ob : span.obs) mean += span.C_B_A * ob.alpha_A;
-    mean /= double(span.obs.size());
-    for (const auto& ob : span.obs) sq += (span.C_B_A * ob.alpha_A - mean).cwiseAbs2();
-    const double weakest = std::sqrt(sq.minCoeff() / double(span.obs.size()));
+    // (From the accelerometer moments, which every span keeps: sum of (alpha_A, 1)(alpha_A, 1)^T.)
+    const double n = span.acc_moments(3, 3);
+    double weakest = 0.0;
+    if (n > 0) {
+      const Vec3 mean_A = span.acc_moments.block<3, 1>(0, 3) / n;
+      const Mat3 cov_A = span.acc_moments.block<3, 3>(0, 0) / n - mean_A * mean_A.transpose();
+      const Mat3 cov_B = span.C_B_A * cov_A * span.C_B_A.transpose();
+      weakest = std::sqrt(std::max(0.0, cov_B.diagonal().minCoeff()));
+    }
     // What the bound needs is said for the refusals about the data's length or excitation (the solver's
     // "too few epochs" and "too quiet"); other refusals (a head never seen with the others, ...) carry
     // their own remedy.
