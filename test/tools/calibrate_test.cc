@@ -240,6 +240,7 @@ TEST(Calibrate, TheConstantMemoryMomentsAgreeWithTheTruthAndTheKeptEpochs) {
   ASSERT_EQ(run("calibrate --config " + kConfig + " " + level1() + " --json " + out + "/o.json").status, 0);
   const auto jm = readJson(out + "/m.json"), jo = readJson(out + "/o.json");
   EXPECT_EQ(jm["options"]["from_moments"], true);
+  EXPECT_EQ(jm["epochs"], jo["epochs"]);
   const auto truth = expectedAngles(sim().dir + "/truth.yaml");
   for (std::size_t k = 0; k < 3; ++k)
     for (int a = 0; a < 3; ++a) {

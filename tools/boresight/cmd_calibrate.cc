@@ -306,6 +306,8 @@ int runCalibrate(int argc, char** argv) {
 
   calib::SolveResult r = calib::solve(span, so);
   stages.mark("solve");
+  // From the moments the solver reports no epochs (it counts kept observations): the span made them.
+  if (r.ok && r.epochs == 0) r.epochs = static_cast<std::size_t>(span.epochs_total);
   if (!r.ok) {
     // This span's own excitation: RMS about the mean of the accelerometer's angular acceleration in B,
     // weakest axis.
