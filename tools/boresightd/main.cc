@@ -131,6 +131,11 @@ int main(int argc, char** argv) {
   j["lost"] = c.lost;
   j["calibrations_published"] = c.calibrations_published;
   j["calibrations_applied"] = c.calibrations_applied;
+  j["frame_changes"] = c.frame_changes;  // calibration.apply_common_rotation: published in the accelerometer datum
+  {
+    const Quat qf = n.frameRotation();
+    j["frame_rotation_q_B_Bpub"] = {qf.w(), qf.x(), qf.y(), qf.z()};
+  }
   j["ring_high_water"] = c.ring_high_water;
   j["ring_dropped"] = c.ring_dropped;
   j["ring_waits"] = c.ring_waits;
