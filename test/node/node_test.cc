@@ -603,6 +603,67 @@ TEST(NodeReplay, CommonRotationIsAppliedOnlyWhenConfiguredAsOneLoggedFrameChange
   EXPECT_EQ(cal_off[0].error_angles_arcsec[0][0], cal[0].error_angles_arcsec[0][0]);
 }
 
+#ifdef BORESIGHTD
+// The command line the demo uses: replay, record, summary JSON with the last calibration, CSV.
+TEST(Boresightd, ReplayWritesSummaryWithTheLastCalibrationAndACsvPerAttitude) {
+  const std::string log = simulate("cli", 1200, {}, nullptr, "config/sim_gracefo_node_demo.yaml");
+  const std::string dir = makeTempDir("node_cli");
+  {
+    std::ifstream in(src("config/boresightd.yaml"));
+    std::ofstream o(dir + "/node.yaml");
+    std::string line;
+    while (std::getline(in, line)) {
+      if (line.rfind("platform:", 0) == 0) line = "platform: " + src("config/gracefo.yaml");
+      if (line.find("apply_common_rotation:") != std::string::npos) line = "  apply_common_rotation: true";
+      if (line.find("cadence_s:") != std::string::npos) line = "  cadence_s: 3600";
+      if (line.find("min_span_s:") != std::string::npos) line = "  min_span_s: 840";
+      if (line.find("apply_lag_epochs:") != std::string::npos) line = "  apply_lag_epochs: 20";
+      o << line << "\n";
+    }
+  }
+  const std::string args = "--config " + dir + "/node.yaml --replay " + log + " --summary-json " + dir + "/s.json --csv " +
+                           dir + "/n.csv --record " + dir + "/out.lcm";
+  const auto r = testutil::runProgram(BORESIGHTD, args);
+  ASSERT_EQ(r.status, 0) << r.out;
+  EXPECT_NE(r.out.find("boresightd: frame change 1:"), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find("frame change 2"), std::string::npos) << r.out;
+  std::ifstream js(dir + "/s.json");
+  std::stringstream ss;
+  ss << js.rdbuf();
+  const std::string j = ss.str();
+  for (const char* key : {"\"frame_changes\": 1", "\"last_calibration\"", "\"status\": \"ok\"", "\"applied\": true",
+                          "\"sigma_arcsec\"", "\"crlb_arcsec\"", "\"common_rotation_B_arcsec\"", "\"id\": 3"})
+    EXPECT_NE(j.find(key), std::string::npos) << key << " not in\n" << j;
+  // One CSV row per published attitude: 2 Hz over 1200 s, and the mounting version steps 0 -> 1 once.
+  std::ifstream csv(dir + "/n.csv");
+  std::string line;
+  ASSERT_TRUE(std::getline(csv, line));
+  EXPECT_EQ(line.rfind("time_s,mounting_version,heads_used,iba_12_dev_arcsec", 0), 0u) << line;
+  int rows = 0, steps = 0, last_version = 0;
+  double corr_after = 0;
+  while (std::getline(csv, line)) {
+    ++rows;
+    std::stringstream ls(line);
+    std::string cell;
+    std::vector<double> v;
+    while (std::getline(ls, cell, ',')) v.push_back(std::stod(cell));
+    ASSERT_EQ(v.size(), 9u) << line;
+    if (static_cast<int>(v[1]) != last_version) ++steps;
+    last_version = static_cast<int>(v[1]);
+    corr_after = v[6] + v[7] + v[8];
+  }
+  EXPECT_GT(rows, 2300);
+  EXPECT_LE(rows, 2401);
+  EXPECT_EQ(steps, 1);
+  EXPECT_GT(corr_after, 10.0);  // the relative corrections in use after the hand-over (arcsec)
+  // An unwritable CSV is a clear error before anything runs.
+  const auto bad = testutil::runProgram(BORESIGHTD, "--config " + dir + "/node.yaml --replay " + log + " --csv " + dir +
+                                                        "/no/such/dir/n.csv");
+  EXPECT_EQ(bad.status, 1);
+  EXPECT_NE(bad.out.find("cannot write the CSV"), std::string::npos) << bad.out;
+}
+#endif
+
 /// Digits two numbers share (15 when equal).
 double matchingDigits(double a, double b) {
   if (a == b || (std::isnan(a) && std::isnan(b))) return 15;
