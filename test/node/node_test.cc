@@ -640,7 +640,8 @@ TEST(Boresightd, ReplayWritesSummaryWithTheLastCalibrationAndACsvPerAttitude) {
   std::string line;
   ASSERT_TRUE(std::getline(csv, line));
   EXPECT_EQ(line.rfind("time_s,mounting_version,heads_used,iba_12_dev_arcsec", 0), 0u) << line;
-  int rows = 0, steps = 0, last_version = 0;
+  int rows = 0, steps = 0, last_version = 0, three_heads = 0;
+  double iba23 = 0;
   double corr_after = 0;
   while (std::getline(csv, line)) {
     ++rows;
@@ -652,11 +653,15 @@ TEST(Boresightd, ReplayWritesSummaryWithTheLastCalibrationAndACsvPerAttitude) {
     if (static_cast<int>(v[1]) != last_version) ++steps;
     last_version = static_cast<int>(v[1]);
     corr_after = v[6] + v[7] + v[8];
+    if (v[2] == 3) ++three_heads, iba23 += std::abs(v[5]);
   }
   EXPECT_GT(rows, 1150);
   EXPECT_LE(rows, 1201);
   EXPECT_EQ(steps, 1);
   EXPECT_GT(corr_after, 10.0);  // the relative corrections in use after the hand-over (arcsec)
+  // Every pair column is a real pair (the 2-3 deviation is not an unused slot's zero).
+  ASSERT_GT(three_heads, 100);
+  EXPECT_GT(iba23 / three_heads, 0.1);
   // An unwritable CSV is a clear error before anything runs.
   const auto bad = testutil::runProgram(BORESIGHTD, "--config " + dir + "/node.yaml --replay " + log + " --csv " + dir +
                                                         "/no/such/dir/n.csv");

@@ -19,6 +19,7 @@
 #include <fstream>
 #include <memory>
 #include <string>
+#include <utility>
 
 namespace {
 
@@ -70,7 +71,9 @@ class LcmOutput : public boresight::node::Output {
       boresight_lcm::boresight_monitor_t m;
       if (m.decode(data, 0, size) != size || m.utime != last_att.utime) return;
       std::fprintf(csv, "%.3f,%d,%d", static_cast<double>(m.utime) * 1e-6, last_att.mounting_version, last_att.heads_used);
-      for (int p = 0; p < 3; ++p) std::fprintf(csv, ",%.3f", m.iba_dev_rad[p] * boresight::kArcsecPerRad);
+      // pairs of the first three head slots (1-2, 1-3, 2-3), indexed as the core does
+      for (const auto& ab : {std::pair{0, 1}, std::pair{0, 2}, std::pair{1, 2}})
+        std::fprintf(csv, ",%.3f", m.iba_dev_rad[boresight::core::pairIndex(ab.first, ab.second)] * boresight::kArcsecPerRad);
       for (int k = 0; k < 3; ++k) {
         const boresight::Quat q(m.q_corr_B[k][0], m.q_corr_B[k][1], m.q_corr_B[k][2], m.q_corr_B[k][3]);
         const double w = std::min(1.0, std::abs(q.w()));
