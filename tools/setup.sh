@@ -10,7 +10,7 @@ pkgs=(
   liblcm-dev liblcm-bin libglib2.0-dev
   libgtest-dev libgmock-dev googletest libbenchmark-dev
   libcli11-dev nlohmann-json3-dev
-  python3 time
+  python3 python3-yaml time
 )
 if [[ "${1:-}" == "--fuzz" ]]; then
   pkgs+=(clang libclang-rt-14-dev)

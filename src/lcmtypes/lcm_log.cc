@@ -41,6 +41,7 @@ bool writeMsg(lcm::LogFile& log, const char* channel, std::int64_t utime, const 
 struct LcmLogWriter::Impl {
   std::unique_ptr<lcm::LogFile> log;
   std::vector<char> buf;
+  lcm::LogEvent raw{};  ///< writeRaw's event: its channel keeps its capacity (no allocation per event)
 };
 
 LcmLogWriter::LcmLogWriter() : impl_(new Impl) {}
@@ -165,10 +166,10 @@ bool LcmLogWriter::write(const OrbitSample& s) {
 
 bool LcmLogWriter::writeRaw(const std::string& channel, TimeUs utime, const void* data, int size) {
   if (!impl_->log || size < 0) return false;
-  lcm::LogEvent ev;
+  lcm::LogEvent& ev = impl_->raw;
   ev.eventnum = 0;
   ev.timestamp = utime + kUnixUsOfGraceEpoch;
-  ev.channel = channel;
+  ev.channel.assign(channel);  // reuses the capacity of the longest channel name so far
   ev.datalen = size;
   ev.data = const_cast<void*>(data);
   const bool ok = impl_->log->writeEvent(&ev) == 0;

@@ -143,9 +143,10 @@ bool loadNodeConfig(const std::string& path, NodeConfig& out, std::string* error
     const YAML::Node c = top["calibration"];
     CalibrationConfig& k = out.calibration;
     if (!r.keys(c, "calibration", {"enabled", "cadence_s", "min_span_s", "apply_lag_epochs", "decimation_s",
-                                    "max_observations", "apply"}))
+                                    "max_observations", "apply", "apply_common_rotation"}))
       return done(false);
     if (!r.boolean(c, "enabled", "calibration.enabled", k.enabled) || !r.boolean(c, "apply", "calibration.apply", k.apply) ||
+        !r.boolean(c, "apply_common_rotation", "calibration.apply_common_rotation", k.apply_common_rotation) ||
         !r.num(c, "cadence_s", "calibration.cadence_s", k.cadence_s, 60, 1e8) ||
         !r.num(c, "min_span_s", "calibration.min_span_s", k.min_span_s, 60, 1e8) ||
         !r.num(c, "decimation_s", "calibration.decimation_s", k.decimation_s, 0.5, 3600))

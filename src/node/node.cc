@@ -20,6 +20,7 @@
 #include <condition_variable>
 #include <mutex>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <thread>
 #include <vector>
@@ -194,6 +195,9 @@ struct Node::Impl {
   Counters c;
   LatencyHistogram lat, lat_heads;  ///< every core step; head epochs only
   std::uint64_t mounting_version = 0;
+  /// Rows from this time on were computed with mounting_version (rows still pending in the core at a
+  /// hand-over were computed with the one before).
+  TimeUs mounting_from_t = std::numeric_limits<TimeUs>::min();
 
   // time state
   bool have_time = false;
@@ -224,6 +228,33 @@ struct Node::Impl {
   std::array<std::pair<std::uint64_t, std::uint64_t>, 64> due{};
   int due_head = 0, due_n = 0;
   std::atomic<std::uint64_t> worker_published{0};
+
+  // frame change (calibration.apply_common_rotation): rows with t >= frame_from_t are published
+  // rotated by q_frame (q_B_Bpub), older ones by q_frame_old. The real-time thread only fills a slot of
+  // flog; the worker thread (or finish(), after it) writes the stderr line.
+  Quat q_frame = Quat::Identity(), q_frame_old = Quat::Identity();
+  TimeUs frame_from_t = std::numeric_limits<TimeUs>::min();
+  struct FrameLog {
+    TimeUs from_t = 0, cal_t = 0;
+    Vec3 common_arcsec = Vec3::Zero();
+  };
+  std::array<FrameLog, 16> flog{};
+  std::atomic<std::uint64_t> flog_n{0};
+  std::uint64_t flog_printed = 0;  ///< the worker's, then finish()'s (after the join)
+
+  void printFrameChanges() {
+    const std::uint64_t n = flog_n.load(std::memory_order_acquire);
+    for (; flog_printed < n; ++flog_printed) {
+      const FrameLog& e = flog[flog_printed % flog.size()];
+      std::fprintf(stderr,
+                   "boresightd: frame change %llu: from data time %lld us the published attitude is in the "
+                   "accelerometer-datum frame (calibration of %lld us; common rotation %.2f %.2f %.2f arcsec, "
+                   "%.1f arcsec)\n",
+                   static_cast<unsigned long long>(flog_printed + 1), static_cast<long long>(e.from_t),
+                   static_cast<long long>(e.cal_t), e.common_arcsec[0], e.common_arcsec[1], e.common_arcsec[2],
+                   e.common_arcsec.norm());
+    }
+  }
 
   // ---------------------------------------------------------------------------------------------
   void reject(Reason r) { ++c.rejected[static_cast<std::size_t>(r)]; }
@@ -538,22 +569,38 @@ struct Node::Impl {
     } else if (mail.state.load(std::memory_order_acquire) != 2) {
       return;
     }
-    takeMailbox();
+    takeMailbox(epoch.t);
   }
 
-  void takeMailbox() {
+  /// from_t: the first row time the new mountings (and a frame change) apply to.
+  void takeMailbox(TimeUs from_t) {
     boresight_lcm::calibration_t& m = mail.msg;
     m.applied = 0;
     if (mail.ok && cfg.calibration.apply) {
       if (pipe.handMountings(mail.q_Si_B) == core::Status::kOk) {
         m.applied = 1;
         ++mounting_version;
+        mounting_from_t = from_t;
         ++c.calibrations_applied;
         // The common part the datum kept out: the handed rotation minus the correction in use (slot 0).
         const auto& al = pipe.fusion().relativeAlignment();
         const Vec3 raw = quatLog(mail.q_Si_B[0].conjugate() * pcfg.heads.head[0].q_Si_B);
         const Vec3 common = raw - al.c_B[0];
         for (int k = 0; k < 3; ++k) m.common_rotation_B_arcsec[k] = common[k] / kRadPerArcsec;
+        // The fused attitude now is C_I_B' Exp(common) to first order (B': the accelerometer datum
+        // the solver's mountings refer to), so C_I_B' = C_I_Bpub Exp(-common).
+        if (cfg.calibration.apply_common_rotation && common.allFinite()) {
+          q_frame_old = q_frame;
+          q_frame = quatExp(-common).normalized();
+          frame_from_t = from_t;
+          const std::uint64_t n = flog_n.load(std::memory_order_relaxed);
+          FrameLog& e = flog[n % flog.size()];
+          e.from_t = from_t;
+          e.cal_t = m.utime;
+          e.common_arcsec = common / kRadPerArcsec;
+          flog_n.store(n + 1, std::memory_order_release);
+          ++c.frame_changes;
+        }
       }
     }
     if (!mail.ok) ++c.calibrations_refused;
@@ -578,6 +625,14 @@ struct Node::Impl {
       boresight_lcm::fused_attitude_t a{};
       a.utime = row.t;
       a.seq = seq_att++;
+      if (c.frame_changes > 0) {  // the frame change: q_I_B' = q_I_B q_B_B', vectors and P into B'
+        const Quat& qf = row.t >= frame_from_t ? q_frame : q_frame_old;
+        const Mat3 R = qf.conjugate().toRotationMatrix();  // C_B'_B
+        row.q_I_B = (row.q_I_B * qf).normalized();
+        row.P_B = R * row.P_B * R.transpose();
+        row.w_B = R * row.w_B;
+        row.a_sc_B = R * row.a_sc_B;  // a_acc_B is already in B' (the configured C_B_A defines it)
+      }
       a.q_I_B[0] = row.q_I_B.w();
       a.q_I_B[1] = row.q_I_B.x();
       a.q_I_B[2] = row.q_I_B.y();
@@ -592,7 +647,8 @@ struct Node::Impl {
         a.alpha_sc_B[k] = row.a_sc_B[k];
         a.alpha_acc_B[k] = row.a_acc_B[k];
       }
-      a.mounting_version = static_cast<int32_t>(mounting_version);
+      a.mounting_version = static_cast<int32_t>(
+          mounting_version > 0 && row.t < mounting_from_t ? mounting_version - 1 : mounting_version);
       publish(cfg.channels.attitude, row.t, a);
       boresight_lcm::boresight_monitor_t mm{};
       mm.utime = row.t;
@@ -671,6 +727,7 @@ struct Node::Impl {
     int idle = 0;
     for (;;) {
       if (!ring.pop(it)) {  // nothing to do: yield a while, then sleep (the worker is not real time)
+        printFrameChanges();
         if (++idle < 64) std::this_thread::yield();
         else std::this_thread::sleep_for(std::chrono::microseconds(200));
         continue;
@@ -773,7 +830,7 @@ struct Node::Impl {
     if (!worker.joinable()) return;
     auto serveMail = [&] {
       if (mail.state.load(std::memory_order_acquire) != 2) return;
-      if (publish) takeMailbox();
+      if (publish) takeMailbox(last_epoch_t + 1);
       else mail.state.store(0, std::memory_order_release);
     };
     RingItem s;
@@ -865,11 +922,12 @@ void Node::finish() {
         while (m.mail.state.load(std::memory_order_acquire) != 2) std::this_thread::yield();
         m.due_head = (m.due_head + 1) % static_cast<int>(m.due.size());
         --m.due_n;
-        m.takeMailbox();
+        m.takeMailbox(m.last_epoch_t + 1);
       }
     }
   }
   m.stopWorker(true);
+  m.printFrameChanges();  // the worker has joined: what it has not written yet
   m.publishHealth(m.last_epoch_t);
 }
 
@@ -880,6 +938,7 @@ core::Health Node::coreHealth() const { return impl_->pipe.health(); }
 const core::Pipeline& Node::pipeline() const { return impl_->pipe; }
 TimeUs Node::dataTime() const { return impl_->now; }
 std::uint64_t Node::mountingVersion() const { return impl_->mounting_version; }
+Quat Node::frameRotation() const { return impl_->q_frame; }
 
 bool replayLog(Node& node, const std::string& path, std::string* error) {
   io::LcmLogReader r;

@@ -7,13 +7,19 @@
 #include <lcm/lcm-cpp.hpp>
 #include <nlohmann/json.hpp>
 
+#include "boresight_lcm/boresight_monitor_t.hpp"
+#include "boresight_lcm/calibration_t.hpp"
+#include "boresight_lcm/fused_attitude_t.hpp"
+
 #include <atomic>
 #include <chrono>
 #include <csignal>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <memory>
 #include <string>
+#include <utility>
 
 namespace {
 
@@ -31,6 +37,11 @@ const char* kHelp =
     "  --replay LOG  reads LOG as fast as possible into the same handlers, deterministically: the worker\n"
     "                runs in lockstep on data time, so two runs publish identical payloads.\n"
     "  --record OUT  writes every published message into the LCM log OUT (event time = data time).\n"
+    "  --csv FILE    one row per published attitude: data time, mounting version, heads used, the\n"
+    "                inter-boresight deviations and the head corrections in use (arcsec), for\n"
+    "                `boresight plot` (meant for replays: live, it is written on the real-time thread).\n"
+    "  --summary-json FILE  the final summary: counters, rejected per reason, lost, latency, ring,\n"
+    "                frame changes and the last published calibration (angles, sigma, CRLB).\n"
     "  Live (no --replay): lcm::LCM on the configured URL (udpm://239.255.76.67:7667?ttl=0 by default);\n"
     "  SIGINT / SIGTERM stop it cleanly. Played with `lcm-logplayer` faster than real time, multicast\n"
     "  loses datagrams in the receive buffer: the `lost` counter (sequence gaps) shows how many.\n"
@@ -42,10 +53,35 @@ class LcmOutput : public boresight::node::Output {
   lcm::LCM* lcm = nullptr;
   std::unique_ptr<boresight::io::LcmLogWriter> rec;
   std::uint64_t published = 0;
+  const boresight::node::Channels* channels = nullptr;
+  std::FILE* csv = nullptr;
+  boresight_lcm::fused_attitude_t last_att{};
+  bool have_cal = false;
+  boresight_lcm::calibration_t last_cal{};
   void publish(const std::string& ch, boresight::TimeUs t, const void* data, int size) override {
     ++published;
     if (lcm) lcm->publish(ch, data, static_cast<unsigned>(size));
     if (rec) rec->writeRaw(ch, t, data, size);
+    if (!channels) return;
+    if (ch == channels->calibration) {
+      have_cal = last_cal.decode(data, 0, size) == size;
+    } else if (csv && ch == channels->attitude) {
+      if (last_att.decode(data, 0, size) != size) last_att = boresight_lcm::fused_attitude_t{};
+    } else if (csv && ch == channels->monitor) {
+      boresight_lcm::boresight_monitor_t m;
+      if (m.decode(data, 0, size) != size || m.utime != last_att.utime) return;
+      std::fprintf(csv, "%.3f,%d,%d", static_cast<double>(m.utime) * 1e-6, last_att.mounting_version, last_att.heads_used);
+      // pairs of the first three head slots (1-2, 1-3, 2-3), indexed as the core does
+      for (const auto& ab : {std::pair{0, 1}, std::pair{0, 2}, std::pair{1, 2}})
+        std::fprintf(csv, ",%.3f", m.iba_dev_rad[boresight::core::pairIndex(ab.first, ab.second)] * boresight::kArcsecPerRad);
+      for (int k = 0; k < 3; ++k) {
+        const boresight::Quat q(m.q_corr_B[k][0], m.q_corr_B[k][1], m.q_corr_B[k][2], m.q_corr_B[k][3]);
+        const double w = std::min(1.0, std::abs(q.w()));
+        const double angle = 2 * std::acos(w) * boresight::kArcsecPerRad;
+        std::fprintf(csv, ",%.3f", angle);
+      }
+      std::fputc('\n', csv);
+    }
   }
 };
 
@@ -61,11 +97,12 @@ struct RawHandler {
 
 int main(int argc, char** argv) {
   CLI::App app{kHelp, "boresightd"};
-  std::string config, replay, record, summary_json;
+  std::string config, replay, record, summary_json, csv;
   app.add_option("--config", config, "node configuration (YAML; names the platform file)")->required();
   app.add_option("--replay", replay, "replay this LCM log instead of subscribing");
   app.add_option("--record", record, "write every published message into this LCM log");
-  app.add_option("--summary-json", summary_json, "write the final summary (counters, latency) here");
+  app.add_option("--summary-json", summary_json, "write the final summary (counters, latency, last calibration) here");
+  app.add_option("--csv", csv, "write one row per published attitude (IBA deviations, corrections) here");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -95,6 +132,16 @@ int main(int argc, char** argv) {
       return 1;
     }
   }
+  out.channels = &cfg.channels;
+  if (!csv.empty()) {
+    out.csv = std::fopen(csv.c_str(), "w");
+    if (!out.csv) {
+      std::fprintf(stderr, "boresightd: %s: cannot write the CSV\n", csv.c_str());
+      return 1;
+    }
+    std::fprintf(out.csv, "time_s,mounting_version,heads_used,iba_12_dev_arcsec,iba_13_dev_arcsec,iba_23_dev_arcsec,"
+                          "corr_1_arcsec,corr_2_arcsec,corr_3_arcsec\n");
+  }
   node::Node n;
   if (!n.configure(cfg, replay.empty() ? node::Node::Mode::kLive : node::Node::Mode::kReplay, &out, &err)) {
     std::fprintf(stderr, "boresightd: %s\n", err.c_str());
@@ -119,6 +166,10 @@ int main(int argc, char** argv) {
   }
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (out.rec) out.rec->close();
+  if (out.csv && std::fclose(out.csv) != 0) {
+    std::fprintf(stderr, "boresightd: %s: cannot write the CSV\n", csv.c_str());
+    return 1;
+  }
 
   const node::Counters& c = n.counters();
   const node::LatencySummary l = n.stepLatency();
@@ -131,6 +182,38 @@ int main(int argc, char** argv) {
   j["lost"] = c.lost;
   j["calibrations_published"] = c.calibrations_published;
   j["calibrations_applied"] = c.calibrations_applied;
+  j["frame_changes"] = c.frame_changes;
+  if (out.have_cal) {  // the last published calibration (arcsec; sigma null where not determined)
+    const auto& k = out.last_cal;
+    nlohmann::ordered_json lc;
+    lc["utime"] = k.utime;
+    lc["span_s"] = static_cast<double>(k.span_end_utime - k.span_start_utime) * 1e-6;
+    lc["epochs"] = k.epochs;
+    lc["status"] = k.status == 0 ? "ok" : "refused";
+    lc["applied"] = k.applied != 0;
+    nlohmann::ordered_json heads = nlohmann::ordered_json::array();
+    for (int h = 0; h < k.n_heads && h < 4; ++h) {
+      nlohmann::ordered_json x;
+      x["id"] = k.head_id[h];
+      for (const char* key : {"error_angles_arcsec", "sigma_arcsec", "crlb_arcsec"}) {
+        const auto& v = std::string(key) == "error_angles_arcsec" ? k.error_angles_arcsec[h]
+                        : std::string(key) == "sigma_arcsec"      ? k.sigma_arcsec[h]
+                                                                  : k.crlb_arcsec[h];
+        nlohmann::ordered_json a = nlohmann::ordered_json::array();
+        for (int i = 0; i < 3; ++i) a.push_back(std::isfinite(v[i]) ? nlohmann::ordered_json(v[i]) : nlohmann::ordered_json());
+        x[key] = a;
+      }
+      x["observable"] = {k.observable[h][0] != 0, k.observable[h][1] != 0, k.observable[h][2] != 0};
+      heads.push_back(x);
+    }
+    lc["heads"] = heads;
+    lc["common_rotation_B_arcsec"] = {k.common_rotation_B_arcsec[0], k.common_rotation_B_arcsec[1], k.common_rotation_B_arcsec[2]};
+    j["last_calibration"] = lc;
+  }  // calibration.apply_common_rotation: published in the accelerometer datum
+  {
+    const Quat qf = n.frameRotation();
+    j["frame_rotation_q_B_Bpub"] = {qf.w(), qf.x(), qf.y(), qf.z()};
+  }
   j["ring_high_water"] = c.ring_high_water;
   j["ring_dropped"] = c.ring_dropped;
   j["ring_waits"] = c.ring_waits;

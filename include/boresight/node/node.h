@@ -15,7 +15,9 @@
 // The real-time thread takes it at a head-epoch boundary and hands the mountings to the core
 // (Pipeline::handMountings keeps the datum: only the relative, head-to-head part changes the fusion,
 // so the published attitude does not jump; the common rotation to the accelerometer frame is
-// published in the calibration message, never applied).
+// published in the calibration message, and applied to the published attitude only when
+// calibration.apply_common_rotation says so: a frame change, counted (frame_changes) and logged on
+// stderr by the worker thread, never by the real-time one).
 //   Live: ring full -> the item is dropped and counted (ring_dropped); a result is applied at the first
 //   epoch after it is ready; the real-time thread never waits.
 //   Replay (lockstep): a full ring makes the reader wait (it is not real time), and a calibration
@@ -74,6 +76,11 @@ struct CalibrationConfig {
   double decimation_s = 10.0;       ///< calib::SpanOptions::decimation_s, s
   std::size_t max_observations = 0; ///< 0: the whole run (memory: ~0.5 kB per observation)
   bool apply = true;                ///< hand the relative part back to the core
+  /// Frame change: the published attitude (and its covariance, rate, accelerations) is rotated into
+  /// the accelerometer-datum frame with the common rotation of each applied calibration (from the
+  /// head epoch at which it is applied on). Off: the published attitude keeps its frame (the heads'
+  /// datum) and the common rotation is only published in calibration_t.
+  bool apply_common_rotation = false;
 };
 
 struct NodeConfig {
@@ -117,6 +124,7 @@ struct Counters {
   std::uint64_t ring_high_water = 0, ring_dropped = 0, ring_waits = 0;
   std::uint64_t stars_dropped = 0;  ///< star vectors (not messages) the assembler refused
   std::uint64_t time_resyncs = 0;
+  std::uint64_t frame_changes = 0;  ///< common rotations applied to the published attitude
   std::uint64_t rejectedTotal() const {
     std::uint64_t n = 0;
     for (auto v : rejected) n += v;
@@ -150,6 +158,8 @@ class Node {
   const core::Pipeline& pipeline() const;
   TimeUs dataTime() const;
   std::uint64_t mountingVersion() const;
+  /// The rotation applied to the published attitude (q_B_Bpub: identity until a frame change).
+  Quat frameRotation() const;
 
  private:
   struct Impl;
