@@ -148,7 +148,7 @@ TEST(Scenario, CalibrationDayIsAnOverlayOfTheBase) {
   ASSERT_TRUE(sim::loadScenario(kConfigDir + "/sim_gracefo_calibration.yaml", cal, &err)) << err;
   // what the overlay changes
   EXPECT_EQ(base.attitude.manoeuvres.size(), 0u);
-  EXPECT_EQ(cal.attitude.manoeuvres.size(), 3u);
+  EXPECT_EQ(cal.attitude.manoeuvres.size(), 12u);
   EXPECT_EQ(base.effects.size(), 0u);
   EXPECT_EQ(cal.effects.size(), 6u);
   // what it keeps

@@ -149,6 +149,28 @@ TEST(Calibrate, SimulatedSpanAgreesWithTheTruthWithinTheReportedSigmas) {
     EXPECT_NE(testutil::slurp(out + "/rep/" + f).find("</svg>"), std::string::npos) << f;
 }
 
+TEST(Calibrate, ShortScenarioInjectsAtLeastFiveTimesTheBoundItReports) {
+  // The rule for a committed calibration scenario: every injected head angle (the truth in the
+  // accelerometer datum) is at least 5 times the Cramer-Rao bound calibrate reports for that axis, so
+  // that a run that finds them tests the solver and not the prior of zero.
+  const std::string out = testutil::makeTempDir("calibrate_rule");
+  const CliRun r = run("calibrate --config " + kConfig + " " + level1() + " --time-offset --json " + out + "/r.json");
+  ASSERT_EQ(r.status, 0) << r.out;
+  const auto j = readJson(out + "/r.json");
+  const auto truth = expectedAngles(sim().dir + "/truth.yaml");
+  ASSERT_EQ(j["heads"].size(), 3u);
+  for (const auto& h : j["heads"]) {
+    const Vec3 t = truth.at(h["id"].get<int>());
+    for (int a = 0; a < 3; ++a) {
+      ASSERT_TRUE(h["crlb_arcsec"][a].is_number()) << h.dump();
+      const double crlb = h["crlb_arcsec"][a];
+      EXPECT_GT(crlb, 0.0);
+      EXPECT_GE(std::abs(t[a]), 5.0 * crlb) << "head " << h["id"] << " axis " << a << ": injected " << t[a]
+                                            << "\" vs CRLB " << crlb << "\"";
+    }
+  }
+}
+
 /// sqrt(sum over axes of cos^2 + sin^2) of harmonic index k, and the largest sigma among those terms.
 std::pair<double, double> harmonicNorm(const nlohmann::json& head, std::size_t k) {
   double s = 0, sg = 0;
