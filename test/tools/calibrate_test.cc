@@ -115,7 +115,7 @@ TEST(Calibrate, SimulatedSpanAgreesWithTheTruthWithinTheReportedSigmas) {
       ASSERT_TRUE(h["observable"][a].get<bool>()) << h.dump();
       const double est = h["error_angles_arcsec"][a], sg = h["sigma_arcsec"][a], crlb = h["crlb_arcsec"][a];
       // The excitation determines every axis to tens of arcsec; the truth is hundreds of arcsec away
-      // from zero (the accelerometer's 250-680" misalignment is a common rotation of all heads).
+      // from zero (the accelerometer's 150-750" misalignment is a common rotation of all heads).
       EXPECT_LT(sg, 60.0);
       EXPECT_LT(sg, 1.5 * crlb);
       EXPECT_LT(std::abs(est - t[a]), 3.0 * sg) << "head " << h["id"] << " axis " << a << ": " << est << " vs "
