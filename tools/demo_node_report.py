@@ -1,10 +1,11 @@
 #!/usr/bin/env python3
-"""The end-to-end demo's comparison: boresightd's last published calibration (--summary-json) against
-the simulator's truth (truth.yaml), and the node's health summary.
+"""The demo's comparison with the simulator's truth (truth.yaml): boresightd's last published
+calibration (its --summary-json) and the node's health summary, or the result of `boresight calibrate`
+(its --json).
 
 The truth is mapped to the accelerometer datum the solver uses (as src/calib/DESIGN.md says):
 Exp([r]x) = C_S_B(true) C_B_A(true) C_B_A(nominal)^T C_S_B(nominal)^T, r in arc seconds.
-Usage: demo_node_report.py SUMMARY.json truth.yaml    (exit status 1 on unreadable input)
+Usage: demo_node_report.py SUMMARY_OR_CALIBRATION.json truth.yaml    (exit status 1 on unreadable input)
 """
 import json
 import math
@@ -54,17 +55,21 @@ def main():
     for h in truth["heads"]:
         e = mul(mul(mul(quat_matrix(h["q_Si_B_true"]), at), tr(an)), tr(quat_matrix(h["q_Si_B_nominal"])))
         expected[h["id"]] = [x * ARCSEC for x in so3_log(e)]
-    cal = summary.get("last_calibration")
-    if not cal:
-        sys.exit("demo_node_report.py: %s: the node published no calibration" % sys.argv[1])
-    print("Last published calibration: %s, %s, span %.1f h, %d epochs (arcsec, head frame)"
-          % (cal["status"], "applied" if cal["applied"] else "not applied", cal["span_s"] / 3600, cal["epochs"]))
+    node = "received" in summary
+    cal = summary.get("last_calibration") if node else summary
+    if not cal or "heads" not in cal:
+        sys.exit("demo_node_report.py: %s: no calibration in it" % sys.argv[1])
+    if node:
+        print("Last published calibration: %s, %s, span %.1f h, %d epochs (arcsec, head frame)"
+              % (cal["status"], "applied" if cal["applied"] else "not applied", cal["span_s"] / 3600, cal["epochs"]))
+    else:
+        print("boresight calibrate: span %.1f h, %d epochs (arcsec, head frame)" % (cal["span_s"] / 3600, cal["epochs"]))
     print("%4s %4s %10s %10s %9s %8s %7s" % ("head", "axis", "estimate", "truth", "est-true", "sigma", "/sigma"))
     chi2, n = 0.0, 0
     for h in cal["heads"]:
         t = expected[h["id"]]
         for a in range(3):
-            est, sg = h["error_angles_arcsec"][a], h["sigma_arcsec"][a]
+            est, sg = h["error_angles_arcsec"][a], h["sigma_arcsec"][a]  # sigma null: not determined
             d = est - t[a]
             ratio = d / sg if sg else float("nan")
             if sg:
@@ -73,6 +78,8 @@ def main():
             print("%4d %4s %10.1f %10.1f %9.1f %8.1f %7.2f" % (h["id"], "xyz"[a], est, t[a], d, sg or float("nan"), ratio))
     print("chi-square of the %d components against the reported sigmas: %.1f (correlated components: a common"
           " rotation dominates)" % (n, chi2))
+    if not node:
+        return
     print("common rotation handed to the published attitude (B, arcsec): %s; frame changes: %d"
           % (" ".join("%.1f" % x for x in cal["common_rotation_B_arcsec"]), summary.get("frame_changes", 0)))
     rej = summary["rejected"]

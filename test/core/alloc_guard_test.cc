@@ -15,8 +15,13 @@
 #include <memory>
 #include <new>
 
+// The sanitizers own malloc: GCC says so with __SANITIZE_*__, clang with __has_feature.
 #if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
 #define BORESIGHT_NO_MALLOC_INTERPOSE 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer)
+#define BORESIGHT_NO_MALLOC_INTERPOSE 1
+#endif
 #endif
 
 namespace {
