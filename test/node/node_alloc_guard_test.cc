@@ -29,82 +29,7 @@
 #include <thread>
 #include <vector>
 
-// The sanitizers own malloc: GCC says so with __SANITIZE_*__, clang with __has_feature.
-#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
-#define BORESIGHT_NO_MALLOC_INTERPOSE 1
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer)
-#define BORESIGHT_NO_MALLOC_INTERPOSE 1
-#endif
-#endif
-
-namespace {
-std::atomic<bool> g_armed{false};
-std::atomic<long> g_allocs{0};
-thread_local bool t_counting = false;  // read only while g_armed (long after the thread's TLS exists)
-inline void note() {
-  if (g_armed.load(std::memory_order_relaxed) && t_counting) g_allocs.fetch_add(1, std::memory_order_relaxed);
-}
-}  // namespace
-
-#ifndef BORESIGHT_NO_MALLOC_INTERPOSE
-extern "C" {
-void* __libc_malloc(std::size_t);
-void* __libc_calloc(std::size_t, std::size_t);
-void* __libc_realloc(void*, std::size_t);
-void* __libc_memalign(std::size_t, std::size_t);
-void __libc_free(void*);
-void* malloc(std::size_t n) {
-  note();
-  return __libc_malloc(n);
-}
-void* calloc(std::size_t n, std::size_t s) {
-  note();
-  return __libc_calloc(n, s);
-}
-void* realloc(void* p, std::size_t n) {
-  note();
-  return __libc_realloc(p, n);
-}
-void* aligned_alloc(std::size_t a, std::size_t n) {
-  note();
-  return __libc_memalign(a, n);
-}
-int posix_memalign(void** p, std::size_t a, std::size_t n) {
-  note();
-  *p = __libc_memalign(a, n);
-  return *p ? 0 : 12;
-}
-void free(void* p) { __libc_free(p); }
-}
-#endif
-
-#if defined(__GNUC__) && !defined(__clang__)
-#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
-#endif
-
-void* operator new(std::size_t n) {
-  note();
-  if (void* p = std::malloc(n ? n : 1)) return p;
-  throw std::bad_alloc();
-}
-void* operator new[](std::size_t n) { return operator new(n); }
-void* operator new(std::size_t n, std::align_val_t a) {
-  note();
-  void* p = nullptr;
-  if (posix_memalign(&p, static_cast<std::size_t>(a) < sizeof(void*) ? sizeof(void*) : static_cast<std::size_t>(a), n ? n : 1) != 0)
-    throw std::bad_alloc();
-  return p;
-}
-void* operator new[](std::size_t n, std::align_val_t a) { return operator new(n, a); }
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete[](void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
-void operator delete(void* p, std::align_val_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::align_val_t) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
+#include "alloc_interpose.h"
 
 namespace boresight {
 namespace {
@@ -112,17 +37,9 @@ namespace {
 /// Counts allocations made by this thread while alive.
 class Count {
  public:
-  Count() {
-    t_counting = true;
-    g_allocs = 0;
-    g_armed = true;
-  }
+  Count() { allocguard::arm(/*this_thread_only=*/true); }
   ~Count() { stop(); }
-  long stop() {
-    g_armed = false;
-    t_counting = false;
-    return g_allocs.load();
-  }
+  long stop() { return allocguard::disarm(); }
 };
 
 std::string src(const std::string& rel) { return std::string(BORESIGHT_SOURCE_DIR) + "/" + rel; }
@@ -260,9 +177,9 @@ TEST(NodeAllocGuard, LiveHandlerAllocatesNothingAndLcmTransportIsMeasured) {
     long handler_allocs = 0;
     std::uint64_t calls = 0;
     void onMessage(const lcm::ReceiveBuffer* rb, const std::string& ch) {
-      const long before = g_allocs.load();
+      const long before = allocguard::count();
       n->onMessage(ch, rb->data, static_cast<int>(rb->data_size));
-      handler_allocs += g_allocs.load() - before;
+      handler_allocs += allocguard::count() - before;
       ++calls;
     }
   } h{&n};
