@@ -23,6 +23,14 @@ inline std::string slurp(const std::string& path) {
   return s;
 }
 
+/// Writes BYTES to PATH (binary-safe, replacing it); false when the file cannot be written whole.
+inline bool writeFile(const std::string& path, const std::string& bytes) {
+  std::FILE* f = std::fopen(path.c_str(), "wb");
+  if (!f) return false;
+  const bool ok = std::fwrite(bytes.data(), 1, bytes.size(), f) == bytes.size();
+  return std::fclose(f) == 0 && ok;
+}
+
 /// A new directory under the test's temporary directory, named PREFIX_XXXXXX.
 inline std::string makeTempDir(const std::string& prefix) {
   std::string tmpl = ::testing::TempDir() + prefix + "_XXXXXX";

@@ -24,10 +24,7 @@ namespace {
 std::string tempDir() { return testutil::makeTempDir("boresight_streamio"); }
 
 void writeFile(const std::string& path, const std::string& text) {
-  std::FILE* f = std::fopen(path.c_str(), "wb");
-  ASSERT_NE(f, nullptr);
-  std::fwrite(text.data(), 1, text.size(), f);
-  std::fclose(f);
+  ASSERT_TRUE(testutil::writeFile(path, text)) << path;
 }
 
 /// An ACC1A text of n records with malformed, blank and long lines sprinkled in (and optionally a

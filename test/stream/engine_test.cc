@@ -673,10 +673,7 @@ TEST(StreamEngine, DamagedLcmLogCountsWhatItCannotRead) {
   damaged.resize(damaged.size() - 20);  // cut the last event
   const std::string d = tempDir();
   const std::string path = d + "/damaged.log";
-  std::FILE* f = std::fopen(path.c_str(), "wb");
-  ASSERT_NE(f, nullptr);
-  std::fwrite(damaged.data(), 1, damaged.size(), f);
-  std::fclose(f);
+  ASSERT_TRUE(testutil::writeFile(path, damaged)) << path;
   const auto cfg = pipelineConfig(readSca(span().sca));
   EngineRun clean = runEngine({}, {}, {span().lcm}, cfg);
   EngineRun r = runEngine({}, {}, {path}, cfg);
@@ -737,10 +734,7 @@ TEST(StreamEngine, AnLcmEventWithADamagedLengthCostsOnlyThatEvent) {
   damaged[e1 + 24] = '\x03';  // data length (big-endian int32 at byte 24 of the event header)
   const std::string d = tempDir();
   const std::string path = d + "/bad_length.log";
-  std::FILE* f = std::fopen(path.c_str(), "wb");
-  ASSERT_NE(f, nullptr);
-  std::fwrite(damaged.data(), 1, damaged.size(), f);
-  std::fclose(f);
+  ASSERT_TRUE(testutil::writeFile(path, damaged)) << path;
   const auto cfg = pipelineConfig(readSca(span().sca));
   EngineRun clean = runEngine({}, {}, {span().lcm}, cfg);
   EngineRun r = runEngine({}, {}, {path}, cfg);
