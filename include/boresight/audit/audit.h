@@ -1,0 +1,197 @@
+// The model audit (METHODS 4): given measured data and the configured model, show what the model gets
+// wrong, name the cause from the effect catalogue (model/effects.h), extend the model with it and
+// measure the gain on data not used to fit.
+//
+// Data flow (bounded memory):
+//   sources -> stream::Engine -> core::Pipeline -> rows ------------------\
+//                     \-> InputObserver (validated head epochs, acc) -----> Collector (time bins)
+//   orbit samples (GNI1B/GNV1B, simulator) and an outside reference (SCA1B) ---/
+//   Collector -> analyse() -> AuditResult -> writeAuditJson / writeAuditReport
+//
+// The Collector reduces every input to sufficient statistics in time bins. A bin starts at the head
+// sample period and doubles (adjacent bins merge exactly) whenever the span would need more than
+// AuditOptions::max_bins, so a 16 s excerpt is analysed sample by sample and a day in bins of a few
+// seconds, in the same memory.
+//
+// Residual families (what the model is compared with):
+//   relative    pair residuals rho_ij = Log(C_B_Sj C_Sj_I C_I_Si C_Si_B) in B, nominal mountings from the
+//               configuration (QSA1B): rho_ij ~= phi_j - phi_i for head rotations phi (B components)
+//   noise       per head and head axis (x, y cross-boresight; z about the boresight) the sample noise
+//               level from first differences of the pair residuals, heads separated by the three-
+//               cornered hat (three or more heads)
+//   angular_acceleration   a_acc_B - a_sc_B (the core's rows: the same CRN on both), rad/s^2
+//   reference   rotation from the outside reference (SCA1B) to the fused attitude, B, arcsec
+//   data        sample-level events: gaps, dropouts, sign flips, outliers, time-tag irregularities
+//
+// Statistics: every candidate (effect, sensor) is a linear(ised) model extension of a family. Its
+// statistic is the F statistic of adding it (residual variance estimated from the data, degrees of
+// freedom reduced by the residuals' autocorrelation), threshold and p-value at a family-wise false-alarm
+// rate over every candidate tested (Bonferroni). Causes are named by forward selection (the most
+// significant candidate given those already named, until none passes); two candidates that each pass
+// alone but not given the other are reported as ambiguous, with what data would separate them.
+#pragma once
+
+#include <boresight/core/conventions.h>
+#include <boresight/core/pipeline.h>
+#include <boresight/model/effects.h>
+#include <boresight/model/orbit_context.h>
+#include <boresight/stream/sinks.h>
+
+#include <array>
+#include <limits>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace boresight::audit {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+struct AuditOptions {
+  double false_alarm = 0.01;  ///< family-wise false-alarm probability over the whole catalogue
+  int max_bins = 16384;       ///< time bins kept; the bin length doubles when the span needs more
+  /// Held-out data: the span is cut into 2 * holdout_blocks blocks; odd blocks are not used to fit and
+  /// measure the gain.
+  int holdout_blocks = 4;
+  /// Largest thermal harmonic tested (cycles per revolution); needs an orbit context.
+  int max_harmonic = 2;
+  /// Outlier threshold on a sample's whitened pair residual (chi-square, 3 dof) is set from the
+  /// false-alarm rate and the number of samples; this is the smallest allowed (sigma units).
+  double outlier_min_sigma = 6.0;
+};
+
+/// One parameter of an estimated effect, in the unit of the catalogue.
+struct ParamValue {
+  std::string key;  ///< catalogue key, e.g. "x_arcsec", "offset_ms"
+  std::string unit;
+  double value = kNaN;
+  double sigma = kNaN;  ///< 1-sigma from the fit (NaN when not available)
+  double truth = kNaN;  ///< from --truth, when given
+};
+
+/// The test of one candidate effect against the baseline.
+struct EffectTest {
+  std::string name;    ///< canonical catalogue name (model::effectCatalogue())
+  std::string sensor;  ///< "1", "2", ..., "all", "acc", "reference"
+  std::string family;  ///< residual family that carries the evidence
+  double statistic = kNaN;  ///< F statistic of adding the effect to the baseline (or the test's own, see note)
+  double threshold = kNaN;  ///< the statistic's value at the family-wise false-alarm rate
+  double p_value = kNaN;    ///< per-test p-value (compare with false_alarm / tests)
+  int dof = 0;              ///< parameters the effect adds
+  bool detected = false;    ///< statistic > threshold
+  bool named = false;       ///< kept by forward selection (a named cause)
+  std::vector<ParamValue> params;  ///< estimate with 1-sigma, catalogue units
+  std::string note;         ///< how the statistic was formed, when not the F test
+};
+
+/// A group of causes the data cannot tell apart.
+struct Ambiguity {
+  std::vector<std::string> causes;  ///< "name[sensor]"
+  std::string separate_by;          ///< what data would separate them
+  double correlation = kNaN;        ///< |correlation| of their fitted signatures
+};
+
+struct NotExplained {
+  std::string family;
+  std::string what;  ///< e.g. "relative pair 1-2 axis y: residual line at 3 cycles/rev"
+  double statistic = kNaN;
+  double threshold = kNaN;
+};
+
+/// Before/after the extension, for one residual family.
+struct Gain {
+  std::string family;
+  std::string unit;
+  double rms_before = kNaN, rms_after = kNaN;  ///< on the fitting data
+  double heldout_rms_before = kNaN, heldout_rms_after = kNaN;
+  double whiteness_before = kNaN, whiteness_after = kNaN;  ///< lag-1 autocorrelation of the residuals
+  double delta_bic = kNaN;  ///< BIC(extended) - BIC(baseline) on the held-out data; negative: better
+};
+
+/// A residual series for the report (bin means), one per family component.
+struct Series {
+  std::string family, label, unit;  ///< e.g. "relative", "pair 1-2 x_B", "arcsec"
+  std::vector<double> t_s;          ///< seconds since the first epoch
+  std::vector<double> before, after;
+};
+
+/// Amplitude spectrum of a series (Lomb-Scargle on the bin means), frequency in cycles per revolution
+/// when an orbit context exists, else in mHz (see `unit`).
+struct Spectrum {
+  std::string family, label, unit;
+  std::vector<double> freq, before, after;
+};
+
+/// A parameter compared with the truth (given --truth).
+struct TruthCompare {
+  std::string effect, sensor, key, unit;
+  double truth = kNaN, before = kNaN, after = kNaN;  ///< before: baseline value (0 when absent)
+};
+
+struct Baseline {
+  std::string description;
+  double span_s = 0;
+  double bin_s = 0;
+  std::uint64_t head_epochs = 0, acc_samples = 0, reference_samples = 0, orbit_samples = 0;
+  std::vector<std::string> families;  ///< families with data
+  std::vector<std::string> missing;   ///< families without (and why), e.g. "angular_acceleration: span 16 s < CRN 70.7 s"
+  std::map<std::string, double> values;  ///< model parameters used (sigma_cross_arcsec, ...)
+};
+
+struct AuditResult {
+  Baseline baseline;
+  std::vector<EffectTest> effects;      ///< every candidate tested
+  int tests = 0;                        ///< number of tests (Bonferroni divisor)
+  std::vector<EffectTest> named;        ///< the named causes, in the order selected
+  std::vector<NotExplained> not_explained;
+  std::vector<Ambiguity> ambiguous;
+  std::vector<EffectTest> extended;     ///< the extended model's effects re-estimated together
+  Gain gain;                            ///< the family with the largest gain
+  std::vector<Gain> gains;              ///< every family
+  std::vector<TruthCompare> truth;
+  std::vector<Series> series;
+  std::vector<Spectrum> spectra;
+  std::vector<std::string> findings;    ///< one plain sentence per finding (printed by the command)
+  /// canonical names of the named causes (deduplicated), e.g. {"relative_misalignment", "acc_bias"}
+  std::vector<std::string> namedCauseNames() const;
+};
+
+class Collector final : public stream::InputObserver, public stream::RowSink {
+ public:
+  Collector();
+  ~Collector() override;
+  Collector(const Collector&) = delete;
+  Collector& operator=(const Collector&) = delete;
+  /// The configuration the core runs (heads, nominal mountings, noise model, C_B_A, CRNs).
+  bool configure(const core::PipelineConfig& cfg, const AuditOptions& opt, std::string* error);
+  // stream::InputObserver: validated head epochs and accelerometer samples, in time order.
+  void onHeads(const core::HeadEpoch& e, core::Status core_status) override;
+  void onAcc(TimeUs t, const Vec3& a_A, core::Status core_status) override;
+  void onEnd() override;
+  // stream::RowSink: the core's rows (fused attitude, rates, angular accelerations).
+  bool write(const core::PipelineRow& row) override;
+  /// Orbit context (GNI1B / GNV1B / simulator), any order; kept decimated to one per 10 s.
+  void addOrbit(const model::OrbitSample& o);
+  /// Outside reference attitude q_I_B (SCA1B), time order.
+  void addReference(TimeUs t, const Quat& q_I_B);
+  /// A sample the sources reported missing or rejected, for the data family (optional).
+  void noteRejected(TimeUs t, int head_id);
+
+  struct Impl;
+  const Impl& impl() const { return *impl_; }
+
+ private:
+  std::unique_ptr<Impl> impl_;
+};
+
+/// Truth for the parameter comparison (a simulation's truth.yaml).
+struct Truth {
+  std::vector<model::EffectSpec> effects;
+  std::map<int, Vec3> mounting_error_rad;  ///< per head id, in the head frame
+};
+
+/// Runs the tests, selection, extension and gain. `truth` may be null.
+AuditResult analyse(const Collector& c, const AuditOptions& opt, const Truth* truth = nullptr);
+
+}  // namespace boresight::audit
