@@ -3,9 +3,9 @@
 // measure the gain on data not used to fit.
 //
 // Data flow (bounded memory):
-//   sources -> stream::Engine -> core::Pipeline -> rows ------------------\
-//                     \-> InputObserver (validated head epochs, acc) -----> Collector (time bins)
-//   orbit samples (GNI1B/GNV1B, simulator) and an outside reference (SCA1B) ---/
+//   sources -> stream::Engine -> core::Pipeline -> rows ---------------> Collector (time bins)
+//              stream::Engine -> InputObserver (validated head epochs, acc) -> Collector
+//   orbit samples (GNI1B/GNV1B, simulator), outside reference (SCA1B) ---> Collector
 //   Collector -> analyse() -> AuditResult -> writeAuditJson / writeAuditReport
 //
 // The Collector reduces every input to sufficient statistics in time bins. A bin starts at the head
