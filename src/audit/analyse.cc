@@ -663,6 +663,14 @@ void Analyser::buildAcc() {
       nn += 1;
     }
   const Vec3 var = (s2 / nn - (s1 / nn).cwiseProduct(s1 / nn)).cwiseMax(1e-40);
+  // The scale and misalignment regressors use the accelerometer's angular acceleration about its mean:
+  // the constant part is the bias's (a scale error on a constant is a bias), and the star-derived side
+  // carries the heads' noise (errors in variables).
+  Vec3 a_mean = Vec3::Zero();
+  double na = 0;
+  for (const auto& b : c.bins)
+    if (b.n_aa > 0) a_mean += b.sum_aacc, na += b.n_aa;
+  a_mean /= std::max(na, 1.0);
   f.Xp = MatrixXd::Zero(static_cast<int>(3 * n), f.ncols);
   f.yp = VectorXd::Zero(static_cast<int>(3 * n));
   int row = 0;
@@ -673,7 +681,7 @@ void Analyser::buildAcc() {
     const Vec3 e = b.sum_e / b.n_aa;
     // Regressors from the accelerometer's side: the star-derived angular acceleration carries the
     // heads' noise, which would correlate with the residual (errors in variables).
-    const Vec3 a_B = b.sum_aacc / b.n_aa;
+    const Vec3 a_B = b.sum_aacc / b.n_aa - a_mean;
     const Vec3 a_A = CBA.transpose() * a_B;
     const Vec3 j = b.n_jerk > 0 ? Vec3(b.sum_jerk / b.n_jerk) : Vec3::Zero();
     Mat3 cross;
