@@ -1038,6 +1038,7 @@ void Analyser::dataTests(std::vector<EffectTest>& out) {
       e.note = "samples whose pair residuals jump above chi2(3) = " + fmt("%.1f", c.outlier_chi2) +
                " in every pair of the head (expected by chance: " + fmt("%.2g", lambda) + ")";
       e.params.push_back({"rate", "1/sample", n > 0 ? cnt / n : kNaN, n > 0 ? std::sqrt(std::max(cnt, 1.0)) / n : kNaN, kNaN});
+      e.params.push_back({"expected_by_chance", "samples", lambda, kNaN, kNaN});
       out.push_back(e);
     }
     {
@@ -1049,12 +1050,13 @@ void Analyser::dataTests(std::vector<EffectTest>& out) {
       const auto cnt = static_cast<double>(c.flips[k]);
       e.statistic = cnt;
       e.p_value = cnt > 0 ? 0.0 : 1.0;
-      e.note = "sign reversals of consecutive quaternions away from a scalar-part crossing (none expected)";
-      e.params.push_back({"rate", "1/sample", n > 0 ? cnt / n : kNaN, kNaN, kNaN});
+      e.note = "sign reversals of consecutive quaternions away from a scalar-part crossing (none expected; an "
+               "isolated flipped sample makes two)";
+      e.params.push_back({"rate", "1/sample", n > 0 ? 0.5 * cnt / n : kNaN, kNaN, kNaN});
       out.push_back(e);
     }
     {
-      double miss = 0, runs = 0, dur = 0, blind_runs = 0;
+      double miss = 0, runs = 0, dur = 0, blind_runs = 0, first_at = kNaN;
       for (const auto& r : c.head_runs[k]) {
         if (!r.others_present) continue;
         // explained by blinding when the geometry reaches the cone anywhere in the run
@@ -1067,9 +1069,11 @@ void Analyser::dataTests(std::vector<EffectTest>& out) {
         miss += r.samples;
         runs += 1;
         dur += r.end_s - r.start_s;
+        if (std::isnan(first_at)) first_at = r.start_s;
       }
+      // One run is an event (head_dropout); several are a process (random gaps of this head).
       EffectTest e;
-      e.name = "head_dropout";
+      e.name = runs >= 2 ? "gaps" : "head_dropout";
       e.sensor = id;
       e.family = "data";
       e.dof = 1;
@@ -1078,7 +1082,13 @@ void Analyser::dataTests(std::vector<EffectTest>& out) {
       e.note = "samples missing while other heads delivered, outside the blinding geometry (" + fmt("%.0f", runs) +
                " runs; " + fmt("%.0f", blind_runs) + " further runs explained by blinding" +
                (orbit.ok() ? std::string(")") : std::string(", not checked: no orbit)"));
-      e.params.push_back({"duration_s", "s", dur, kNaN, kNaN});
+      if (runs >= 2) {
+        e.params.push_back({"per_day", "1/day", span_s > 0 ? runs / span_s * kDay : kNaN, kNaN, kNaN});
+        e.params.push_back({"mean_s", "s", dur / runs, kNaN, kNaN});
+      } else {
+        e.params.push_back({"at_s", "s since start", first_at, kNaN, kNaN});
+        e.params.push_back({"duration_s", "s", dur, kNaN, kNaN});
+      }
       out.push_back(e);
     }
   }
@@ -1630,11 +1640,11 @@ AuditResult Analyser::run() {
     if (e.family == "noise") e.threshold = stats::normalQuantile2(alpha_each);
     else if (e.family == "angular_acceleration") e.threshold = stats::chi2Quantile(alpha_each, 3);
     else if (e.name == "outliers") {
-      // smallest count with P(Poisson >= count) below the per-test level
-      const double lambda = e.statistic > 0 ? e.statistic * (e.p_value >= 0 ? 1 : 1) : 0;
-      (void)lambda;
-      e.threshold = 0.5;
-      if (e.p_value < alpha_each && e.statistic >= 1) e.threshold = std::max(0.5, e.statistic - 0.5);
+      // the smallest count whose chance probability P(Poisson(lambda) >= count) is below the per-test level
+      const double lambda = e.params.size() > 1 ? e.params[1].value : 0.0;
+      double k = 1;
+      while (k < 1e6 && stats::poissonSfGe(k, lambda) >= alpha_each) k += 1;
+      e.threshold = k - 0.5;
     } else {
       e.threshold = 0.5;
     }
