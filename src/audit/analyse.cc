@@ -684,16 +684,30 @@ void Analyser::buildAcc() {
     const Vec3 a_B = b.sum_aacc / b.n_aa - a_mean;
     const Vec3 a_A = CBA.transpose() * a_B;
     const Vec3 j = b.n_jerk > 0 ? Vec3(b.sum_jerk / b.n_jerk) : Vec3::Zero();
-    Mat3 cross;
-    cross << 0, -a_A.z(), a_A.y(), a_A.z(), 0, -a_A.x(), -a_A.y(), a_A.x(), 0;
-    const Mat3 Mmis = -CBA * cross;
+    (void)a_A;
+    // Columns from the model's own accelerometer (model::AccelModel::predict, linear in bias and scale,
+    // linearised in the misalignment): the change of the predicted a_A per unit parameter, in B.
+    model::AccelConfig acfg;
+    acfg.C_A_B = CBA.transpose();
+    const model::AccelModel nominal(acfg, model::AccEffects{});
+    const Vec3 p0 = nominal.predict(a_B);
+    Mat3 Mb, Ms, Mm;
+    for (int q = 0; q < 3; ++q) {
+      model::AccEffects eb, es, em;
+      eb.bias_rad_s2 = Vec3::Unit(q);
+      es.scale = Vec3::Unit(q);
+      em.misalignment_rad = Vec3::Unit(q) * 1e-6;
+      Mb.col(q) = CBA * (model::AccelModel(acfg, eb).predict(a_B) - p0);
+      Ms.col(q) = CBA * (model::AccelModel(acfg, es).predict(a_B) - p0);
+      Mm.col(q) = CBA * (model::AccelModel(acfg, em).predict(a_B) - p0) / 1e-6;
+    }
     for (int a = 0; a < 3; ++a) {
       const int r = row + a;
       f.yp[r] = e[a];
       for (int q = 0; q < 3; ++q) {
-        f.Xp(r, cb + q) = CBA(a, q);
-        f.Xp(r, cs + q) = CBA(a, q) * a_A[q];
-        f.Xp(r, cm + q) = Mmis(a, q);
+        f.Xp(r, cb + q) = Mb(a, q);
+        f.Xp(r, cs + q) = Ms(a, q);
+        f.Xp(r, cm + q) = Mm(a, q);
       }
       f.Xp(r, ct) = -j[a];
       f.Xp(r, cc) = -j[a] * (t - 0.5 * span_s);
