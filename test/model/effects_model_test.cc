@@ -6,6 +6,7 @@
 #include <boresight/model/sensors.h>
 #include <boresight/model/stochastic.h>
 
+#include <ceres/jet.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -248,6 +249,34 @@ TEST(EffectModel, ParameterVectorFormAgreesWithHeadSystematicRotVec) {
   headRotationFromParams(L, unit.data(), ctxAt(110), out);
   EXPECT_EQ(out[0], 100.0);
   EXPECT_EQ(out[1], 0.0);
+}
+
+TEST(EffectModel, ParameterVectorFormDifferentiatesWithCeresJets) {
+  // With Jets, d phi / d p is the model's basis: one harmonic's cos/sin columns, the drift's elapsed
+  // time after its start, the step's indicator (the function is linear, so exact).
+  const HeadEffects e = headEffectsFor({spec("thermal_periodic:sensor=1,harmonic=2,x_arcsec=3,beta_gain=0.4,beta_ref_deg=30"),
+                                        spec("drift:sensor=1,y_arcsec_per_day=5,start_s=100"),
+                                        spec("step:sensor=1,z_arcsec=2,at_s=50")}, 1);
+  const HeadParamLayout L = headParamLayout(e);
+  constexpr int N = 15;
+  ASSERT_EQ(L.size(), static_cast<std::size_t>(N));
+  using J = ceres::Jet<double, N>;
+  const std::vector<double> p = headParams(e);
+  std::vector<J> pj(N);
+  for (int k = 0; k < N; ++k) pj[static_cast<std::size_t>(k)] = J(p[static_cast<std::size_t>(k)], k);
+  const OrbitContext c = ctxAt(400, 0.7, 0.5);
+  J out[3];
+  headRotationFromParams(L, pj.data(), c, out);
+  const Vec3 ref = headSystematicRotVec(e, c);
+  const double m = 1 + 0.4 * (std::cos(0.5) - std::cos(30 * kRadPerDeg));
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_NEAR(out[k].a, ref[k], 1e-18);
+    EXPECT_EQ(out[k].v[k], 1.0);                                   // misalignment
+    EXPECT_NEAR(out[k].v[3 + k], m * std::cos(1.4), 1e-15);       // harmonic cos
+    EXPECT_NEAR(out[k].v[6 + k], m * std::sin(1.4), 1e-15);       // harmonic sin
+    EXPECT_EQ(out[k].v[9 + k], 300.0);                             // drift: t - start
+    EXPECT_EQ(out[k].v[12 + k], 1.0);                              // step: t >= at
+  }
 }
 
 TEST(EffectModel, AccelerometerNoiseDrawMatchesItsVarianceAutocovarianceAndPsd) {
