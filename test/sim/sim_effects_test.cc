@@ -475,6 +475,39 @@ TEST(SimEffects, TwoOutlierSpecsAreTwoProcessesAndTheFirstIsUnchanged) {
   EXPECT_EQ(two->sim.stats().head_outliers[1], n2);
 }
 
+TEST(SimEffects, ASecondGapOrFlipSpecAddsAProcessAndKeepsTheFirst) {
+  const auto sc = gracefo();
+  auto one = run(withEffects(sc, {"gaps:sensor=2,per_day=3000,mean_s=4", "sign_flips:sensor=2,rate=0.02"}), kSeed, 900);
+  auto two = run(withEffects(sc, {"gaps:sensor=2,per_day=3000,mean_s=4", "sign_flips:sensor=2,rate=0.02",
+                                  "gaps:sensor=2,per_day=1500,mean_s=20", "sign_flips:sensor=2,rate=0.03"}),
+                 kSeed, 900);
+  expectUnchangedExcept(one->cap, two->cap, {2}, false);
+  std::map<TimeUs, const sim::HeadSampleOut*> b;
+  for (const auto& x : two->cap.heads)
+    if (x.head == 2) b[x.tag] = &x;
+  std::size_t gone = 0, extra_flips = 0;
+  for (const auto& x : one->cap.heads) {
+    if (x.head != 2) continue;
+    auto it = b.find(x.tag);
+    if (it == b.end()) {
+      ++gone;  // missing only through the second gap process
+      continue;
+    }
+    if (x.sign_flipped) {
+      EXPECT_TRUE(it->second->sign_flipped) << x.tag;  // the first flip process is unchanged
+    }
+    extra_flips += !x.sign_flipped && it->second->sign_flipped;
+  }
+  // Every sample missing in the one-spec run is missing in the two-spec run, and the second process
+  // removes more (expected fraction 1500/86400*20 = 35 % of what remains).
+  EXPECT_EQ(one->cap.head(2, false).size(), b.size() + gone);
+  EXPECT_GT(gone, 50u);
+  EXPECT_GT(extra_flips, 5u);
+  const auto& st1 = one->sim.stats();
+  const auto& st2 = two->sim.stats();
+  EXPECT_EQ(st2.head_missing[1], st1.head_missing[1] + gone);
+}
+
 TEST(SimEffects, EffectArgumentsAreValidated) {
   model::EffectSpec s;
   std::string err;
