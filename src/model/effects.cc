@@ -40,7 +40,7 @@ std::vector<EffectInfo> buildCatalogue() {
                {P{"x_arcsec", "arcsec", 0, false, ""}, P{"y_arcsec", "arcsec", 0, false, ""},
                 P{"z_arcsec", "arcsec", 0, false, ""}, P{"at_s", "s since start", 0, true, "time of the step"}}});
   c.push_back({EffectKind::TimeOffset, "time_offset", EffectTarget::Any,
-               "time tags of the sensor run ahead of the truth: t_tag = t_true + offset",
+               "time tags of the sensor run ahead of the truth: t_tag = t_true + offset; 'all' = every head",
                {P{"offset_ms", "ms", 0, true, "|offset| <= 2000 ms"}}});
   c.push_back({EffectKind::AccBias, "acc_bias", EffectTarget::Acc, "constant angular-acceleration bias, frame A",
                {P{"x", "rad/s^2", 0, false, ""}, P{"y", "rad/s^2", 0, false, ""}, P{"z", "rad/s^2", 0, false, ""}}});
@@ -258,7 +258,8 @@ std::string effectCatalogueText() {
   std::ostringstream o;
   for (const auto& e : effectCatalogue()) {
     const char* tgt = e.target == EffectTarget::Head ? "heads" : e.target == EffectTarget::Acc ? "acc" : "heads|acc";
-    o << "  " << e.name << " [" << tgt << "]: " << e.doc << "\n      sensor=" << (e.target == EffectTarget::Acc ? "acc" : "1|2|..|all");
+    o << "  " << e.name << " [" << tgt << "]: " << e.doc << "\n      sensor="
+      << (e.target == EffectTarget::Acc ? "acc" : e.target == EffectTarget::Any ? "1|2|..|all|acc" : "1|2|..|all");
     for (const auto& p : e.params) {
       o << ", " << p.key << "[" << p.unit << "]";
       if (p.required) o << " (required)";
