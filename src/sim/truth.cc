@@ -282,7 +282,8 @@ class Node {
   }
   std::uint64_t u64() const {
     const std::string s = str();
-    if (s.empty() || s.find_first_not_of("0123456789") != std::string::npos) fail("'" + s + "' is not an unsigned integer");
+    if (s.empty() || s.find_first_not_of("0123456789") != std::string::npos || s.size() > 19)
+      fail("'" + s + "' is not an unsigned integer below 10^19");
     return std::stoull(s);
   }
   std::int64_t i64() const {
