@@ -337,6 +337,7 @@ Vec3 headSystematicRotVec(const HeadEffects& e, const OrbitContext& ctx) {
   }
   for (const auto& d : e.drifts)
     if (ctx.t_s > d.start_s) phi += d.rate_rad_s * (ctx.t_s - d.start_s);
+  if (ctx.t_s > e.drift_start_s && !e.drift_rad_s.isZero()) phi += e.drift_rad_s * (ctx.t_s - e.drift_start_s);
   for (const auto& [at, rot] : e.steps)
     if (ctx.t_s >= at) phi += rot;
   return phi;
@@ -372,6 +373,7 @@ HeadParamLayout headParamLayout(const HeadEffects& e) {
   HeadParamLayout L;
   for (const auto& h : e.thermal) L.harmonics.push_back({h.n, h.beta_gain, h.beta_ref_rad});
   for (const auto& d : e.drifts) L.drift_starts_s.push_back(d.start_s);
+  if (!e.drift_rad_s.isZero()) L.drift_starts_s.push_back(e.drift_start_s);
   for (const auto& st : e.steps) L.step_times_s.push_back(st.first);
   return L;
 }
@@ -388,6 +390,7 @@ std::vector<double> headParams(const HeadEffects& e) {
     put(-h.amp_rad * std::sin(h.phase_rad));
   }
   for (const auto& d : e.drifts) put(d.rate_rad_s);
+  if (!e.drift_rad_s.isZero()) put(e.drift_rad_s);
   for (const auto& st : e.steps) put(st.second);
   return p;
 }

@@ -240,6 +240,21 @@ TEST(EffectModel, ParameterVectorFormAgreesWithHeadSystematicRotVec) {
       EXPECT_LT((Vec3(out[0], out[1], out[2]) - ref).norm() * kArcsecPerRad, 1e-9) << trial << " " << k;
     }
   }
+  // A hand-built HeadEffects (the audit's unit signatures) may use the single drift_rad_s term: it is
+  // evaluated like a list entry and appears in the parameter vector.
+  {
+    HeadEffects h;
+    h.drift_rad_s = Vec3(0, 2, 0);
+    h.drift_start_s = 10;
+    h.drifts.push_back({Vec3(1, 0, 0), 0.0});
+    EXPECT_EQ(headSystematicRotVec(h, ctxAt(30)), Vec3(30, 40, 0));
+    EXPECT_EQ(headSystematicRotVec(h, ctxAt(5)), Vec3(5, 0, 0));
+    const HeadParamLayout Lh = headParamLayout(h);
+    ASSERT_EQ(Lh.size(), 9u);
+    double o[3];
+    headRotationFromParams(Lh, headParams(h).data(), ctxAt(30), o);
+    EXPECT_EQ(Vec3(o[0], o[1], o[2]), Vec3(30, 40, 0));
+  }
   // Linearity: unit parameter k gives the k-th basis function (here the drift's x rate after its start).
   const HeadEffects e = headEffectsFor({spec("drift:sensor=1,x_arcsec_per_day=1,start_s=10")}, 1);
   const HeadParamLayout L = headParamLayout(e);

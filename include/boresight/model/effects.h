@@ -154,7 +154,11 @@ struct HeadEffects {
   /// cross_noise: white noise per cross-boresight axis, quadrature sum of the specs (<0: configured).
   double cross_sigma_rad = -1;
   std::vector<ThermalHarmonic> thermal;
-  std::vector<DriftTerm> drifts;
+  std::vector<DriftTerm> drifts;  ///< one per drift spec
+  /// One more drift term, drift_rad_s (t - drift_start_s) after drift_start_s, for code that builds a
+  /// HeadEffects by hand (the audit's unit signatures); headEffectsFor never sets it (it fills `drifts`).
+  Vec3 drift_rad_s = Vec3::Zero();
+  double drift_start_s = 0;
   std::vector<std::pair<double, Vec3>> steps;  ///< (time since start [s], rotation vector [rad])
   double time_offset_s = 0;                    ///< sum of the time_offset specs (head id or 'all')
   std::vector<ClockDriftTerm> clock_drifts;
@@ -210,7 +214,8 @@ constexpr double kSpeedOfLight = 299792458.0;
 ///   [0,3)                       misalignment (relative_misalignment), rad
 ///   per harmonic: C then S      phi += m(beta) (C cos(n u) + S sin(n u)), rad; the catalogue's
 ///                               amp cos(n u + phase) is C = amp cos(phase), S = -amp sin(phase)
-///   per drift                   rate, rad/s (after its start)
+///   per drift                   rate, rad/s (after its start); a nonzero HeadEffects::drift_rad_s
+///                               is one more drift term after the list
 ///   per step                    rotation, rad (from its time on)
 struct HeadParamLayout {
   struct Harmonic {
