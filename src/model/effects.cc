@@ -40,7 +40,7 @@ std::vector<EffectInfo> buildCatalogue() {
                {P{"x_arcsec", "arcsec", 0, false, ""}, P{"y_arcsec", "arcsec", 0, false, ""},
                 P{"z_arcsec", "arcsec", 0, false, ""}, P{"at_s", "s since start", 0, true, "time of the step"}}});
   c.push_back({EffectKind::TimeOffset, "time_offset", EffectTarget::Any,
-               "time tags of the sensor run ahead of the truth: t_tag = t_true + offset",
+               "time tags of the sensor run ahead of the truth: t_tag = t_true + offset; 'all' = every head",
                {P{"offset_ms", "ms", 0, true, "|offset| <= 2000 ms"}}});
   c.push_back({EffectKind::AccBias, "acc_bias", EffectTarget::Acc, "constant angular-acceleration bias, frame A",
                {P{"x", "rad/s^2", 0, false, ""}, P{"y", "rad/s^2", 0, false, ""}, P{"z", "rad/s^2", 0, false, ""}}});
@@ -68,6 +68,15 @@ std::vector<EffectInfo> buildCatalogue() {
                 P{"duration_s", "s", 0, false, "explicit gap length (0: none)"}}});
   c.push_back({EffectKind::HeadDropout, "head_dropout", EffectTarget::Head, "a head delivers nothing for a while",
                {P{"at_s", "s since start", 0, true, ""}, P{"duration_s", "s", 0, true, ""}}});
+  // Appended (the order above is stable; the audit indexes by name).
+  c.push_back({EffectKind::CrossNoise, "cross_noise", EffectTarget::Head,
+               "white attitude noise per cross-boresight axis set to cross_arcsec (about-boresight unchanged)",
+               {P{"cross_arcsec", "arcsec", 0, true, "1-sigma noise per cross-boresight axis, per sample"}}});
+  c.push_back({EffectKind::ClockDrift, "clock_drift", EffectTarget::Any,
+               "tag clock rate error: t_tag = t_true + offset + rate_ppm 1e-6 (t_true - start_s); 'all' = every head",
+               {P{"rate_ppm", "ppm", 0, true, "|rate| <= 1000 ppm"},
+                P{"offset_ms", "ms", 0, false, "clock error at start_s, |offset| <= 2000 ms"},
+                P{"start_s", "s since start", 0, false, "reference epoch of the offset"}}});
   return c;
 }
 
@@ -93,12 +102,16 @@ Vec3 arcsecVec(const EffectSpec& s, const char* x, const char* y, const char* z)
   return Vec3(s.get(x), s.get(y), s.get(z)) * kRadPerArcsec;
 }
 
-void addGaps(const EffectSpec& s, RandomGaps& rg, std::vector<Interval>& gaps) {
-  if (s.get("per_day") > 0) {
-    rg.per_s += s.get("per_day") / kDay;
-    rg.mean_s = s.get("mean_s");
-  }
+void addGaps(const EffectSpec& s, std::vector<RandomGaps>& rg, std::vector<Interval>& gaps) {
+  if (s.get("per_day") > 0) rg.push_back({s.get("per_day") / kDay, s.get("mean_s")});
   if (s.get("duration_s") > 0) gaps.push_back({s.get("at_s"), s.get("at_s") + s.get("duration_s")});
+}
+
+/// Independent white sources: variances add. One source gives its sigma exactly.
+void addSigma(double& sigma, double add) { sigma = sigma < 0 ? add : std::hypot(sigma, add); }
+
+ClockDriftTerm clockTerm(const EffectSpec& s) {
+  return {s.get("offset_ms") * 1e-3, s.get("rate_ppm"), s.get("start_s")};
 }
 
 }  // namespace
@@ -186,7 +199,14 @@ bool makeEffect(std::string_view name, const std::vector<std::pair<std::string, 
     }
     case EffectKind::TimeOffset:
       if (!need("offset_ms", std::abs(s.get("offset_ms")) <= 2000, "must be within +-2000 ms")) return false;
-      if (s.sensor == "all") return fail(error, origin, name, "sensor", "required: a head id or 'acc'");
+      break;
+    case EffectKind::ClockDrift:
+      if (!need("offset_ms", std::abs(s.get("offset_ms")) <= 2000, "must be within +-2000 ms") ||
+          !need("rate_ppm", std::abs(s.get("rate_ppm")) <= 1000, "must be within +-1000 ppm"))
+        return false;
+      break;
+    case EffectKind::CrossNoise:
+      if (!need("cross_arcsec", s.get("cross_arcsec") >= 0, "must be >= 0")) return false;
       break;
     case EffectKind::Outliers:
     case EffectKind::SignFlips:
@@ -238,7 +258,8 @@ std::string effectCatalogueText() {
   std::ostringstream o;
   for (const auto& e : effectCatalogue()) {
     const char* tgt = e.target == EffectTarget::Head ? "heads" : e.target == EffectTarget::Acc ? "acc" : "heads|acc";
-    o << "  " << e.name << " [" << tgt << "]: " << e.doc << "\n      sensor=" << (e.target == EffectTarget::Acc ? "acc" : "1|2|..|all");
+    o << "  " << e.name << " [" << tgt << "]: " << e.doc << "\n      sensor="
+      << (e.target == EffectTarget::Acc ? "acc" : e.target == EffectTarget::Any ? "1|2|..|all|acc" : "1|2|..|all");
     for (const auto& p : e.params) {
       o << ", " << p.key << "[" << p.unit << "]";
       if (p.required) o << " (required)";
@@ -255,7 +276,9 @@ HeadEffects headEffectsFor(const std::vector<EffectSpec>& specs, int head_id) {
     if (!s.appliesToHead(head_id)) continue;
     switch (s.kind) {
       case EffectKind::RelativeMisalignment: h.misalignment_rad += arcsecVec(s, "x_arcsec", "y_arcsec", "z_arcsec"); break;
-      case EffectKind::AnisotropicNoise: h.about_sigma_rad = s.get("about_arcsec") * kRadPerArcsec; break;
+      case EffectKind::AnisotropicNoise: addSigma(h.about_sigma_rad, s.get("about_arcsec") * kRadPerArcsec); break;
+      case EffectKind::CrossNoise: addSigma(h.cross_sigma_rad, s.get("cross_arcsec") * kRadPerArcsec); break;
+      case EffectKind::ClockDrift: h.clock_drifts.push_back(clockTerm(s)); break;
       case EffectKind::ThermalPeriodic: {
         ThermalHarmonic t;
         t.n = static_cast<int>(s.get("harmonic"));
@@ -267,8 +290,7 @@ HeadEffects headEffectsFor(const std::vector<EffectSpec>& specs, int head_id) {
         break;
       }
       case EffectKind::Drift:
-        h.drift_rad_s += arcsecVec(s, "x_arcsec_per_day", "y_arcsec_per_day", "z_arcsec_per_day") / kDay;
-        h.drift_start_s = s.get("start_s");
+        h.drifts.push_back({arcsecVec(s, "x_arcsec_per_day", "y_arcsec_per_day", "z_arcsec_per_day") / kDay, s.get("start_s")});
         break;
       case EffectKind::Step: h.steps.emplace_back(s.get("at_s"), arcsecVec(s, "x_arcsec", "y_arcsec", "z_arcsec")); break;
       case EffectKind::TimeOffset: h.time_offset_s += s.get("offset_ms") * 1e-3; break;
@@ -276,11 +298,8 @@ HeadEffects headEffectsFor(const std::vector<EffectSpec>& specs, int head_id) {
         h.aberration_annual |= s.get("annual") != 0;
         h.aberration_orbital |= s.get("orbital") != 0;
         break;
-      case EffectKind::Outliers:
-        h.outlier_prob = s.get("rate");
-        h.outlier_rad = s.get("arcsec") * kRadPerArcsec;
-        break;
-      case EffectKind::SignFlips: h.sign_flip_prob = s.get("rate"); break;
+      case EffectKind::Outliers: h.outliers.push_back({s.get("rate"), s.get("arcsec") * kRadPerArcsec}); break;
+      case EffectKind::SignFlips: h.sign_flip_probs.push_back(s.get("rate")); break;
       case EffectKind::Gaps: addGaps(s, h.random_gaps, h.gaps); break;
       case EffectKind::HeadDropout: h.dropouts.push_back({s.get("at_s"), s.get("at_s") + s.get("duration_s")}); break;
       default: break;  // accelerometer effects
@@ -300,6 +319,9 @@ AccEffects accEffectsFor(const std::vector<EffectSpec>& specs) {
       case EffectKind::TimeOffset:
         if (s.sensor == "acc") a.time_offset_s += s.get("offset_ms") * 1e-3;
         break;
+      case EffectKind::ClockDrift:
+        if (s.sensor == "acc") a.clock_drifts.push_back(clockTerm(s));
+        break;
       case EffectKind::Gaps: addGaps(s, a.random_gaps, a.gaps); break;
       default: break;
     }
@@ -313,7 +335,9 @@ Vec3 headSystematicRotVec(const HeadEffects& e, const OrbitContext& ctx) {
     const double m = 1.0 + h.beta_gain * (std::cos(ctx.beta_rad) - std::cos(h.beta_ref_rad));
     phi += h.amp_rad * (m * std::cos(h.n * ctx.arg_lat_rad + h.phase_rad));
   }
-  if (ctx.t_s > e.drift_start_s) phi += e.drift_rad_s * (ctx.t_s - e.drift_start_s);
+  for (const auto& d : e.drifts)
+    if (ctx.t_s > d.start_s) phi += d.rate_rad_s * (ctx.t_s - d.start_s);
+  if (ctx.t_s > e.drift_start_s && !e.drift_rad_s.isZero()) phi += e.drift_rad_s * (ctx.t_s - e.drift_start_s);
   for (const auto& [at, rot] : e.steps)
     if (ctx.t_s >= at) phi += rot;
   return phi;
@@ -325,6 +349,50 @@ Vec3 aberrationRotVec(const HeadEffects& e, const Vec3& b_I, const Mat3& C_Si_I,
   if (e.aberration_orbital) v += ctx.v_sat_I;
   if (v.isZero()) return Vec3::Zero();
   return C_Si_I * (b_I.cross(v) / kSpeedOfLight);
+}
+
+double tagMinusTrue(double time_offset_s, const std::vector<ClockDriftTerm>& clock, double t_true_s) {
+  double d = time_offset_s;
+  for (const auto& c : clock) d += c.offset_s + c.rate_ppm * 1e-6 * (t_true_s - c.start_s);
+  return d;
+}
+
+double trueTimeOfTag(double time_offset_s, const std::vector<ClockDriftTerm>& clock, double t_tag_s) {
+  if (clock.empty()) return t_tag_s - time_offset_s;
+  // t_tag = t + off + sum r_j (t - s_j)  =>  t (1 + sum r_j) = t_tag - off + sum r_j s_j
+  double off = time_offset_s, r = 0, rs = 0;
+  for (const auto& c : clock) {
+    off += c.offset_s;
+    r += c.rate_ppm * 1e-6;
+    rs += c.rate_ppm * 1e-6 * c.start_s;
+  }
+  return (t_tag_s - off + rs) / (1.0 + r);
+}
+
+HeadParamLayout headParamLayout(const HeadEffects& e) {
+  HeadParamLayout L;
+  for (const auto& h : e.thermal) L.harmonics.push_back({h.n, h.beta_gain, h.beta_ref_rad});
+  for (const auto& d : e.drifts) L.drift_starts_s.push_back(d.start_s);
+  if (!e.drift_rad_s.isZero()) L.drift_starts_s.push_back(e.drift_start_s);
+  for (const auto& st : e.steps) L.step_times_s.push_back(st.first);
+  return L;
+}
+
+std::vector<double> headParams(const HeadEffects& e) {
+  std::vector<double> p;
+  p.reserve(headParamLayout(e).size());
+  auto put = [&](const Vec3& v) {
+    for (int k = 0; k < 3; ++k) p.push_back(v[k]);
+  };
+  put(e.misalignment_rad);
+  for (const auto& h : e.thermal) {
+    put(h.amp_rad * std::cos(h.phase_rad));
+    put(-h.amp_rad * std::sin(h.phase_rad));
+  }
+  for (const auto& d : e.drifts) put(d.rate_rad_s);
+  if (!e.drift_rad_s.isZero()) put(e.drift_rad_s);
+  for (const auto& st : e.steps) put(st.second);
+  return p;
 }
 
 }  // namespace boresight::model

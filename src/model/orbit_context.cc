@@ -46,6 +46,21 @@ Vec3 sunPositionLowPrecision(double t) {
   return R * Vec3(std::cos(lam), std::cos(eps) * std::sin(lam), std::sin(eps) * std::sin(lam));
 }
 
+Vec3 earthVelocityLowPrecision(double t) {
+  const double h = 300.0;
+  return -(sunPositionLowPrecision(t + h) - sunPositionLowPrecision(t - h)) / (2 * h);
+}
+
+OrbitContext effectContext(const OrbitSample& o, double t_rel_s) {
+  OrbitContext c;
+  c.t_s = t_rel_s;
+  c.arg_lat_rad = o.u_rad;
+  c.beta_rad = o.beta_rad;
+  c.v_sat_I = o.v_I;
+  c.v_earth_I = earthVelocityLowPrecision(toSeconds(o.t));
+  return c;
+}
+
 double argumentOfLatitude(const Vec3& r, const Vec3& v) {
   const Vec3 h = r.cross(v).normalized();
   Vec3 node = Vec3::UnitZ().cross(h);

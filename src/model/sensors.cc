@@ -1,6 +1,9 @@
 #include <boresight/model/rotation.h>
 #include <boresight/model/sensors.h>
 
+#include <algorithm>
+#include <cmath>
+
 namespace boresight::model {
 
 HeadModel::HeadModel(const HeadConfig& cfg, const HeadEffects& eff) : cfg_(cfg), eff_(eff) {
@@ -42,6 +45,17 @@ Vec3 HeadModel::noisyStar(const Vec3& s_true, const CounterRng& rng, std::uint64
   double n0, n1;
   rng.normal2(n, k, n0, n1);
   return (s_true + sigmaStar() * (n0 * e1 + n1 * e2)).normalized();
+}
+
+std::uint8_t blindMask(const HeadConfig& hc, const Vec3& b_I, const Vec3& sun_I, const Vec3& moon_I, const Vec3& r_I) {
+  std::uint8_t m = 0;
+  const double rn = r_I.norm();
+  const double earth_radius_angle = std::asin(std::min(1.0, kEarthEquatorialRadius_m / rn));
+  if (b_I.dot(sun_I) > std::cos(hc.sun_exclusion_rad)) m |= kBlindBitSun;
+  if (std::acos(std::clamp(b_I.dot(-r_I / rn), -1.0, 1.0)) < earth_radius_angle + hc.earth_exclusion_rad)
+    m |= kBlindBitEarth;
+  if (b_I.dot((moon_I - r_I).normalized()) > std::cos(hc.moon_exclusion_rad)) m |= kBlindBitMoon;
+  return m;
 }
 
 AccelModel::AccelModel(const AccelConfig& cfg, const AccEffects& eff) : cfg_(cfg), eff_(eff) {

@@ -1,4 +1,5 @@
 #include <boresight/io/level1.h>
+#include <boresight/model/orbit_context.h>
 #include <boresight/sim/ephemeris.h>
 #include <boresight/sim/orbit.h>
 
@@ -10,14 +11,9 @@ namespace boresight::sim {
 OrbitState Orbit::state(double t) const {
   OrbitState s;
   posVel(t, s.r_I, s.v_I);
-  const Vec3 h = s.r_I.cross(s.v_I).normalized();
-  Vec3 node = Vec3::UnitZ().cross(h);
-  if (node.norm() < 1e-12) node = Vec3::UnitX();  // equatorial orbit: measure u from x
-  node.normalize();
-  const Vec3 rn = s.r_I.normalized();
-  s.arg_lat_rad = std::atan2(h.dot(node.cross(rn)), node.dot(rn));
+  s.arg_lat_rad = model::argumentOfLatitude(s.r_I, s.v_I);
   s.sun_I = sunDirection(t);
-  s.beta_rad = std::asin(std::clamp(h.dot(s.sun_I), -1.0, 1.0));
+  s.beta_rad = model::betaAngle(s.r_I, s.v_I, s.sun_I);
   return s;
 }
 

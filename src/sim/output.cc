@@ -2,8 +2,6 @@
 #include <boresight/model/rotation.h>
 #include <boresight/sim/output.h>
 
-#include <yaml-cpp/yaml.h>
-
 #include <cerrno>
 #include <cmath>
 #include <cstring>
@@ -218,118 +216,6 @@ bool writeQsa1b(const std::string& path, const Simulator& sim, std::string* erro
     f.records.push_back(r);
   }
   return io::writeProduct(path, f, error);
-}
-
-namespace {
-
-void emitVec(YAML::Emitter& y, const Vec3& v, double scale = 1.0) {
-  y << YAML::Flow << YAML::BeginSeq << v.x() * scale << v.y() * scale << v.z() * scale << YAML::EndSeq;
-}
-void emitQuat(YAML::Emitter& y, const Quat& q) {
-  double a[4];
-  quatToScalarFirst(q, a);
-  y << YAML::Flow << YAML::BeginSeq << a[0] << a[1] << a[2] << a[3] << YAML::EndSeq;
-}
-void emitMat(YAML::Emitter& y, const Mat3& m) {
-  y << YAML::BeginSeq;
-  for (int i = 0; i < 3; ++i) y << YAML::Flow << YAML::BeginSeq << m(i, 0) << m(i, 1) << m(i, 2) << YAML::EndSeq;
-  y << YAML::EndSeq;
-}
-
-}  // namespace
-
-bool writeTruthYaml(const std::string& path, const Simulator& sim, const std::vector<std::string>& effect_args,
-                    const std::vector<std::string>& files, std::string* error) {
-  const Scenario& sc = sim.scenario();
-  const SimStats& st = sim.stats();
-  YAML::Emitter y;
-  y.SetDoublePrecision(17);
-  y << YAML::Comment(
-      "boresight simulate: the truth behind the simulated files. Angles in arcseconds unless named; quaternions "
-      "scalar first; q_Si_B maps body (SRF) to head; C_B_A maps accelerometer-frame vectors to the body (as in the configuration files).");
-  y << YAML::BeginMap;
-  y << YAML::Key << "scenario" << YAML::Value << sc.file;
-  y << YAML::Key << "seed" << YAML::Value << sim.seed();
-  y << YAML::Key << "satellite" << YAML::Value << std::string(1, sc.satellite);
-  y << YAML::Key << "start_gps_us" << YAML::Value << sc.start;
-  y << YAML::Key << "start_date_gps" << YAML::Value << io::formatDate(sc.start);
-  y << YAML::Key << "duration_s" << YAML::Value << sim.duration();
-  y << YAML::Key << "effect_args" << YAML::Value << YAML::Flow << effect_args;
-  y << YAML::Key << "effects" << YAML::Value << YAML::BeginSeq;
-  for (const auto& e : sc.effects) {
-    y << YAML::BeginMap << YAML::Key << "name" << YAML::Value << e.name << YAML::Key << "sensor" << YAML::Value
-      << e.sensor << YAML::Key << "origin" << YAML::Value << e.origin;
-    for (const auto& [k, v] : e.values) y << YAML::Key << k << YAML::Value << v;
-    y << YAML::EndMap;
-  }
-  y << YAML::EndSeq;
-  y << YAML::Key << "heads" << YAML::Value << YAML::BeginSeq;
-  for (std::size_t i = 0; i < sim.heads().size(); ++i) {
-    const auto& h = sim.heads()[i];
-    const auto& c = h.config();
-    const auto& e = h.effects();
-    y << YAML::BeginMap;
-    y << YAML::Key << "id" << YAML::Value << c.id;
-    y << YAML::Key << "q_Si_B_nominal" << YAML::Value;
-    emitQuat(y, c.q_Si_B);
-    y << YAML::Key << "q_Si_B_true" << YAML::Value;
-    emitQuat(y, h.qSiBTrue());
-    y << YAML::Comment("constant mounting; time-varying effects below come on top");
-    y << YAML::Key << "mounting_error_arcsec" << YAML::Value;
-    emitVec(y, c.mounting_error_rad, kArcsecPerRad);
-    y << YAML::Key << "relative_misalignment_arcsec" << YAML::Value;
-    emitVec(y, e.misalignment_rad, kArcsecPerRad);
-    y << YAML::Key << "boresight" << YAML::Value;
-    emitVec(y, c.boresight_Si);
-    y << YAML::Key << "noise_cross_arcsec" << YAML::Value << h.sigmaCross() * kArcsecPerRad;
-    y << YAML::Key << "noise_about_arcsec" << YAML::Value << h.sigmaAbout() * kArcsecPerRad;
-    y << YAML::Key << "time_offset_s" << YAML::Value << e.time_offset_s;
-    y << YAML::Key << "rate_hz" << YAML::Value << c.rate_hz;
-    y << YAML::Key << "samples_written" << YAML::Value << st.head_samples[i];
-    y << YAML::Key << "blinded_sun" << YAML::Value << st.head_blinded_sun[i];
-    y << YAML::Key << "blinded_earth" << YAML::Value << st.head_blinded_earth[i];
-    y << YAML::Key << "blinded_moon" << YAML::Value << st.head_blinded_moon[i];
-    y << YAML::Key << "missing_gaps_dropouts" << YAML::Value << st.head_missing[i];
-    y << YAML::Key << "outliers" << YAML::Value << st.head_outliers[i];
-    y << YAML::Key << "sign_flips" << YAML::Value << st.head_sign_flips[i];
-    y << YAML::EndMap;
-  }
-  y << YAML::EndSeq;
-  const auto& a = sim.accel();
-  y << YAML::Key << "accelerometer" << YAML::Value << YAML::BeginMap;
-  y << YAML::Key << "C_B_A_nominal" << YAML::Value;
-  emitMat(y, a.config().C_A_B.transpose());
-  y << YAML::Key << "C_B_A_true" << YAML::Value;
-  emitMat(y, a.C_A_B_true().transpose());
-  y << YAML::Key << "misalignment_arcsec" << YAML::Value;
-  emitVec(y, a.effects().misalignment_rad, kArcsecPerRad);
-  y << YAML::Key << "bias_rad_s2" << YAML::Value;
-  emitVec(y, a.config().bias_rad_s2 + a.effects().bias_rad_s2);
-  y << YAML::Key << "injected_bias_rad_s2" << YAML::Value;
-  emitVec(y, a.effects().bias_rad_s2);
-  y << YAML::Key << "scale_error" << YAML::Value;
-  emitVec(y, a.effects().scale);
-  y << YAML::Key << "white_noise_rad_s2" << YAML::Value;
-  emitVec(y, a.config().white_rad_s2);
-  y << YAML::Key << "lowfreq_noise_rad_s2" << YAML::Value;
-  emitVec(y, a.config().lowfreq_rad_s2);
-  y << YAML::Key << "time_offset_s" << YAML::Value << a.effects().time_offset_s;
-  y << YAML::Key << "samples_written" << YAML::Value << st.acc_samples;
-  y << YAML::Key << "missing_gaps" << YAML::Value << st.acc_missing;
-  y << YAML::EndMap;
-  y << YAML::Key << "attitude" << YAML::Value << YAML::BeginMap;
-  y << YAML::Key << "thruster_pulses" << YAML::Value << st.thruster_pulses;
-  y << YAML::Key << "max_abs_angular_acceleration_rad_s2" << YAML::Value << st.max_abs_alpha;
-  y << YAML::EndMap;
-  y << YAML::Key << "files" << YAML::Value << files;
-  y << YAML::EndMap;
-  std::ofstream out(path);
-  out << y.c_str() << "\n";
-  if (!out) {
-    if (error) *error = path + ": write failed";
-    return false;
-  }
-  return true;
 }
 
 }  // namespace boresight::sim

@@ -1,5 +1,7 @@
+#include <boresight/model/orbit_context.h>
 #include <boresight/model/random.h>
 #include <boresight/model/rotation.h>
+#include <boresight/model/stochastic.h>
 #include <boresight/sim/ephemeris.h>
 #include <boresight/sim/simulator.h>
 
@@ -13,70 +15,46 @@ namespace {
 using model::CounterRng;
 using model::Stream;
 
-/// A sensor's time-tag pattern: start + offset + n * period + drift + jitter (integer microseconds).
+/// A sensor's tags in time order: the model's pattern (model::TagModel) with a cursor.
 struct TagStream {
-  TimeUs start = 0, period = 1;
-  double drift_ppm = 0, jitter_us = 0;
-  CounterRng jitter_rng{0, Stream::HeadTagJitter, 0};
+  model::TagModel m;
   std::uint64_t n = 0;
   TimeUs cached = 0;  ///< tag(n), updated by advance()
-  void reset() { cached = tag(n); }
   std::uint64_t advance() {
     const std::uint64_t k = n++;
-    cached = tag(n);
+    cached = m.tag(n);
     return k;
   }
-  TimeUs tag(std::uint64_t k) const {
-    const double nominal = static_cast<double>(k) * static_cast<double>(period);
-    TimeUs t = start + static_cast<TimeUs>(k) * period + static_cast<TimeUs>(std::llround(drift_ppm * 1e-6 * nominal));
-    if (jitter_us > 0) t += static_cast<TimeUs>(std::llround((2 * jitter_rng.uniform(k) - 1) * jitter_us));
-    return t;
-  }
   TimeUs next() const { return cached; }
-};
-
-/// Random gaps as a Poisson process on 1 s slots, evaluated in time order.
-struct GapTracker {
-  model::RandomGaps g;
-  const std::vector<model::Interval>* fixed = nullptr;
-  const std::vector<model::Interval>* dropouts = nullptr;
-  CounterRng rng{0, Stream::HeadGap, 0};
-  std::int64_t next_slot = 0;
-  double until = -1;
-  bool missing(double t) {
-    if (g.per_s > 0) {
-      const auto slot = static_cast<std::int64_t>(std::floor(t));
-      for (; next_slot <= slot; ++next_slot) {
-        const auto k = static_cast<std::uint64_t>(next_slot);
-        if (rng.uniform(k, 0) < g.per_s) until = std::max(until, static_cast<double>(next_slot) - g.mean_s * std::log(rng.uniform(k, 1)));
-      }
-      if (t < until) return true;
-    }
-    if (fixed)
-      for (const auto& i : *fixed)
-        if (i.contains(t)) return true;
-    if (dropouts)
-      for (const auto& i : *dropouts)
-        if (i.contains(t)) return true;
-    return false;
-  }
 };
 
 TagStream makeTags(TimeUs start, double rate_hz, TimeUs offset_us, double drift, double jitter, std::uint64_t seed,
                    Stream stream) {
   TagStream s;
-  s.period = static_cast<TimeUs>(std::llround(1e6 / rate_hz));
-  // First tag: the first whole second at or after the start, plus the offset.
-  const TimeUs sec0 = ((start + kUsPerSecond - 1) / kUsPerSecond) * kUsPerSecond;
-  s.start = sec0 + offset_us;
-  while (s.start - s.period >= start) s.start -= s.period;
-  s.drift_ppm = drift;
-  s.jitter_us = jitter;
-  // Heads that share rate and offset share the jitter (one camera electronics unit stamps them).
-  s.jitter_rng = CounterRng(seed, stream, static_cast<std::uint64_t>(s.period) * 1000003ULL + static_cast<std::uint64_t>(offset_us));
-  s.reset();
+  s.m = model::makeTagModel(start, rate_hz, offset_us, drift, jitter, seed, stream);
+  s.cached = s.m.tag(0);
   return s;
 }
+
+/// Runs of consecutive missing samples of one sensor (truth.yaml's realised gap intervals).
+struct MissingRuns {
+  std::vector<model::Interval>* runs = nullptr;
+  std::uint64_t* count = nullptr;
+  bool open = false;
+  void sample(double t, bool missing) {
+    if (missing && !open) {
+      open = true;
+      ++*count;
+      if (runs->size() < kMaxRecordedMissingRuns) runs->push_back({t, t});
+    } else if (!missing && open) {
+      close(t);
+    }
+  }
+  void close(double t) {
+    if (open && *count <= kMaxRecordedMissingRuns) runs->back().end_s = t;
+    open = false;
+  }
+};
 
 }  // namespace
 
@@ -116,6 +94,8 @@ bool Simulator::init(const Scenario& sc, std::uint64_t seed, double duration_s, 
   stats_.head_outliers.assign(n, 0);
   stats_.head_sign_flips.assign(n, 0);
   stats_.head_star_epochs.assign(n, 0);
+  stats_.head_missing_runs.assign(n, {});
+  stats_.head_missing_run_count.assign(n, 0);
   if (sc_.output.star_vectors_per_head < 1 || sc_.output.star_vectors_per_head > kMaxSimStarsPerHead) {
     if (error) *error = sc_.file + ": output.star_vectors_per_head must be in 1.." + std::to_string(kMaxSimStarsPerHead);
     return false;
@@ -142,8 +122,11 @@ void Simulator::run(SimSink& sink, const std::function<void(double)>& progress) 
   const std::size_t nh = heads_.size();
 
   std::vector<TagStream> head_tags;
-  std::vector<GapTracker> head_gaps(nh);
-  std::vector<CounterRng> noise, outl, flip, star_noise;
+  std::vector<model::GapProcess> head_gaps;
+  std::vector<model::OutlierSampler> outl;
+  std::vector<model::SignFlipSampler> flip;
+  std::vector<CounterRng> noise, star_noise;
+  std::vector<MissingRuns> head_runs(nh);
   const TimeUs star_period =
       sc_.output.star_vectors_interval_s > 0 ? static_cast<TimeUs>(std::llround(sc_.output.star_vectors_interval_s * 1e6)) : 0;
   std::vector<std::int64_t> star_slot(nh, -1);  ///< last interval that got star vectors, per head
@@ -153,31 +136,27 @@ void Simulator::run(SimSink& sink, const std::function<void(double)>& progress) 
   std::vector<Quat> prev_q(nh, Quat(1, 0, 0, 0));
   for (std::size_t i = 0; i < nh; ++i) {
     const auto& c = heads_[i].config();
+    const auto& e = heads_[i].effects();
     const auto id = static_cast<std::uint64_t>(c.id);
     head_tags.push_back(makeTags(sc_.start, c.rate_hz, c.tag_offset_us, c.tag_drift_ppm, c.tag_jitter_us, seed_, Stream::HeadTagJitter));
-    head_gaps[i].g = heads_[i].effects().random_gaps;
-    head_gaps[i].fixed = &heads_[i].effects().gaps;
-    head_gaps[i].dropouts = &heads_[i].effects().dropouts;
-    head_gaps[i].rng = CounterRng(seed_, Stream::HeadGap, id);
+    head_gaps.emplace_back(e.random_gaps, e.gaps, e.dropouts, seed_, Stream::HeadGap, id);
+    outl.emplace_back(e.outliers, seed_, id);
+    flip.emplace_back(e.sign_flip_probs, seed_, id);
     noise.emplace_back(seed_, Stream::HeadNoise, id);
-    outl.emplace_back(seed_, Stream::HeadOutlier, id);
-    flip.emplace_back(seed_, Stream::HeadSignFlip, id);
     star_noise.emplace_back(seed_, Stream::StarNoise, id);
     counters.emplace_back(&stars_, c.fov_half_angle_rad, c.limiting_mag);
+    head_runs[i].runs = &stats_.head_missing_runs[i];
+    head_runs[i].count = &stats_.head_missing_run_count[i];
   }
   const auto& ac = acc_.config();
+  const auto& ae = acc_.effects();
   TagStream acc_tags = makeTags(sc_.start, ac.rate_hz, ac.tag_offset_us, ac.tag_drift_ppm, ac.tag_jitter_us, seed_, Stream::AccTagJitter);
-  GapTracker acc_gaps;
-  acc_gaps.g = acc_.effects().random_gaps;
-  acc_gaps.fixed = &acc_.effects().gaps;
-  acc_gaps.rng = CounterRng(seed_, Stream::AccGap, 0);
-  const CounterRng acc_noise(seed_, Stream::AccNoise, 0), acc_lf_rng(seed_, Stream::AccLowFreq, 0);
-  const double acc_T = 1.0 / ac.rate_hz;
+  model::GapProcess acc_gaps(ae.random_gaps, ae.gaps, {}, seed_, Stream::AccGap, 0);
+  MissingRuns acc_runs{&stats_.acc_missing_runs, &stats_.acc_missing_run_count};
+  const model::AccNoiseModel acc_noise(ac, seed_);
   const auto acc_T_us = static_cast<std::int64_t>(std::llround(1e6 / ac.rate_hz));
-  const auto acc_offset_us = static_cast<std::int64_t>(std::llround(acc_.effects().time_offset_s * 1e6));
-  const double lf_phi = std::exp(-acc_T / ac.lowfreq_tau_s);
-  Vec3 lf(ac.lowfreq_rad_s2.x() * acc_lf_rng.normal(0, 0), ac.lowfreq_rad_s2.y() * acc_lf_rng.normal(0, 1),
-          ac.lowfreq_rad_s2.z() * acc_lf_rng.normal(0, 2));
+  const auto acc_offset_us = static_cast<std::int64_t>(std::llround(ae.time_offset_s * 1e6));
+  Vec3 lf = acc_noise.lowFreqInitial();
 
   const TimeUs gnv_period = static_cast<TimeUs>(std::llround(sc_.output.gnv1b_interval_s * 1e6));
   TimeUs gnv_next = ((sc_.start + gnv_period - 1) / gnv_period) * gnv_period;
@@ -202,14 +181,9 @@ void Simulator::run(SimSink& sink, const std::function<void(double)>& progress) 
       moon_I = moonPosition(t);
     }
     orbit_->posVel(t, r_I, v_I);
-    const Vec3 h = r_I.cross(v_I).normalized();
-    Vec3 node = Vec3::UnitZ().cross(h);
-    if (node.norm() < 1e-12) node = Vec3::UnitX();
-    node.normalize();
-    const Vec3 rn = r_I.normalized();
     ctx.t_s = tau;
-    ctx.arg_lat_rad = std::atan2(h.dot(node.cross(rn)), node.dot(rn));
-    ctx.beta_rad = std::asin(std::clamp(h.dot(sun_I), -1.0, 1.0));
+    ctx.arg_lat_rad = model::argumentOfLatitude(r_I, v_I);
+    ctx.beta_rad = model::betaAngle(r_I, v_I, sun_I);
     ctx.v_sat_I = v_I;
     ctx.v_earth_I = v_earth;
   };
@@ -257,29 +231,27 @@ void Simulator::run(SimSink& sink, const std::function<void(double)>& progress) 
       const std::uint64_t n = acc_tags.advance();
       // Low-frequency noise: one Gauss-Markov step per sample, whether or not the sample is missing.
       const Vec3 lf_now = lf;
-      {
-        double g0, g1, g2, g3;
-        acc_lf_rng.normal2(n + 1, 0, g0, g1);
-        acc_lf_rng.normal2(n + 1, 1, g2, g3);
-        lf = lf_phi * lf + std::sqrt(1 - lf_phi * lf_phi) * ac.lowfreq_rad_s2.cwiseProduct(Vec3(g0, g1, g2));
-      }
-      if (acc_gaps.missing(tag_rel)) {
+      lf = acc_noise.lowFreqNext(lf, n);
+      const bool acc_missing = acc_gaps.missing(tag_rel);
+      acc_runs.sample(tag_rel, acc_missing);
+      if (acc_missing) {
         ++stats_.acc_missing;
         continue;
       }
       AccSampleOut a;
       a.tag = tmin;
       a.index = n;
-      const std::int64_t t_true_us = (tmin - sc_.start) - acc_offset_us;
+      const std::int64_t t_true_us =
+          ae.clock_drifts.empty()
+              ? (tmin - sc_.start) - acc_offset_us
+              : static_cast<std::int64_t>(std::llround(model::trueTimeOfTag(ae.time_offset_s, ae.clock_drifts, tag_rel) * 1e6));
       a.t_true_s = static_cast<double>(t_true_us) * 1e-6;
       a.a_B_true = att.meanAngularAcceleration(t_true_us, acc_T_us);
       stats_.max_abs_alpha = std::max(stats_.max_abs_alpha, a.a_B_true.cwiseAbs().maxCoeff());
-      double w[6];
-      acc_noise.normal2(n, 0, w[0], w[1]);
-      acc_noise.normal2(n, 1, w[2], w[3]);
-      acc_noise.normal2(n, 2, w[4], w[5]);
-      a.ang_A = acc_.predict(a.a_B_true) + ac.white_rad_s2.cwiseProduct(Vec3(w[0], w[1], w[2])) + lf_now;
-      a.lin_A = ac.lin_bias_m_s2 + ac.lin_white_m_s2.cwiseProduct(Vec3(w[3], w[4], w[5]));
+      Vec3 w_ang, w_lin;
+      acc_noise.white(n, w_ang, w_lin);
+      a.ang_A = acc_.predict(a.a_B_true) + w_ang + lf_now;
+      a.lin_A = ac.lin_bias_m_s2 + w_lin;
       ++stats_.acc_samples;
       sink.accel(a);
       continue;
@@ -288,7 +260,9 @@ void Simulator::run(SimSink& sink, const std::function<void(double)>& progress) 
     const std::uint64_t n = head_tags[i].advance();
     const model::HeadModel& hm = heads_[i];
     const auto& hc = hm.config();
-    if (head_gaps[i].missing(tag_rel)) {
+    const bool head_missing = head_gaps[i].missing(tag_rel);
+    head_runs[i].sample(tag_rel, head_missing);
+    if (head_missing) {
       ++stats_.head_missing[i];
       continue;
     }
@@ -296,18 +270,13 @@ void Simulator::run(SimSink& sink, const std::function<void(double)>& progress) 
     s.tag = tmin;
     s.head = hc.id;
     s.index = n;
-    s.t_true_s = tag_rel - hm.effects().time_offset_s;
+    s.t_true_s = model::trueTimeOfTag(hm.effects().time_offset_s, hm.effects().clock_drifts, tag_rel);
     Vec3 w_B;
     att.eval(s.t_true_s, s.q_I_B, w_B);
     contextAt(s.t_true_s);
     s.q_I_Si_expected = hm.predict(s.q_I_B, ctx);
     const Vec3 b_I = hm.boresightInertial(s.q_I_Si_expected);
-    const double rn = r_I.norm();
-    const double earth_radius_angle = std::asin(std::min(1.0, kEarthRadius_m / rn));
-    if (b_I.dot(sun_I) > std::cos(hc.sun_exclusion_rad)) s.blind |= kBlindSun;
-    if (std::acos(std::clamp(b_I.dot(-r_I / rn), -1.0, 1.0)) < earth_radius_angle + hc.earth_exclusion_rad)
-      s.blind |= kBlindEarth;
-    if (b_I.dot((moon_I - r_I).normalized()) > std::cos(hc.moon_exclusion_rad)) s.blind |= kBlindMoon;
+    s.blind = model::blindMask(hc, b_I, sun_I, moon_I, r_I);
     if (s.blind) {
       stats_.head_blinded_sun[i] += (s.blind & kBlindSun) != 0;
       stats_.head_blinded_earth[i] += (s.blind & kBlindEarth) != 0;
@@ -316,17 +285,14 @@ void Simulator::run(SimSink& sink, const std::function<void(double)>& progress) 
       continue;
     }
     Quat q = s.q_I_Si_expected * model::quatExp(hm.noiseRotVec(noise[i], n));
-    const auto& e = hm.effects();
-    if (e.outlier_prob > 0 && outl[i].uniform(n, 0) < e.outlier_prob) {
-      const Vec3 axis(outl[i].normal(n, 1), outl[i].normal(n, 2), outl[i].normal(n, 3));
-      q = q * model::quatExp(axis.normalized() * e.outlier_rad);
+    if (outl[i].apply(n, q)) {
       s.outlier = true;
       ++stats_.head_outliers[i];
     }
     // Deliver a sign-continuous quaternion (q0 >= 0 at the first sample).
     if (q.coeffs().dot(prev_q[i].coeffs()) < 0) q.coeffs() = -q.coeffs();
     prev_q[i] = q;
-    if (e.sign_flip_prob > 0 && flip[i].uniform(n, 0) < e.sign_flip_prob) {
+    if (flip[i].fires(n)) {
       q.coeffs() = -q.coeffs();
       s.sign_flipped = true;
       ++stats_.head_sign_flips[i];
@@ -370,6 +336,9 @@ void Simulator::run(SimSink& sink, const std::function<void(double)>& progress) 
       }
     }
   }
+  const double t_end = static_cast<double>(end - sc_.start) * 1e-6;
+  for (auto& r : head_runs) r.close(t_end);
+  acc_runs.close(t_end);
   stats_.thruster_pulses = att.thrusterPulses();
   for (const auto& c : counters) stats_.star_refreshes += c.refreshes();
   if (progress) progress(1.0);

@@ -384,6 +384,130 @@ TEST(SimEffects, GapsAndDropoutsRemoveSamplesAndNothingElse) {
   EXPECT_EQ(st.head_missing[1], 0u);
 }
 
+TEST(SimEffects, TwoDriftsOnOneHeadBothActWithTheirOwnStarts) {
+  const auto sc = gracefo();
+  auto base = run(sc, kSeed, 600);
+  auto two = run(withEffects(sc, {"drift:sensor=3,z_arcsec_per_day=8640,start_s=100",
+                                  "drift:sensor=3,x_arcsec_per_day=17280,start_s=400"}), kSeed, 600);
+  expectUnchangedExcept(base->cap, two->cap, {3}, false);
+  const auto a = base->cap.head(3), b = two->cap.head(3);
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t i = 0; i < a.size(); i += 29) {
+    const double t = a[i].t_true_s;
+    const Vec3 expect(t > 400 ? 0.2 * (t - 400) : 0.0, 0.0, t > 100 ? 0.1 * (t - 100) : 0.0);  // arcsec
+    const Vec3 d = -simtest::rotBetween(a[i].q_I_Si, b[i].q_I_Si) * kArcsecPerRad;
+    EXPECT_LT((d - expect).norm(), 0.05) << t;
+  }
+}
+
+TEST(SimEffects, CrossNoiseChangesOnlyTheCrossBoresightNoise) {
+  const auto sc = gracefo();
+  auto base = run(sc, kSeed, 600);
+  auto eff = run(withEffects(sc, {"cross_noise:sensor=2,cross_arcsec=2.4"}), kSeed, 600);
+  expectUnchangedExcept(base->cap, eff->cap, {2}, false);
+  const auto a = base->cap.head(2), b = eff->cap.head(2);
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    const Vec3 ra = simtest::rotBetween(a[i].q_I_Si_expected, a[i].q_I_Si);
+    const Vec3 rb = simtest::rotBetween(b[i].q_I_Si_expected, b[i].q_I_Si);
+    EXPECT_NEAR(rb.x(), ra.x() * 2.4 / 6.0, 1e-3 * kRadPerArcsec);
+    EXPECT_NEAR(rb.y(), ra.y() * 2.4 / 6.0, 1e-3 * kRadPerArcsec);
+    EXPECT_NEAR(rb.z(), ra.z(), 1e-3 * kRadPerArcsec);
+  }
+}
+
+TEST(SimEffects, TimeOffsetAllShiftsEveryHeadAndNotTheAccelerometer) {
+  const auto sc = gracefo();
+  auto base = run(sc, kSeed, 120);
+  auto eff = run(withEffects(sc, {"time_offset:sensor=all,offset_ms=80"}), kSeed, 120);
+  expectUnchangedExcept(base->cap, eff->cap, {1, 2, 3}, false);
+  for (int id : {1, 2, 3}) {
+    const auto a = base->cap.head(id), b = eff->cap.head(id);
+    ASSERT_EQ(a.size(), b.size());
+    for (std::size_t i = 0; i < a.size(); ++i) EXPECT_NEAR(a[i].t_true_s - b[i].t_true_s, 0.080, 1e-9);
+  }
+}
+
+TEST(SimEffects, ClockDriftMakesTheTagErrorGrowAtItsRate) {
+  const auto sc = gracefo();
+  auto base = run(sc, kSeed, 300);
+  auto eff = run(withEffects(sc, {"clock_drift:sensor=1,rate_ppm=500,offset_ms=10,start_s=100",
+                                  "clock_drift:sensor=acc,rate_ppm=-800"}), kSeed, 300);
+  expectUnchangedExcept(base->cap, eff->cap, {1}, true);
+  const auto a = base->cap.head(1), b = eff->cap.head(1);
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    EXPECT_EQ(a[i].tag, b[i].tag);  // the tags are the receiver's: unchanged
+    const double t_true = b[i].t_true_s, t_tag = a[i].t_true_s;
+    EXPECT_NEAR(t_tag - t_true, 0.010 + 500e-6 * (t_true - 100), 1e-9) << i;
+  }
+  ASSERT_EQ(base->cap.acc.size(), eff->cap.acc.size());
+  for (std::size_t i = 0; i < base->cap.acc.size(); i += 11) {
+    const double t_tag = base->cap.acc[i].t_true_s, t_true = eff->cap.acc[i].t_true_s;
+    EXPECT_NEAR(t_tag - t_true, -800e-6 * t_true, 1e-6) << i;  // integer microseconds
+  }
+}
+
+TEST(SimEffects, TwoOutlierSpecsAreTwoProcessesAndTheFirstIsUnchanged) {
+  const auto sc = gracefo();
+  auto one = run(withEffects(sc, {"outliers:sensor=2,rate=0.02,arcsec=300"}), kSeed, 900);
+  auto two = run(withEffects(sc, {"outliers:sensor=2,rate=0.02,arcsec=300", "outliers:sensor=2,rate=0.05,arcsec=900"}), kSeed, 900);
+  expectUnchangedExcept(one->cap, two->cap, {2}, false);
+  const auto a = one->cap.head(2), b = two->cap.head(2);
+  ASSERT_EQ(a.size(), b.size());
+  std::size_t n1 = 0, n2 = 0, only_second = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    n1 += a[i].outlier;
+    n2 += b[i].outlier;
+    if (a[i].outlier) {
+      EXPECT_TRUE(b[i].outlier) << i;
+    } else if (b[i].outlier) {
+      ++only_second;
+      EXPECT_NEAR(simtest::rotBetween(a[i].q_I_Si, b[i].q_I_Si).norm() * kArcsecPerRad, 900.0, 1.0);
+    } else {
+      EXPECT_TRUE(simtest::sameQuat(a[i].q_I_Si, b[i].q_I_Si));
+    }
+  }
+  const double N = static_cast<double>(a.size()), p2 = 1 - 0.98 * 0.95;
+  EXPECT_NEAR(static_cast<double>(n1), 0.02 * N, 5 * std::sqrt(0.02 * N));
+  EXPECT_NEAR(static_cast<double>(n2), p2 * N, 5 * std::sqrt(p2 * N));
+  EXPECT_GT(only_second, 0u);
+  EXPECT_EQ(two->sim.stats().head_outliers[1], n2);
+}
+
+TEST(SimEffects, ASecondGapOrFlipSpecAddsAProcessAndKeepsTheFirst) {
+  const auto sc = gracefo();
+  auto one = run(withEffects(sc, {"gaps:sensor=2,per_day=3000,mean_s=4", "sign_flips:sensor=2,rate=0.02"}), kSeed, 900);
+  auto two = run(withEffects(sc, {"gaps:sensor=2,per_day=3000,mean_s=4", "sign_flips:sensor=2,rate=0.02",
+                                  "gaps:sensor=2,per_day=1500,mean_s=20", "sign_flips:sensor=2,rate=0.03"}),
+                 kSeed, 900);
+  expectUnchangedExcept(one->cap, two->cap, {2}, false);
+  std::map<TimeUs, const sim::HeadSampleOut*> b;
+  for (const auto& x : two->cap.heads)
+    if (x.head == 2) b[x.tag] = &x;
+  std::size_t gone = 0, extra_flips = 0;
+  for (const auto& x : one->cap.heads) {
+    if (x.head != 2) continue;
+    auto it = b.find(x.tag);
+    if (it == b.end()) {
+      ++gone;  // missing only through the second gap process
+      continue;
+    }
+    if (x.sign_flipped) {
+      EXPECT_TRUE(it->second->sign_flipped) << x.tag;  // the first flip process is unchanged
+    }
+    extra_flips += !x.sign_flipped && it->second->sign_flipped;
+  }
+  // Every sample missing in the one-spec run is missing in the two-spec run, and the second process
+  // removes more (expected fraction 1500/86400*20 = 35 % of what remains).
+  EXPECT_EQ(one->cap.head(2, false).size(), b.size() + gone);
+  EXPECT_GT(gone, 50u);
+  EXPECT_GT(extra_flips, 5u);
+  const auto& st1 = one->sim.stats();
+  const auto& st2 = two->sim.stats();
+  EXPECT_EQ(st2.head_missing[1], st1.head_missing[1] + gone);
+}
+
 TEST(SimEffects, EffectArgumentsAreValidated) {
   model::EffectSpec s;
   std::string err;
@@ -407,7 +531,7 @@ TEST(SimEffects, EffectArgumentsAreValidated) {
   // Every catalogue entry has a unique canonical name.
   std::set<std::string> names;
   for (const auto& e : model::effectCatalogue()) EXPECT_TRUE(names.insert(e.name).second) << e.name;
-  EXPECT_EQ(names.size(), 14u);
+  EXPECT_EQ(names.size(), 16u);
 }
 
 }  // namespace

@@ -2,6 +2,7 @@
 #include "real_data.h"
 #include "sim_test_util.h"
 
+#include <boresight/model/orbit_context.h>
 #include <boresight/sim/ephemeris.h>
 #include <boresight/sim/output.h>
 
@@ -31,6 +32,29 @@ TEST(SimOrbit, CircularOrbitHasTheConfiguredGeometry) {
   EXPECT_NEAR(2 * kPi / o.meanMotion(), 5664, 10);
   EXPECT_NEAR(s.v_I.norm(), std::sqrt(sim::kEarthMu_m3_s2 / (sim::kEarthRadius_m + 490e3)), 1e-6);
   EXPECT_NEAR(s.v_I.norm(), 7618.1, 0.1);
+}
+
+TEST(SimOrbit, MeasuredDataGetTheSimulatorsOrbitContext) {
+  // The context an estimator builds from GNI1B/GNV1B samples (model::effectContext) is the one the
+  // simulator's effects saw: same u and beta definitions (one code path), Sun and Earth velocity from
+  // the model's series instead of the simulator's.
+  const auto sc = simtest::gracefo();
+  sim::Simulator s;
+  std::string err;
+  ASSERT_TRUE(s.init(sc, 1, 6000, &err)) << err;
+  for (double t_rel = 0; t_rel < 6000; t_rel += 613) {
+    const double t = toSeconds(sc.start) + t_rel;
+    Vec3 r, v;
+    s.orbit().posVel(t, r, v);
+    model::OrbitSample o;
+    ASSERT_TRUE(model::orbitSampleFromInertial(sc.start + static_cast<TimeUs>(std::llround(t_rel * 1e6)), r, v, o));
+    const model::OrbitContext a = model::effectContext(o, t_rel), b = s.context(t_rel);
+    EXPECT_EQ(a.t_s, b.t_s);
+    EXPECT_EQ(a.arg_lat_rad, b.arg_lat_rad);  // the same function of the same r, v
+    EXPECT_NEAR(a.beta_rad, b.beta_rad, 2e-4);  // 0.01 deg: two low-precision Sun series
+    EXPECT_EQ(a.v_sat_I, b.v_sat_I);
+    EXPECT_LT((a.v_earth_I - b.v_earth_I).norm(), 1e-3 * b.v_earth_I.norm());
+  }
 }
 
 TEST(SimOrbit, Gnv1bOrbitReproducesTheOrbitItWasWrittenFrom) {

@@ -11,15 +11,37 @@
 //   phi_mount being the constant per-head mounting error (truth) and phi_eff the sum of
 //   relative_misalignment + thermal_periodic + drift + step.
 //   time_offset: a sensor's time tag runs AHEAD of the truth by offset: t_tag = t_true + offset
-//     (so the data stamped t_tag describe the state at t_tag - offset).
+//     (so the data stamped t_tag describe the state at t_tag - offset). sensor 'all': every head
+//     shares the offset (the accelerometer does not: target it with 'acc').
+//   clock_drift: a tag RATE error: t_tag = t_true + offset + rate_ppm 1e-6 (t_true - start_s), for all
+//     t (start_s is the epoch at which the clock error equals offset); 'all' = every head, as above.
+//   cross_noise: the head's white noise per cross-boresight axis (real GRACE-FO heads are about 2.5x
+//     quieter than the 6" GROOPS value); anisotropic_noise: the same about the boresight.
 //   acc_*: a_A = (I + diag(scale)) R(Exp(misalignment)) C_A_B a_B + bias + noise.
 //   aberration (uncorrected): the apparent boresight moves towards the observer velocity v by
 //     |b x v| / c: the head frame is rotated by b_I x v / c (annual: Earth about the Sun; orbital:
 //     the satellite about the Earth).
+//
+// Composition: every spec is its own term; two specs of one kind never overwrite each other.
+//   Rotations (relative_misalignment, thermal_periodic, drift, step) add as rotation vectors; each
+//     drift keeps its own start. time_offset specs add; clock_drift terms add.
+//   Noise levels (anisotropic_noise about the boresight, cross_noise per cross axis) are independent
+//     white sources: variances add, sigma = sqrt(sum sigma_j^2), and that sum REPLACES the head's
+//     configured level on its axes (one spec sets the level, as it always did).
+//   outliers, sign_flips and random gaps (gaps with per_day > 0): independent processes, each with its
+//     own rate (size, mean length) and its own random stream (model/stochastic.h); a sample is hit
+//     when any process fires (the rotations of the outlier processes that fire compose; a sign flip
+//     is applied once). Explicit gaps and head_dropout intervals add. aberration: on when any spec
+//     turns it on.
+// Linearity: headSystematicRotVec and aberrationRotVec are linear in the effect parameters
+// (amplitudes, rates, step sizes; the audit evaluates them with unit parameters);
+// headRotationFromParams (below) is the same sum from a parameter vector, templated for Ceres.
 #pragma once
 
 #include <boresight/core/conventions.h>
 
+#include <cmath>
+#include <cstddef>
 #include <map>
 #include <string>
 #include <string_view>
@@ -31,6 +53,7 @@ namespace boresight::model {
 enum class EffectKind : std::uint8_t {
   RelativeMisalignment, AnisotropicNoise, ThermalPeriodic, Drift, Step, TimeOffset,
   AccBias, AccScale, AccMisalignment, Aberration, Outliers, SignFlips, Gaps, HeadDropout,
+  CrossNoise, ClockDrift,  // appended: the catalogue order of the older entries is unchanged
 };
 
 /// Which sensors an effect may target.
@@ -94,24 +117,55 @@ struct ThermalHarmonic {
   double beta_ref_rad = 0;
 };
 
+/// One random-gap process (one `gaps` spec with per_day > 0): gap starts on 1 s slots with
+/// probability per_s each, lengths exponential with mean mean_s. Several processes are independent.
 struct RandomGaps {
   double per_s = 0;    ///< expected gap starts per second
   double mean_s = 0;   ///< mean gap duration (exponential)
 };
 
-/// Everything that acts on one head.
+/// One `drift` spec: rate_rad_s * (t - start_s) for t > start_s.
+struct DriftTerm {
+  Vec3 rate_rad_s = Vec3::Zero();
+  double start_s = 0;
+};
+
+/// One `outliers` spec: per sample, with probability `prob`, the attitude is rotated by `rad` about a
+/// random axis. Several specs are independent processes; a sample is an outlier when any fires (each
+/// process that fires applies its rotation).
+struct OutlierProcess {
+  double prob = 0;
+  double rad = 0;
+};
+
+/// One `clock_drift` spec: the tag clock runs off by offset_s + rate_ppm 1e-6 (t_true - start_s).
+struct ClockDriftTerm {
+  double offset_s = 0;
+  double rate_ppm = 0;
+  double start_s = 0;
+};
+
+/// Everything that acts on one head. Each spec is its own term (see the composition rules above).
 struct HeadEffects {
   Vec3 misalignment_rad = Vec3::Zero();
-  double about_sigma_rad = -1;  ///< anisotropic_noise: noise about the boresight (<0: unchanged)
+  /// anisotropic_noise: white noise about the boresight, quadrature sum of the specs (<0: none given,
+  /// the head's configured level applies).
+  double about_sigma_rad = -1;
+  /// cross_noise: white noise per cross-boresight axis, quadrature sum of the specs (<0: configured).
+  double cross_sigma_rad = -1;
   std::vector<ThermalHarmonic> thermal;
+  std::vector<DriftTerm> drifts;  ///< one per drift spec
+  /// One more drift term, drift_rad_s (t - drift_start_s) after drift_start_s, for code that builds a
+  /// HeadEffects by hand (the audit's unit signatures); headEffectsFor never sets it (it fills `drifts`).
   Vec3 drift_rad_s = Vec3::Zero();
   double drift_start_s = 0;
   std::vector<std::pair<double, Vec3>> steps;  ///< (time since start [s], rotation vector [rad])
-  double time_offset_s = 0;
+  double time_offset_s = 0;                    ///< sum of the time_offset specs (head id or 'all')
+  std::vector<ClockDriftTerm> clock_drifts;
   bool aberration_annual = false, aberration_orbital = false;
-  double outlier_prob = 0, outlier_rad = 0;
-  double sign_flip_prob = 0;
-  RandomGaps random_gaps;
+  std::vector<OutlierProcess> outliers;
+  std::vector<double> sign_flip_probs;  ///< one independent process per sign_flips spec
+  std::vector<RandomGaps> random_gaps;  ///< one independent process per gaps spec with per_day > 0
   std::vector<Interval> gaps;      ///< explicit gaps
   std::vector<Interval> dropouts;  ///< head_dropout intervals
 };
@@ -120,10 +174,17 @@ struct AccEffects {
   Vec3 bias_rad_s2 = Vec3::Zero();
   Vec3 scale = Vec3::Zero();          ///< scale error (a_meas = (1 + scale) a)
   Vec3 misalignment_rad = Vec3::Zero();
-  double time_offset_s = 0;
-  RandomGaps random_gaps;
+  double time_offset_s = 0;           ///< sum of the time_offset specs with sensor 'acc'
+  std::vector<ClockDriftTerm> clock_drifts;
+  std::vector<RandomGaps> random_gaps;
   std::vector<Interval> gaps;
 };
+
+/// t_tag - t_true (s) at true time t_true_s (since the start): time_offset plus the clock drifts.
+double tagMinusTrue(double time_offset_s, const std::vector<ClockDriftTerm>& clock, double t_true_s);
+/// The true time (s since the start) that a sample tagged t_tag_s describes: the exact inverse of
+/// tagMinusTrue (it is linear). Without clock drifts exactly t_tag_s - time_offset_s.
+double trueTimeOfTag(double time_offset_s, const std::vector<ClockDriftTerm>& clock, double t_tag_s);
 
 /// Collects the specs that apply to a head / to the accelerometer.
 HeadEffects headEffectsFor(const std::vector<EffectSpec>& specs, int head_id);
@@ -146,5 +207,52 @@ Vec3 headSystematicRotVec(const HeadEffects& e, const OrbitContext& ctx);
 Vec3 aberrationRotVec(const HeadEffects& e, const Vec3& b_I, const Mat3& C_Si_I, const OrbitContext& ctx);
 
 constexpr double kSpeedOfLight = 299792458.0;
+
+/// The structure of a head's deterministic rotation: which terms it has (harmonic numbers, beta
+/// modulation, drift starts, step times); their sizes are the parameter vector of
+/// headRotationFromParams. Layout (3 components each, head axes):
+///   [0,3)                       misalignment (relative_misalignment), rad
+///   per harmonic: C then S      phi += m(beta) (C cos(n u) + S sin(n u)), rad; the catalogue's
+///                               amp cos(n u + phase) is C = amp cos(phase), S = -amp sin(phase)
+///   per drift                   rate, rad/s (after its start); a nonzero HeadEffects::drift_rad_s
+///                               is one more drift term after the list
+///   per step                    rotation, rad (from its time on)
+struct HeadParamLayout {
+  struct Harmonic {
+    int n = 1;
+    double beta_gain = 0, beta_ref_rad = 0;
+  };
+  std::vector<Harmonic> harmonics;
+  std::vector<double> drift_starts_s;
+  std::vector<double> step_times_s;
+  std::size_t size() const { return 3 * (1 + 2 * harmonics.size() + drift_starts_s.size() + step_times_s.size()); }
+};
+
+HeadParamLayout headParamLayout(const HeadEffects& e);
+/// The parameter values of e in the layout's order (size() numbers).
+std::vector<double> headParams(const HeadEffects& e);
+
+/// headSystematicRotVec from a parameter vector (double or a Ceres Jet): out = phi_eff in head axes.
+template <typename T>
+void headRotationFromParams(const HeadParamLayout& L, const T* p, const OrbitContext& ctx, T out[3]) {
+  for (int k = 0; k < 3; ++k) out[k] = p[k];
+  std::size_t i = 3;
+  for (const auto& h : L.harmonics) {
+    const double m = 1.0 + h.beta_gain * (std::cos(ctx.beta_rad) - std::cos(h.beta_ref_rad));
+    const double c = m * std::cos(h.n * ctx.arg_lat_rad), s = m * std::sin(h.n * ctx.arg_lat_rad);
+    for (std::size_t k = 0; k < 3; ++k) out[k] += p[i + k] * c + p[i + 3 + k] * s;
+    i += 6;
+  }
+  for (double start : L.drift_starts_s) {
+    if (ctx.t_s > start)
+      for (std::size_t k = 0; k < 3; ++k) out[k] += p[i + k] * (ctx.t_s - start);
+    i += 3;
+  }
+  for (double at : L.step_times_s) {
+    if (ctx.t_s >= at)
+      for (std::size_t k = 0; k < 3; ++k) out[k] += p[i + k];
+    i += 3;
+  }
+}
 
 }  // namespace boresight::model

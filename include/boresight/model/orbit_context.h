@@ -19,6 +19,7 @@
 #pragma once
 
 #include <boresight/core/conventions.h>
+#include <boresight/model/effects.h>
 
 namespace boresight::model {
 
@@ -42,6 +43,10 @@ double earthRotationAngle(double t_gps_s);
 /// Low-precision geocentric Sun position, m, inertial (Astronomical Almanac, about 0.01 deg, 1950-2050).
 Vec3 sunPositionLowPrecision(double t_gps_s);
 
+/// Earth velocity about the Sun, m/s, inertial: central difference (+-300 s) of sunPositionLowPrecision
+/// (the annual-aberration velocity; heliocentric, ~ barycentric to 0.05 %).
+Vec3 earthVelocityLowPrecision(double t_gps_s);
+
 /// Argument of latitude of (r, v), rad in (-pi, pi]. An equatorial orbit measures from +x.
 double argumentOfLatitude(const Vec3& r_I, const Vec3& v_I);
 /// Sun elevation above the plane of (r, v), rad; sun_I need not be unit.
@@ -51,5 +56,11 @@ double betaAngle(const Vec3& r_I, const Vec3& v_I, const Vec3& sun_I);
 bool orbitSampleFromInertial(TimeUs t, const Vec3& r_I, const Vec3& v_I, OrbitSample& out);
 /// From Earth-fixed position and velocity (GNV1B), rotated by the Earth rotation angle.
 bool orbitSampleFromEarthFixed(TimeUs t, const Vec3& r_E, const Vec3& v_E, OrbitSample& out);
+
+/// The effect models' context (effects.h) at an orbit sample of measured data: t_s = t_rel_s (seconds
+/// since the data's start), u, beta, v_sat_I = the sample's inertial velocity, v_earth_I from
+/// earthVelocityLowPrecision. Between samples, interpolate the orbit first (u from an interpolated
+/// r, v), not the angles.
+OrbitContext effectContext(const OrbitSample& o, double t_rel_s);
 
 }  // namespace boresight::model

@@ -56,7 +56,8 @@ class HeadModel {
   /// Boresight direction in I for an attitude q_I_Si.
   Vec3 boresightInertial(const Quat& q_I_Si) const { return q_I_Si * b_; }
 
-  double sigmaCross() const { return cfg_.sigma_cross_rad; }
+  /// cross_noise / anisotropic_noise replace the configured levels (quadrature sum of the specs).
+  double sigmaCross() const { return eff_.cross_sigma_rad >= 0 ? eff_.cross_sigma_rad : cfg_.sigma_cross_rad; }
   double sigmaAbout() const { return eff_.about_sigma_rad >= 0 ? eff_.about_sigma_rad : cfg_.sigma_roll_rad; }
   double sigmaStar() const { return cfg_.sigma_star_rad; }
   /// A measured star direction: unit s_true (head frame) with noise of sigmaStar() per perpendicular
@@ -73,6 +74,15 @@ class HeadModel {
   Quat q_Si_B_true_ = Quat::Identity();
   Vec3 e1_ = Vec3::UnitX(), e2_ = Vec3::UnitY(), b_ = Vec3::UnitZ();
 };
+
+/// Exclusion-cone bits (the simulator's BlindReason values).
+enum BlindBit : std::uint8_t { kBlindBitSun = 1, kBlindBitEarth = 2, kBlindBitMoon = 4 };
+constexpr double kEarthEquatorialRadius_m = 6378137.0;
+
+/// Which exclusion cones of a head contain its boresight b_I (unit, inertial): the Sun (sun_I, unit
+/// geocentric direction), the Earth's limb seen from r_I (satellite position, m; Earth a sphere of
+/// the equatorial radius) and the Moon (moon_I, geocentric position, m). A blinded head delivers nothing.
+std::uint8_t blindMask(const HeadConfig& hc, const Vec3& b_I, const Vec3& sun_I, const Vec3& moon_I, const Vec3& r_I);
 
 struct AccelConfig {
   double rate_hz = 10.0;

@@ -10,6 +10,7 @@
 
 #include <boresight/io/level1.h>
 #include <boresight/sim/simulator.h>
+#include <boresight/sim/truth.h>
 
 #include <cstdio>
 #include <memory>
@@ -128,9 +129,6 @@ class TeeSink : public SimSink {
 /// QSA1B with the NOMINAL alignment q_Si_B of every head (what the ground calibration says).
 bool writeQsa1b(const std::string& path, const Simulator& sim, std::string* error);
 
-/// truth.yaml: seed, scenario, every injected effect with all parameters, each head's true mounting
-/// (q_Si_B, error angles), the accelerometer's true frame, biases and scale, and run statistics.
-bool writeTruthYaml(const std::string& path, const Simulator& sim, const std::vector<std::string>& effect_args,
-                    const std::vector<std::string>& files, std::string* error);
+// writeTruthYaml: sim/truth.h.
 
 }  // namespace boresight::sim

@@ -19,7 +19,9 @@
 
 namespace boresight::sim {
 
-enum BlindReason : std::uint8_t { kBlindNone = 0, kBlindSun = 1, kBlindEarth = 2, kBlindMoon = 4 };
+enum BlindReason : std::uint8_t {
+  kBlindNone = 0, kBlindSun = model::kBlindBitSun, kBlindEarth = model::kBlindBitEarth, kBlindMoon = model::kBlindBitMoon
+};
 
 struct HeadSampleOut {
   TimeUs tag = 0;
@@ -82,10 +84,19 @@ class SimSink {
   virtual void stars(const StarVectorsOut&) {}
 };
 
+constexpr std::size_t kMaxRecordedMissingRuns = 500;
+
 struct SimStats {
   std::vector<std::uint64_t> head_samples, head_blinded_sun, head_blinded_earth, head_blinded_moon, head_missing,
       head_outliers, head_sign_flips, head_star_epochs;
   std::uint64_t acc_samples = 0, acc_missing = 0, orbit_samples = 0, thruster_pulses = 0, star_refreshes = 0;
+  /// Runs of consecutive missing samples (random gaps, explicit gaps, dropouts): [tag of the first
+  /// missing sample, tag of the next sample or the end), s since the start; the first
+  /// kMaxRecordedMissingRuns are kept, all are counted.
+  std::vector<std::vector<model::Interval>> head_missing_runs;
+  std::vector<std::uint64_t> head_missing_run_count;
+  std::vector<model::Interval> acc_missing_runs;
+  std::uint64_t acc_missing_run_count = 0;
   double max_abs_alpha = 0;  ///< rad/s^2, largest true angular acceleration component seen by the accelerometer
 };
 
