@@ -531,7 +531,7 @@ void Analyser::buildRelative() {
         e.misalignment_rad = Vec3::Unit(a);
         sig[k][static_cast<std::size_t>(hc[k].mis + a)] = mountSig(CBS, e, v.ctx);
         model::HeadEffects d;
-        d.drift_rad_s = Vec3::Unit(a) / kDay;
+        d.drifts.push_back({Vec3(Vec3::Unit(a) / kDay), 0.0});
         sig[k][static_cast<std::size_t>(hc[k].drift + a)] = mountSig(CBS, d, v.ctx);
         for (const auto& [at, col] : hc[k].steps) {
           model::HeadEffects s;
