@@ -141,6 +141,10 @@ struct LinFam {
   // fit
   MatrixXd G;  ///< Gram of [Xw yw] over the fitting rows
   int n_fit = 0;
+  /// Colour of the noise: lag-1 autocorrelation rho of the whitened rows per component, from first
+  /// differences (which remove constants and slow signals: for AR(1) noise their lag-1 correlation is
+  /// -(1 - rho) / 2), and the variance inflation (1 + rho) / (1 - rho) of slowly varying regressors.
+  double rho = 0, infl = 1;
 };
 
 /// Adds one candidate with `ncol` columns and returns its first column.
@@ -171,6 +175,26 @@ void finishFamily(LinFam& f) {
   f.G.selfadjointView<Eigen::Lower>().rankUpdate(Af.transpose());
   f.G = f.G.selfadjointView<Eigen::Lower>();
   f.n_fit = nf;
+  // noise colour from first differences per component (fitting rows, consecutive in time)
+  std::vector<int> last(f.comp_label.size() + 1, -1);
+  std::vector<double> prevd(f.comp_label.size() + 1, 0.0);
+  std::vector<char> havep(f.comp_label.size() + 1, 0);
+  double num = 0, den = 0;
+  for (int i = 0; i < n; ++i) {
+    if (f.held[static_cast<std::size_t>(i)]) continue;
+    const auto c = static_cast<std::size_t>(f.comp[static_cast<std::size_t>(i)]);
+    if (last[c] >= 0) {
+      const double d = f.yw[i] - f.yw[last[c]];
+      den += d * d;
+      if (havep[c]) num += d * prevd[c];
+      prevd[c] = d;
+      havep[c] = 1;
+    }
+    last[c] = i;
+  }
+  const double r1d = den > 0 ? num / den : -0.5;
+  f.rho = std::clamp(1 + 2 * r1d, 0.0, 0.98);
+  f.infl = (1 + f.rho) / (1 - f.rho);
 }
 
 std::vector<int> colsOf(const LinFam& f, const std::vector<int>& set) {
@@ -241,12 +265,9 @@ Fit fitSet(const LinFam& f, const std::vector<int>& set, bool residual_color = t
     ft.rss = std::max(yy - g.dot(ft.beta), yy * 1e-15);
     ft.rank = rank;
   }
-  if (residual_color) {
-    VectorXd r = f.yw;
-    for (int i = 0; i < p; ++i) r -= f.Xw.col(ft.cols[static_cast<std::size_t>(i)]) * ft.beta[i];
-    ft.rho1 = std::max(0.0, lag1(f, r, false));
-    ft.infl = std::min(100.0, (1 + ft.rho1) / (1 - std::min(ft.rho1, 0.98)));
-  }
+  (void)residual_color;
+  ft.rho1 = f.rho;
+  ft.infl = f.infl;
   ft.n_eff = f.n_fit / ft.infl;
   return ft;
 }
@@ -333,7 +354,8 @@ std::string causeName(const EffectTest& e) {
 
 std::string separateBy(const std::string& a, const std::string& b) {
   auto has = [&](const char* n) { return a == n || b == n; };
-  if (has("time_offset") && (has("relative_misalignment") || has("clock_drift")))
+  if ((has("time_offset") && (has("relative_misalignment") || has("clock_drift"))) ||
+      (has("clock_drift") && (has("drift") || has("relative_misalignment"))))
     return "attitude-rate changes (manoeuvres, or a span in which the rate varies): a time-tag offset moves "
            "with the rate, an alignment does not; a longer span";
   if (has("thermal_periodic") && (has("relative_misalignment") || has("drift") || has("step")))
@@ -453,7 +475,6 @@ void Analyser::buildRelative() {
   // latitude is a constant plus a trend, and its fitted amplitude means nothing.
   thermal_testable = ctx && T_orb > 0 && span_s >= 0.5 * T_orb;
   const bool th_ok = thermal_testable;
-  const double t_mid = 0.5 * span_s;
   // candidates
   struct HeadCols {
     int mis = -1, drift = -1, toff = -1, cdrift = -1;
@@ -489,7 +510,7 @@ void Analyser::buildRelative() {
     Cand to{"time_offset", id, "", 0, 1, {{"offset_ms", "ms", 1e3}}, {}, false, 0};
     hc[k].toff = addCand(f, to);
     Cand cd{"clock_drift", id, "", 0, 1, {{"rate_ppm", "ppm", 1e6}}, {}, false, 0};
-    cd.fixed.push_back({"start_s", "s since start", t_mid, kNaN, kNaN});
+    cd.fixed.push_back({"start_s", "s since start", 0.0, kNaN, kNaN});
     hc[k].cdrift = addCand(f, cd);
   }
   int ab = -1;
@@ -554,7 +575,7 @@ void Analyser::buildRelative() {
       }
       if (v.has_w) {
         sig[k][static_cast<std::size_t>(hc[k].toff)] = v.w;                          // s = w dt
-        sig[k][static_cast<std::size_t>(hc[k].cdrift)] = v.w * (v.t - t_mid);        // s = w rate (t - t_mid)
+        sig[k][static_cast<std::size_t>(hc[k].cdrift)] = v.w * v.t;  // s = w rate (t - start)
       }
       if (ab >= 0 && v.has_ctx) {
         const Mat3 C_I_B = v.q.toRotationMatrix();
@@ -650,7 +671,7 @@ void Analyser::buildAcc() {
   Cand to{"time_offset", "acc", "", 0, 1, {{"offset_ms", "ms", 1e3}}, {}, false, 0};
   const int ct = addCand(f, to);
   Cand cd{"clock_drift", "acc", "", 0, 1, {{"rate_ppm", "ppm", 1e6}}, {}, false, 0};
-  cd.fixed.push_back({"start_s", "s since start", 0.5 * span_s, kNaN, kNaN});
+  cd.fixed.push_back({"start_s", "s since start", 0.0, kNaN, kNaN});
   const int cc = addCand(f, cd);
   // per-axis scatter for the weights
   Vec3 s1 = Vec3::Zero(), s2 = Vec3::Zero();
@@ -710,7 +731,7 @@ void Analyser::buildAcc() {
         f.Xp(r, cm + q) = Mm(a, q);
       }
       f.Xp(r, ct) = -j[a];
-      f.Xp(r, cc) = -j[a] * (t - 0.5 * span_s);
+      f.Xp(r, cc) = -j[a] * t;
       f.t.push_back(t);
       f.comp.push_back(a);
       f.held.push_back(bv[i].held);
@@ -746,7 +767,7 @@ void Analyser::buildReference() {
   Cand to{"time_offset", "all", "", 0, 1, {{"offset_ms", "ms", 1e3}}, {}, false, 0};
   const int ct = addCand(f, to);
   Cand cd{"clock_drift", "all", "", 0, 1, {{"rate_ppm", "ppm", 1e6}}, {}, false, 0};
-  cd.fixed.push_back({"start_s", "s since start", 0.5 * span_s, kNaN, kNaN});
+  cd.fixed.push_back({"start_s", "s since start", 0.0, kNaN, kNaN});
   const int cc = addCand(f, cd);
   // per-axis scatter about the mean, for the weights
   Vec3 s1 = Vec3::Zero(), s2 = Vec3::Zero();
@@ -772,7 +793,7 @@ void Analyser::buildReference() {
       f.Xp(r, cmis + a) = 1.0;
       if (v.has_w) {
         f.Xp(r, ct) = -v.w[a];
-        f.Xp(r, cc) = -v.w[a] * (v.t - 0.5 * span_s);
+        f.Xp(r, cc) = -v.w[a] * v.t;
       }
       f.t.push_back(v.t);
       f.comp.push_back(a);
@@ -790,146 +811,125 @@ void Analyser::buildReference() {
   fams.push_back(std::move(f));
 }
 
-/// Per-head noise covariance (B) from pair first differences: D_ij = 2 (S_i + S_j) per difference,
-/// separated by least squares over the pairs (three or more heads); with two heads a common scale of
-/// the configured model.
-bool headCovariances(const Collector::Impl& c, const std::array<PairNoiseSum, kMaxPairs>& ns, std::array<Mat3, kMaxHeads>& out,
-                     bool& separated) {
-  const int H = c.n_heads;
-  std::vector<Mat3> D;
-  std::vector<std::pair<int, int>> pr;
-  for (int i = 0; i < H; ++i)
-    for (int j = i + 1; j < H; ++j) {
-      const auto& s = ns[static_cast<std::size_t>(pairOf(i, j, H))];
-      if (s.n < 3) continue;
-      D.push_back(s.sdd / (2 * s.n));
-      pr.emplace_back(i, j);
-    }
-  if (D.empty()) return false;
-  // which heads are in some pair
-  std::vector<int> deg(static_cast<std::size_t>(H), 0);
-  for (auto [i, j] : pr) ++deg[i], ++deg[j];
-  separated = false;
-  if (H >= 3 && static_cast<int>(pr.size()) >= H) {
-    MatrixXd A = MatrixXd::Zero(static_cast<int>(pr.size()), H);
-    for (std::size_t p = 0; p < pr.size(); ++p) A(static_cast<int>(p), pr[p].first) = A(static_cast<int>(p), pr[p].second) = 1;
-    const auto cod = A.completeOrthogonalDecomposition();
-    if (cod.rank() == H) {
-      separated = true;
-      for (int k = 0; k < H; ++k) out[k] = Mat3::Zero();
-      for (int r = 0; r < 3; ++r)
-        for (int s = 0; s < 3; ++s) {
-          VectorXd y(static_cast<int>(pr.size()));
-          for (std::size_t p = 0; p < pr.size(); ++p) y[static_cast<int>(p)] = D[p](r, s);
-          const VectorXd x = cod.solve(y);
-          for (int k = 0; k < H; ++k) out[k](r, s) = x[k];
-        }
-      return true;
-    }
-  }
-  // common scale of the model
-  double num = 0, den = 0;
-  for (std::size_t p = 0; p < pr.size(); ++p) {
-    const Mat3 M = c.cov_model_B[pr[p].first] + c.cov_model_B[pr[p].second];
-    num += (M.inverse() * D[p]).trace();
-    den += 3;
-  }
-  const double kappa = num / den;
-  for (int k = 0; k < H; ++k) out[k] = kappa * c.cov_model_B[k];
-  return true;
-}
+/// Per-head noise levels from pair first differences. Each head's per-sample noise has the model's
+/// structure, c_k^2 (I - b b^T) + a_k^2 b b^T in its own frame (cross-boresight level c_k, about the
+/// boresight a_k), so a pair's difference covariance D_ij = 2 (S_i + S_j) is linear in the levels:
+/// weighted least squares over the six distinct elements of every pair's D, weights from the covariance
+/// of a sample covariance of Gaussian differences (Wishart; first differences of white noise have
+/// lag-1 correlation -1/2, about 2n/3 effective samples). Two passes: weights at the configured levels,
+/// then at the first estimate. Works with two heads (four levels from six elements).
+struct NoiseLevels {
+  bool ok = false;
+  std::array<double, kMaxHeads> cross2{}, about2{};        ///< rad^2
+  std::array<double, kMaxHeads> se_cross2{}, se_about2{};  ///< 1-sigma
+};
 
-/// Head-frame levels (cross, about) of a B covariance, rad^2.
-std::pair<double, double> headLevels(const Collector::Impl& c, int k, const Mat3& cov_B) {
-  const Mat3 CSB = c.C_B_S[k].transpose();
-  const Mat3 S = CSB * cov_B * CSB.transpose();
-  Vec3 e1, e2, b;
-  model::boresightBasis(c.cfg.heads.head[k].boresight_Si, e1, e2, b);
-  return {0.5 * (e1.dot(S * e1) + e2.dot(S * e2)), b.dot(S * b)};
+NoiseLevels noiseLevels(const Collector::Impl& c, const std::array<PairNoiseSum, kMaxPairs>& ns) {
+  NoiseLevels out;
+  const int H = c.n_heads;
+  std::array<Mat3, kMaxHeads> P{}, B{};
+  for (int k = 0; k < H; ++k) {
+    Vec3 e1, e2, bb;
+    model::boresightBasis(c.cfg.heads.head[k].boresight_Si, e1, e2, bb);
+    const Vec3 bB = c.C_B_S[k] * bb;
+    B[k] = bB * bB.transpose();
+    P[k] = Mat3::Identity() - B[k];
+    out.cross2[k] = std::pow(c.cfg.heads.head[k].sigma_cross_rad, 2);
+    out.about2[k] = std::pow(c.cfg.heads.head[k].sigma_roll_rad, 2);
+  }
+  const std::array<std::pair<int, int>, 6> el = {{{0, 0}, {1, 1}, {2, 2}, {0, 1}, {0, 2}, {1, 2}}};
+  for (int pass = 0; pass < 2; ++pass) {
+    MatrixXd N = MatrixXd::Zero(2 * H, 2 * H);
+    VectorXd r = VectorXd::Zero(2 * H);
+    int used = 0;
+    for (int i = 0; i < H; ++i)
+      for (int j = i + 1; j < H; ++j) {
+        const auto& s = ns[static_cast<std::size_t>(pairOf(i, j, H))];
+        if (s.n < 3) continue;
+        ++used;
+        const Mat3 D = s.sdd / s.n;  // per difference: 2 (S_i + S_j)
+        const Mat3 Dm = 2 * (out.cross2[i] * P[i] + out.about2[i] * B[i] + out.cross2[j] * P[j] + out.about2[j] * B[j]);
+        const double neff = std::max(1.0, 2.0 * s.n / 3.0);
+        Eigen::Matrix<double, 6, 6> C;
+        for (int a = 0; a < 6; ++a)
+          for (int b2 = 0; b2 < 6; ++b2) {
+            const auto [r1, s1] = el[static_cast<std::size_t>(a)];
+            const auto [t1, u1] = el[static_cast<std::size_t>(b2)];
+            C(a, b2) = (Dm(r1, t1) * Dm(s1, u1) + Dm(r1, u1) * Dm(s1, t1)) / neff;
+          }
+        Eigen::Matrix<double, 6, 1> y;
+        Eigen::Matrix<double, 6, Eigen::Dynamic> A = Eigen::Matrix<double, 6, Eigen::Dynamic>::Zero(6, 2 * H);
+        for (int a = 0; a < 6; ++a) {
+          const auto [r1, s1] = el[static_cast<std::size_t>(a)];
+          y[a] = D(r1, s1);
+          A(a, 2 * i) = 2 * P[i](r1, s1);
+          A(a, 2 * i + 1) = 2 * B[i](r1, s1);
+          A(a, 2 * j) = 2 * P[j](r1, s1);
+          A(a, 2 * j + 1) = 2 * B[j](r1, s1);
+        }
+        const Eigen::Matrix<double, 6, 6> W = C.inverse();
+        N += A.transpose() * W * A;
+        r += A.transpose() * W * y;
+      }
+    if (used == 0) return out;
+    const auto cod = N.completeOrthogonalDecomposition();
+    if (cod.rank() < 2 * H) return out;
+    const VectorXd th = cod.solve(r);
+    const MatrixXd cov = cod.pseudoInverse();
+    for (int k = 0; k < H; ++k) {
+      const double floor_c = 1e-4 * std::pow(c.cfg.heads.head[k].sigma_cross_rad, 2);
+      const double floor_a = 1e-4 * std::pow(c.cfg.heads.head[k].sigma_roll_rad, 2);
+      out.cross2[k] = std::max(th[2 * k], floor_c);
+      out.about2[k] = std::max(th[2 * k + 1], floor_a);
+      out.se_cross2[k] = std::sqrt(std::max(0.0, cov(2 * k, 2 * k)));
+      out.se_about2[k] = std::sqrt(std::max(0.0, cov(2 * k + 1, 2 * k + 1)));
+    }
+    out.ok = true;
+  }
+  return out;
 }
 
 void Analyser::estimateNoise(std::vector<EffectTest>& out) {
   const int H = c.n_heads;
   if (H < 2) return;
   std::array<PairNoiseSum, kMaxPairs> tot{};
-  const int K = 8;
-  std::vector<std::array<PairNoiseSum, kMaxPairs>> blk(K);
-  for (std::size_t i = 0; i < c.bins.size(); ++i) {
-    const int kb = std::min(K - 1, static_cast<int>(bv[i].t / std::max(span_s, 1e-9) * K));
+  for (const auto& b : c.bins)
     for (int p = 0; p < kMaxPairs; ++p) {
-      tot[p].n += c.bins[i].noise[p].n;
-      tot[p].sdd += c.bins[i].noise[p].sdd;
-      blk[kb][p].n += c.bins[i].noise[p].n;
-      blk[kb][p].sdd += c.bins[i].noise[p].sdd;
+      tot[p].n += b.noise[p].n;
+      tot[p].sdd += b.noise[p].sdd;
     }
+  const NoiseLevels L = noiseLevels(c, tot);
+  if (!L.ok) {
+    R.baseline.missing.push_back("noise: too few consecutive epochs with two heads");
+    return;
   }
-  bool sep = false;
-  if (!headCovariances(c, tot, cov_est, sep)) return;
   noise_est = true;
-  // keep the estimate positive definite (floor at 1 % of the model's level per axis)
   for (int k = 0; k < H; ++k) {
-    Eigen::SelfAdjointEigenSolver<Mat3> es(cov_est[k]);
-    Vec3 ev = es.eigenvalues();
-    const double floor = 1e-4 * c.cov_model_B[k].trace() / 3;
-    for (int a = 0; a < 3; ++a) ev[a] = std::max(ev[a], floor);
-    cov_est[k] = es.eigenvectors() * ev.asDiagonal() * es.eigenvectors().transpose();
+    Vec3 e1, e2, bb;
+    model::boresightBasis(c.cfg.heads.head[k].boresight_Si, e1, e2, bb);
+    const Vec3 bB = c.C_B_S[k] * bb;
+    cov_est[k] = L.cross2[k] * (Mat3::Identity() - bB * bB.transpose()) + L.about2[k] * bB * bB.transpose();
   }
-  // jackknife over time blocks for the standard error of log levels
-  std::vector<std::array<Mat3, kMaxHeads>> jk;
-  for (int drop = 0; drop < K; ++drop) {
-    std::array<PairNoiseSum, kMaxPairs> s = tot;
-    bool any = false;
-    for (int p = 0; p < kMaxPairs; ++p) {
-      s[p].n -= blk[drop][p].n;
-      s[p].sdd -= blk[drop][p].sdd;
-      any |= blk[drop][p].n > 0;
-    }
-    if (!any) continue;
-    std::array<Mat3, kMaxHeads> e{};
-    bool sp = false;
-    if (headCovariances(c, s, e, sp) && sp == sep) jk.push_back(e);
-  }
-  const int nj = static_cast<int>(jk.size());
-  const int heads_tested = sep ? H : 1;
-  for (int kk = 0; kk < heads_tested; ++kk) {
-    const int k = sep ? kk : 0;
-    const auto [cross, about] = headLevels(c, k, cov_est[k]);
+  for (int k = 0; k < H; ++k) {
     const auto& hcfg = c.cfg.heads.head[k];
-    const double mc = hcfg.sigma_cross_rad * hcfg.sigma_cross_rad, ma = hcfg.sigma_roll_rad * hcfg.sigma_roll_rad;
     for (int which = 0; which < 2; ++which) {
-      const double est = which == 0 ? cross : about;
-      const double mod = which == 0 ? mc : ma;
-      double se = kNaN;
-      if (nj >= 4) {
-        std::vector<double> lv;
-        for (const auto& e : jk) {
-          const auto lv2 = headLevels(c, k, e[k]);
-          const double v = which == 0 ? lv2.first : lv2.second;
-          if (v > 0) lv.push_back(std::log(v));
-        }
-        const double m = std::accumulate(lv.begin(), lv.end(), 0.0) / static_cast<double>(lv.size());
-        double ss = 0;
-        for (double v : lv) ss += (v - m) * (v - m);
-        const double n = static_cast<double>(lv.size());
-        se = std::sqrt((n - 1) / n * ss);
-      }
-      if (!(se > 0)) {
-        double nd = 0;
-        for (int p = 0; p < kMaxPairs; ++p) nd += tot[p].n;
-        se = std::sqrt(3.0 / std::max(1.0, nd / std::max(1, H - 1)));
-      }
+      const double est = which == 0 ? L.cross2[k] : L.about2[k];
+      const double se = which == 0 ? L.se_cross2[k] : L.se_about2[k];
+      const double mod = std::pow(which == 0 ? hcfg.sigma_cross_rad : hcfg.sigma_roll_rad, 2);
       EffectTest t;
       t.name = which == 0 ? "cross_noise" : "anisotropic_noise";
-      t.sensor = sep ? std::to_string(c.ids[k]) : "all";
+      t.sensor = std::to_string(c.ids[k]);
       t.family = "noise";
       t.dof = 1;
-      const double z = est > 0 ? std::log(est / mod) / se : -1e9;
+      // log ratio over its standard error (delta method at the estimate)
+      const double se_log = se / est;
+      const double z = std::log(est / mod) / std::max(se_log, 1e-12);
       t.statistic = std::abs(z);
       t.p_value = stats::normalSf2(z);
-      t.note = "|ln(estimated / configured variance)| / its jackknife standard error over 8 time blocks; "
-               "per-sample levels from pair first differences" + std::string(sep ? ", heads separated by the pairs" : ", two heads: one common scale");
-      const double lvl = std::sqrt(std::max(est, 0.0)) * kArcsecPerRad;
-      t.params.push_back({which == 0 ? "cross_arcsec" : "about_arcsec", "arcsec", lvl, 0.5 * lvl * se, kNaN});
+      t.note = "|ln(estimated / configured variance)| over its standard error; per-sample levels of every head from "
+               "the pairs' first differences by weighted least squares (cross and about-boresight levels per head)";
+      const double lvl = std::sqrt(est) * kArcsecPerRad;
+      t.params.push_back({which == 0 ? "cross_arcsec" : "about_arcsec", "arcsec", lvl, 0.5 * lvl * se_log, kNaN});
       t.params.push_back({which == 0 ? "configured_cross_arcsec" : "configured_about_arcsec", "arcsec",
                           std::sqrt(mod) * kArcsecPerRad, kNaN, kNaN});
       out.push_back(t);
