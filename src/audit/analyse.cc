@@ -822,6 +822,8 @@ struct NoiseLevels {
   bool ok = false;
   std::array<double, kMaxHeads> cross2{}, about2{};        ///< rad^2
   std::array<double, kMaxHeads> se_cross2{}, se_about2{};  ///< 1-sigma
+  std::array<int, kMaxHeads> active{};                     ///< index of the head's unknowns, -1: no data
+  bool common_cross = false;  ///< one cross-boresight scale for every head (two heads)
 };
 
 NoiseLevels noiseLevels(const Collector::Impl& c, const std::array<PairNoiseSum, kMaxPairs>& ns) {
@@ -838,53 +840,91 @@ NoiseLevels noiseLevels(const Collector::Impl& c, const std::array<PairNoiseSum,
     out.about2[k] = std::pow(c.cfg.heads.head[k].sigma_roll_rad, 2);
   }
   const std::array<std::pair<int, int>, 6> el = {{{0, 0}, {1, 1}, {2, 2}, {0, 1}, {0, 2}, {1, 2}}};
-  for (int pass = 0; pass < 2; ++pass) {
-    MatrixXd N = MatrixXd::Zero(2 * H, 2 * H);
-    VectorXd r = VectorXd::Zero(2 * H);
-    int used = 0;
-    for (int i = 0; i < H; ++i)
-      for (int j = i + 1; j < H; ++j) {
-        const auto& s = ns[static_cast<std::size_t>(pairOf(i, j, H))];
-        if (s.n < 3) continue;
-        ++used;
-        const Mat3 D = s.sdd / s.n;  // per difference: 2 (S_i + S_j)
-        const Mat3 Dm = 2 * (out.cross2[i] * P[i] + out.about2[i] * B[i] + out.cross2[j] * P[j] + out.about2[j] * B[j]);
-        const double neff = std::max(1.0, 2.0 * s.n / 3.0);
-        Eigen::Matrix<double, 6, 6> C;
-        for (int a = 0; a < 6; ++a)
-          for (int b2 = 0; b2 < 6; ++b2) {
-            const auto [r1, s1] = el[static_cast<std::size_t>(a)];
-            const auto [t1, u1] = el[static_cast<std::size_t>(b2)];
-            C(a, b2) = (Dm(r1, t1) * Dm(s1, u1) + Dm(r1, u1) * Dm(s1, t1)) / neff;
-          }
-        Eigen::Matrix<double, 6, 1> y;
-        Eigen::Matrix<double, 6, Eigen::Dynamic> A = Eigen::Matrix<double, 6, Eigen::Dynamic>::Zero(6, 2 * H);
-        for (int a = 0; a < 6; ++a) {
-          const auto [r1, s1] = el[static_cast<std::size_t>(a)];
-          y[a] = D(r1, s1);
-          A(a, 2 * i) = 2 * P[i](r1, s1);
-          A(a, 2 * i + 1) = 2 * B[i](r1, s1);
-          A(a, 2 * j) = 2 * P[j](r1, s1);
-          A(a, 2 * j + 1) = 2 * B[j](r1, s1);
-        }
-        const Eigen::Matrix<double, 6, 6> W = C.inverse();
-        N += A.transpose() * W * A;
-        r += A.transpose() * W * y;
+  // unknowns only for the heads that appear in a pair with data (a configured head without data keeps
+  // its configured levels and is not tested)
+  std::array<int, kMaxHeads> ix{};
+  ix.fill(-1);
+  int na = 0;
+  for (int i = 0; i < H; ++i)
+    for (int j = i + 1; j < H; ++j)
+      if (ns[static_cast<std::size_t>(pairOf(i, j, H))].n >= 3) {
+        if (ix[i] < 0) ix[i] = na++;
+        if (ix[j] < 0) ix[j] = na++;
       }
-    if (used == 0) return out;
-    const auto cod = N.completeOrthogonalDecomposition();
-    if (cod.rank() < 2 * H) return out;
-    const VectorXd th = cod.solve(r);
-    const MatrixXd cov = cod.pseudoInverse();
+  out.active = ix;
+  // Parametrisation: c_k^2 = sx[k] theta[cx[k]], a_k^2 = theta[ax[k]]. With two heads only the sum of the
+  // cross-boresight levels is observable (a pair's difference sees c_i^2 + c_j^2 along every axis): one
+  // common cross scale then, in the configured ratio.
+  std::array<int, kMaxHeads> cx{}, ax{};
+  std::array<double, kMaxHeads> sx{};
+  int ref = -1;
+  for (int k = 0; k < H; ++k)
+    if (ix[k] >= 0 && ref < 0) ref = k;
+  for (int attempt = 0; attempt < 2; ++attempt) {
+    const bool common = attempt == 1;
+    const int nu = common ? na + 1 : 2 * na;
     for (int k = 0; k < H; ++k) {
-      const double floor_c = 1e-4 * std::pow(c.cfg.heads.head[k].sigma_cross_rad, 2);
-      const double floor_a = 1e-4 * std::pow(c.cfg.heads.head[k].sigma_roll_rad, 2);
-      out.cross2[k] = std::max(th[2 * k], floor_c);
-      out.about2[k] = std::max(th[2 * k + 1], floor_a);
-      out.se_cross2[k] = std::sqrt(std::max(0.0, cov(2 * k, 2 * k)));
-      out.se_about2[k] = std::sqrt(std::max(0.0, cov(2 * k + 1, 2 * k + 1)));
+      if (ix[k] < 0) continue;
+      cx[k] = common ? 0 : 2 * ix[k];
+      ax[k] = common ? 1 + ix[k] : 2 * ix[k] + 1;
+      sx[k] = common ? std::pow(c.cfg.heads.head[k].sigma_cross_rad / c.cfg.heads.head[ref].sigma_cross_rad, 2) : 1.0;
     }
-    out.ok = true;
+    bool solved = true;
+    for (int pass = 0; pass < 2 && solved; ++pass) {
+      MatrixXd N = MatrixXd::Zero(nu, nu);
+      VectorXd r = VectorXd::Zero(nu);
+      int used = 0;
+      for (int i = 0; i < H; ++i)
+        for (int j = i + 1; j < H; ++j) {
+          const auto& sm = ns[static_cast<std::size_t>(pairOf(i, j, H))];
+          if (sm.n < 3) continue;
+          ++used;
+          const Mat3 D = sm.sdd / sm.n;  // per difference: 2 (S_i + S_j)
+          const Mat3 Dm = 2 * (out.cross2[i] * P[i] + out.about2[i] * B[i] + out.cross2[j] * P[j] + out.about2[j] * B[j]);
+          const double neff = std::max(1.0, 2.0 * sm.n / 3.0);
+          Eigen::Matrix<double, 6, 6> C;
+          for (int e1 = 0; e1 < 6; ++e1)
+            for (int e2 = 0; e2 < 6; ++e2) {
+              const auto [r1, s1] = el[static_cast<std::size_t>(e1)];
+              const auto [t1, u1] = el[static_cast<std::size_t>(e2)];
+              C(e1, e2) = (Dm(r1, t1) * Dm(s1, u1) + Dm(r1, u1) * Dm(s1, t1)) / neff;
+            }
+          Eigen::Matrix<double, 6, 1> y;
+          Eigen::Matrix<double, 6, Eigen::Dynamic> A = Eigen::Matrix<double, 6, Eigen::Dynamic>::Zero(6, nu);
+          for (int e1 = 0; e1 < 6; ++e1) {
+            const auto [r1, s1] = el[static_cast<std::size_t>(e1)];
+            y[e1] = D(r1, s1);
+            for (int k : {i, j}) {
+              A(e1, cx[k]) += 2 * sx[k] * P[k](r1, s1);
+              A(e1, ax[k]) += 2 * B[k](r1, s1);
+            }
+          }
+          const Eigen::Matrix<double, 6, 6> W = C.inverse();
+          N += A.transpose() * W * A;
+          r += A.transpose() * W * y;
+        }
+      if (used == 0) return out;
+      const auto cod = N.completeOrthogonalDecomposition();
+      if (cod.rank() < nu) {
+        solved = false;
+        break;
+      }
+      const VectorXd th = cod.solve(r);
+      const MatrixXd cov = cod.pseudoInverse();
+      for (int k = 0; k < H; ++k) {
+        if (ix[k] < 0) continue;
+        const double floor_c = 1e-4 * std::pow(c.cfg.heads.head[k].sigma_cross_rad, 2);
+        const double floor_a = 1e-4 * std::pow(c.cfg.heads.head[k].sigma_roll_rad, 2);
+        out.cross2[k] = std::max(sx[k] * th[cx[k]], floor_c);
+        out.about2[k] = std::max(th[ax[k]], floor_a);
+        out.se_cross2[k] = sx[k] * std::sqrt(std::max(0.0, cov(cx[k], cx[k])));
+        out.se_about2[k] = std::sqrt(std::max(0.0, cov(ax[k], ax[k])));
+      }
+      out.ok = true;
+      out.common_cross = common;
+    }
+    if (solved) return out;
+    out.ok = false;
   }
   return out;
 }
@@ -910,15 +950,19 @@ void Analyser::estimateNoise(std::vector<EffectTest>& out) {
     const Vec3 bB = c.C_B_S[k] * bb;
     cov_est[k] = L.cross2[k] * (Mat3::Identity() - bB * bB.transpose()) + L.about2[k] * bB * bB.transpose();
   }
+  bool cross_done = false;
   for (int k = 0; k < H; ++k) {
+    if (L.active[k] < 0) continue;
     const auto& hcfg = c.cfg.heads.head[k];
     for (int which = 0; which < 2; ++which) {
+      if (which == 0 && L.common_cross && cross_done) continue;
+      if (which == 0) cross_done = true;
       const double est = which == 0 ? L.cross2[k] : L.about2[k];
       const double se = which == 0 ? L.se_cross2[k] : L.se_about2[k];
       const double mod = std::pow(which == 0 ? hcfg.sigma_cross_rad : hcfg.sigma_roll_rad, 2);
       EffectTest t;
       t.name = which == 0 ? "cross_noise" : "anisotropic_noise";
-      t.sensor = std::to_string(c.ids[k]);
+      t.sensor = (which == 0 && L.common_cross) ? "all" : std::to_string(c.ids[k]);
       t.family = "noise";
       t.dof = 1;
       // log ratio over its standard error (delta method at the estimate)
