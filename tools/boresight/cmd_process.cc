@@ -1,4 +1,5 @@
 // boresight process --config FILE INPUT... --out FILE.csv: the real-time core over recorded telemetry.
+#include <boresight/audit/reference.h>
 #include <boresight/core/pipeline.h>
 #include <boresight/io/core_config.h>
 #include <boresight/io/lcm_log.h>
@@ -62,62 +63,6 @@ const char* kUsage =
     "files and LCM logs are not mixed in one run. Every record read is reported as used or rejected\n"
     "with its reason.\n";
 
-/// Receiver time -> GPS time from CLK1B (t_gps = t_rcv + eps_time, linear between records).
-struct ClockMap {
-  std::vector<io::ClkRecord> r;
-  double epsAt(TimeUs t) const {
-    if (r.empty()) return 0.0;
-    if (t <= r.front().t) return r.front().eps_time;
-    // First record at or after t (records in time order, as CLK1B files are).
-    auto it = std::lower_bound(r.begin(), r.end(), t, [](const io::ClkRecord& c, TimeUs v) { return c.t < v; });
-    if (it == r.end()) return r.back().eps_time;
-    const auto& a = *(it - 1);
-    const auto& b = *it;
-    double f = double(t - a.t) / double(std::max<TimeUs>(1, b.t - a.t));
-    return a.eps_time + f * (b.eps_time - a.eps_time);
-  }
-};
-
-struct Comparison {
-  int n = 0;
-  Vec3 mean = Vec3::Zero(), sd = Vec3::Zero();
-};
-
-/// The SCA1B rows as the comparison needs them: GPS seconds and the normalised attitude.
-struct RefRow {
-  double t;
-  Quat q;
-};
-
-/// Difference SCA1B -> fused (small rotation in body axes, arcsec) with the fused attitude taken at
-/// each SCA1B tag + shift_s (slerp between the two rows around it; row tags mapped to GPS time).
-Comparison compareAt(const std::vector<std::pair<double, Quat>>& fused, const std::vector<RefRow>& ref,
-                     double shift_s) {
-  Comparison c;
-  Vec3 sum = Vec3::Zero(), sum2 = Vec3::Zero();
-  for (const auto& s : ref) {
-    double t = s.t + shift_s;
-    auto it = std::lower_bound(fused.begin(), fused.end(), t,
-                               [](const std::pair<double, Quat>& a, double v) { return a.first < v; });
-    if (it == fused.begin() || it == fused.end()) continue;
-    auto prev = it - 1;
-    if (it->first - prev->first > 1.5) continue;
-    double f = (t - prev->first) / (it->first - prev->first);
-    Quat q = prev->second.slerp(f, it->second);
-    Eigen::AngleAxisd d(q.conjugate() * s.q);
-    double ang = d.angle() > kPi ? d.angle() - 2 * kPi : d.angle();
-    Vec3 e = ang * d.axis() * kArcsecPerRad;
-    sum += e;
-    sum2 += e.cwiseProduct(e);
-    ++c.n;
-  }
-  if (c.n > 0) {
-    c.mean = sum / c.n;
-    c.sd = ((sum2 / c.n - c.mean.cwiseProduct(c.mean)).cwiseMax(0.0) * (c.n / std::max(1.0, c.n - 1.0))).cwiseSqrt();
-  }
-  return c;
-}
-
 /// The fused attitude of each row with heads (40 bytes a row: what the SCA1B comparison needs).
 class AttitudeTrack final : public stream::RowSink {
  public:
@@ -128,102 +73,33 @@ class AttitudeTrack final : public stream::RowSink {
   std::vector<std::pair<TimeUs, Quat>> rows;
 };
 
-/// Opens an SCA1B file as a check before the replay (so a wrong path fails fast): false with *error.
-bool checkSca1b(const std::string& path, std::string* error) {
-  io::LineStream probe;
-  if (!probe.open(path, {}, error, 4096)) return false;
-  if (probe.header().product != io::Product::SCA1B) {
-    if (error) *error = path + ":1: " + probe.header().product_name + " is not an SCA1B product";
-    return false;
-  }
-  return true;
-}
-
-/// Reads the SCA1B records (streamed: the text is not held; GRACE binary SCA1B is read whole).
-bool readSca1b(const std::string& path, std::vector<io::Sca1bRecord>& out, std::string* error) {
-  io::LineStream probe;
-  if (!probe.open(path, {}, error, 4096)) return false;
-  if (probe.header().binary) {
-    auto p = io::readProduct<io::Sca1bRecord>(path);
-    if (!p.ok) {
-      if (error) *error = p.error;
-      return false;
-    }
-    out = std::move(p.records);
-    return true;
-  }
-  io::ProductStream<io::Sca1bRecord> st;
-  if (!st.open(path, {}, error)) return false;
-  io::Sca1bRecord rec;
-  while (st.next(rec)) out.push_back(rec);
-  if (!st.ok()) {
-    if (error) *error = st.error();
-    return false;
-  }
-  return true;
-}
-
 /// Prints the comparison. False with *error when the SCA1B file cannot be read.
-bool compareSca1b(const std::vector<std::pair<TimeUs, Quat>>& rows, const std::string& path, const ClockMap& clk,
+bool compareSca1b(const std::vector<std::pair<TimeUs, Quat>>& rows, const std::string& path, const audit::ClockMap& clk,
                   std::string* error) {
-  std::vector<RefRow> ref;
+  std::vector<audit::TimedAttitude> ref;
   {
     std::vector<io::Sca1bRecord> recs;
-    if (!readSca1b(path, recs, error)) return false;
-    ref.reserve(recs.size());
-    for (const auto& s : recs) ref.push_back({toSeconds(s.t), quatFromScalarFirst(s.q).normalized()});
+    if (!audit::readSca1b(path, recs, error)) return false;
+    ref = audit::referenceSamples(recs);
   }
-  std::vector<std::pair<double, Quat>> fused;
+  std::vector<audit::TimedAttitude> fused;
   fused.reserve(rows.size());
-  for (const auto& r : rows) fused.emplace_back(toSeconds(r.first) + clk.epsAt(r.first), r.second);
-  Comparison c0 = compareAt(fused, ref, 0.0);
+  for (const auto& r : rows) fused.push_back({toSeconds(r.first) + clk.epsAt(r.first), r.second});
+  // Which time shift explains the difference best, on a +-1 s grid of 10 ms (fused taken at t + shift)?
+  const audit::ShiftScan scan = audit::scanTimeShift(fused, ref);
+  const audit::AttitudeDifference& c0 = scan.at_zero;
   if (c0.n == 0) {
     std::printf("SCA1B comparison: no common epochs\n");
     return true;
   }
   const char* ax = "xyz";
   std::printf("\nFused attitude versus SCA1B (%s), %d epochs, rotation SCA1B->fused in body axes%s:\n",
-              path.c_str(), c0.n, clk.r.empty() ? " (receiver time taken as GPS time)" : " (CLK1B applied)");
+              path.c_str(), c0.n, clk.empty() ? " (receiver time taken as GPS time)" : " (CLK1B applied)");
   std::printf("  axis   mean [arcsec]   scatter [arcsec]\n");
   for (int i = 0; i < 3; ++i) std::printf("  %c      %12.2f   %12.2f\n", ax[i], c0.mean[i], c0.sd[i]);
-  // Which time shift explains the difference best, on a +-1 s grid of 10 ms (fused taken at t + shift)?
-  // For small shifts the mean difference is close to linear in the shift (the rate about each axis
-  // times the shift), so its norm is convex along the grid: a scan in 100 ms steps finds the
-  // neighbourhood and a 10 ms scan within +-100 ms of the best coarse point finds the grid minimum
-  // (42 evaluations instead of 201; same choice, same rule: smallest norm, at least half the epochs).
-  std::map<int, Comparison> seen;
-  seen[0] = c0;
-  auto eval = [&](int k) {
-    auto it = seen.find(k);
-    if (it == seen.end()) it = seen.emplace(k, compareAt(fused, ref, k * 0.01)).first;
-    return it->second;
-  };
-  auto pick = [&](int lo, int hi, int step, int& best_k) {
-    double best = c0.mean.norm();
-    for (int k = lo; k <= hi; k += step) {
-      Comparison c = eval(k);
-      if (c.n >= c0.n / 2 && c.mean.norm() < best) {
-        best = c.mean.norm();
-        best_k = k;
-      }
-    }
-  };
-  int coarse_k = 0, best_k = 0;
-  pick(-100, 100, 10, coarse_k);
-  pick(std::max(-100, coarse_k - 10), std::min(100, coarse_k + 10), 1, best_k);
-  // The full scan's rule (first strict minimum in grid order) over every point evaluated.
-  {
-    double best = c0.mean.norm();
-    best_k = 0;
-    for (const auto& [k, c] : seen)
-      if (c.n >= c0.n / 2 && c.mean.norm() < best) {
-        best = c.mean.norm();
-        best_k = k;
-      }
-  }
-  const Comparison cb = seen[best_k];
+  const audit::AttitudeDifference& cb = scan.best;
   std::printf("  smallest mean difference with the fused attitude taken at SCA1B time %+.2f s: %d epochs\n",
-              best_k * 0.01, cb.n);
+              scan.best_shift_s, cb.n);
   for (int i = 0; i < 3; ++i) std::printf("  %c      %12.2f   %12.2f\n", ax[i], cb.mean[i], cb.sd[i]);
   return true;
 }
@@ -253,20 +129,14 @@ int runProcess(int argc, char** argv) {
     return 1;
   }
   // The comparison files are checked before the replay: a wrong path fails at once, not after it.
-  if (!compare.empty() && !checkSca1b(compare, &err)) {
+  if (!compare.empty() && !audit::checkSca1b(compare, &err)) {
     std::fprintf(stderr, "boresight process: %s\n", err.c_str());
     return 1;
   }
   if (!clk1b.empty()) {
     if (compare.empty()) std::printf("%s: --clk1b is used only with --compare-sca1b: ignored\n", clk1b.c_str());
-    io::LineStream probe;
-    if (!probe.open(clk1b, {}, &err, 4096)) {
+    if (!audit::checkClk1b(clk1b, &err)) {
       std::fprintf(stderr, "boresight process: %s\n", err.c_str());
-      return 1;
-    }
-    if (probe.header().product != io::Product::CLK1B) {
-      std::fprintf(stderr, "boresight process: %s:1: %s is not a CLK1B product\n", clk1b.c_str(),
-                   probe.header().product_name.c_str());
       return 1;
     }
   }
@@ -330,15 +200,10 @@ int runProcess(int argc, char** argv) {
   printCoreHealth(engine.health());
 
   if (!compare.empty()) {
-    ClockMap clk;
-    if (!clk1b.empty()) {
-      auto c = io::readProduct<io::ClkRecord>(clk1b);
-      if (!c.ok) {
-        std::fprintf(stderr, "boresight process: %s\n", c.error.c_str());
-        return 1;
-      }
-      for (const auto& r : c.records)
-        if (r.qualflg.value == 0) clk.r.push_back(r);
+    audit::ClockMap clk;
+    if (!clk1b.empty() && !audit::loadClk1b({clk1b}, clk, &err)) {
+      std::fprintf(stderr, "boresight process: %s\n", err.c_str());
+      return 1;
     }
     if (!compareSca1b(track.rows, compare, clk, &err)) {
       std::fprintf(stderr, "boresight process: %s\n", err.c_str());

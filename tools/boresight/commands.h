@@ -12,5 +12,6 @@ int runPlot(int argc, char** argv);
 int runCalibrate(int argc, char** argv);
 int runGround(int argc, char** argv);
 int runSimulateGround(int argc, char** argv);
+int runAudit(int argc, char** argv);
 
 }  // namespace boresight::cli

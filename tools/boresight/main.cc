@@ -29,6 +29,10 @@ const Command kCommands[] = {
     {"calibrate", "method A: each head's mounting-error angles with sigma, Cramer-Rao bound, observability",
      boresight::cli::runCalibrate},
 #endif
+#ifdef BORESIGHT_HAVE_AUDIT
+    {"audit", "model audit: what the model gets wrong in measured data, the named cause, the gain of extending it",
+     boresight::cli::runAudit},
+#endif
 #ifdef BORESIGHT_HAVE_GROUND
     {"ground", "star sensor to IMU mounting from a ground measurement (method C)", boresight::cli::runGround},
     {"simulate-ground", "simulate a method C ground measurement with its truth", boresight::cli::runSimulateGround},

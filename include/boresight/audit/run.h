@@ -1,0 +1,59 @@
+// The model audit over recorded telemetry: what `boresight audit` runs and what the real-sample test
+// runs, in one place.
+//
+//   files -> stream::classifyInputs / prepareConfig (SCA1A, ACC1A, QSA1B mountings, LCM log)
+//         -> stream::Engine (-> Collector as InputObserver and RowSink)
+//   GNI1B / GNV1B -> model::OrbitSample -> Collector::addOrbit (before the replay)
+//   SCA1B (+ CLK1B) -> ReferenceFeed -> Collector::addReference (interleaved with the head epochs)
+//   -> analyse() -> AuditResult
+//
+// Other Level-1 products among the inputs are listed as ignored (not an error).
+#pragma once
+
+#include <boresight/audit/audit.h>
+#include <boresight/core/pipeline.h>
+#include <boresight/stream/source.h>
+
+#include <functional>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace boresight::audit {
+
+struct RunRequest {
+  std::string config;               ///< platform file (config/gracefo.yaml)
+  std::vector<std::string> inputs;  ///< Level-1 files or LCM logs, recognised by content
+  AuditOptions options;
+  std::string truth;                ///< a simulator's truth.yaml (empty: none)
+  double lookahead_s = 2.0;         ///< out-of-order tolerance of the inputs
+  bool strict = false;              ///< stop at the first malformed input line
+  /// Progress while replaying (every `progress_every_s` of data time), e.g. to stderr; may be empty.
+  std::function<void(const std::string&)> progress;
+  double progress_every_s = 6 * 3600.0;
+};
+
+struct RunOutput {
+  AuditResult result;
+  std::vector<std::string> inputs;   ///< "FILE: role" for every file used
+  std::vector<std::string> notes;    ///< ignored files, the reference's time base, ...
+  std::string reference_time_base;   ///< empty without SCA1B
+  stream::Counters counters;         ///< every input record: used or rejected with its reason
+  core::Health health;
+  std::uint64_t epochs = 0, rows = 0, orbit_samples = 0, orbit_rejected = 0, reference_samples = 0,
+                reference_dropped = 0;
+  double span_s = 0;
+  bool truth_given = false;
+};
+
+/// Runs the audit. False with *error (file:line: reason) on bad input; the analysis' own limits (too
+/// short a span for a family, ...) are in the result, not errors.
+bool runAudit(const RunRequest& req, RunOutput& out, std::string* error);
+
+/// Reads what the audit compares with from a simulator's truth.yaml: the injected effects (`effects`:
+/// name, sensor and every parameter, back into model::EffectSpec through model::makeEffect) and each
+/// head's constant mounting error (`heads[].mounting_error_arcsec`, head frame). False with *error
+/// ("FILE: effects[2]: ..."). (A stop-gap until the simulator reads its own truth back: sim::readTruthYaml.)
+bool readTruthFile(const std::string& path, Truth& out, std::string* error);
+
+}  // namespace boresight::audit

@@ -1,0 +1,243 @@
+// The audit over recorded telemetry: see include/boresight/audit/run.h.
+#include <boresight/audit/reference.h>
+#include <boresight/audit/run.h>
+#include <boresight/io/core_config.h>
+#include <boresight/io/product_stream.h>
+#include <boresight/model/effects.h>
+#include <boresight/model/orbit_context.h>
+#include <boresight/stream/engine.h>
+#include <boresight/stream/replay.h>
+
+#include <yaml-cpp/yaml.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <set>
+
+namespace boresight::audit {
+namespace {
+
+/// Says how far the replay has come, every `every_s` of data time.
+class Progress final : public stream::InputObserver {
+ public:
+  Progress(std::function<void(const std::string&)> f, double every_s) : f_(std::move(f)), every_s_(every_s) {}
+  void onHeads(const core::HeadEpoch& e, core::Status) override {
+    if (!f_) return;
+    if (!started_) {
+      t0_ = e.t;
+      started_ = true;
+      return;
+    }
+    const double data_s = toSeconds(e.t - t0_);
+    if (data_s >= next_s_) {
+      next_s_ = (std::floor(data_s / every_s_) + 1) * every_s_;
+      const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - w0_).count();
+      char b[160];
+      std::snprintf(b, sizeof b, "audit: %.1f h of data replayed (%.1f s)", data_s / 3600.0, wall);
+      f_(b);
+    }
+  }
+
+ private:
+  std::function<void(const std::string&)> f_;
+  double every_s_;
+  double next_s_ = every_s_;
+  bool started_ = false;
+  TimeUs t0_ = 0;
+  std::chrono::steady_clock::time_point w0_ = std::chrono::steady_clock::now();
+};
+
+/// Orbit records (GNI1B inertial, GNV1B Earth-fixed) into the collector. Counts what it could not use.
+bool feedOrbit(const std::vector<std::string>& files, const io::ReadOptions& opt, Collector& c, std::uint64_t& used,
+               std::uint64_t& rejected, std::string* error) {
+  for (const auto& f : files) {
+    io::ProductStream<io::GnvRecord> st;
+    if (!st.open(f, opt, error)) return false;
+    io::GnvRecord r;
+    while (st.next(r)) {
+      model::OrbitSample s;
+      const Vec3 p(r.pos[0], r.pos[1], r.pos[2]), v(r.vel[0], r.vel[1], r.vel[2]);
+      const bool ok = r.coord_ref == 'I'   ? model::orbitSampleFromInertial(r.t, p, v, s)
+                      : r.coord_ref == 'E' ? model::orbitSampleFromEarthFixed(r.t, p, v, s)
+                                           : false;
+      if (!ok) {
+        ++rejected;
+        continue;
+      }
+      c.addOrbit(s);
+      ++used;
+    }
+    if (!st.ok()) {
+      if (error) *error = st.error();
+      return false;
+    }
+    rejected += st.rejectedCount();
+  }
+  return true;
+}
+
+}  // namespace
+
+bool readTruthFile(const std::string& path, Truth& out, std::string* error) {
+  out = Truth{};
+  YAML::Node y;
+  try {
+    y = YAML::LoadFile(path);
+  } catch (const YAML::BadFile&) {
+    if (error) *error = path + ":0: cannot open";
+    return false;
+  } catch (const YAML::Exception& e) {
+    if (error) *error = path + ":" + std::to_string(e.mark.line + 1) + ": " + e.msg;
+    return false;
+  }
+  auto fail = [&](const YAML::Node& n, const std::string& what) {
+    if (error) *error = path + ":" + std::to_string(n.Mark().line + 1) + ": " + what;
+    return false;
+  };
+  if (!y.IsMap() || !y["heads"]) return fail(y, "not a simulator truth file (no 'heads')");
+  try {
+    if (const YAML::Node eff = y["effects"]) {
+      if (!eff.IsSequence()) return fail(eff, "'effects' is not a list");
+      for (std::size_t i = 0; i < eff.size(); ++i) {
+        const YAML::Node e = eff[i];
+        if (!e.IsMap() || !e["name"]) return fail(e, "effects[" + std::to_string(i) + "]: no name");
+        const std::string name = e["name"].as<std::string>();
+        const model::EffectInfo* info = model::findEffect(name);
+        if (!info) return fail(e, "effects[" + std::to_string(i) + "]: unknown effect '" + name + "'");
+        // Only what the catalogue knows (a later truth format may add records the spec does not hold).
+        std::vector<std::pair<std::string, std::string>> kv;
+        if (e["sensor"]) kv.emplace_back("sensor", e["sensor"].as<std::string>());
+        for (const auto& p : info->params)
+          if (e[p.key] && e[p.key].IsScalar()) kv.emplace_back(p.key, e[p.key].as<std::string>());
+        model::EffectSpec s;
+        std::string err;
+        const std::string origin = path + ": effects[" + std::to_string(i) + "]";
+        if (!model::makeEffect(name, kv, origin, s, &err)) return fail(e, err);
+        out.effects.push_back(std::move(s));
+      }
+    }
+    const YAML::Node heads = y["heads"];
+    if (!heads.IsSequence()) return fail(heads, "'heads' is not a list");
+    for (std::size_t i = 0; i < heads.size(); ++i) {
+      const YAML::Node h = heads[i];
+      if (!h["id"] || !h["mounting_error_arcsec"] || !h["mounting_error_arcsec"].IsSequence() ||
+          h["mounting_error_arcsec"].size() != 3)
+        return fail(h, "heads[" + std::to_string(i) + "]: needs id and mounting_error_arcsec [x, y, z]");
+      const YAML::Node m = h["mounting_error_arcsec"];
+      Vec3 v(m[0].as<double>(), m[1].as<double>(), m[2].as<double>());
+      if (!v.allFinite()) return fail(m, "heads[" + std::to_string(i) + "]: mounting_error_arcsec not finite");
+      out.mounting_error_rad[h["id"].as<int>()] = v * kRadPerArcsec;
+    }
+  } catch (const YAML::Exception& e) {
+    if (error) *error = path + ":" + std::to_string(e.mark.line + 1) + ": " + e.msg;
+    return false;
+  }
+  return true;
+}
+
+bool runAudit(const RunRequest& req, RunOutput& out, std::string* error) {
+  out = RunOutput{};
+  io::PlatformConfig pc;
+  if (!io::loadPlatformConfig(req.config, pc, error)) return false;
+  Truth truth;
+  if (!req.truth.empty()) {
+    if (!readTruthFile(req.truth, truth, error)) return false;
+    out.truth_given = true;
+  }
+  stream::ReplayInputs in;
+  if (!stream::classifyInputs(req.inputs, in, error)) return false;
+  // Sort what the replay does not read: outside reference, its clock, the orbit; the rest is ignored.
+  std::vector<std::string> sca1b, clk1b, gni, gnv;
+  std::vector<std::pair<std::string, std::string>> ignored;
+  for (const auto& [f, product] : in.ignored) {
+    if (product == "SCA1B") sca1b.push_back(f);
+    else if (product == "CLK1B") clk1b.push_back(f);
+    else if (product == "GNI1B") gni.push_back(f);
+    else if (product == "GNV1B") gnv.push_back(f);
+    else ignored.emplace_back(f, product);
+  }
+  for (const auto& f : in.scv) ignored.emplace_back(f, "SCV1A");
+  in.scv.clear();
+  in.ignored = ignored;
+  for (const auto& [f, product] : ignored)
+    out.notes.push_back(f + ": " + product +
+                        " is not an input of audit (SCA1A, ACC1A, QSA1B, GNI1B/GNV1B, SCA1B, CLK1B, LCM log): ignored");
+  // The orbit: GNI1B (inertial, exact) when given, else GNV1B (through the Earth rotation angle).
+  const std::vector<std::string>& orbit = gni.empty() ? gnv : gni;
+  if (!gni.empty())
+    for (const auto& f : gnv) out.notes.push_back(f + ": GNV1B not used: GNI1B gives the orbit");
+  if (!clk1b.empty() && sca1b.empty())
+    for (const auto& f : clk1b) out.notes.push_back(f + ": CLK1B is used only with an SCA1B reference: ignored");
+  for (const auto& f : sca1b)
+    if (!checkSca1b(f, error)) return false;
+  for (const auto& f : clk1b)
+    if (!checkClk1b(f, error)) return false;
+
+  io::ReadOptions opt;
+  if (req.strict) opt.on_error = io::OnError::Stop;
+  if (!stream::prepareConfig(in, opt, pc, error)) return false;
+  for (const auto& f : in.sca) out.inputs.push_back(f + ": SCA1A heads");
+  for (const auto& f : in.acc) out.inputs.push_back(f + ": accelerometer");
+  for (const auto& f : in.qsa) out.inputs.push_back(f + ": QSA1B nominal mountings");
+  for (const auto& f : in.lcm) out.inputs.push_back(f + ": LCM log");
+  for (const auto& f : orbit) out.inputs.push_back(f + ": orbit context");
+
+  stream::AssemblerConfig acfg;
+  acfg.lookahead_us = static_cast<TimeUs>(std::llround(req.lookahead_s * 1e6));
+  stream::Engine engine(acfg);
+  if (!engine.configure(pc.pipeline, error) || !stream::addSources(in, opt, true, engine, error)) return false;
+  Collector collector;
+  if (!collector.configure(pc.pipeline, req.options, error)) return false;
+  if (!feedOrbit(orbit, opt, collector, out.orbit_samples, out.orbit_rejected, error)) return false;
+
+  ClockMap clock;
+  if (!sca1b.empty() && !loadClk1b(clk1b, clock, error)) return false;
+  ReferenceFeed reference(collector, clock);
+  if (!sca1b.empty()) {
+    if (!reference.open(sca1b, error)) return false;
+    out.reference_time_base = reference.timeBase();
+    for (const auto& f : sca1b) out.inputs.push_back(f + ": SCA1B outside reference (" + out.reference_time_base + ")");
+    for (const auto& f : clk1b) out.inputs.push_back(f + ": CLK1B receiver clock");
+    engine.addObserver(&reference);  // before the collector: reference samples up to each head epoch first
+  }
+  Progress progress(req.progress, req.progress_every_s > 0 ? req.progress_every_s : 6 * 3600.0);
+  engine.addObserver(&progress);
+  engine.addObserver(&collector);
+  engine.addSink(&collector);
+  if (engine.run() != stream::Engine::Result::kDone) {
+    if (error) *error = engine.error();
+    return false;
+  }
+  if (!reference.error().empty()) {
+    if (error) *error = reference.error();
+    return false;
+  }
+  out.counters = engine.counters();
+  out.health = engine.health();
+  out.epochs = engine.epochs();
+  out.rows = engine.rows();
+  out.span_s = toSeconds(engine.lastEpoch() - engine.firstEpoch());
+  out.reference_samples = reference.fed();
+  out.reference_dropped = reference.dropped();
+  if (out.counters.used_heads == 0) {
+    if (error) *error = "no star sensor samples in the inputs";
+    return false;
+  }
+  if (!sca1b.empty())
+    out.notes.push_back("outside reference: " + std::to_string(out.reference_samples) + " SCA1B samples, " +
+                        out.reference_time_base +
+                        (out.reference_dropped ? ", " + std::to_string(out.reference_dropped) +
+                                                     " dropped (bad quaternion or out of time order)"
+                                               : std::string()));
+  if (!orbit.empty())
+    out.notes.push_back("orbit context: " + std::to_string(out.orbit_samples) + " samples from " +
+                        (gni.empty() ? "GNV1B (Earth-fixed, rotated by the Earth rotation angle)" : "GNI1B") +
+                        (out.orbit_rejected ? ", " + std::to_string(out.orbit_rejected) + " rejected" : std::string()));
+  else
+    out.notes.push_back("no orbit context (GNI1B / GNV1B): no orbit-harmonic tests");
+  out.result = analyse(collector, req.options, out.truth_given ? &truth : nullptr);
+  return true;
+}
+
+}  // namespace boresight::audit

@@ -1,0 +1,188 @@
+// boresight audit --config FILE INPUT... --out DIR: the model audit (METHODS 4). Option parsing and
+// printing only: audit::runAudit() replays the inputs into the audit's collector and analyses them,
+// audit::writeAuditJson / writeAuditReport write the result.
+#include <boresight/audit/report.h>
+#include <boresight/audit/run.h>
+#include <boresight/stream/source.h>
+
+#include "cli_common.h"
+#include "commands.h"
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace boresight::cli {
+namespace {
+
+const char* kUsage =
+    "usage: boresight audit --config FILE INPUT... --out DIR [--truth truth.yaml] [--false-alarm P]\n"
+    "                       [--holdout-blocks N] [--max-harmonic N] [--lookahead S] [--strict] [--quiet]\n"
+    "\n"
+    "The model audit: shows what the configured model gets wrong in measured data, names the cause from\n"
+    "the effect catalogue (boresight simulate --list-effects), extends the model with it and measures\n"
+    "the gain on data not used to fit.\n"
+    "\n"
+    "INPUT: Level-1 files, recognised by content: SCA1A (heads), ACC1A (accelerometer), QSA1B (the\n"
+    "nominal mountings when the config says heads.mounting: qsa1b), GNI1B or GNV1B (orbit context:\n"
+    "argument of latitude and beta angle, for the orbit-periodic tests), and optionally SCA1B as an\n"
+    "outside reference with CLK1B (SCA1B's GPS tags are mapped to the receiver time of SCA1A through\n"
+    "CLK1B; without it GPS time is taken as receiver time, and the output says so); or an LCM log\n"
+    "(with GNV1B files for the orbit). Other products are listed as ignored.\n"
+    "\n"
+    "Residual families: relative (head pair residuals and inter-boresight angles against the\n"
+    "configured mountings), noise (per head axis), angular_acceleration (star sensors minus\n"
+    "accelerometer through the same CRN; needs a span longer than the CRN), reference (fused attitude\n"
+    "against SCA1B), data (gaps, dropouts, outliers, sign flips). Every candidate effect is tested with\n"
+    "a statistic against a threshold at a family-wise false-alarm rate over the whole catalogue; the\n"
+    "causes the evidence supports are named, groups the data cannot separate are reported with what\n"
+    "would separate them, and significant residuals nothing explains are reported as not explained.\n"
+    "\n"
+    "  --config FILE          platform file (config/gracefo.yaml)\n"
+    "  --out DIR              writes DIR/report.md (findings, evidence, gain table, plots), DIR/audit.json\n"
+    "                         (keys: baseline, effects[], named_causes[], not_explained[], ambiguous[],\n"
+    "                         extended, gain, gains[], truth[] with --truth) and the SVG plots\n"
+    "  --truth FILE           a simulator's truth.yaml: parameter errors before and after the extension\n"
+    "  --false-alarm P        family-wise false-alarm probability over every test (default 0.01)\n"
+    "  --holdout-blocks N     the span is cut into 2N blocks; every other block is held out to measure\n"
+    "                         the gain (default 4)\n"
+    "  --max-harmonic N       largest orbit harmonic tested, cycles per revolution (default 2)\n"
+    "  --lookahead S          out-of-order tolerance of the inputs, seconds (default 2)\n"
+    "  --strict               stop at the first malformed input line\n"
+    "  --quiet                print the findings only (no progress, no input summary)\n"
+    "\n"
+    "Exit status: 0 audited (whatever was found); 1 bad input (file:line: reason) or an output that\n"
+    "cannot be written; 2 usage error.\n";
+
+int fail(const std::string& msg) {
+  std::fprintf(stderr, "boresight audit: %s\n", msg.c_str());
+  return 1;
+}
+
+std::string fmt(double v, const char* f = "%.3g") {
+  if (!std::isfinite(v)) return "-";
+  char b[64];
+  std::snprintf(b, sizeof b, f, v);
+  return b;
+}
+
+std::string paramsText(const audit::EffectTest& e) {
+  std::string o;
+  for (const auto& p : e.params) {
+    o += (o.empty() ? "" : ", ") + p.key + " " + fmt(p.value, "%.4g");
+    if (std::isfinite(p.sigma)) o += " +- " + fmt(p.sigma, "%.2g");
+    if (!p.unit.empty() && p.key.find(p.unit) == std::string::npos) o += " " + p.unit;
+  }
+  return o;
+}
+
+void printResult(const audit::AuditResult& r) {
+  std::printf("\nfindings:\n");
+  if (r.findings.empty()) std::printf("  none: every test stayed below its threshold\n");
+  for (const auto& f : r.findings) std::printf("  - %s\n", f.c_str());
+  std::printf("\nnamed causes (%d tests, family-wise false-alarm rate):\n", r.tests);
+  if (r.named.empty()) std::printf("  none\n");
+  for (const auto& e : r.named)
+    std::printf("  %-22s sensor %-9s %-20s statistic %9s > threshold %9s (p %s)  %s\n", e.name.c_str(),
+                e.sensor.c_str(), e.family.c_str(), fmt(e.statistic).c_str(), fmt(e.threshold).c_str(),
+                fmt(e.p_value, "%.2g").c_str(), paramsText(e).c_str());
+  if (!r.ambiguous.empty()) {
+    std::printf("\nthe data cannot tell apart:\n");
+    for (const auto& a : r.ambiguous) {
+      std::string c;
+      for (const auto& x : a.causes) c += (c.empty() ? "" : " / ") + x;
+      std::printf("  %s%s\n    would separate them: %s\n", c.c_str(),
+                  std::isfinite(a.correlation) ? (" (signature correlation " + fmt(a.correlation, "%.3f") + ")").c_str()
+                                               : "",
+                  a.separate_by.c_str());
+    }
+  }
+  if (!r.not_explained.empty()) {
+    std::printf("\nnot explained:\n");
+    for (const auto& n : r.not_explained)
+      std::printf("  %s: %s (statistic %s, threshold %s)\n", n.family.c_str(), n.what.c_str(), fmt(n.statistic).c_str(),
+                  fmt(n.threshold).c_str());
+  }
+  if (!r.gains.empty()) {
+    std::printf("\ngain of the extended model (held out: data not used to fit; delta BIC < 0: better):\n");
+    std::printf("  %-22s %-10s %11s %11s %13s %13s %11s\n", "family", "unit", "RMS before", "RMS after",
+                "held-out bef.", "held-out aft.", "delta BIC");
+    for (const auto& g : r.gains)
+      std::printf("  %-22s %-10s %11s %11s %13s %13s %11s%s\n", g.family.c_str(), g.unit.c_str(),
+                  fmt(g.rms_before).c_str(), fmt(g.rms_after).c_str(), fmt(g.heldout_rms_before).c_str(),
+                  fmt(g.heldout_rms_after).c_str(), fmt(g.delta_bic, "%.4g").c_str(),
+                  g.family == r.gain.family ? "  <- largest gain" : "");
+  }
+  if (!r.truth.empty()) {
+    std::printf("\nagainst the truth:\n  %-22s %-7s %-14s %12s %12s %12s\n", "effect", "sensor", "parameter", "truth",
+                "before", "after");
+    for (const auto& t : r.truth)
+      std::printf("  %-22s %-7s %-14s %12s %12s %12s\n", t.effect.c_str(), t.sensor.c_str(), t.key.c_str(),
+                  fmt(t.truth, "%.4g").c_str(), fmt(t.before, "%.4g").c_str(), fmt(t.after, "%.4g").c_str());
+  }
+  for (const auto& m : r.baseline.missing) std::printf("not formed: %s\n", m.c_str());
+}
+
+}  // namespace
+
+int runAudit(int argc, char** argv) {
+  CLI::App app{"boresight audit"};
+  audit::RunRequest req;
+  std::string out_dir;
+  bool quiet = false;
+  app.add_option("--config", req.config)->required();
+  app.add_option("--out", out_dir)->required();
+  app.add_option("--truth", req.truth);
+  app.add_option("--false-alarm", req.options.false_alarm)->check(CLI::Range(1e-12, 0.5));
+  app.add_option("--holdout-blocks", req.options.holdout_blocks)->check(CLI::Range(1, 1000));
+  app.add_option("--max-harmonic", req.options.max_harmonic)->check(CLI::Range(0, 20));
+  app.add_option("--lookahead", req.lookahead_s)->check(CLI::Range(0.0, 3600.0));
+  app.add_flag("--strict", req.strict);
+  app.add_flag("--quiet", quiet);
+  app.add_option("inputs", req.inputs)->required();
+  if (int st = parseCommandLine(app, argc, argv, "audit", kUsage); st >= 0) return st;
+
+  // The output directory first: a run of hours must not end on an unwritable folder.
+  std::error_code ec;
+  std::filesystem::create_directories(out_dir, ec);
+  if (ec) return fail(out_dir + ": cannot create the output directory: " + ec.message());
+  if (!quiet) req.progress = [](const std::string& s) { std::fprintf(stderr, "%s\n", s.c_str()); };
+
+  audit::RunOutput out;
+  std::string err;
+  if (!audit::runAudit(req, out, &err)) return fail(err);
+
+  if (!quiet) {
+    for (const auto& s : out.inputs) std::printf("%s\n", s.c_str());
+    for (const auto& s : out.notes) std::printf("%s\n", s.c_str());
+    const auto& c = out.counters;
+    std::printf("inputs: %llu read = %llu used (%llu head samples in %llu epochs, %llu accelerometer) + %llu rejected; "
+                "span %.1f s\n",
+                static_cast<unsigned long long>(c.read), static_cast<unsigned long long>(c.used()),
+                static_cast<unsigned long long>(c.used_heads), static_cast<unsigned long long>(out.epochs),
+                static_cast<unsigned long long>(c.used_accel), static_cast<unsigned long long>(c.rejectedTotal()),
+                out.span_s);
+  } else if (!out.reference_time_base.empty()) {
+    std::printf("outside reference SCA1B: %s\n", out.reference_time_base.c_str());
+  }
+  printResult(out.result);
+
+  audit::ReportContext ctx;
+  ctx.command = "boresight audit --config " + req.config;
+  for (const auto& f : req.inputs) ctx.command += " " + f;
+  ctx.command += " --out " + out_dir;
+  if (!req.truth.empty()) ctx.command += " --truth " + req.truth;
+  ctx.inputs = out.inputs;
+  ctx.notes = out.notes;
+  const std::string json = out_dir + "/audit.json";
+  if (!audit::writeAuditJson(out.result, json, &err)) return fail(err);
+  if (!audit::writeAuditReport(out.result, out_dir, &err, &ctx)) return fail(err);
+  std::printf("-> %s/report.md, %s", out_dir.c_str(), json.c_str());
+  for (const auto& f : audit::auditPlotFiles(out.result)) std::printf(", %s", f.c_str());
+  std::printf("\n");
+  return 0;
+}
+
+}  // namespace boresight::cli
