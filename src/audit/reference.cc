@@ -165,7 +165,9 @@ struct ReferenceFeed::Reader {
   std::string path;
 };
 
-ReferenceFeed::ReferenceFeed(Collector& c, ClockMap clock) : c_(c), clock_(std::move(clock)) {}
+ReferenceFeed::ReferenceFeed(Collector& c, ClockMap clock)
+    : ReferenceFeed([&c](TimeUs t, const Quat& q) { c.addReference(t, q); }, std::move(clock)) {}
+ReferenceFeed::ReferenceFeed(Sink sink, ClockMap clock) : sink_(std::move(sink)), clock_(std::move(clock)) {}
 ReferenceFeed::~ReferenceFeed() = default;
 
 std::string ReferenceFeed::timeBase() const {
@@ -241,7 +243,7 @@ bool ReferenceFeed::feedUntil(TimeUs t_rcv) {
       have_pending_ = true;
     }
     if (pending_t_ > t_rcv) return true;
-    c_.addReference(pending_t_, pending_q_);
+    sink_(pending_t_, pending_q_);
     last_t_ = pending_t_;
     ++fed_;
     have_pending_ = false;

@@ -18,6 +18,7 @@
 #include <boresight/io/level1.h>
 #include <boresight/stream/sinks.h>
 
+#include <functional>
 #include <memory>
 #include <string>
 #include <utility>
@@ -92,7 +93,10 @@ std::vector<TimedAttitude> referenceSamples(const std::vector<io::Sca1bRecord>& 
 /// stream; feedAll() does it without an engine. Text SCA1B is streamed (constant memory).
 class ReferenceFeed final : public stream::InputObserver {
  public:
+  using Sink = std::function<void(TimeUs t_rcv, const Quat& q_I_B)>;
   ReferenceFeed(Collector& c, ClockMap clock);
+  /// Feeds `sink` instead of a collector.
+  ReferenceFeed(Sink sink, ClockMap clock);
   ~ReferenceFeed() override;
   /// Opens the files (each in time order; files given in time order). False with *error.
   bool open(const std::vector<std::string>& sca1b, std::string* error);
@@ -113,7 +117,7 @@ class ReferenceFeed final : public stream::InputObserver {
  private:
   struct Reader;
   bool next(TimeUs& t_rcv, Quat& q);
-  Collector& c_;
+  Sink sink_;
   ClockMap clock_;
   std::vector<std::string> files_;
   std::size_t file_ = 0;
