@@ -145,12 +145,12 @@ std::vector<std::string> familiesOf(const std::vector<T>& v, bool (*skip)(const 
 
 const std::vector<EffectTest>& estimatesOf(const AuditResult& r) { return r.extended.empty() ? r.named : r.extended; }
 
-/// Units of the estimated parameters (one estimates plot per unit), in order of appearance.
+/// Units of the estimated parameters with a sigma (one estimates plot per unit), in order of appearance.
 std::vector<std::string> estimateUnits(const AuditResult& r) {
   std::vector<std::string> units;
   for (const auto& e : estimatesOf(r))
     for (const auto& p : e.params) {
-      if (!std::isfinite(p.value)) continue;
+      if (!std::isfinite(p.value) || !std::isfinite(p.sigma)) continue;
       bool seen = false;
       for (const auto& u : units) seen |= u == p.unit;
       if (!seen) units.push_back(p.unit);
@@ -232,7 +232,7 @@ std::vector<NamedPlot> plotsOf(const AuditResult& r) {
     bool any_truth = false;
     for (const auto& e : estimatesOf(r))
       for (const auto& p : e.params) {
-        if (p.unit != unit || !std::isfinite(p.value)) continue;
+        if (p.unit != unit || !std::isfinite(p.value) || !std::isfinite(p.sigma)) continue;
         const double x = double(np.plot.xcategories.size());
         np.plot.xcategories.push_back(e.name + "[" + e.sensor + "] " + p.key);
         est.x.push_back(x);
@@ -262,10 +262,13 @@ std::string paramsText(const std::vector<ParamValue>& ps) {
   return o.empty() ? "-" : o;
 }
 
-std::string cell(std::string s) {  // a Markdown table cell: no pipes, no line breaks
-  for (char& c : s)
-    if (c == '|' || c == '\n') c = c == '|' ? '/' : ' ';
-  return s;
+std::string cell(const std::string& s) {  // a Markdown table cell: pipes escaped, no line breaks
+  std::string o;
+  for (char c : s) {
+    if (c == '|') o += "\\|";
+    else o += c == '\n' ? ' ' : c;
+  }
+  return o;
 }
 
 void effectTable(std::ostringstream& o, const std::vector<EffectTest>& v, bool verdict) {

@@ -47,7 +47,7 @@ AuditResult handMade(bool with_truth) {
   EffectTest lat = effect("time_offset", "reference", "reference", 40.0, 12.5, 3e-8, true);
   lat.params = {{"offset_ms", "ms", 550.0, 40.0, kNaN}};
   EffectTest clean = effect("acc_scale", "acc", "angular_acceleration", 1.2, 12.5, kNaN, false);
-  clean.note = "statistic from the residual's autocorrelation";
+  clean.note = "|ln(estimated / configured variance)| over its jackknife error";
   r.effects = {mis, lat, clean};
   r.tests = 3;
   r.named = {mis, lat};
@@ -171,12 +171,17 @@ TEST(AuditReport, WritesTheReportAndEveryPlot) {
   EXPECT_NE(res.find("pair 1-2 x_B after"), std::string::npos);
   EXPECT_EQ(res.find("iba 1-2"), std::string::npos);
   EXPECT_NE(testutil::slurp(dir + "/iba.svg").find("iba 1-2 before"), std::string::npos);
+  // Estimates with their error bars: a parameter without a sigma is not drawn.
+  const std::string est = testutil::slurp(dir + "/estimates_arcsec.svg");
+  EXPECT_NE(est.find("relative_misalignment[2] x_arcsec"), std::string::npos);
+  EXPECT_EQ(est.find("relative_misalignment[2] y_arcsec"), std::string::npos);
   const std::string md = testutil::slurp(dir + "/report.md");
   for (const char* s : {"## What is wrong", "changed since QSA1B", "relative_misalignment", "| 85 | 12.5 |",
                         "What would separate them: attitude rate changes", "residual line at 3 cycles/rev",
                         "| relative (largest gain) | arcsec | 22 | 2.1 | 22.5 | 2.3 |", "## Against the truth",
                         "through CLK1B", "(residuals_relative.svg)", "(estimates_ms.svg)",
-                        "angular_acceleration: span 16 s < CRN 70.7 s"})
+                        "angular_acceleration: span 16 s < CRN 70.7 s",
+                        "(\\|ln(estimated / configured variance)\\| over"})  // a pipe in a cell is escaped
     EXPECT_NE(md.find(s), std::string::npos) << s << "\n" << md;
 }
 

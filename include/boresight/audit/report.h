@@ -17,7 +17,8 @@
 // threshold, p-value) and estimates, every test, the gain table, the ambiguities with what would
 // separate them, what is not explained, the truth comparison; plots (report/svg_plot.h):
 // residuals_<family>.svg (series before/after), spectrum_<family>.svg (amplitude before/after),
-// iba.svg (inter-boresight angle series), estimates_<unit>.svg (named effects' parameters +- sigma).
+// iba.svg (inter-boresight angle series: family "relative", label "iba..."), estimates_<unit>.svg (the
+// extended model's parameters that have a sigma, +- sigma, with the truth when given).
 #pragma once
 
 #include <boresight/audit/audit.h>
