@@ -110,7 +110,8 @@ void printResult(const audit::AuditResult& r) {
     std::printf("  %-22s %-10s %11s %11s %13s %13s %11s\n", "family", "unit", "RMS before", "RMS after",
                 "held-out bef.", "held-out aft.", "delta BIC");
     for (const auto& g : r.gains)
-      std::printf("  %-22s %-10s %11s %11s %13s %13s %11s%s\n", g.family.c_str(), g.unit.c_str(),
+      std::printf("  %-22s %-10s %11s %11s %13s %13s %11s%s\n", g.family.c_str(),
+                  g.unit.substr(0, g.unit.find(" (")).c_str(),  // the explanation is in report.md
                   fmt(g.rms_before).c_str(), fmt(g.rms_after).c_str(), fmt(g.heldout_rms_before).c_str(),
                   fmt(g.heldout_rms_after).c_str(), fmt(g.delta_bic, "%.4g").c_str(),
                   g.family == r.gain.family ? "  <- largest gain" : "");
