@@ -5,10 +5,9 @@
 #include <boresight/io/product_stream.h>
 #include <boresight/model/effects.h>
 #include <boresight/model/orbit_context.h>
+#include <boresight/sim/truth.h>
 #include <boresight/stream/engine.h>
 #include <boresight/stream/replay.h>
-
-#include <yaml-cpp/yaml.h>
 
 #include <chrono>
 #include <cmath>
@@ -81,58 +80,10 @@ bool feedOrbit(const std::vector<std::string>& files, const io::ReadOptions& opt
 
 bool readTruthFile(const std::string& path, Truth& out, std::string* error) {
   out = Truth{};
-  YAML::Node y;
-  try {
-    y = YAML::LoadFile(path);
-  } catch (const YAML::BadFile&) {
-    if (error) *error = path + ":0: cannot open";
-    return false;
-  } catch (const YAML::Exception& e) {
-    if (error) *error = path + ":" + std::to_string(e.mark.line + 1) + ": " + e.msg;
-    return false;
-  }
-  auto fail = [&](const YAML::Node& n, const std::string& what) {
-    if (error) *error = path + ":" + std::to_string(n.Mark().line + 1) + ": " + what;
-    return false;
-  };
-  if (!y.IsMap() || !y["heads"]) return fail(y, "not a simulator truth file (no 'heads')");
-  try {
-    if (const YAML::Node eff = y["effects"]) {
-      if (!eff.IsSequence()) return fail(eff, "'effects' is not a list");
-      for (std::size_t i = 0; i < eff.size(); ++i) {
-        const YAML::Node e = eff[i];
-        if (!e.IsMap() || !e["name"]) return fail(e, "effects[" + std::to_string(i) + "]: no name");
-        const std::string name = e["name"].as<std::string>();
-        const model::EffectInfo* info = model::findEffect(name);
-        if (!info) return fail(e, "effects[" + std::to_string(i) + "]: unknown effect '" + name + "'");
-        // Only what the catalogue knows (a later truth format may add records the spec does not hold).
-        std::vector<std::pair<std::string, std::string>> kv;
-        if (e["sensor"]) kv.emplace_back("sensor", e["sensor"].as<std::string>());
-        for (const auto& p : info->params)
-          if (e[p.key] && e[p.key].IsScalar()) kv.emplace_back(p.key, e[p.key].as<std::string>());
-        model::EffectSpec s;
-        std::string err;
-        const std::string origin = path + ": effects[" + std::to_string(i) + "]";
-        if (!model::makeEffect(name, kv, origin, s, &err)) return fail(e, err);
-        out.effects.push_back(std::move(s));
-      }
-    }
-    const YAML::Node heads = y["heads"];
-    if (!heads.IsSequence()) return fail(heads, "'heads' is not a list");
-    for (std::size_t i = 0; i < heads.size(); ++i) {
-      const YAML::Node h = heads[i];
-      if (!h["id"] || !h["mounting_error_arcsec"] || !h["mounting_error_arcsec"].IsSequence() ||
-          h["mounting_error_arcsec"].size() != 3)
-        return fail(h, "heads[" + std::to_string(i) + "]: needs id and mounting_error_arcsec [x, y, z]");
-      const YAML::Node m = h["mounting_error_arcsec"];
-      Vec3 v(m[0].as<double>(), m[1].as<double>(), m[2].as<double>());
-      if (!v.allFinite()) return fail(m, "heads[" + std::to_string(i) + "]: mounting_error_arcsec not finite");
-      out.mounting_error_rad[h["id"].as<int>()] = v * kRadPerArcsec;
-    }
-  } catch (const YAML::Exception& e) {
-    if (error) *error = path + ":" + std::to_string(e.mark.line + 1) + ": " + e.msg;
-    return false;
-  }
+  sim::TruthFile tf;
+  if (!sim::readTruthYaml(path, tf, error)) return false;
+  out.effects = tf.effects;
+  for (const auto& h : tf.heads) out.mounting_error_rad[h.config.id] = h.config.mounting_error_rad;
   return true;
 }
 

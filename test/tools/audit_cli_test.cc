@@ -78,7 +78,8 @@ TEST(AuditCli, BadInputsAreExitOneWithFileLineAndReason) {
   CliRun e = run("audit" + kConfig + sim + "/SCA1A_2023-06-01_C_04.txt " + sim + "/QSA1B_2023-06-01_C_04.txt --out " +
                  dir + "/o --truth " + dir + "/missing_truth.yaml");
   EXPECT_EQ(e.status, 1) << e.out;
-  EXPECT_NE(e.out.find(dir + "/missing_truth.yaml:0: cannot open"), std::string::npos) << e.out;
+  EXPECT_NE(e.out.find(dir + "/missing_truth.yaml"), std::string::npos) << e.out;
+  EXPECT_NE(e.out.find("cannot open"), std::string::npos) << e.out;
 }
 
 TEST(AuditCli, TruthYamlReadsBackTheInjectedEffectsAndMountings) {

@@ -50,10 +50,9 @@ struct RunOutput {
 /// short a span for a family, ...) are in the result, not errors.
 bool runAudit(const RunRequest& req, RunOutput& out, std::string* error);
 
-/// Reads what the audit compares with from a simulator's truth.yaml: the injected effects (`effects`:
-/// name, sensor and every parameter, back into model::EffectSpec through model::makeEffect) and each
-/// head's constant mounting error (`heads[].mounting_error_arcsec`, head frame). False with *error
-/// ("FILE: effects[2]: ..."). (A stop-gap until the simulator reads its own truth back: sim::readTruthYaml.)
+/// Reads what the audit compares with from a simulator's truth.yaml (sim::readTruthYaml): the injected
+/// effects (model::EffectSpec, as simulated) and each head's constant mounting error (head frame, the
+/// drawn part included). False with *error ("FILE:LINE: key 'k': reason").
 bool readTruthFile(const std::string& path, Truth& out, std::string* error);
 
 }  // namespace boresight::audit
