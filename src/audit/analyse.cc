@@ -762,6 +762,7 @@ void Analyser::buildReference() {
   f.unit_scale = kArcsecPerRad;
   f.comp_label = {"x_B", "y_B", "z_B"};
   Cand m{"relative_misalignment", "all", "", 0, 3, {}, {}, false, 0};
+  // the rotation from the fused attitude to the reference in body axes (process --compare-sca1b's sign)
   for (const char* a : {"x", "y", "z"}) m.params.push_back({std::string(a) + "_arcsec", "arcsec (B axes)", kArcsecPerRad});
   const int cmis = addCand(f, m);
   Cand to{"time_offset", "all", "", 0, 1, {{"offset_ms", "ms", 1e3}}, {}, false, 0};
@@ -791,9 +792,9 @@ void Analyser::buildReference() {
       const int r = row + a;
       f.yp[r] = d[a];
       f.Xp(r, cmis + a) = 1.0;
-      if (v.has_w) {
-        f.Xp(r, ct) = -v.w[a];
-        f.Xp(r, cc) = -v.w[a] * v.t;
+      if (v.has_w) {  // heads' tags ahead by dt: the fused attitude lags, d = Log(q_fused^-1 q_ref) = +w dt
+        f.Xp(r, ct) = v.w[a];
+        f.Xp(r, cc) = v.w[a] * v.t;
       }
       f.t.push_back(v.t);
       f.comp.push_back(a);
@@ -1693,6 +1694,21 @@ AuditResult Analyser::run() {
   R.tests = tests;
   alpha_each = opt.false_alarm / std::max(1, tests);
   for (auto& f : fams) runFamily(f);
+  // inter-boresight angle deviations from their ground values (the core's monitor), per pair
+  for (int i = 0; i < c.n_heads; ++i)
+    for (int j = i + 1; j < c.n_heads; ++j) {
+      const int p = core::pairIndex(i, j);  // the core's row index of the pair
+      Series sr;
+      sr.family = "relative";
+      sr.label = "iba " + std::to_string(c.ids[i]) + "-" + std::to_string(c.ids[j]);
+      sr.unit = "arcsec";
+      for (std::size_t b = 0; b < c.bins.size(); ++b)
+        if (c.bins[b].iba_n[p] > 0) {
+          sr.t_s.push_back(bv[b].t);
+          sr.before.push_back(c.bins[b].iba_sum[p] / c.bins[b].iba_n[p] * kArcsecPerRad);
+        }
+      if (sr.t_s.size() >= 2) R.series.push_back(sr);
+    }
   // side tests: thresholds at the same per-test level
   for (auto& e : side) {
     if (e.family == "noise") e.threshold = stats::normalQuantile2(alpha_each);

@@ -51,6 +51,10 @@ void Bin::merge(const Bin& o) {
   n_ref += o.n_ref;
   sum_d += o.sum_d;
   sum_d2 += o.sum_d2;
+  for (int p = 0; p < kMaxPairs; ++p) {
+    iba_n[p] += o.iba_n[p];
+    iba_sum[p] += o.iba_sum[p];
+  }
   n_acc += o.n_acc;
   sum_a += o.sum_a;
   sum_a2 += o.sum_a2;
@@ -353,6 +357,11 @@ bool Collector::write(const core::PipelineRow& row) {
   if (!m.configured || !m.have_t0) return true;
   ++m.rows;
   Bin& b = m.binAt(row.t);
+  for (int p = 0; p < kMaxPairs; ++p)
+    if (std::isfinite(row.iba_dev_rad[static_cast<std::size_t>(p)])) {
+      b.iba_n[p] += 1;
+      b.iba_sum[p] += row.iba_dev_rad[static_cast<std::size_t>(p)];
+    }
   if (row.has_rates && row.has_acc && row.a_sc_B.allFinite() && row.a_acc_B.allFinite()) {
     const Vec3 e = row.a_acc_B - row.a_sc_B;
     b.n_aa += 1;
@@ -380,7 +389,8 @@ bool Collector::write(const core::PipelineRow& row) {
       if (c.first - a.first <= 2500000 && c.first > a.first) {
         const double f = static_cast<double>(row.t - a.first) / static_cast<double>(c.first - a.first);
         const Quat q_ref = a.second.slerp(f, c.second);
-        const Vec3 d = model::quatLog(q_ref.conjugate() * row.q_I_B);
+        // the rotation from the fused attitude to the reference, body axes (as process --compare-sca1b)
+        const Vec3 d = model::quatLog(row.q_I_B.conjugate() * q_ref);
         if (d.allFinite()) {
           b.n_ref += 1;
           b.sum_d += d;

@@ -50,6 +50,8 @@ struct Bin {
   // outside reference
   double n_ref = 0;
   Vec3 sum_d = Vec3::Zero(), sum_d2 = Vec3::Zero();
+  // inter-boresight angle deviations from ground (the core's monitor, per pair index)
+  std::array<double, kMaxPairs> iba_n{}, iba_sum{};
   // raw accelerometer
   double n_acc = 0;
   Vec3 sum_a = Vec3::Zero(), sum_a2 = Vec3::Zero();
