@@ -34,6 +34,6 @@ for i in $(seq 1 "$runs"); do
   echo "audit run $i: wall ${wall} s, peak RSS $((rss / 1024)) MB"
 done
 printf '%s\n' "${walls[@]}" | sort -g | awk '{a[NR] = $1} END {printf "audit of %s s from files, %d runs: wall %s .. %s s\n", "'"$duration"'", NR, a[1], a[NR]}'
-printf '%s\n' "${rsss[@]}" | sort -g | awk '{a[NR] = $1} END {printf "peak RSS %.0f .. %.0f MB\n", a[1] / 1024, a[NR] / 1024}'
+printf '%s\n' "${rsss[@]}" | sort -g | awk '{a[NR] = $1} END {printf "peak RSS %d .. %d MB\n", int(a[1] / 1024), int(a[NR] / 1024)}'
 echo "findings of the last run:"
 cat "$work/out_$runs"
