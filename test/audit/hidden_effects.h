@@ -125,7 +125,7 @@ inline const std::vector<Testable>& testables() {
   static const std::vector<Testable> t = {
       {"relative_misalignment", "arcsec", "rotation of one head, cross-boresight, random direction",
        {8, 4, 2, 1, 0.5}, 4,
-       "detection floor 1 (100/100, 0.5: 13/19); named with the sensor 4: 100/100, 2: 86/100",
+       "[d22942b] detection floor 1 (100/100, 0.5: 9/16); named with the sensor 4: 100/100, 2: 88/100 (54b0370: the same)",
        [](double m, Draws& d, double) { return inj("relative_misalignment", headId(d), crossVec(m, d), m); }},
       {"anisotropic_noise", "1", "relative change of one head's noise about the boresight (48\"), random sign",
        {0.5, 0.25, 0.12, 0.06}, 0.06,
@@ -143,7 +143,7 @@ inline const std::vector<Testable>& testables() {
        }},
       {"thermal_periodic", "arcsec", "amplitude on one head, cross-boresight, harmonic 1 or 2, random phase",
        {8, 4, 2, 1}, 2,
-       "detection floor 2 (100/100, 1: 43/49); named with the sensor 2: 98/100",
+       "[d22942b] detection floor 2 (100/100, 1: 48/54); named with the sensor 2: 98/100 (54b0370: the same)",
        [](double m, Draws& d, double) {
          const std::string h = headId(d);
          const int n = 1 + d.index(2);
@@ -159,7 +159,7 @@ inline const std::vector<Testable>& testables() {
        }},
       {"step", "arcsec", "step of one head, cross-boresight, at 25-75 % of the span",
        {16, 8, 4, 2, 1}, 4,
-       "detection floor 2 (100/100, 1: 69/75); named with the sensor 4: 100/100, 2: 89/100",
+       "[d22942b] detection floor 2 (100/100, 1: 45/51); named with the sensor 4: 100/100, 2: 91/100 (54b0370: the same)",
        [](double m, Draws& d, double span_s) {
          const std::string h = headId(d);
          const std::string v = crossVec(m, d);
