@@ -152,7 +152,7 @@ inline const std::vector<Testable>& testables() {
        }},
       {"drift", "arcsec/day", "rate of one head, cross-boresight, from the start",
        {512, 256, 128, 64, 32}, 64,
-       "detection floor 16 (99/100, 8: 3/9); named with the sensor 64: 100/100, 32: 91/100",
+       "[d22942b] named with the sensor 64: 98/100, 32: 81/100; found 100/100 at 32 (54b0370: detection floor 16, 99/100, 8: 3/9; named 64: 100/100, 32: 91/100)",
        [](double m, Draws& d, double) {
          const std::string h = headId(d);
          return inj("drift", h, crossVec(m, d, "x_arcsec_per_day", "y_arcsec_per_day"), m);
