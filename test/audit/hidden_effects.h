@@ -129,7 +129,7 @@ inline const std::vector<Testable>& testables() {
        [](double m, Draws& d, double) { return inj("relative_misalignment", headId(d), crossVec(m, d), m); }},
       {"anisotropic_noise", "1", "relative change of one head's noise about the boresight (48\"), random sign",
        {0.5, 0.25, 0.12, 0.06}, 0.06,
-       "detection floor 0.06 (97/100, 0.03: 7/13); named with the sensor 0.06: 97/100",
+       "[d22942b] detection and naming floor 0.06 (100/100, 0.03: 35/41; 54b0370: 0.06 too, 97/100)",
        [](double m, Draws& d, double) {
          const std::string h = headId(d);
          return inj("anisotropic_noise", h, "about_arcsec=" + num(48.0 * (1 + d.sign() * m)), m);
@@ -152,7 +152,7 @@ inline const std::vector<Testable>& testables() {
        }},
       {"drift", "arcsec/day", "rate of one head, cross-boresight, from the start",
        {512, 256, 128, 64, 32}, 64,
-       "[d22942b] named with the sensor 64: 98/100, 32: 81/100; found 100/100 at 32 (54b0370: detection floor 16, 99/100, 8: 3/9; named 64: 100/100, 32: 91/100)",
+       "[d22942b] detection floor 16 (99/100, 8: 2/9); named with the sensor 64: 98/100, 32: 81/100 (54b0370: 16 and 64 too)",
        [](double m, Draws& d, double) {
          const std::string h = headId(d);
          return inj("drift", h, crossVec(m, d, "x_arcsec_per_day", "y_arcsec_per_day"), m);
@@ -192,7 +192,7 @@ inline const std::vector<Testable>& testables() {
        }},
       {"aberration", "-", "uncorrected annual and orbital aberration on every head (fixed size: 20.5\", 5.2\")",
        {1}, 1,
-       "fixed size (the magnitude is not used): found and named 100/100",
+       "[d22942b] fixed size (the magnitude is not used): found and named 100/100",
        [](double m, Draws&, double) { return inj("aberration", "all", "annual=1,orbital=1", m); }},
       {"outliers", "arcsec", "size of isolated wrong attitudes of one head (rate 1e-3 per sample)",
        {480, 240, 120, 60}, 240,
