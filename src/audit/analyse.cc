@@ -443,8 +443,10 @@ void Analyser::views() {
   }
   const int nb = 2 * opt.holdout_blocks;
   for (auto& v : bv) {
+    // odd blocks are held out, except the last one: both ends of the span are fitted (a step late in
+    // the span keeps fitting rows after it)
     const int blk = std::min(nb - 1, static_cast<int>(std::floor(v.t / std::max(span_s, 1e-9) * nb)));
-    v.held = (blk % 2) == 1;
+    v.held = (blk % 2) == 1 && blk != nb - 1;
     v.has_ctx = orbit.at(v.t, v.ctx);
     if (!v.has_ctx) v.ctx.t_s = v.t;
   }
@@ -1731,38 +1733,54 @@ AuditResult Analyser::run() {
       R.extended.push_back(e);
     }
   }
-  // noise family gain: normalised first differences under the configured and the estimated levels
+  // noise family gain: the pairs' first differences under the configured levels and under the extended
+  // model (the configured levels with the named noise effects' estimates)
   if (noise_est && c.n_heads >= 2) {
+    std::array<Mat3, kMaxHeads> cov_ext = c.cov_model_B;
+    int k_named = 0;
+    for (const auto& e : R.named) {
+      if (e.family != "noise" || e.params.empty()) continue;
+      ++k_named;
+      for (int k = 0; k < c.n_heads; ++k) {
+        if (e.sensor != "all" && e.sensor != std::to_string(c.ids[k])) continue;
+        Vec3 e1, e2, bb;
+        model::boresightBasis(c.cfg.heads.head[k].boresight_Si, e1, e2, bb);
+        const Vec3 bB = c.C_B_S[k] * bb;
+        const Mat3 Bm = bB * bB.transpose(), Pm = Mat3::Identity() - Bm;
+        const double lv = std::pow(e.params[0].value * kRadPerArcsec, 2);
+        // keep the other component of this head as it is in cov_ext
+        const double cross2 = (Pm * cov_ext[k] * Pm).trace() / 2, about2 = (Bm * cov_ext[k] * Bm).trace();
+        cov_ext[k] = e.name == "cross_noise" ? Mat3(lv * Pm + about2 * Bm) : Mat3(cross2 * Pm + lv * Bm);
+      }
+    }
     Gain g;
     g.family = "noise";
     g.unit = "1 (normalised: chi2 per dof of pair first differences)";
-    auto chi = [&](bool held, bool est) {
-      double s = 0, n = 0;
+    double nll_cfg = 0, nll_ext = 0, n_all = 0;
+    auto chi = [&](bool held, const std::array<Mat3, kMaxHeads>& cv, double* nll) {
+      double sum = 0, n = 0;
       for (std::size_t i = 0; i < c.bins.size(); ++i) {
         if (bv[i].held != held) continue;
-        for (int a = 0; a < c.n_heads; ++a)
-          for (int b = a + 1; b < c.n_heads; ++b) {
-            const auto& ns = c.bins[i].noise[static_cast<std::size_t>(pairOf(a, b, c.n_heads))];
+        for (int a2 = 0; a2 < c.n_heads; ++a2)
+          for (int b2 = a2 + 1; b2 < c.n_heads; ++b2) {
+            const auto& ns = c.bins[i].noise[static_cast<std::size_t>(pairOf(a2, b2, c.n_heads))];
             if (ns.n <= 0) continue;
-            const Mat3 M = 2 * (est ? Mat3(cov_est[a] + cov_est[b]) : Mat3(c.cov_model_B[a] + c.cov_model_B[b]));
-            s += (M.inverse() * ns.sdd).trace();
+            const Mat3 M = 2 * (cv[a2] + cv[b2]);
+            const double tr = (M.inverse() * ns.sdd).trace();
+            sum += tr;
             n += 3 * ns.n;
+            // Gaussian negative log-likelihood of the differences (2/3 effective: lag-1 correlation -1/2)
+            if (nll) *nll += (2.0 / 3.0) * 0.5 * (ns.n * std::log(M.determinant()) + tr);
           }
       }
-      return n > 0 ? std::sqrt(s / n) : kNaN;
+      if (held == false && nll == &nll_cfg) n_all += n;
+      return n > 0 ? std::sqrt(sum / n) : kNaN;
     };
-    bool any_noise = false;
-    for (const auto& e : R.named) any_noise |= e.family == "noise";
-    g.rms_before = chi(false, false);
-    g.rms_after = any_noise ? chi(false, true) : g.rms_before;
-    g.heldout_rms_before = chi(true, false);
-    g.heldout_rms_after = any_noise ? chi(true, true) : g.heldout_rms_before;
-    // Gaussian log-likelihood change of the differences, about 3 n (ln r^2 - r^2 + 1)/2 ... as BIC
-    double n = 0;
-    for (const auto& b : c.bins)
-      for (const auto& ns : b.noise) n += 3 * ns.n;
-    const double r2 = g.rms_before * g.rms_before;
-    g.delta_bic = any_noise ? -(n * (r2 - 1 - std::log(r2))) + 2 * c.n_heads * std::log(std::max(n, 2.0)) : 0.0;
+    g.rms_before = chi(false, c.cov_model_B, &nll_cfg);
+    g.rms_after = chi(false, cov_ext, &nll_ext);
+    g.heldout_rms_before = chi(true, c.cov_model_B, nullptr);
+    g.heldout_rms_after = chi(true, cov_ext, nullptr);
+    g.delta_bic = 2 * (nll_ext - nll_cfg) + k_named * std::log(std::max(2.0, (2.0 / 3.0) * n_all));
     R.gains.push_back(g);
   }
   // the headline gain: the family whose held-out RMS dropped the most (relative to before)

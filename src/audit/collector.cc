@@ -370,7 +370,8 @@ bool Collector::write(const core::PipelineRow& row) {
     b.sum_asc += row.a_sc_B;
     b.sum_aacc += row.a_acc_B;
     // the jerk from the accelerometer (far less noisy than the star-derived angular acceleration)
-    if (m.have_prev_row && row.t - m.prev_row_t <= m.period_us * 3 / 2 && row.t > m.prev_row_t) {
+    // rows come on the CRN's output grid (1 s on GRACE-FO), not at every head epoch
+    if (m.have_prev_row && row.t - m.prev_row_t <= 3 * kUsPerSecond && row.t > m.prev_row_t) {
       b.n_jerk += 1;
       b.sum_jerk += (row.a_acc_B - m.prev_asc) / (static_cast<double>(row.t - m.prev_row_t) * 1e-6);
     }
