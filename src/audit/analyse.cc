@@ -1079,8 +1079,6 @@ bool Analyser::blindAt(int k, double t) const {
 
 void Analyser::dataTests(std::vector<EffectTest>& out) {
   const int H = c.n_heads;
-  double eps = 0;
-  for (int k = 0; k < H; ++k) eps += static_cast<double>(c.samples[k]);
   // outliers: the per-sample threshold's own false-alarm expectation
   const double p_sample = stats::chi2Sf(c.outlier_chi2, 3);
   for (int k = 0; k < H; ++k) {
@@ -1153,45 +1151,28 @@ void Analyser::dataTests(std::vector<EffectTest>& out) {
       out.push_back(e);
     }
   }
-  {
+  // Missing-sample runs of a whole stream (every head at once; the accelerometer) as the gaps effect.
+  auto gapTest = [&](const std::vector<MissingRun>& runs_in, const char* sensor, const char* what) {
     double miss = 0, dur = 0, runs = 0;
-    for (const auto& r : c.epoch_gaps) {
+    for (const auto& r : runs_in) {
       miss += r.samples;
       dur += r.end_s - r.start_s;
       runs += 1;
     }
     EffectTest e;
     e.name = "gaps";
-    e.sensor = "all";
+    e.sensor = sensor;
     e.family = "data";
     e.dof = 1;
     e.statistic = miss;
     e.p_value = miss > 0 ? 0.0 : 1.0;
-    e.note = "head epochs missing for every head (" + fmt("%.0f", runs) + " gaps)";
+    e.note = std::string(what) + " (" + fmt("%.0f", runs) + " gaps)";
     e.params.push_back({"per_day", "1/day", span_s > 0 ? runs / span_s * kDay : kNaN, kNaN, kNaN});
     e.params.push_back({"mean_s", "s", runs > 0 ? dur / runs : kNaN, kNaN, kNaN});
     out.push_back(e);
-  }
-  if (c.acc_samples > 0) {
-    double miss = 0, dur = 0, runs = 0;
-    for (const auto& r : c.acc_gaps) {
-      miss += r.samples;
-      dur += r.end_s - r.start_s;
-      runs += 1;
-    }
-    EffectTest e;
-    e.name = "gaps";
-    e.sensor = "acc";
-    e.family = "data";
-    e.dof = 1;
-    e.statistic = miss;
-    e.p_value = miss > 0 ? 0.0 : 1.0;
-    e.note = "accelerometer samples missing (" + fmt("%.0f", runs) + " gaps)";
-    e.params.push_back({"per_day", "1/day", span_s > 0 ? runs / span_s * kDay : kNaN, kNaN, kNaN});
-    e.params.push_back({"mean_s", "s", runs > 0 ? dur / runs : kNaN, kNaN, kNaN});
-    out.push_back(e);
-  }
-  (void)eps;
+  };
+  gapTest(c.epoch_gaps, "all", "head epochs missing for every head");
+  if (c.acc_samples > 0) gapTest(c.acc_gaps, "acc", "accelerometer samples missing");
 }
 
 EffectTest toTest(const LinFam& f, int k, const Fit& fit, const TestOut& t) {

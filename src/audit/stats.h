@@ -8,10 +8,31 @@
 
 namespace boresight::audit::stats {
 
+namespace detail {
+/// Continued fraction of Q(a, x) for x >= a + 1 (modified Lentz), without the prefactor.
+inline double gammaQCf(double a, double x) {
+  const double tiny = 1e-300;
+  double b = x + 1 - a, c = 1 / tiny, d = 1 / b, h = d;
+  for (int i = 1; i < 1000; ++i) {
+    const double an = -i * (i - a);
+    b += 2;
+    d = an * d + b;
+    if (std::abs(d) < tiny) d = tiny;
+    c = b + an / c;
+    if (std::abs(c) < tiny) c = tiny;
+    d = 1 / d;
+    const double del = d * c;
+    h *= del;
+    if (std::abs(del - 1) < 1e-16) break;
+  }
+  return h;
+}
+inline double gammaPrefactor(double a, double x) { return std::exp(-x + a * std::log(x) - std::lgamma(a)); }
+}  // namespace detail
+
 /// Regularised lower incomplete gamma P(a, x), a > 0, x >= 0.
 inline double gammaP(double a, double x) {
   if (x <= 0) return 0.0;
-  const double lg = std::lgamma(a);
   if (x < a + 1) {  // series
     double term = 1.0 / a, sum = term;
     for (int n = 1; n < 1000; ++n) {
@@ -19,45 +40,16 @@ inline double gammaP(double a, double x) {
       sum += term;
       if (std::abs(term) < std::abs(sum) * 1e-16) break;
     }
-    return std::min(1.0, sum * std::exp(-x + a * std::log(x) - lg));
+    return std::min(1.0, sum * detail::gammaPrefactor(a, x));
   }
-  // continued fraction for Q, modified Lentz
-  const double tiny = 1e-300;
-  double b = x + 1 - a, c = 1 / tiny, d = 1 / b, h = d;
-  for (int i = 1; i < 1000; ++i) {
-    const double an = -i * (i - a);
-    b += 2;
-    d = an * d + b;
-    if (std::abs(d) < tiny) d = tiny;
-    c = b + an / c;
-    if (std::abs(c) < tiny) c = tiny;
-    d = 1 / d;
-    const double del = d * c;
-    h *= del;
-    if (std::abs(del - 1) < 1e-16) break;
-  }
-  return std::max(0.0, 1.0 - std::exp(-x + a * std::log(x) - lg) * h);
+  return std::max(0.0, 1.0 - detail::gammaPrefactor(a, x) * detail::gammaQCf(a, x));
 }
 
 /// Regularised upper incomplete gamma Q(a, x) = 1 - P(a, x), accurate in the far tail.
 inline double gammaQ(double a, double x) {
   if (x <= 0) return 1.0;
   if (x < a + 1) return 1.0 - gammaP(a, x);
-  const double tiny = 1e-300;
-  double b = x + 1 - a, c = 1 / tiny, d = 1 / b, h = d;
-  for (int i = 1; i < 1000; ++i) {
-    const double an = -i * (i - a);
-    b += 2;
-    d = an * d + b;
-    if (std::abs(d) < tiny) d = tiny;
-    c = b + an / c;
-    if (std::abs(c) < tiny) c = tiny;
-    d = 1 / d;
-    const double del = d * c;
-    h *= del;
-    if (std::abs(del - 1) < 1e-16) break;
-  }
-  return std::exp(-x + a * std::log(x) - std::lgamma(a)) * h;
+  return detail::gammaPrefactor(a, x) * detail::gammaQCf(a, x);
 }
 
 namespace detail {
