@@ -175,7 +175,14 @@ void finishFamily(LinFam& f) {
   f.G.selfadjointView<Eigen::Lower>().rankUpdate(Af.transpose());
   f.G = f.G.selfadjointView<Eigen::Lower>();
   f.n_fit = nf;
-  // noise colour from first differences per component (fitting rows, consecutive in time)
+  // noise colour from first differences per component (fitting rows, consecutive in time), in physical
+  // units over each row's standard deviation: a constant signal cancels even where rows carry different
+  // weights (bins with fewer epochs, other head masks), which differences of whitened rows would not do
+  std::vector<double> sd(static_cast<std::size_t>(n), 1.0);
+  for (const auto& b : f.blocks) {
+    const MatrixXd cov = (b.W.transpose() * b.W).inverse();
+    for (int r = 0; r < b.n; ++r) sd[static_cast<std::size_t>(b.row0 + r)] = std::sqrt(std::max(cov(r, r), 1e-300));
+  }
   std::vector<int> last(f.comp_label.size() + 1, -1);
   std::vector<double> prevd(f.comp_label.size() + 1, 0.0);
   std::vector<char> havep(f.comp_label.size() + 1, 0);
@@ -184,7 +191,8 @@ void finishFamily(LinFam& f) {
     if (f.held[static_cast<std::size_t>(i)]) continue;
     const auto c = static_cast<std::size_t>(f.comp[static_cast<std::size_t>(i)]);
     if (last[c] >= 0) {
-      const double d = f.yw[i] - f.yw[last[c]];
+      const auto a = static_cast<std::size_t>(i), b0 = static_cast<std::size_t>(last[c]);
+      const double d = (f.yp[i] - f.yp[last[c]]) / std::sqrt(sd[a] * sd[a] + sd[b0] * sd[b0]);
       den += d * d;
       if (havep[c]) num += d * prevd[c];
       prevd[c] = d;
