@@ -5,6 +5,10 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <system_error>
+#include <vector>
 #include <string>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -31,11 +35,35 @@ inline bool writeFile(const std::string& path, const std::string& bytes) {
   return std::fclose(f) == 0 && ok;
 }
 
-/// A new directory under the test's temporary directory, named PREFIX_XXXXXX.
+/// The directories makeTempDir made; removed with everything in them when the test program exits
+/// normally (set BORESIGHT_KEEP_TEST_FILES to keep them for a look after a failure).
+class TempDirs {
+ public:
+  static TempDirs& instance() {
+    static TempDirs dirs;
+    return dirs;
+  }
+  void add(const std::string& dir) { dirs_.push_back(dir); }
+  ~TempDirs() {
+    if (std::getenv("BORESIGHT_KEEP_TEST_FILES")) return;
+    for (const auto& d : dirs_) {
+      std::error_code ec;
+      std::filesystem::remove_all(d, ec);
+    }
+  }
+
+ private:
+  std::vector<std::string> dirs_;
+};
+
+/// A new directory under the test's temporary directory, named PREFIX_XXXXXX, its own even when
+/// ctest runs this program's tests as parallel processes; removed at exit (see TempDirs).
 inline std::string makeTempDir(const std::string& prefix) {
   std::string tmpl = ::testing::TempDir() + prefix + "_XXXXXX";
   const char* d = ::mkdtemp(tmpl.data());
-  return d ? std::string(d) : ::testing::TempDir();
+  if (!d) return ::testing::TempDir();
+  TempDirs::instance().add(d);
+  return std::string(d);
 }
 
 struct CliRun {

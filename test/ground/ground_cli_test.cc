@@ -4,6 +4,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <gtest/gtest.h>
+#include "test_files.h"
 
 #include <algorithm>
 #include <cmath>
@@ -39,11 +40,8 @@ CliRun run(const std::string& args, const fs::path& dir) {
 class GroundCli : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("boresight_ground_cli_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
+    dir_ = testutil::makeTempDir(std::string("boresight_ground_cli_") +
+                                 ::testing::UnitTest::GetInstance()->current_test_info()->name());
   }
   void TearDown() override { fs::remove_all(dir_); }
   std::string p(const char* name) const { return (dir_ / name).string(); }

@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include "test_files.h"
+
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -26,13 +28,14 @@ std::string validText() {
   Measurement m;
   SimTruth t;
   EXPECT_TRUE(simulateGround(cfg, m, t, nullptr));
-  const auto path = std::filesystem::temp_directory_path() / "boresight_ground_meas_test.yaml";
+  // A directory of its own: ctest runs this file's tests as parallel processes, and one fixed name
+  // let one test delete the file another was reading.
+  const std::filesystem::path dir = testutil::makeTempDir("boresight_ground_meas");
+  const auto path = dir / "meas.yaml";
   EXPECT_TRUE(writeMeasurement(path.string(), m, nullptr));
-  std::ifstream in(path);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  std::filesystem::remove(path);
-  return ss.str();
+  const std::string text = testutil::slurp(path.string());
+  std::filesystem::remove_all(dir);
+  return text;
 }
 
 /// 1-based line of the n-th (0-based) occurrence of `what`.
@@ -78,11 +81,12 @@ TEST(GroundMeasurement, RoundTrip) {
   SimTruth t;
   ASSERT_TRUE(simulateGround(cfg, m, t, nullptr));
   m.positions[1].name = "table \"B\" \\ 20 deg: tilted";
-  const auto path = std::filesystem::temp_directory_path() / "boresight_ground_rt.yaml";
+  const std::filesystem::path dir = testutil::makeTempDir("boresight_ground_rt");
+  const auto path = dir / "rt.yaml";
   ASSERT_TRUE(writeMeasurement(path.string(), m, nullptr));
   std::string err;
   ASSERT_TRUE(loadMeasurement(path.string(), back, &err)) << err;
-  std::filesystem::remove(path);
+  std::filesystem::remove_all(dir);
   EXPECT_EQ(back.gravity_mps2, m.gravity_mps2);
   EXPECT_NEAR(back.q_s_t_design.angularDistance(m.q_s_t_design), 0, 1e-14);
   EXPECT_EQ(back.camera.width_px, 1024);

@@ -9,6 +9,7 @@
 #include <random>
 
 #include "real_data.h"
+#include "test_files.h"
 
 using namespace boresight;
 using namespace boresight::io;
@@ -212,12 +213,12 @@ void expectSynthRoundTrip(Product p, Fill fill, bool binary = false) {
     EXPECT_EQ(g.header.binary, binary);
     EXPECT_EQ(g.records, f.records);
     // Through the file system as well.
-    const std::string path = (std::filesystem::temp_directory_path() /
-                              (std::string(productName(p)) + "_rt_" + sat + (binary ? ".dat" : ".txt"))).string();
+    const std::string dir = testutil::makeTempDir("boresight_io_rt");
+    const std::string path = dir + "/" + std::string(productName(p)) + "_rt_" + sat + (binary ? ".dat" : ".txt");
     std::string err;
     ASSERT_TRUE(writeProduct(path, f, &err)) << err;
     auto h = readProduct<Rec>(path);
-    std::remove(path.c_str());
+    std::filesystem::remove_all(dir);
     ASSERT_TRUE(h.ok) << h.error;
     EXPECT_EQ(h.records, f.records);
   }

@@ -1,6 +1,7 @@
 // Files written by the simulator read back through the io readers with identical values; runs are
 // deterministic for a seed; scenarios are validated with FILE:LINE: key 'k': reason messages.
 #include "sim_test_util.h"
+#include "test_files.h"
 
 #include <boresight/io/lcm_log.h>
 #include <boresight/sim/output.h>
@@ -36,9 +37,7 @@ std::unique_ptr<Written> simulateTo(const sim::Scenario& sc, std::uint64_t seed,
                                     std::size_t chunk_note = 0) {
   (void)chunk_note;
   auto w = std::make_unique<Written>();
-  w->dir = fs::temp_directory_path() / ("boresight_sim_io_" + name);
-  fs::remove_all(w->dir);
-  fs::create_directories(w->dir);
+  w->dir = testutil::makeTempDir("boresight_sim_io_" + name);
   w->sim = std::make_unique<sim::Simulator>();
   std::string err;
   EXPECT_TRUE(w->sim->init(sc, seed, duration, &err)) << err;

@@ -1,6 +1,7 @@
 // Orbits: the circular LEO model, and positions read back from a GNV1B file (simulated and real).
 #include "real_data.h"
 #include "sim_test_util.h"
+#include "test_files.h"
 
 #include <boresight/model/orbit_context.h>
 #include <boresight/sim/ephemeris.h>
@@ -59,8 +60,7 @@ TEST(SimOrbit, MeasuredDataGetTheSimulatorsOrbitContext) {
 
 TEST(SimOrbit, Gnv1bOrbitReproducesTheOrbitItWasWrittenFrom) {
   const auto sc = simtest::gracefo();
-  const fs::path dir = fs::temp_directory_path() / "boresight_sim_gnv";
-  fs::create_directories(dir);
+  const fs::path dir = testutil::makeTempDir("boresight_sim_gnv");
   sim::Simulator s;
   std::string err;
   ASSERT_TRUE(s.init(sc, 1, 900, &err)) << err;

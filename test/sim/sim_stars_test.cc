@@ -1,6 +1,7 @@
 // Star catalogue and field of view; Sun/Earth/Moon exclusion; Sun and Moon directions.
 #include <boresight/io/time_format.h>
 #include "sim_test_util.h"
+#include "test_files.h"
 
 #include <boresight/sim/ephemeris.h>
 #include <boresight/sim/output.h>
@@ -161,8 +162,7 @@ TEST(SimStars, ExclusionConesBlindHeadsWhenTheSunEarthOrMoonIsInside) {
   sim::Simulator sim2;
   std::string err;
   ASSERT_TRUE(sim2.init(sc2, 11, 120, &err)) << err;
-  const auto dir = std::filesystem::temp_directory_path() / "boresight_sim_blind_test";
-  std::filesystem::create_directories(dir);
+  const std::filesystem::path dir = testutil::makeTempDir("boresight_sim_blind");
   sim::Level1Sink l1;
   ASSERT_TRUE(l1.open(dir.string(), sc2, &err)) << err;
   sim2.run(l1);

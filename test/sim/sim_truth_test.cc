@@ -2,6 +2,7 @@
 // read back; every effect spec equals the simulated one and every sensor parameter and realised event
 // agrees with the simulator's. Bad files give "PATH:LINE: key 'k': reason".
 #include "sim_test_util.h"
+#include "test_files.h"
 
 #include <boresight/model/stochastic.h>
 #include <boresight/sim/truth.h>
@@ -43,9 +44,7 @@ struct TruthRun {
 /// `name`: a directory of its own per test (ctest runs the tests of this file in parallel).
 TruthRun writeOne(const std::string& name) {
   TruthRun t;
-  t.dir = fs::temp_directory_path() / ("boresight_sim_truth_" + name);
-  fs::remove_all(t.dir);
-  fs::create_directories(t.dir);
+  t.dir = testutil::makeTempDir("boresight_sim_truth_" + name);
   auto sc = simtest::gracefo();
   sc.mounting_error_sigma_rad = 7 * kRadPerArcsec;  // a drawn part on top of the configured errors
   sc.heads[1].tag_drift_ppm = 12.5;

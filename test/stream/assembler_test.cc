@@ -179,10 +179,7 @@ TEST(Assembler, PrefetchHandsOverTheSameSequence) {
 }
 
 TEST(CsvRowSink, NumbersAreFormattedAsPrintf) {
-  std::string tmpl = ::testing::TempDir() + "boresight_csv_XXXXXX";
-  const char* made = ::mkdtemp(tmpl.data());
-  ASSERT_NE(made, nullptr);
-  const std::string dir = made;
+  const std::string dir = testutil::makeTempDir("boresight_csv");
   const std::string path = dir + "/rows.csv";
   core::PipelineConfig cfg;
   cfg.heads.n_heads = 3;
