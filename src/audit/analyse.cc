@@ -4,6 +4,7 @@
 #include "collector_impl.h"
 #include "stats.h"
 
+#include <boresight/io/time_format.h>
 #include <boresight/model/rotation.h>
 #include <boresight/model/sensors.h>
 #include <boresight/sim/ephemeris.h>
@@ -1180,7 +1181,7 @@ void Analyser::dataTests(std::vector<EffectTest>& out) {
     out.push_back(e);
   };
   gapTest(c.epoch_gaps, "all", "head epochs missing for every head");
-  if (c.acc_samples > 0) gapTest(c.acc_gaps, "acc", "accelerometer samples missing");
+  if (c.acc_samples > c.acc_outside) gapTest(c.acc_gaps, "acc", "accelerometer samples missing");
 }
 
 EffectTest toTest(const LinFam& f, int k, const Fit& fit, const TestOut& t) {
@@ -1664,6 +1665,19 @@ AuditResult Analyser::run() {
     R.baseline.missing.push_back("no head epochs");
     R.findings.push_back("no head epochs: nothing to audit");
     return R;
+  }
+  R.baseline.acc_samples_outside = c.acc_outside;
+  if (c.acc_outside > 0) {
+    const std::string acc_span = io::formatTime(c.acc_first) + " to " + io::formatTime(c.acc_final);
+    const std::string star_span = io::formatTime(c.t0) + " to " + io::formatTime(c.t_last);
+    if (c.acc_outside == c.acc_samples)
+      R.findings.push_back("the accelerometer data (" + acc_span + ") does not overlap the star data (" + star_span +
+                           "): no accelerometer sample is used; give files of the same span");
+    else if (c.acc_first < c.t0 - Collector::Impl::kStarCoverUs || c.acc_final > c.t_last + Collector::Impl::kStarCoverUs)
+      // (a lead-in of less than 300 s before the first head epoch is normal and only counted)
+      R.findings.push_back("accelerometer: " + std::to_string(c.acc_outside) + " of " + std::to_string(c.acc_samples) +
+                           " samples (" + acc_span + ") lie away from the star data (" + star_span +
+                           "; before its first epoch or over 300 s after the latest) and are not used");
   }
   views();
   R.baseline.span_s = span_s;

@@ -313,9 +313,16 @@ void Collector::Impl::finalizeEpoch(int k) {
 void Collector::onAcc(TimeUs t, const Vec3& a_A, core::Status) {
   Impl& m = *impl_;
   if (!m.configured || !a_A.allFinite()) return;
-  if (!m.have_t0) {
-    m.have_t0 = true;
-    m.t0 = t;
+  if (!m.have_acc_span) {
+    m.have_acc_span = true;
+    m.acc_first = t;
+  }
+  m.acc_final = std::max(m.acc_final, t);
+  ++m.acc_samples;
+  if (!m.inStarCover(t)) {
+    ++m.acc_outside;
+    m.have_acc = false;  // a run of samples outside the star data is not an accelerometer gap
+    return;
   }
   if (m.have_acc) {
     const TimeUs dt = t - m.last_acc_t;
@@ -325,7 +332,6 @@ void Collector::onAcc(TimeUs t, const Vec3& a_A, core::Status) {
   }
   m.have_acc = true;
   m.last_acc_t = t;
-  ++m.acc_samples;
   Bin& b = m.binAt(t);
   b.n_acc += 1;
   b.sum_a += a_A;
@@ -354,7 +360,11 @@ void Collector::onEnd() {
 
 bool Collector::write(const core::PipelineRow& row) {
   Impl& m = *impl_;
-  if (!m.configured || !m.have_t0) return true;
+  if (!m.configured) return true;
+  if (!m.inStarCover(row.t)) {
+    ++m.rows_outside;
+    return true;
+  }
   ++m.rows;
   Bin& b = m.binAt(row.t);
   for (int p = 0; p < kMaxPairs; ++p)

@@ -115,6 +115,16 @@ struct Collector::Impl {
   TimeUs last_epoch_t = 0, last_acc_t = 0;
   bool have_epoch = false, have_acc = false;
 
+  // Coverage: the time bins serve the star data. Accelerometer samples and rows before the first head
+  // epoch, or more than kStarCoverUs after the latest one, are counted here and not binned: every family
+  // that uses them needs star data in the same bin, and an accelerometer file of another day would
+  // otherwise stretch the bins over days and average the star span into a few of them.
+  static constexpr TimeUs kStarCoverUs = 300 * kUsPerSecond;
+  bool inStarCover(TimeUs t) const { return have_t0 && t >= t0 && t <= t_last + kStarCoverUs; }
+  std::uint64_t acc_outside = 0, rows_outside = 0;
+  bool have_acc_span = false;
+  TimeUs acc_first = 0, acc_final = 0;  ///< every accelerometer sample's span, used or not
+
   // rows
   bool have_prev_row = false;
   TimeUs prev_row_t = 0;

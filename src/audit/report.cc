@@ -60,6 +60,7 @@ Json resultJson(const AuditResult& r) {
                    {"bin_s", num(b.bin_s)},
                    {"head_epochs", b.head_epochs},
                    {"acc_samples", b.acc_samples},
+                   {"acc_samples_outside_star_span", b.acc_samples_outside},
                    {"reference_samples", b.reference_samples},
                    {"orbit_samples", b.orbit_samples},
                    {"families", b.families},
@@ -301,7 +302,9 @@ std::string reportText(const AuditResult& r, const ReportContext* ctx, const std
   o << "## Baseline\n\n";
   if (!b.description.empty()) o << b.description << "\n\n";
   o << "Span " << fmt(b.span_s, "%.1f") << " s in bins of " << fmt(b.bin_s, "%.3g") << " s; " << b.head_epochs
-    << " head epochs, " << b.acc_samples << " accelerometer samples, " << b.reference_samples << " reference samples, "
+    << " head epochs, " << b.acc_samples << " accelerometer samples"
+    << (b.acc_samples_outside ? " (" + std::to_string(b.acc_samples_outside) + " outside the star data's span, not used)" : std::string())
+    << ", " << b.reference_samples << " reference samples, "
     << b.orbit_samples << " orbit samples.\n\n";
   if (!b.families.empty()) {
     o << "Residual families with data:";

@@ -29,10 +29,17 @@ struct Feed {
 
 /// Two hours at 2 Hz of a body turning about y at the orbital rate; head 2 misaligned by `mis` (head
 /// frame); every head missing from 3000 s to 3060 s; head 3 missing from 5000 s to 5100 s.
-void feed(audit::Collector& c, const core::PipelineConfig& cfg, const Vec3& mis, Feed& f) {
+/// With `acc_elsewhere`, accelerometer samples come as well, in time order: 600 a day before the first
+/// epoch, 100 in the 10 s after the last, and 6000 two days later (an accelerometer file of another day).
+void feed(audit::Collector& c, const core::PipelineConfig& cfg, const Vec3& mis, Feed& f, bool acc_elsewhere = false) {
   std::mt19937_64 rng(42);
   std::normal_distribution<double> n01;
   const TimeUs t0 = 738849600LL * kUsPerSecond;
+  const Vec3 a(1e-7, -2e-7, 3e-8);
+  auto accRun = [&](TimeUs from, int n) {
+    for (int i = 0; i < n; ++i) c.onAcc(from + static_cast<TimeUs>(i) * 100000, a, core::Status::kOk);
+  };
+  if (acc_elsewhere) accRun(t0 - 86400 * kUsPerSecond, 600);
   for (int i = 0; i < 14400; ++i) {
     const double t = 0.5 * i;
     if (t >= 3000 && t < 3060) continue;
@@ -51,6 +58,11 @@ void feed(audit::Collector& c, const core::PipelineConfig& cfg, const Vec3& mis,
     }
     c.onHeads(e, core::Status::kOk);
     ++f.epochs;
+  }
+  if (acc_elsewhere) {
+    const TimeUs last = t0 + 14399LL * 500000;
+    accRun(last + 100000, 100);
+    accRun(last + 2 * 86400 * kUsPerSecond, 6000);
   }
   c.onEnd();
 }
@@ -108,6 +120,35 @@ TEST(AuditCollector, BinDoublingLeavesTheAnalysisUnchangedAndSeamsAreCounted) {
       if (e.name == "cross_noise" && e.sensor == "2") lvl[run] = e.params[0].value;
   EXPECT_GT(lvl[0], 0);
   EXPECT_NEAR(lvl[0], lvl[1], 1e-9 * lvl[0]);
+}
+
+/// Accelerometer samples far outside the star data (files of another day) are counted, said, and kept out
+/// of the time bins: the bins stay 0.5 s and the star families give what they give without them.
+TEST(AuditCollector, AccelerometerDataOutsideTheStarSpanIsCountedAndDoesNotStretchTheBins) {
+  const auto cfg = threeHeads();
+  const Vec3 mis = Vec3(10, -4, 0) * kRadPerArcsec;
+  audit::AuditResult res[2];
+  for (int run = 0; run < 2; ++run) {
+    audit::AuditOptions opt;
+    audit::Collector c;
+    std::string err;
+    ASSERT_TRUE(c.configure(cfg, opt, &err)) << err;
+    Feed f;
+    feed(c, cfg, mis, f, run == 1);
+    res[run] = audit::analyse(c, opt);
+  }
+  EXPECT_EQ(res[1].baseline.acc_samples, 6700u);
+  EXPECT_EQ(res[1].baseline.acc_samples_outside, 6600u);
+  EXPECT_DOUBLE_EQ(res[1].baseline.bin_s, 0.5);
+  EXPECT_NEAR(res[1].baseline.span_s, res[0].baseline.span_s, 11.0);
+  bool said = false;
+  for (const auto& s : res[1].findings) said = said || s.find("6600 of 6700 samples (") != std::string::npos;
+  EXPECT_TRUE(said);
+  const auto* a = named(res[0], "relative_misalignment", "2");
+  const auto* b = named(res[1], "relative_misalignment", "2");
+  ASSERT_TRUE(a && b);
+  for (int q = 0; q < 3; ++q) EXPECT_NEAR(a->params[static_cast<std::size_t>(q)].value, b->params[static_cast<std::size_t>(q)].value, 1e-6);
+  EXPECT_EQ(named(res[1], "gaps", "acc"), nullptr);  // samples outside the star data are not a gap
 }
 
 }  // namespace

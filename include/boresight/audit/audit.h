@@ -138,6 +138,9 @@ struct Baseline {
   double span_s = 0;
   double bin_s = 0;
   std::uint64_t head_epochs = 0, acc_samples = 0, reference_samples = 0, orbit_samples = 0;
+  /// accelerometer samples outside the star data's span (before its first epoch or over 300 s after
+  /// its last): counted in acc_samples, not used
+  std::uint64_t acc_samples_outside = 0;
   std::vector<std::string> families;  ///< families with data
   std::vector<std::string> missing;   ///< families without (and why), e.g. "angular_acceleration: span 16 s < CRN 70.7 s"
   std::map<std::string, double> values;  ///< model parameters used (sigma_cross_arcsec, ...)
