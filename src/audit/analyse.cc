@@ -117,6 +117,10 @@ struct Cand {
   /// Physical bounds on the coefficients (aberration: 0 = corrected, 1 = uncorrected); a fit outside
   /// them means the candidate explains something else, and it is not admissible.
   double coef_min = -1e300, coef_max = 1e300;
+  /// Columns whose regressor the data cannot identify (set to zero before fitting; reported as null),
+  /// and why (appended to the test's note).
+  std::vector<char> gated{};
+  std::string caveat{};
 };
 
 struct Block {
@@ -146,6 +150,11 @@ struct LinFam {
   /// differences (which remove constants and slow signals: for AR(1) noise their lag-1 correlation is
   /// -(1 - rho) / 2), and the variance inflation (1 + rho) / (1 - rho) of slowly varying regressors.
   double rho = 0, infl = 1;
+  /// Colour per test instead (angular acceleration): the CRN-differentiated star noise has almost no power
+  /// at low frequencies while the accelerometer's has much, so one lag-1 inflation is wrong both ways
+  /// (99 on 1 s rows, 1 on 16 s rows). Each test's statistic is divided by the batch-means ratio of its
+  /// score (fitted signature times residual) over time blocks, with blocks - 1 degrees of freedom.
+  bool hac = false;
 };
 
 /// Adds one candidate with `ncol` columns and returns its first column.
@@ -285,12 +294,61 @@ struct TestOut {
   double F = 0, p = 1, thr = 0;
   int k = 0;
   double d2 = 0;
+  double infl = 0;  ///< the test's own variance inflation (hac families), 0: the family's
+  int blocks = 0;   ///< time blocks of the batch-means estimate (hac families)
+  double block_s = 0;
 };
 
-/// F test of `big` against `small` (nested), residual variance and colour from `big`.
-TestOut ftest(const Fit& small, const Fit& big, double alpha_each) {
+/// Batch-means variance ratio of the score u = (fitted big - fitted small) x residual(big), summed over
+/// time blocks: sum_b (sum_{t in b} u_t)^2 / sum_t u_t^2 (1 for independent rows). Blocks of
+/// max(150 s, span / 48) (twice the CRN length at least; about the accelerometer's low-frequency
+/// correlation time on a day), at least 8 of them.
+double scoreInflation(const LinFam& f, const Fit& small, const Fit& big, int& blocks, double& block_s) {
+  const int n = static_cast<int>(f.yw.size());
+  auto fitted = [&](const Fit& ft, int i) {
+    double v = 0;
+    for (std::size_t j = 0; j < ft.cols.size(); ++j) v += f.Xw(i, ft.cols[j]) * ft.beta[static_cast<int>(j)];
+    return v;
+  };
+  double t0 = 1e300, t1 = -1e300;
+  for (int i = 0; i < n; ++i)
+    if (!f.held[static_cast<std::size_t>(i)]) t0 = std::min(t0, f.t[static_cast<std::size_t>(i)]), t1 = std::max(t1, f.t[static_cast<std::size_t>(i)]);
+  const double span = t1 - t0;
+  block_s = std::max(150.0, span / 48);
+  if (span / block_s < 8) block_s = span / 8;
+  blocks = 0;
+  if (!(block_s > 0)) return 1;
+  std::vector<double> sum(static_cast<std::size_t>(span / block_s) + 2, 0.0);
+  std::vector<char> used(sum.size(), 0);
+  double den = 0;
+  for (int i = 0; i < n; ++i) {
+    if (f.held[static_cast<std::size_t>(i)]) continue;
+    const double yb = fitted(big, i);
+    const double u = (yb - fitted(small, i)) * (f.yw[i] - yb);
+    const auto b = static_cast<std::size_t>((f.t[static_cast<std::size_t>(i)] - t0) / block_s);
+    sum[b] += u;
+    used[b] = 1;
+    den += u * u;
+  }
+  double num = 0;
+  for (std::size_t b = 0; b < sum.size(); ++b) num += sum[b] * sum[b], blocks += used[b];
+  return den > 0 ? num / den : 1;
+}
+
+/// F test of `big` against `small` (nested), residual variance and colour from `big` (or, in hac
+/// families, from the test's own score).
+TestOut ftest(const LinFam& f, const Fit& small, const Fit& big, double alpha_each) {
   TestOut o;
   o.k = std::max(1, big.rank - small.rank);
+  if (f.hac) {
+    o.infl = std::max(0.2, scoreInflation(f, small, big, o.blocks, o.block_s));
+    o.d2 = std::max(1, o.blocks - 1);
+    const double s2 = big.rss / std::max(1.0, static_cast<double>(f.n_fit - big.rank));
+    o.F = std::max(0.0, (small.rss - big.rss) / o.k / s2) / o.infl;
+    o.p = stats::fSf(o.F, o.k, o.d2);
+    o.thr = stats::fQuantile(alpha_each, o.k, o.d2);
+    return o;
+  }
   const double d2 = std::max(1.0, big.n_eff - big.rank);
   const double s2 = big.rss / std::max(1.0, static_cast<double>(big.n_eff * big.infl) - big.rank);  // per-row variance
   o.F = std::max(0.0, (small.rss - big.rss) / o.k / s2) / big.infl;
@@ -405,6 +463,7 @@ struct Analyser {
   void views();
   void buildRelative();
   void buildAcc();
+  void gateScale(LinFam& f, int cand);
   void buildReference();
   void estimateNoise(std::vector<EffectTest>& out);
   void rateRoute(std::vector<EffectTest>& out);
@@ -676,6 +735,7 @@ void Analyser::buildAcc() {
   Cand sc{"acc_scale", "acc", "", 0, 3, {}, {}, false, 0};
   for (auto a : ax) sc.params.push_back({a, "1", 1.0});
   const int cs = addCand(f, sc);
+  const int cs_idx = static_cast<int>(f.cands.size()) - 1;
   Cand mi{"acc_misalignment", "acc", "", 0, 3, {}, {}, false, 0};
   for (auto a : ax) mi.params.push_back({std::string(a) + "_arcsec", "arcsec", kArcsecPerRad});
   const int cm = addCand(f, mi);
@@ -754,9 +814,64 @@ void Analyser::buildAcc() {
     f.blocks.push_back(blk);
     row += 3;
   }
+  gateScale(f, cs_idx);
+  f.hac = true;
   finishFamily(f);
   R.baseline.families.push_back("angular_acceleration");
   fams.push_back(std::move(f));
+}
+
+// The scale regressor is the accelerometer's own angular acceleration, which carries the accelerometer's
+// noise: regressing the residual (accelerometer minus stars) on it gives var(noise) / var(signal + noise)
+// even without a scale error (errors in variables), and in quiet pointing, where the true angular
+// acceleration is as small as that noise, the F test would name a scale error of tens of percent on
+// spans of days. Second moments alone cannot separate a scale error from that dilution, but they bound
+// it (Frisch): with A = (1 + s) T + n_A and S = T + n_S (independent noises), 1 + s lies between
+// cov(A, S) / var(S) and var(A) / cov(A, S). An A axis whose bounds include 1 (no scale error) cannot
+// show one, and its column is left out; angular accelerations well above both noises (manoeuvres) narrow
+// the bounds and keep it. The bounds use every bin (held-out ones too): they decide whether the data can
+// show a scale at all, and fit nothing.
+void Analyser::gateScale(LinFam& f, int cand) {
+  Cand& cd = f.cands[static_cast<std::size_t>(cand)];
+  const Mat3 CAB = c.cfg.C_B_A.transpose();
+  double w = 0;
+  Vec3 ma = Vec3::Zero(), ms = Vec3::Zero();
+  for (std::size_t i = 0; i < c.bins.size(); ++i) {
+    const Bin& b = c.bins[i];
+    if (b.n_aa <= 0) continue;
+    ma += CAB * b.sum_aacc;
+    ms += CAB * b.sum_asc;
+    w += b.n_aa;
+  }
+  if (w <= 0) return;
+  ma /= w;
+  ms /= w;
+  Vec3 va = Vec3::Zero(), vs = Vec3::Zero(), cv = Vec3::Zero();
+  for (std::size_t i = 0; i < c.bins.size(); ++i) {
+    const Bin& b = c.bins[i];
+    if (b.n_aa <= 0) continue;
+    const Vec3 A = CAB * b.sum_aacc / b.n_aa - ma, S = CAB * b.sum_asc / b.n_aa - ms;
+    va += b.n_aa * A.cwiseProduct(A);
+    vs += b.n_aa * S.cwiseProduct(S);
+    cv += b.n_aa * A.cwiseProduct(S);
+  }
+  cd.gated.assign(static_cast<std::size_t>(cd.ncol), 0);
+  std::string why;
+  int gated = 0;
+  for (int q = 0; q < 3; ++q) {
+    const double lo = cv[q] > 0 ? cv[q] / vs[q] : kNaN, hi = cv[q] > 0 ? va[q] / cv[q] : kNaN;
+    const bool identified = cv[q] > 0 && (lo > 1 || hi < 1);
+    if (identified) continue;
+    ++gated;
+    cd.gated[static_cast<std::size_t>(q)] = 1;
+    for (std::size_t r = 0; r < static_cast<std::size_t>(f.Xp.rows()); ++r) f.Xp(static_cast<int>(r), cd.col0 + q) = 0;
+    why += std::string(why.empty() ? "" : ", ") + "xyz"[q] + " [" + (cv[q] > 0 ? fmt("%.3g", lo) + ", " + fmt("%.3g", hi) : "no common signal") + "]";
+  }
+  if (gated > 0)
+    cd.caveat = "not identifiable on A axis " + why +
+                " (bounds of 1 + s from the accelerometer's and the stars' angular accelerations; they include 1, so "
+                "the sensors' own noise explains a fitted scale as well: angular accelerations well above both noises, "
+                "e.g. manoeuvres, identify it)";
 }
 
 void Analyser::buildReference() {
@@ -1195,7 +1310,9 @@ EffectTest toTest(const LinFam& f, int k, const Fit& fit, const TestOut& t) {
   e.threshold = t.thr;
   e.p_value = t.p;
   e.detected = t.F > t.thr;
-  e.note = "F(" + std::to_string(t.k) + ", " + fmt("%.0f", t.d2) + ") with residual variance inflation " + fmt("%.2f", fit.infl);
+  const double infl = t.infl > 0 ? t.infl : fit.infl;
+  e.note = "F(" + std::to_string(t.k) + ", " + fmt("%.0f", t.d2) + ") with residual variance inflation " + fmt("%.2f", infl);
+  if (t.infl > 0) e.note += " (batch means of the test's score over " + std::to_string(t.blocks) + " blocks of " + fmt("%.0f", t.block_s) + " s)";
   // parameters from the fit
   std::vector<double> val(static_cast<std::size_t>(cd.ncol), kNaN), sig(static_cast<std::size_t>(cd.ncol), kNaN);
   const double s2 = fit.rss / std::max(1.0, f.n_fit - static_cast<double>(fit.rank));
@@ -1203,7 +1320,7 @@ EffectTest toTest(const LinFam& f, int k, const Fit& fit, const TestOut& t) {
     if (fit.cols[i] >= cd.col0 && fit.cols[i] < cd.col0 + cd.ncol) {
       const auto j = static_cast<std::size_t>(fit.cols[i] - cd.col0);
       val[j] = fit.beta[static_cast<int>(i)];
-      sig[j] = std::sqrt(std::max(0.0, fit.cov_unit(static_cast<int>(i), static_cast<int>(i)) * s2 * fit.infl));
+      sig[j] = std::sqrt(std::max(0.0, fit.cov_unit(static_cast<int>(i), static_cast<int>(i)) * s2 * infl));
     }
   if (cd.thermal) {
     // cos/sin per axis -> amplitude per axis with one phase (that of the largest axis)
@@ -1226,6 +1343,9 @@ EffectTest toTest(const LinFam& f, int k, const Fit& fit, const TestOut& t) {
                           val[static_cast<std::size_t>(j)] * cd.params[static_cast<std::size_t>(j)].scale,
                           sig[static_cast<std::size_t>(j)] * std::abs(cd.params[static_cast<std::size_t>(j)].scale), kNaN});
   }
+  for (std::size_t j = 0; j < cd.gated.size() && j < e.params.size(); ++j)
+    if (cd.gated[j]) e.params[j].value = e.params[j].sigma = kNaN;
+  if (!cd.caveat.empty()) e.note += "; " + cd.caveat;
   for (const auto& p : cd.fixed) e.params.push_back(p);
   return e;
 }
@@ -1398,10 +1518,11 @@ void Analyser::runFamily(LinFam& f) {
       e.p_value = kNaN;
       e.detected = false;
       e.note = "not testable with these data (no signature in the " + f.name + " family)";
+      if (!f.cands[static_cast<std::size_t>(k)].caveat.empty()) e.note += "; " + f.cands[static_cast<std::size_t>(k)].caveat;
       marg[static_cast<std::size_t>(k)] = e;
       continue;
     }
-    const TestOut t = ftest(base, fk, alpha_each);
+    const TestOut t = ftest(f, base, fk, alpha_each);
     marg[static_cast<std::size_t>(k)] = toTest(f, k, fk, t);
     if (!admissible(f, k, fk)) {
       informative[static_cast<std::size_t>(k)] = false;
@@ -1421,7 +1542,7 @@ void Analyser::runFamily(LinFam& f) {
       if (!informative[static_cast<std::size_t>(k)] || std::find(S.begin(), S.end(), k) != S.end()) continue;
       const Fit fk = fitSet(f, with(S, k));
       if (fk.rank <= cur.rank || !admissible(f, k, fk)) continue;
-      const TestOut t = ftest(cur, fk, alpha_each);
+      const TestOut t = ftest(f, cur, fk, alpha_each);
       // prefer the smallest p; among p-values that underflow, the largest F per parameter
       const double key = t.p > 0 ? t.p : -t.F;
       if (t.F > t.thr && key < bp) bp = key, best = k, bfit = fk;
@@ -1436,7 +1557,7 @@ void Analyser::runFamily(LinFam& f) {
       double wp = -1;
       for (int k : S) {
         const Fit fr = fitSet(f, without(S, k));
-        const TestOut t = ftest(fr, cur, alpha_each);
+        const TestOut t = ftest(f, fr, cur, alpha_each);
         if (!(t.F > t.thr) && t.p > wp) wp = t.p, worst = k;
       }
       if (worst >= 0) {
@@ -1453,7 +1574,7 @@ void Analyser::runFamily(LinFam& f) {
     for (int b = 0; b < nc; ++b) {
       if (!detected[static_cast<std::size_t>(b)] || std::find(S.begin(), S.end(), b) != S.end()) continue;
       const Fit fb = fitSet(f, with(S, b));
-      const TestOut t = ftest(cur, fb, alpha_each);
+      const TestOut t = ftest(f, cur, fb, alpha_each);
       if (t.F > t.thr) continue;
       // b's explanation lies within a's, and b captures most of a's
       const double cc = containedCorr(f, without(S, a), a, b);
@@ -1495,7 +1616,7 @@ void Analyser::runFamily(LinFam& f) {
         S2.push_back(simple);
         const Fit f2 = fitSet(f, S2);
         if (f2.rank == 0 || !admissible(f, simple, f2)) continue;
-        const TestOut back = ftest(f2, fitSet(f, with(S2, sel)), alpha_each);
+        const TestOut back = ftest(f, f2, fitSet(f, with(S2, sel)), alpha_each);
         if (back.F > back.thr) continue;
         S = S2;
         out_of_s.erase(it);
@@ -1551,7 +1672,7 @@ void Analyser::runFamily(LinFam& f) {
   for (int k = 0; k < nc; ++k) R.effects.push_back(marg[static_cast<std::size_t>(k)]);
   for (int k : S) {
     const Fit others = fitSet(f, without(S, k));
-    const TestOut t = ftest(others, fin, alpha_each);
+    const TestOut t = ftest(f, others, fin, alpha_each);
     EffectTest e = toTest(f, k, fin, t);
     e.named = true;
     e.detected = true;
