@@ -429,10 +429,4 @@ void Collector::addReference(TimeUs t, const Quat& q_I_B) {
   m.ref.emplace_back(t, q);
 }
 
-void Collector::noteRejected(TimeUs, int head_id) {
-  Impl& m = *impl_;
-  for (int k = 0; k < m.n_heads; ++k)
-    if (m.ids[k] == head_id) ++m.rejected[k];
-}
-
 }  // namespace boresight::audit

@@ -105,7 +105,7 @@ struct Collector::Impl {
   std::array<TimeUs, kMaxHeads> last_tag{};
   std::array<bool, kMaxHeads> seen{};
   std::array<Quat, kMaxHeads> last_q{};
-  std::array<std::uint64_t, kMaxHeads> flips{}, outliers{}, samples{}, rejected{};
+  std::array<std::uint64_t, kMaxHeads> flips{}, outliers{}, samples{};
   std::uint64_t outliers_unattributed = 0;
   std::vector<double> flip_times_s, outlier_times_s;
   std::vector<MissingRun> head_runs[kMaxHeads];

@@ -165,6 +165,18 @@ bool runAudit(const RunRequest& req, RunOutput& out, std::string* error) {
     return false;
   }
   out.counters = engine.counters();
+  // Every record is used or rejected with a reason: the rejected ones per source, with the first lines.
+  for (std::size_t i = 0; i < engine.sourceCount(); ++i) {
+    const auto& c = engine.counters(i);
+    if (c.rejectedTotal() == 0) continue;
+    std::string s = engine.source(i).name() + ": " + std::to_string(c.read) + " read, " + std::to_string(c.used()) + " used";
+    for (int r = 0; r < stream::kRejectCount; ++r)
+      if (c.rejected[static_cast<std::size_t>(r)])
+        s += ", " + std::to_string(c.rejected[static_cast<std::size_t>(r)]) + " " + stream::rejectName(stream::Reject(r));
+    out.notes.push_back(s);
+    const auto issues = engine.source(i).issues();
+    for (std::size_t k = 0; k < issues.size() && k < 5; ++k) out.notes.push_back("  rejected " + issues[k]);
+  }
   out.health = engine.health();
   out.epochs = engine.epochs();
   out.rows = engine.rows();

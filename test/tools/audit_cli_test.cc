@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <string>
@@ -143,4 +144,32 @@ TEST(AuditCli, SimulatedMinutesGiveReportJsonAndPlotsFromLevel1AndFromTheLog) {
   EXPECT_EQ(k["named_causes"].size(), j["named_causes"].size());
   for (std::size_t i = 0; i < k["named_causes"].size() && i < j["named_causes"].size(); ++i)
     EXPECT_EQ(k["named_causes"][i]["name"], j["named_causes"][i]["name"]);
+}
+
+/// Damaged records are used or rejected, never dropped silently: the audit still runs, and says per source
+/// how many it rejected and why, with file and line, on the terminal and in report.md.
+TEST(AuditCli, DamagedRecordsAreCountedAndLocated) {
+  const std::string& sim = simulated();
+  const std::string dir = testutil::makeTempDir("audit_cli_damaged");
+  std::string text = testutil::slurp(sim + "/SCA1A_2023-06-01_C_04.txt");
+  const std::size_t body = text.find("# End of YAML header");
+  ASSERT_NE(body, std::string::npos);
+  // lines 40 and 41 after the header: one made unreadable, one cut short
+  std::size_t b = body;
+  int line = 1 + static_cast<int>(std::count(text.begin(), text.begin() + static_cast<long>(body), '\n'));
+  for (int k = 0; k < 40; ++k) b = text.find('\n', b) + 1, ++line;
+  std::size_t e = text.find('\n', b);
+  text.replace(b, e - b, "not a record");
+  b = text.find('\n', b) + 1;
+  e = text.find('\n', b);
+  text.replace(b, e - b, text.substr(b, (e - b) / 3));
+  const std::string sca = dir + "/SCA1A_2023-06-01_C_04.txt";
+  ASSERT_TRUE(testutil::writeFile(sca, text));
+  CliRun a = run("audit" + kConfig + sca + " " + sim + "/QSA1B_2023-06-01_C_04.txt --out " + dir + "/o");
+  ASSERT_EQ(a.status, 0) << a.out;
+  EXPECT_NE(a.out.find("+ 2 rejected"), std::string::npos) << a.out;
+  EXPECT_NE(a.out.find("rejected " + sca + ":" + std::to_string(line) + ":"), std::string::npos) << a.out;
+  EXPECT_NE(a.out.find("rejected " + sca + ":" + std::to_string(line + 1) + ":"), std::string::npos) << a.out;
+  const std::string md = testutil::slurp(dir + "/o/report.md");
+  EXPECT_NE(md.find(sca + ":" + std::to_string(line) + ":"), std::string::npos);
 }

@@ -182,8 +182,6 @@ class Collector final : public stream::InputObserver, public stream::RowSink {
   void addOrbit(const model::OrbitSample& o);
   /// Outside reference attitude q_I_B (SCA1B), time order.
   void addReference(TimeUs t, const Quat& q_I_B);
-  /// A sample the sources reported missing or rejected, for the data family (optional).
-  void noteRejected(TimeUs t, int head_id);
 
   struct Impl;
   const Impl& impl() const { return *impl_; }
