@@ -738,6 +738,8 @@ void Analyser::buildAcc() {
   const int cs_idx = static_cast<int>(f.cands.size()) - 1;
   Cand mi{"acc_misalignment", "acc", "", 0, 3, {}, {}, false, 0};
   for (auto a : ax) mi.params.push_back({std::string(a) + "_arcsec", "arcsec", kArcsecPerRad});
+  mi.caveat = "against the body frame the heads define with their configured mountings: a common rotation of "
+              "the heads' mountings is part of it";
   const int cm = addCand(f, mi);
   Cand to{"time_offset", "acc", "", 0, 1, {{"offset_ms", "ms", 1e3}}, {}, false, 0};
   const int ct = addCand(f, to);
