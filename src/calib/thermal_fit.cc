@@ -239,10 +239,7 @@ void ThermalCollector::pushOrbit(const io::GnvRecord& r) {
   if (!configured_) return;
   model::OrbitSample s;
   const Vec3 p(r.pos[0], r.pos[1], r.pos[2]), v(r.vel[0], r.vel[1], r.vel[2]);
-  const bool ok = r.coord_ref == 'I'   ? model::orbitSampleFromInertial(r.t, p, v, s)
-                  : r.coord_ref == 'E' ? model::orbitSampleFromEarthFixed(r.t, p, v, s)
-                                       : false;
-  if (!ok) {
+  if (!model::orbitSampleFromRecord(r.t, r.coord_ref, p, v, s)) {
     ++counts_.orbit_records_rejected;
     return;
   }

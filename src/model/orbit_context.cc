@@ -100,4 +100,10 @@ bool orbitSampleFromEarthFixed(TimeUs t, const Vec3& r_E, const Vec3& v_E, Orbit
   return true;
 }
 
+bool orbitSampleFromRecord(TimeUs t, char coord_ref, const Vec3& r, const Vec3& v, OrbitSample& out) {
+  if (coord_ref == 'I') return orbitSampleFromInertial(t, r, v, out);
+  if (coord_ref == 'E') return orbitSampleFromEarthFixed(t, r, v, out);
+  return false;
+}
+
 }  // namespace boresight::model

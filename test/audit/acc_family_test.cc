@@ -12,6 +12,8 @@
 
 #include <gtest/gtest.h>
 
+#include "synthetic_heads.h"
+
 #include <cmath>
 #include <random>
 
@@ -19,17 +21,7 @@ namespace {
 
 using namespace boresight;
 
-core::PipelineConfig threeHeads() {
-  core::PipelineConfig cfg;
-  cfg.heads.n_heads = 3;
-  const Vec3 axes[3] = {Vec3(1.2, 0, 0), Vec3(0, 1.1, 0.3), Vec3(0.7, -0.6, 0.9)};
-  for (int k = 0; k < 3; ++k) {
-    auto& h = cfg.heads.head[static_cast<std::size_t>(k)];
-    h.id = k + 1;
-    h.q_Si_B = model::quatExp(axes[k]);
-  }
-  return cfg;
-}
+using audittest::threeHeads;
 
 const Vec3 kBiasB(1.3e-5, 1.2e-4, -7.8e-4);
 
@@ -48,7 +40,7 @@ audit::AuditResult run(const Scenario& sc) {
   EXPECT_TRUE(c.configure(cfg, opt, &err)) << err;
   std::mt19937_64 rng(sc.seed);
   std::normal_distribution<double> n01;
-  const TimeUs t0 = 738849600LL * kUsPerSecond;
+  const TimeUs t0 = audittest::kT0;
   const Mat3 CBA = cfg.C_B_A, CAB = cfg.C_B_A.transpose();
   // per-row processes (1 Hz)
   Vec3 T_slow = Vec3::Zero(), gm_A = Vec3::Zero();
@@ -61,16 +53,11 @@ audit::AuditResult run(const Scenario& sc) {
     // two head epochs per row (2 Hz), aligned heads, small noise: they give the star data's span
     for (int half = 0; half < 2; ++half) {
       const double th = t + 0.5 * half;
-      const Quat q_I_B = model::quatExp(Vec3(0, -1.1e-3 * th, 0));
+      const Quat q_I_B = audittest::pitchTurn(th);
       core::HeadEpoch e;
       e.t = t0 + static_cast<TimeUs>(std::llround(th * 1e6));
-      for (int h = 0; h < 3; ++h) {
-        const auto& hc = cfg.heads.head[static_cast<std::size_t>(h)];
-        const Vec3 noise(hc.sigma_cross_rad * n01(rng), hc.sigma_cross_rad * n01(rng), hc.sigma_roll_rad * n01(rng));
-        auto& s = e.sample[static_cast<std::size_t>(e.n++)];
-        s.head_id = hc.id;
-        s.q_I_Si = (q_I_B * hc.q_Si_B.conjugate() * model::quatExp(noise)).normalized();
-      }
+      for (int h = 0; h < 3; ++h)
+        audittest::addSample(e, cfg, h, q_I_B, cfg.heads.head[static_cast<std::size_t>(h)].q_Si_B, rng, n01);
       c.onHeads(e, core::Status::kOk);
     }
     // the true angular acceleration: a smooth quiet-pointing part, plus slews when manoeuvring

@@ -5,23 +5,15 @@
 
 #include <gtest/gtest.h>
 
+#include "synthetic_heads.h"
+
 #include <random>
 
 namespace {
 
 using namespace boresight;
 
-core::PipelineConfig threeHeads() {
-  core::PipelineConfig cfg;
-  cfg.heads.n_heads = 3;
-  const Vec3 axes[3] = {Vec3(1.2, 0, 0), Vec3(0, 1.1, 0.3), Vec3(0.7, -0.6, 0.9)};
-  for (int k = 0; k < 3; ++k) {
-    auto& h = cfg.heads.head[static_cast<std::size_t>(k)];
-    h.id = k + 1;
-    h.q_Si_B = model::quatExp(axes[k]);
-  }
-  return cfg;
-}
+using audittest::threeHeads;
 
 struct Feed {
   std::uint64_t epochs = 0;
@@ -34,7 +26,7 @@ struct Feed {
 void feed(audit::Collector& c, const core::PipelineConfig& cfg, const Vec3& mis, Feed& f, bool acc_elsewhere = false) {
   std::mt19937_64 rng(42);
   std::normal_distribution<double> n01;
-  const TimeUs t0 = 738849600LL * kUsPerSecond;
+  const TimeUs t0 = audittest::kT0;
   const Vec3 a(1e-7, -2e-7, 3e-8);
   auto accRun = [&](TimeUs from, int n) {
     for (int i = 0; i < n; ++i) c.onAcc(from + static_cast<TimeUs>(i) * 100000, a, core::Status::kOk);
@@ -43,18 +35,13 @@ void feed(audit::Collector& c, const core::PipelineConfig& cfg, const Vec3& mis,
   for (int i = 0; i < 14400; ++i) {
     const double t = 0.5 * i;
     if (t >= 3000 && t < 3060) continue;
-    const Quat q_I_B = model::quatExp(Vec3(0, -1.1e-3 * t, 0));
+    const Quat q_I_B = audittest::pitchTurn(t);
     core::HeadEpoch e;
     e.t = t0 + static_cast<TimeUs>(i) * 500000;
     for (int k = 0; k < 3; ++k) {
       if (k == 2 && t >= 5000 && t < 5100) continue;
-      const auto& h = cfg.heads.head[static_cast<std::size_t>(k)];
-      Quat q_S_B = h.q_Si_B;
-      if (k == 1) q_S_B = model::quatExp(mis) * q_S_B;
-      const Vec3 noise(h.sigma_cross_rad * n01(rng), h.sigma_cross_rad * n01(rng), h.sigma_roll_rad * n01(rng));
-      auto& s = e.sample[static_cast<std::size_t>(e.n++)];
-      s.head_id = h.id;
-      s.q_I_Si = (q_I_B * q_S_B.conjugate() * model::quatExp(noise)).normalized();
+      const Quat& q_nom = cfg.heads.head[static_cast<std::size_t>(k)].q_Si_B;
+      audittest::addSample(e, cfg, k, q_I_B, k == 1 ? Quat(model::quatExp(mis) * q_nom) : q_nom, rng, n01);
     }
     c.onHeads(e, core::Status::kOk);
     ++f.epochs;

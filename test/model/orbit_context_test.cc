@@ -65,6 +65,15 @@ TEST(OrbitContext, EarthFixedRouteGivesTheSameArgumentOfLatitude) {
     const Vec3 rE = C_E_I * r, vE = C_E_I * v - w.cross(rE);
     ASSERT_TRUE(model::orbitSampleFromEarthFixed(tu, rE, vE, me));
     EXPECT_TRUE(me.from_earth_fixed);
+    // a record's frame flag picks the route; any other flag is refused
+    model::OrbitSample ri, re, rx;
+    ASSERT_TRUE(model::orbitSampleFromRecord(tu, 'I', r, v, ri));
+    ASSERT_TRUE(model::orbitSampleFromRecord(tu, 'E', rE, vE, re));
+    EXPECT_EQ(ri.u_rad, mi.u_rad);
+    EXPECT_EQ(re.u_rad, me.u_rad);
+    EXPECT_TRUE(re.from_earth_fixed);
+    EXPECT_FALSE(ri.from_earth_fixed);
+    EXPECT_FALSE(model::orbitSampleFromRecord(tu, 'X', r, v, rx));
     max_du = std::max(max_du, std::fabs(wrap(me.u_rad - mi.u_rad)));
     EXPECT_NEAR(me.beta_rad, mi.beta_rad, 1e-9);
     // the simulator's Earth-fixed frame (mean sidereal angle): u does not depend on a rotation about z,

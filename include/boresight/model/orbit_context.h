@@ -56,6 +56,9 @@ double betaAngle(const Vec3& r_I, const Vec3& v_I, const Vec3& sun_I);
 bool orbitSampleFromInertial(TimeUs t, const Vec3& r_I, const Vec3& v_I, OrbitSample& out);
 /// From Earth-fixed position and velocity (GNV1B), rotated by the Earth rotation angle.
 bool orbitSampleFromEarthFixed(TimeUs t, const Vec3& r_E, const Vec3& v_E, OrbitSample& out);
+/// From a GNI1B / GNV1B record's position and velocity by its coordinate frame flag ('I' inertial, 'E'
+/// Earth-fixed); false for any other flag, or as the two above.
+bool orbitSampleFromRecord(TimeUs t, char coord_ref, const Vec3& r, const Vec3& v, OrbitSample& out);
 
 /// The effect models' context (effects.h) at an orbit sample of measured data: t_s = t_rel_s (seconds
 /// since the data's start), u, beta, v_sat_I = the sample's inertial velocity, v_earth_I from
