@@ -35,8 +35,9 @@ NoiseTerm NoiseTerm::gaussMarkov(double sigma, double tau_s) {
   return t;
 }
 
-NoiseTerm NoiseTerm::powerLaw(double sigma, double alpha, double f_lo_hz, double f_hi_hz) {
+NoiseTerm NoiseTerm::powerLaw(double sigma, double alpha, double f_lo_hz, double f_hi_hz, int terms) {
   NoiseTerm t;
+  t.pl_terms = terms;
   t.kind = NoiseKind::PowerLaw;
   t.sigma = sigma;
   t.alpha = alpha;
@@ -50,9 +51,16 @@ bool NoiseTerm::operator==(const NoiseTerm& o) const {
   switch (kind) {
     case NoiseKind::White: return true;
     case NoiseKind::GaussMarkov: return tau_s == o.tau_s;
-    case NoiseKind::PowerLaw: return alpha == o.alpha && f_lo_hz == o.f_lo_hz && f_hi_hz == o.f_hi_hz;
+    case NoiseKind::PowerLaw:
+      return alpha == o.alpha && f_lo_hz == o.f_lo_hz && f_hi_hz == o.f_hi_hz && powerLawTermCount() == o.powerLawTermCount();
   }
   return false;
+}
+
+int NoiseTerm::powerLawTermCount() const {
+  if (pl_terms > 0) return pl_terms;
+  if (!(f_hi_hz > f_lo_hz) || !(f_lo_hz > 0)) return 2;
+  return std::max(2, static_cast<int>(std::lround(3.0 * std::log10(f_hi_hz / f_lo_hz))) + 1);
 }
 
 NoiseModel NoiseModel::white(double sigma) {
@@ -74,30 +82,30 @@ std::string NoiseModel::validate() const {
     if (t.kind == NoiseKind::GaussMarkov && !(std::isfinite(t.tau_s) && t.tau_s > 0))
       return at + "tau_s must be finite and > 0";
     if (t.kind == NoiseKind::PowerLaw) {
-      if (!(std::isfinite(t.alpha) && t.alpha >= 0 && t.alpha < 2)) return at + "alpha must be in [0, 2)";
+      if (!(std::isfinite(t.alpha) && t.alpha > 0 && t.alpha < 2)) return at + "alpha must be in (0, 2)";
       if (!(std::isfinite(t.f_lo_hz) && t.f_lo_hz > 0)) return at + "f_lo_hz must be finite and > 0";
       if (!(std::isfinite(t.f_hi_hz) && t.f_hi_hz > t.f_lo_hz)) return at + "f_hi_hz must be finite and > f_lo_hz";
       if (t.f_hi_hz / t.f_lo_hz > 1e8) return at + "f_hi_hz / f_lo_hz must be <= 1e8";
+      if (t.pl_terms < 0 || t.pl_terms == 1 || t.pl_terms > 64) return at + "pl_terms must be 0 (three per decade) or 2..64";
     }
   }
   return {};
 }
 
 std::vector<MarkovTerm> powerLawTerms(const NoiseTerm& p) {
-  std::vector<MarkovTerm> out;
-  const double decades = std::log10(p.f_hi_hz / p.f_lo_hz);
-  const int K = std::max(2, static_cast<int>(std::ceil(3.0 * decades - 1e-9)) + 1);
+  const int K = p.powerLawTermCount();
+  std::vector<MarkovTerm> out(static_cast<std::size_t>(K));
   const double lr = std::log(p.f_hi_hz / p.f_lo_hz) / (K - 1);
   double wsum = 0;
-  out.resize(static_cast<std::size_t>(K));
   for (int k = 0; k < K; ++k) {
     const double fk = p.f_lo_hz * std::exp(lr * k);
-    const double w = std::pow(fk / p.f_lo_hz, 1.0 - p.alpha);
-    out[static_cast<std::size_t>(k)] = {w, 1.0 / (kTwoPi * fk)};
-    wsum += w;
+    auto& t = out[static_cast<std::size_t>(k)];
+    t.var = std::exp((1.0 - p.alpha) * lr * k);  // (f_k / f_lo)^(1 - alpha)
+    t.tau_s = 1.0 / (kTwoPi * fk);
+    wsum += t.var;
   }
   const double s2 = p.sigma * p.sigma;
-  for (auto& m : out) m.var *= s2 / wsum;
+  for (auto& t : out) t.var *= s2 / wsum;
   return out;
 }
 
@@ -165,7 +173,8 @@ std::string NoiseModel::describe(double scale, const std::string& unit) const {
       case NoiseKind::White: o << "white " << t.sigma * scale << unit; break;
       case NoiseKind::GaussMarkov: o << "GM(" << t.sigma * scale << unit << ", tau " << t.tau_s << " s)"; break;
       case NoiseKind::PowerLaw:
-        o << "PL(" << t.sigma * scale << unit << ", f^-" << t.alpha << ", " << t.f_lo_hz << "-" << t.f_hi_hz << " Hz)";
+        o << "PL(" << t.sigma * scale << unit << ", f^-" << t.alpha << ", " << t.f_lo_hz << "-" << t.f_hi_hz << " Hz, "
+          << t.powerLawTermCount() << " terms)";
         break;
     }
   }
@@ -178,14 +187,18 @@ NoiseSimulator::NoiseSimulator(const NoiseModel& m, const CounterRng& rng)
     : white_sigma_(std::sqrt(m.whiteVariance())), gm_(m.markovTerms()), x_(gm_.size(), 0.0), rng_(rng) {}
 
 double NoiseSimulator::next(double t_s) {
-  // Normals of sample n: sub 0 the white term, sub 1 + j Gauss-Markov term j.
+  // Normal m of sample n (m = 0 the white term, m = 1 + j Gauss-Markov term j) is the counter draw
+  // (index n G + m / 8, sub m % 8), G = ceil((1 + terms) / 8): a CounterRng index carries eight
+  // normals (subs 0..7; sub 8 would be the next index's sub 0). With up to seven terms G = 1.
   const std::uint64_t n = n_++;
-  double v = white_sigma_ > 0 ? white_sigma_ * rng_.normal(n, 0) : 0.0;
+  const std::uint64_t G = (gm_.size() + 1 + 7) / 8;
+  auto normal = [&](std::uint64_t m) { return rng_.normal(n * G + m / 8, m % 8); };
+  double v = white_sigma_ > 0 ? white_sigma_ * normal(0) : 0.0;
   const double dt = n == 0 ? 0.0 : std::max(0.0, t_s - t_prev_);
   t_prev_ = t_s;
   for (std::size_t j = 0; j < gm_.size(); ++j) {
     const double s = std::sqrt(gm_[j].var);
-    const double e = rng_.normal(n, 1 + j);
+    const double e = normal(1 + j);
     if (n == 0) {
       x_[j] = s * e;
     } else {

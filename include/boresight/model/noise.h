@@ -16,10 +16,15 @@
 //                below f_lo and falls as f^-2 above f_hi. It IS a sum of K Gauss-Markov terms (it is
 //                not approximated by them: the sum is the model, so its PSD and autocovariance are
 //                exact): corner frequencies f_k = f_lo r^k, k = 0..K-1, r = (f_hi/f_lo)^(1/(K-1)),
-//                K = max(2, ceil(3 log10(f_hi/f_lo)) + 1) (three per decade: the PSD ripples by less
-//                than 1.5 % about the power law inside the band), variances sigma^2 w_k with
-//                w_k proportional to f_k^(1 - alpha) and sum_k w_k = 1 (sigma is the stationary
-//                standard deviation of the whole term). 0 <= alpha < 2 keeps the sum meaningful.
+//                variances sigma^2 w_k with w_k proportional to f_k^(1 - alpha), sum w_k = 1 (sigma is
+//                the stationary standard deviation of the whole term). K is part of the term
+//                (`pl_terms`); 0 means three per decade, K = max(2, round(3 log10(f_hi/f_lo)) + 1). For a
+//                fixed K the model is smooth in every parameter, which the fit needs.
+//                0 < alpha < 2 keeps the sum meaningful. The sum has soft corners: in the middle two
+//                decades of a five-decade band its local log-log slope is -alpha within 0.08 (for
+//                alpha = 1 within 0.015, ripple under 2 %), and for alpha = 1 the PSD is 14 % below
+//                the power law a third of a decade inside a corner (test/model/noise_test.cc).
+//                alpha, f_lo and f_hi are parameters of this exact model, not of an ideal power law.
 //   A model is a sum of independent terms: its canonical form is one white variance plus a list of
 //   Gauss-Markov terms (markovTerms()).
 //
@@ -56,12 +61,15 @@ struct NoiseTerm {
   NoiseKind kind = NoiseKind::White;
   double sigma = 0;   ///< white: per-sample 1-sigma; Gauss-Markov and power law: stationary 1-sigma
   double tau_s = 0;   ///< Gauss-Markov correlation time, s
-  double alpha = 1;   ///< power law: PSD proportional to f^-alpha inside [f_lo, f_hi]
+  double alpha = 1;   ///< power law: PSD about proportional to f^-alpha inside [f_lo, f_hi], 0 < alpha < 2
   double f_lo_hz = 0, f_hi_hz = 0;  ///< power law band, Hz (0 < f_lo < f_hi)
+  int pl_terms = 0;   ///< power law: number of Gauss-Markov terms K (0: three per decade)
 
   static NoiseTerm white(double sigma);
   static NoiseTerm gaussMarkov(double sigma, double tau_s);
-  static NoiseTerm powerLaw(double sigma, double alpha, double f_lo_hz, double f_hi_hz);
+  static NoiseTerm powerLaw(double sigma, double alpha, double f_lo_hz, double f_hi_hz, int terms = 0);
+  /// K of a power law: `terms`, or three per decade when 0.
+  int powerLawTermCount() const;
   bool operator==(const NoiseTerm& o) const;
 };
 
@@ -80,7 +88,7 @@ struct NoiseModel {
   bool empty() const { return terms.empty(); }
   bool operator==(const NoiseModel& o) const { return terms == o.terms; }
 
-  /// Checks every term (finite, positive levels and times, 0 <= alpha < 2, f_lo < f_hi); "" when valid.
+  /// Checks every term (finite, positive levels and times, 0 < alpha < 2, f_lo < f_hi); "" when valid.
   std::string validate() const;
   /// Sum of the white terms' per-sample variances.
   double whiteVariance() const;
@@ -107,8 +115,9 @@ std::vector<MarkovTerm> powerLawTerms(const NoiseTerm& p);
 // Simulation
 
 /// Draws one axis of a model at non-decreasing times (any spacing, gaps allowed). Sample n (the n-th
-/// call of next(), counted from 0) uses normals of `rng` at index n only: draws are a pure function
-/// of (seed, stream, sensor key, n), so switching other effects on or off does not change them. The
+/// call of next(), counted from 0) uses normals of `rng` at indices n G .. n G + G - 1 only (G = 1 for
+/// up to seven Gauss-Markov terms, one more per eight terms): draws are a pure function of (seed,
+/// stream, sensor key, n), so switching other effects on or off does not change them. The
 /// Gauss-Markov states start from their stationary distribution at the first call.
 class NoiseSimulator {
  public:
@@ -148,21 +157,22 @@ class KalmanWhitener {
   void whitenColumns(double t_s, const double* in, double* out, int columns);
   /// Innovation variance of the last step.
   double innovationVariance() const { return F_; }
+  double logInnovationVariance() const { return logF_; }
   /// Sum over the steps since reset of log(2 pi F) + z^2 (for whiten()): -2 log-likelihood.
   double minusTwoLogLikelihood() const { return m2ll_; }
   std::size_t steps() const { return steps_; }
 
  private:
   void predict(double t_s);
-  double gainStep();  // computes the gain K_ and F_ for the predicted covariance; returns F_
+  void gainStep();  // the gain K_ and innovation variance F_ of the predicted covariance
   double white_var_ = 0;
   std::vector<MarkovTerm> gm_;
   int k_ = 0;
-  Eigen::VectorXd phi_, q_, K_;
-  Eigen::MatrixXd P_;
-  Eigen::MatrixXd X_;          ///< filter states, k_ x columns (column 0 serves whiten()/colour())
+  // Small dense arrays (k_ is a few to a dozen): row-major P, per-term transition and gain.
+  std::vector<double> phi_, q_, K_, s_, P_;
+  std::vector<double> X_;  ///< filter states, column-major k_ x columns_ (column 0 serves whiten()/colour())
   int columns_ = 0;
-  double F_ = 1, t_prev_ = 0, dt_prev_ = -1, m2ll_ = 0;
+  double F_ = 1, logF_ = 0, t_prev_ = 0, dt_prev_ = -1, m2ll_ = 0;
   bool started_ = false, frozen_ = false;
   std::size_t steps_ = 0;
   int settle_ = 0;
@@ -221,7 +231,16 @@ struct NoiseFitOptions {
   /// Correlation times and corner frequencies are determined only inside [band_lo / span, fs /
   /// band_hi] (corner frequency 1/(2 pi tau)); outside, the parameter is reported not determined.
   double band_lo = 20, band_hi = 20;
+  /// Number of terms of a fitted power law (fixed during the fit; 0: powerLawFitTerms of the series).
+  int pl_terms = 0;
+  /// A known part of the series' noise, added to every candidate and not fitted (e.g. what other
+  /// sensors contribute to a difference series). NoiseFit::model does not include it.
+  NoiseModel fixed;
 };
+
+/// The power-law term count a fit uses by default: three per decade between 10 / span and 1 / (2 T)
+/// (the widest band the data can show), 3..16.
+int powerLawFitTerms(double span_s, double T_s);
 
 struct NoiseFit {
   NoiseStructure structure = NoiseStructure::White;
@@ -234,6 +253,7 @@ struct NoiseFit {
   double aic = 0, bic = 0;
   std::size_t n = 0;
   bool converged = false;
+  int evaluations = 0;            ///< likelihood evaluations (each a pass over the series)
   std::string message;            ///< why not converged, or ""
   const NoiseParam* find(const std::string& name) const;
 };

@@ -30,6 +30,7 @@ class CounterRng {
  public:
   CounterRng(std::uint64_t seed, Stream stream, std::uint64_t sensor)
       : key_(mix64(mix64(seed) ^ mix64(static_cast<std::uint64_t>(stream) * 0x1000193ULL + sensor))) {}
+  /// sub must be < 8: bits(index, 8) is bits(index + 1, 0).
   std::uint64_t bits(std::uint64_t index, std::uint64_t sub = 0) const {
     return mix64(key_ ^ mix64(index * 8 + sub));
   }
