@@ -613,7 +613,8 @@ TEST(Boresightd, ReplayWritesSummaryWithTheLastCalibrationAndACsvPerAttitude) {
     std::ofstream o(dir + "/node.yaml");
     std::string line;
     while (std::getline(in, line)) {
-      if (line.rfind("platform:", 0) == 0) line = "platform: " + src("config/gracefo.yaml");
+      // the ideal noise preset: the log is simulated from config/sim_gracefo_node_demo.yaml (white 6"/48")
+      if (line.rfind("platform:", 0) == 0) line = "platform: " + src("config/gracefo_ideal.yaml");
       if (line.find("apply_common_rotation:") != std::string::npos) line = "  apply_common_rotation: true";
       if (line.find("cadence_s:") != std::string::npos) line = "  cadence_s: 3600";
       if (line.find("min_span_s:") != std::string::npos) line = "  min_span_s: 840";

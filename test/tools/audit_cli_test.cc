@@ -17,7 +17,9 @@ namespace {
 
 using testutil::CliRun;
 CliRun run(const std::string& args) { return testutil::runProgram(BORESIGHT_CLI, args); }
-const std::string kConfig = " --config " BORESIGHT_SOURCE_DIR "/config/gracefo.yaml ";
+// The data below are simulated with the ideal noise preset (config/sim_gracefo.yaml: white 6"/48"
+// heads): the platform file with that noise.
+const std::string kConfig = " --config " BORESIGHT_SOURCE_DIR "/config/gracefo_ideal.yaml ";
 
 /// Three simulated minutes with a hidden relative misalignment of head 2, once per test program.
 const std::string& simulated() {

@@ -24,7 +24,9 @@ namespace {
 CliRun run(const std::string& args) { return testutil::runProgram(BORESIGHT_CLI, args); }
 
 const std::string kSrc = BORESIGHT_SOURCE_DIR;
-const std::string kConfig = kSrc + "/config/gracefo.yaml";
+// The data are simulated with the ideal noise preset (config/sim_gracefo*.yaml: white 6"/48" heads):
+// the platform file with that noise.
+const std::string kConfig = kSrc + "/config/gracefo_ideal.yaml";
 
 struct Sim {
   std::string dir, sca, acc, qsa, gnv, lcm;

@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <string>
 #include <sys/wait.h>
@@ -162,7 +163,10 @@ TEST(Cli, ProcessConfigErrorsNameFileAndKey) {
   }
   CliRun r = run("process --config " + dir + "/bad.yaml x.txt --out " + dir + "/o.csv");
   EXPECT_EQ(r.status, 1);
-  EXPECT_NE(r.out.find(dir + "/bad.yaml:6: key 'heads.list[0].sigma_roll_arcsec': must be > 0"), std::string::npos) << r.out;
+  // (the old per-head level: the error says where it moved)
+  EXPECT_NE(r.out.find(dir + "/bad.yaml:6: key 'heads.list[0].sigma_roll_arcsec': the head noise levels moved to the noise "
+                             "section: noise.head_defaults.about_boresight"),
+            std::string::npos) << r.out;
 }
 
 TEST(CliReal, ProcessGivesTheSameRowsFromAnLcmLogAsFromLevel1) {
@@ -251,7 +255,8 @@ TEST(Cli, ProcessStreamsTheSimulatorsOutputWhateverTheLogIsCalled) {
   CliRun sim = run("simulate --scenario " BORESIGHT_SOURCE_DIR "/config/sim_gracefo.yaml --seed 3 --duration 150 --out " +
                    dir + " --quiet");
   ASSERT_EQ(sim.status, 0) << sim.out;
-  const std::string cfg = " --config " BORESIGHT_SOURCE_DIR "/config/gracefo.yaml ";
+  // the ideal noise preset: the data are simulated from config/sim_gracefo.yaml (white 6"/48" heads)
+  const std::string cfg = " --config " BORESIGHT_SOURCE_DIR "/config/gracefo_ideal.yaml ";
   const std::string d = dir + "/";
   const std::string qsa = d + "QSA1B_2023-06-01_C_04.txt", gnv = d + "GNV1B_2023-06-01_C_04.txt";
   // Level-1, with an orbit file process does not need: listed as ignored, not an error.
@@ -286,7 +291,7 @@ TEST(Cli, ProcessCompareSca1bFilesThatCannotBeReadAreErrors) {
                    dir + " --quiet --no-lcm");
   ASSERT_EQ(sim.status, 0) << sim.out;
   const std::string d = dir + "/";
-  const std::string base = "process --config " BORESIGHT_SOURCE_DIR "/config/gracefo.yaml " + d +
+  const std::string base = "process --config " BORESIGHT_SOURCE_DIR "/config/gracefo_ideal.yaml " + d +
                            "SCA1A_2023-06-01_C_04.txt " + d + "QSA1B_2023-06-01_C_04.txt --out " + d + "p.csv";
   // A missing SCA1B: exit 1 with the file and the reason (before the replay, nothing else printed).
   CliRun a = run(base + " --compare-sca1b " + d + "no_such_SCA1B.txt");
