@@ -102,6 +102,13 @@ TEST(AuditReal, GraceFoSampleWithoutReference) {
   EXPECT_EQ(out.result.baseline.reference_samples, 0u);
   for (const auto& e : out.result.effects) EXPECT_NE(e.family, "reference") << e.name << ": tested without SCA1B";
   expectSection3Findings(out.result, false);
+  // The levels the noise tests compared with are the platform file's, and it says so.
+  EXPECT_NEAR(out.platform.pipeline.heads.head[0].sigma_cross_rad * kArcsecPerRad, 2.0, 1e-12);
+  std::string model;
+  for (const auto& l : out.model_in_use) model += l + "\n";
+  EXPECT_NE(model.find("head 1: cross_x white 2\", cross_y white 2\", about_boresight white 25\", star_direction white 5\" (" BORESIGHT_SOURCE_DIR
+                       "/config/gracefo.yaml noise.head_defaults)"),
+            std::string::npos) << model;
 }
 
 TEST(AuditReal, GraceFoSampleAgainstTheIdealNoiseNamesTheNoise) {
