@@ -115,6 +115,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "boresightd: %s\n", err.c_str());
     return 1;
   }
+  for (const auto& l : cfg.model_in_use) std::printf("%s\n", l.c_str());
   LcmOutput out;
   std::unique_ptr<lcm::LCM> lcm;
   if (replay.empty()) {
@@ -236,6 +237,7 @@ int main(int argc, char** argv) {
   j["core_health"] = ch;
   const bool balanced = c.received == c.used + c.rejectedTotal();
   j["accounted"] = balanced;
+  j["model_in_use"] = cfg.model_in_use;
   std::printf("boresightd: %llu messages received, %llu used, %llu rejected, %llu lost; %llu head epochs, "
               "%llu calibrations; %.2f s wall (%.0f messages/s); step latency p50 %.2f us, p99 %.2f us, "
               "p99.9 %.2f us, max %.1f us (head epochs: p50 %.2f us, p99 %.2f us, p99.9 %.2f us)\n",
