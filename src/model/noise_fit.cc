@@ -26,12 +26,12 @@ struct ParamDef {
 std::vector<ParamDef> paramDefs(NoiseStructure s) {
   switch (s) {
     case NoiseStructure::White: return {{"white.sigma", true}};
-    case NoiseStructure::WhiteGaussMarkov: return {{"white.sigma", true}, {"gm.sigma", true}, {"gm.tau_s", true}};
+    case NoiseStructure::WhiteGaussMarkov: return {{"white.sigma", true}, {"gm1.sigma", true}, {"gm1.tau_s", true}};
     case NoiseStructure::WhiteTwoGaussMarkov:
       return {{"white.sigma", true}, {"gm1.sigma", true}, {"gm1.tau_s", true}, {"gm2.sigma", true}, {"gm2.tau_s", true}};
     case NoiseStructure::WhitePowerLaw:
       return {{"white.sigma", true}, {"pl.sigma", true}, {"pl.alpha", false}, {"pl.f_lo_hz", true}, {"pl.f_hi_hz", true}};
-    case NoiseStructure::GaussMarkov: return {{"gm.sigma", true}, {"gm.tau_s", true}};
+    case NoiseStructure::GaussMarkov: return {{"gm1.sigma", true}, {"gm1.tau_s", true}};
   }
   return {};
 }
@@ -584,6 +584,48 @@ NoiseFit fitNoise(const NoiseSeries& s, NoiseStructure structure, const Eigen::M
   const auto k = static_cast<double>(np + X.cols());
   fit.aic = fit.m2ll + 2 * k;
   fit.bic = fit.m2ll + k * std::log(static_cast<double>(s.size()));
+  return fit;
+}
+
+NoiseFit fitWhiteFromDifferences(const NoiseSeries& s) {
+  NoiseFit fit;
+  fit.structure = NoiseStructure::White;
+  const double T = s.medianInterval();
+  std::vector<std::int64_t> t_us;
+  std::vector<double> d;
+  for (std::size_t i = 1; i < s.size(); ++i) {
+    if (!(T > 0) || std::abs(s.t_s[i] - s.t_s[i - 1] - T) > 0.1 * T) continue;
+    t_us.push_back(static_cast<std::int64_t>(std::llround(s.t_s[i] * 1e6)));
+    d.push_back(s.y[i] - s.y[i - 1]);
+  }
+  fit.n = d.size();
+  if (d.size() < 3) {
+    fit.message = "fewer than three consecutive pairs of samples";
+    return fit;
+  }
+  // Differences one interval apart share a sample (correlation -1/2); further apart they share none.
+  const BandedWhitener w(t_us, T, {1.0, -0.5});
+  const std::vector<double> z = w.whiten(d);
+  double q = 0;
+  for (double v : z) q += v * v;
+  const auto n = static_cast<double>(d.size());
+  const double var_d = q / n;  // ML variance of the differences: 2 sigma^2
+  const double sigma = std::sqrt(var_d / 2);
+  fit.model = NoiseModel::white(sigma);
+  NoiseParam p;
+  p.name = "white.sigma";
+  p.value = sigma;
+  p.log_sigma = 1.0 / std::sqrt(2 * n);  // var of an ML variance of n: 2 var^2 / n
+  p.sigma = sigma * p.log_sigma;
+  p.note = "from the differences of consecutive samples";
+  fit.params.push_back(p);
+  fit.cov = Eigen::MatrixXd::Constant(1, 1, p.log_sigma * p.log_sigma);
+  double logdet = 0;
+  for (std::size_t k = 0; k < d.size(); ++k) logdet += 2 * std::log(w.factor(k, k));
+  fit.m2ll = n * std::log(kTwoPi * var_d) + logdet + n;
+  fit.aic = fit.m2ll + 2;
+  fit.bic = fit.m2ll + std::log(n);
+  fit.converged = true;
   return fit;
 }
 

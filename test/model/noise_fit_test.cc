@@ -55,7 +55,7 @@ TEST(NoiseFit, CorrelationTimesOutsideTheSpanAreNotDetermined) {
   const NoiseModel m = NoiseModel::white(1.0).add(NoiseTerm::gaussMarkov(3.0, 5000.0));
   const NoiseSeries s = gappedSeries(m, 7200, kT, 0.05, 5, 0.0);
   const NoiseFit f = fitNoise(s, NoiseStructure::WhiteGaussMarkov, Eigen::MatrixXd::Ones(static_cast<Eigen::Index>(s.size()), 1));
-  const NoiseParam* tau = f.find("gm.tau_s");
+  const NoiseParam* tau = f.find("gm1.tau_s");
   ASSERT_NE(tau, nullptr);
   EXPECT_FALSE(tau->determined) << tau->value << " s";
   EXPECT_FALSE(tau->note.empty());

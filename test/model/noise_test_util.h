@@ -60,7 +60,7 @@ inline std::vector<FitCase> fitCases(double span_s, double T) {
   std::vector<FitCase> c;
   c.push_back({"white", NoiseModel::white(2.0), NoiseStructure::White, {{"white.sigma", 2.0}}});
   c.push_back({"gauss_markov", NoiseModel::white(1.0).add(NoiseTerm::gaussMarkov(1.5, tau)), NoiseStructure::WhiteGaussMarkov,
-               {{"white.sigma", 1.0}, {"gm.sigma", 1.5}, {"gm.tau_s", tau}}});
+               {{"white.sigma", 1.0}, {"gm1.sigma", 1.5}, {"gm1.tau_s", tau}}});
   const double pl_lo = f_lo * 2, pl_hi = f_hi / 2;
   // the fit's own term count (the truth is a member of the family fitted)
   const int K = powerLawFitTerms(span_s, T);

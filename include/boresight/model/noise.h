@@ -216,7 +216,7 @@ std::vector<NoiseStructure> defaultNoiseStructures();
 /// One fitted parameter. Levels, times and frequencies are fitted on a log scale (value = exp(x),
 /// sigma from the delta method; log_sigma is the standard error of x); alpha on its own scale.
 struct NoiseParam {
-  std::string name;       ///< "white.sigma", "gm1.sigma", "gm1.tau_s", "pl.alpha", "pl.f_lo_hz", ...
+  std::string name;       ///< "white.sigma", "gm1.sigma", "gm1.tau_s", "pl.alpha", "pl.f_lo_hz", ... (model/overlay.h: noiseTermName)
   double value = 0;
   double sigma = 0;       ///< standard error (delta method from the log scale)
   double log_sigma = 0;   ///< standard error of log(value) (0 for alpha)
@@ -262,6 +262,14 @@ struct NoiseFit {
 /// columns of X (regressors such as a constant) are profiled out by GLS at every evaluation.
 NoiseFit fitNoise(const NoiseSeries& s, NoiseStructure structure, const Eigen::MatrixXd& X = Eigen::MatrixXd(),
                   const NoiseFitOptions& opt = {});
+
+/// The white level alone from the differences of consecutive samples (on the series' regular grid):
+/// d_k = y_k - y_{k-1} is 2 sigma^2 white with correlation -1/2 between differences that share a
+/// sample, whatever changes slower than one interval (a mean, a drift, slow noise) adds almost nothing.
+/// Exact Gaussian likelihood through the banded whitener: sigma^2 = d^T R^-1 d / n, standard error
+/// sigma / sqrt(2 n). For spans too short to fit a coloured part: the white level without the slow
+/// content a whole-variance fit would put into it. Structure White; m2ll is the differences'.
+NoiseFit fitWhiteFromDifferences(const NoiseSeries& s);
 
 struct NoiseSelection {
   std::vector<NoiseFit> fits;  ///< every candidate, in the order given
