@@ -22,7 +22,9 @@ constexpr std::uint64_t mix64(std::uint64_t z) {
 /// Named random streams. Values are part of the reproducibility contract: do not renumber.
 enum class Stream : std::uint64_t {
   HeadNoise = 1, HeadOutlier = 2, HeadSignFlip = 3, HeadGap = 4, HeadTagJitter = 5, StarNoise = 6,
+  HeadColouredNoise = 7, HeadFovField = 8, HeadThermalWander = 9,  // appended: coloured_noise, fov_error, thermal_wander
   AccNoise = 11, AccLowFreq = 12, AccGap = 13, AccTagJitter = 14,
+  AccColouredNoise = 15, AccBiasWander = 16,                       // appended: acc_coloured_noise, acc_bias_wander
   Attitude = 21, MountingDraw = 22, Magnetic = 23,
 };
 
