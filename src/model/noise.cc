@@ -184,27 +184,28 @@ std::string NoiseModel::describe(double scale, const std::string& unit) const {
 // ---------------------------------------------------------------------------------------------
 
 NoiseSimulator::NoiseSimulator(const NoiseModel& m, const CounterRng& rng)
-    : white_sigma_(std::sqrt(m.whiteVariance())), gm_(m.markovTerms()), x_(gm_.size(), 0.0), rng_(rng) {}
+    : white_sigma_(std::sqrt(m.whiteVariance())), gm_(m.markovTerms()), x_(gm_.size(), 0.0), phi_(gm_.size(), 0.0), rng_(rng) {
+  for (std::size_t c = 1; c * 8 <= gm_.size(); ++c) chunks_.push_back(rng_.derived(c));
+}
 
 double NoiseSimulator::next(double t_s) {
-  // Normal m of sample n (m = 0 the white term, m = 1 + j Gauss-Markov term j) is the counter draw
-  // (index n G + m / 8, sub m % 8), G = ceil((1 + terms) / 8): a CounterRng index carries eight
-  // normals (subs 0..7; sub 8 would be the next index's sub 0). With up to seven terms G = 1.
+  // Normal m of sample n (m = 0 the white term, m = 1 + j Gauss-Markov term j) is draw (n, m % 8) of
+  // the stream rng_.derived(m / 8): a CounterRng index carries eight normals (subs 0..7; sub 8 would be
+  // the next index's sub 0), so every eight terms take a stream of their own, and a term's draws do not
+  // depend on how many terms follow it.
   const std::uint64_t n = n_++;
-  const std::uint64_t G = (gm_.size() + 1 + 7) / 8;
-  auto normal = [&](std::uint64_t m) { return rng_.normal(n * G + m / 8, m % 8); };
+  auto normal = [&](std::uint64_t m) { return m < 8 ? rng_.normal(n, m) : chunks_[m / 8 - 1].normal(n, m % 8); };
   double v = white_sigma_ > 0 ? white_sigma_ * normal(0) : 0.0;
   const double dt = n == 0 ? 0.0 : std::max(0.0, t_s - t_prev_);
   t_prev_ = t_s;
+  if (n > 0 && dt != dt_) {  // a regular grid computes its transitions once
+    dt_ = dt;
+    for (std::size_t j = 0; j < gm_.size(); ++j) phi_[j] = std::exp(-dt / gm_[j].tau_s);
+  }
   for (std::size_t j = 0; j < gm_.size(); ++j) {
     const double s = std::sqrt(gm_[j].var);
     const double e = normal(1 + j);
-    if (n == 0) {
-      x_[j] = s * e;
-    } else {
-      const double phi = std::exp(-dt / gm_[j].tau_s);
-      x_[j] = phi * x_[j] + std::sqrt(std::max(0.0, 1.0 - phi * phi)) * s * e;
-    }
+    x_[j] = n == 0 ? s * e : gaussMarkovStep(x_[j], phi_[j], s, e);
     v += x_[j];
   }
   return v;

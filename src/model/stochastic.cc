@@ -166,24 +166,8 @@ bool SignFlipSampler::fires(std::uint64_t n) const {
   return any;
 }
 
-NoiseProcess::NoiseProcess(const NoiseModel& m, std::uint64_t seed, Stream stream, std::uint64_t sensor, int axis) {
-  const std::vector<MarkovTerm> gm = m.markovTerms();
-  const double white = m.whiteVariance();
-  for (std::size_t c = 0; c == 0 || c * kTermsPerSimulator < gm.size(); ++c) {
-    NoiseModel chunk;
-    if (c == 0 && white > 0) chunk.add(NoiseTerm::white(std::sqrt(white)));
-    for (std::size_t j = c * kTermsPerSimulator; j < std::min(gm.size(), (c + 1) * kTermsPerSimulator); ++j)
-      chunk.add(NoiseTerm::gaussMarkov(std::sqrt(gm[j].var), gm[j].tau_s));
-    if (chunk.empty()) break;
-    sims_.emplace_back(chunk, CounterRng(seed, stream, colouredProcessKey(sensor, axis, c)));
-  }
-}
-
-double NoiseProcess::next(double t_s) {
-  double v = 0;
-  for (auto& s : sims_) v += s.next(t_s);
-  return v;
-}
+NoiseProcess::NoiseProcess(const NoiseModel& m, std::uint64_t seed, Stream stream, std::uint64_t sensor, int axis)
+    : sim_(m, CounterRng(seed, stream, colouredProcessKey(sensor, axis, 0))), empty_(m.empty()) {}
 
 NoiseProcess3::NoiseProcess3(const std::array<NoiseModel, 3>& models, std::uint64_t seed, Stream stream,
                              std::uint64_t sensor) {

@@ -46,6 +46,8 @@
 
 #include <Eigen/Core>
 
+#include <cmath>
+
 #include <cstddef>
 #include <cstdint>
 #include <string>
@@ -114,10 +116,18 @@ std::vector<MarkovTerm> powerLawTerms(const NoiseTerm& p);
 // ---------------------------------------------------------------------------------------------
 // Simulation
 
+/// The exact Gauss-Markov step over dt: x' = phi x + sqrt(1 - phi^2) (sigma e), phi = exp(-dt / tau),
+/// e standard normal. Written once, in this order of operations (the simulator's existing output of
+/// the accelerometer's Gauss-Markov noise depends on it bit for bit).
+inline double gaussMarkovStep(double x, double phi, double sigma, double e) {
+  return phi * x + std::sqrt(1 - phi * phi) * (sigma * e);
+}
+
 /// Draws one axis of a model at non-decreasing times (any spacing, gaps allowed). Sample n (the n-th
-/// call of next(), counted from 0) uses normals of `rng` at indices n G .. n G + G - 1 only (G = 1 for
-/// up to seven Gauss-Markov terms, one more per eight terms): draws are a pure function of (seed,
-/// stream, sensor key, n), so switching other effects on or off does not change them. The
+/// call of next(), counted from 0) uses normals of `rng` at index n only (and of rng.derived(c) for
+/// the terms beyond the seventh, eight per stream): draws are a pure function of (seed, stream,
+/// sensor key, n) and of the term's place, so switching other effects on or off, or adding terms after
+/// a term, does not change them. The
 /// Gauss-Markov states start from their stationary distribution at the first call.
 class NoiseSimulator {
  public:
@@ -130,8 +140,10 @@ class NoiseSimulator {
  private:
   double white_sigma_ = 0;
   std::vector<MarkovTerm> gm_;
-  std::vector<double> x_;
+  std::vector<double> x_, phi_;  ///< states; transitions of the last step (kept while the step repeats)
+  double dt_ = -1;
   CounterRng rng_{0, Stream::HeadNoise, 0};
+  std::vector<CounterRng> chunks_;  ///< rng_.derived(1, 2, ...) for terms 8.. (see next())
   std::uint64_t n_ = 0;
   double t_prev_ = 0;
 };

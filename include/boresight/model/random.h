@@ -32,6 +32,13 @@ class CounterRng {
  public:
   CounterRng(std::uint64_t seed, Stream stream, std::uint64_t sensor)
       : key_(mix64(mix64(seed) ^ mix64(static_cast<std::uint64_t>(stream) * 0x1000193ULL + sensor))) {}
+  /// Another independent stream derived from this one (c > 0; c = 0 is this stream): for a consumer
+  /// that needs more than the eight normals one index carries per sample.
+  CounterRng derived(std::uint64_t c) const {
+    CounterRng r = *this;
+    if (c > 0) r.key_ = mix64(key_ ^ mix64(0x6a09e667f3bcc909ULL + c));
+    return r;
+  }
   /// sub must be < 8: bits(index, 8) is bits(index + 1, 0).
   std::uint64_t bits(std::uint64_t index, std::uint64_t sub = 0) const {
     return mix64(key_ ^ mix64(index * 8 + sub));

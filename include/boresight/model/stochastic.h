@@ -147,37 +147,27 @@ class SignFlipSampler {
 // ---------------------------------------------------------------------------------------------
 // Coloured processes (noise.h models drawn at the sensor's sample times)
 
-/// The exact Gauss-Markov step x' = phi x + sqrt(1 - phi^2) (sigma e), phi = exp(-dt / tau), written
-/// once for AccNoiseModel, whose draws (and so the simulator's existing output) depend on this exact
-/// order of operations. noise.h's NoiseSimulator has the same step inline; it belongs in noise.h.
-inline double gaussMarkovStep(double x, double phi, double sigma, double e) {
-  return phi * x + std::sqrt(1 - phi * phi) * (sigma * e);
-}
-
 /// Sensor key of a coloured process on its stream: sensor (head id, 0 for the accelerometer), axis
-/// (0, 1: cross-boresight e1, e2 or A x, y; 2: about the boresight or A z) and chunk (below).
+/// (0, 1: cross-boresight e1, e2 or A x, y; 2: about the boresight or A z); chunk 0 (a chunk > 0 was
+/// a work-around of a simulator limit that no longer exists).
 constexpr std::uint64_t colouredProcessKey(std::uint64_t sensor, int axis, std::size_t chunk) {
   return sensor + 0x100ULL * static_cast<std::uint64_t>(axis) + 0x1000ULL * static_cast<std::uint64_t>(chunk);
 }
 
-/// One axis of a noise.h model drawn by noise.h's NoiseSimulator. A CounterRng index has 8 uniforms
-/// (sub 0..7) and NoiseSimulator draws Gauss-Markov term j from normal(n, 1 + j), so one simulator
-/// carries at most kTermsPerSimulator terms (more would reuse the next sample's draws: a power law of
-/// more than two decades has 8 or more); the canonical Gauss-Markov terms (NoiseModel::markovTerms())
-/// are cut into chunks of that many, chunk c on CounterRng(seed, stream, colouredProcessKey(sensor,
-/// axis, c)), the white part in chunk 0. The sum is the model exactly; a term's draws do not depend on
-/// the terms after it.
+/// One axis of a noise.h model drawn by noise.h's NoiseSimulator on CounterRng(seed, stream,
+/// colouredProcessKey(sensor, axis, 0)) (any number of terms: the simulator spreads them over as many
+/// counter indices per sample as it needs).
 class NoiseProcess {
  public:
-  static constexpr std::size_t kTermsPerSimulator = 7;
   NoiseProcess() = default;
   NoiseProcess(const NoiseModel& m, std::uint64_t seed, Stream stream, std::uint64_t sensor, int axis);
-  bool empty() const { return sims_.empty(); }
+  bool empty() const { return empty_; }
   /// The value at t_s (non-decreasing over calls; the first call starts from the stationary state).
-  double next(double t_s);
+  double next(double t_s) { return empty_ ? 0.0 : sim_.next(t_s); }
 
  private:
-  std::vector<NoiseSimulator> sims_;
+  NoiseSimulator sim_;
+  bool empty_ = true;
 };
 
 /// Three axes of NoiseProcess: models[0..2] on axes 0..2 (see colouredProcessKey).
