@@ -5,9 +5,11 @@
 #include <boresight/model/noise.h>
 
 #include <Eigen/Eigenvalues>
+#include <unsupported/Eigen/FFT>
 
 #include <algorithm>
 #include <cmath>
+#include <complex>
 #include <functional>
 #include <limits>
 #include <sstream>
@@ -265,7 +267,7 @@ Eigen::VectorXd newton(const Objective& f, Eigen::VectorXd x, int max_iter, bool
     const Eigen::VectorXd lam = es.eigenvalues().cwiseAbs().cwiseMax(1e-8 * lmax);
     Eigen::VectorXd d = -es.eigenvectors() * (es.eigenvalues().size() > 0 ? (es.eigenvectors().transpose() * g).cwiseQuotient(lam) : g);
     const double decrement = -g.dot(d);
-    if (decrement < 1e-3) {
+    if (decrement < 1e-2) {  // a hundredth of the unit of -2 log L that one standard error spans
       *converged = true;
       return x;
     }
@@ -391,7 +393,127 @@ std::vector<Eigen::VectorXd> starts(NoiseStructure s, const DataScale& d) {
   return out;
 }
 
+// --- the Whittle likelihood ----------------------------------------------------------------------
+
+/// The largest n' <= n whose only prime factors are 2, 3 and 5 (a fast FFT length).
+std::size_t smoothBelow(std::size_t n) {
+  std::size_t best = 1;
+  for (std::size_t a = 1; a <= n; a *= 2)
+    for (std::size_t b = a; b <= n; b *= 3)
+      for (std::size_t c = b; c <= n; c *= 5) best = std::max(best, c);
+  return best;
+}
+
+/// The periodogram ordinates of a series' long gap-free runs, pooled in narrow log-frequency bins.
+struct WhittleData {
+  std::vector<double> f, isum, m;  ///< per bin: mean frequency, sum of ordinates, their number
+  double T = 1;
+  std::size_t samples = 0;         ///< samples in the pieces used
+  double longest_s = 0;            ///< the longest piece, s
+  bool ok() const { return !f.empty(); }
+};
+
+/// Runs on the grid of interval T (steps within 10 %) of at least min_len samples; each cut into
+/// pieces of fast FFT lengths (what is left below min_len is not used). Ordinate k of a piece of L
+/// samples (its mean removed): I_k = 2 T / L |sum_n y_n exp(-2 pi i k n / L)|^2 at f = k / (L T),
+/// k = 1 .. (L - 1) / 2, distributed as S(f) times a unit exponential when S is the one-sided sampled
+/// PSD (white: 2 T sigma^2), independent between ordinates and pieces. (First differences instead,
+/// to cut the leakage of steep low-frequency power, made the power-law fits worse: the differenced
+/// white part then leaks into the low frequencies.)
+WhittleData whittleData(const NoiseSeries& s, double T, std::size_t min_len) {
+  WhittleData w;
+  w.T = T;
+  min_len = std::max<std::size_t>(min_len, 16);
+  std::vector<std::pair<double, double>> ord;
+  Eigen::FFT<double> fft;
+  std::vector<double> buf;
+  std::vector<std::complex<double>> spec;
+  auto piece = [&](std::size_t i0, std::size_t L) {
+    buf.assign(s.y.begin() + static_cast<std::ptrdiff_t>(i0), s.y.begin() + static_cast<std::ptrdiff_t>(i0 + L));
+    double mean = 0;
+    for (double v : buf) mean += v;
+    mean /= static_cast<double>(L);
+    for (double& v : buf) v -= mean;
+    fft.fwd(spec, buf);
+    const double scale = 2.0 * T / static_cast<double>(L);
+    for (std::size_t k = 1; 2 * k < L; ++k)
+      ord.emplace_back(static_cast<double>(k) / (static_cast<double>(L) * T), scale * std::norm(spec[k]));
+    w.samples += L;
+    w.longest_s = std::max(w.longest_s, static_cast<double>(L) * T);
+  };
+  std::size_t i0 = 0;
+  for (std::size_t i = 1; i <= s.size(); ++i) {
+    if (i < s.size() && std::abs(s.t_s[i] - s.t_s[i - 1] - T) <= 0.1 * T) continue;
+    std::size_t left = i - i0, at = i0;
+    while (left >= min_len) {
+      const std::size_t L = smoothBelow(left);
+      piece(at, L);
+      at += L;
+      left -= L;
+    }
+    i0 = i;
+  }
+  std::sort(ord.begin(), ord.end());
+  // Bins 1 % wide in frequency: the spectra fitted change little across one, so the Whittle sum over
+  // a bin's ordinates is m (log S + mean I / S) at the bin's mean frequency to second order.
+  for (std::size_t k = 0; k < ord.size();) {
+    const double edge = ord[k].first * 1.01;
+    double fs = 0, is = 0;
+    std::size_t n = 0;
+    for (; k < ord.size() && (n == 0 || ord[k].first < edge); ++k, ++n) {
+      fs += ord[k].first;
+      is += ord[k].second;
+    }
+    w.f.push_back(fs / static_cast<double>(n));
+    w.isum.push_back(is);
+    w.m.push_back(static_cast<double>(n));
+  }
+  return w;
+}
+
+/// -2 log of the Whittle likelihood on the scale of the time-domain one (two real
+/// samples per ordinate, S / (2 T) their variance): sum over ordinates of 2 (log(2 pi S / (2 T)) + I / S).
+double whittleM2ll(const NoiseModel& m, const WhittleData& w) {
+  double r = 0;
+  const double c = std::log(kTwoPi / (2.0 * w.T));
+  for (std::size_t b = 0; b < w.f.size(); ++b) {
+    const double S = m.psdSampled(w.f[b], w.T);
+    if (!(S > 0)) return kInf;
+    r += 2.0 * (w.m[b] * (std::log(S) + c) + w.isum[b] / S);
+  }
+  return r;
+}
+
+/// Samples in runs (steps within 10 % of T) of at least min_len samples.
+std::size_t samplesInRuns(const NoiseSeries& s, double T, std::size_t min_len) {
+  std::size_t in = 0, run = s.size() == 0 ? 0 : 1;
+  for (std::size_t i = 1; i <= s.size(); ++i) {
+    if (i < s.size() && std::abs(s.t_s[i] - s.t_s[i - 1] - T) <= 0.1 * T) {
+      ++run;
+      continue;
+    }
+    if (run >= min_len) in += run;
+    run = 1;
+  }
+  return in;
+}
+
+bool constantColumns(const Eigen::MatrixXd& X) {
+  for (Eigen::Index c = 0; c < X.cols(); ++c)
+    if (X.rows() > 0 && (X.col(c).array() != X(0, c)).any()) return false;
+  return X.cols() <= 1;
+}
+
 }  // namespace
+
+const char* noiseLikelihoodName(NoiseLikelihood l) {
+  switch (l) {
+    case NoiseLikelihood::Exact: return "exact";
+    case NoiseLikelihood::Whittle: return "whittle";
+    case NoiseLikelihood::Auto: return "auto";
+  }
+  return "?";
+}
 
 const char* noiseStructureName(NoiseStructure s) {
   switch (s) {
@@ -455,10 +577,38 @@ NoiseFit fitNoise(const NoiseSeries& s, NoiseStructure structure, const Eigen::M
     };
     for (auto& x : x0s) x = project(structure, box, nelderMead(spec, x, 0.5, 300 * static_cast<int>(np), nullptr));
   }
-  // 2. Exact likelihood from the best start.
+  // 2. The likelihood: Whittle on the long runs where asked for (and, for Auto, where the gaps are few
+  // and the runs long), else exact.
+  WhittleData wd, starter;
+  // An exact fit of a long series starts from the Whittle optimum of its runs (cheap and close: the
+  // exact Newton steps from there are few); the fit itself is then exact.
+  constexpr std::size_t kCoarse = 20000;
+  if (constantColumns(X) && (opt.likelihood != NoiseLikelihood::Exact || s.size() > 2 * kCoarse)) {
+    std::size_t longest = 0, run = 1;
+    for (std::size_t i = 1; i < s.size(); ++i) {
+      run = std::abs(s.t_s[i] - s.t_s[i - 1] - d.T) <= 0.1 * d.T ? run + 1 : 1;
+      longest = std::max(longest, run);
+    }
+    auto minLen = [&](double ref) { return static_cast<std::size_t>(std::max(16.0, std::ceil(opt.whittle_min_run * ref))); };
+    auto dataOf = [&](std::size_t min_len) {
+      WhittleData w = whittleData(s, d.T, min_len);
+      if (w.f.size() < static_cast<std::size_t>(2 * np + 2)) w = WhittleData{};
+      return w;
+    };
+    const bool use = opt.likelihood == NoiseLikelihood::Whittle ||
+                     (opt.likelihood == NoiseLikelihood::Auto &&
+                      static_cast<double>(samplesInRuns(s, d.T, minLen(d.span / d.T))) >= opt.whittle_min_coverage * static_cast<double>(s.size()));
+    if (use) wd = dataOf(opt.likelihood == NoiseLikelihood::Auto ? minLen(d.span / d.T) : minLen(static_cast<double>(longest)));
+    if (!wd.ok() && s.size() > 2 * kCoarse) starter = dataOf(minLen(static_cast<double>(longest)));
+  }
+  const bool whittle = wd.ok();
+  fit.likelihood = whittle ? NoiseLikelihood::Whittle : NoiseLikelihood::Exact;
+  fit.whittle_samples = wd.samples;
   const Objective nll = [&](const Eigen::VectorXd& x) {
+    const NoiseModel m = modelOf(structure, project(structure, box, x), pl_terms, &opt.fixed);
+    if (whittle) return whittleM2ll(m, wd);
     ++fit.evaluations;
-    return minusTwoLogLikelihood(modelOf(structure, project(structure, box, x), pl_terms, &opt.fixed), s, X, opt.reml);
+    return minusTwoLogLikelihood(m, s, X, opt.reml);
   };
   Eigen::VectorXd best = x0s.front();
   double fbest = kInf;
@@ -470,10 +620,33 @@ NoiseFit fitNoise(const NoiseSeries& s, NoiseStructure structure, const Eigen::M
     }
   }
   std::string why;
-  // 3. Long series: first on every d-th sample (the same model, exact at the longer intervals; it
-  // keeps the slow terms and costs 1/d), then from there on the whole series.
-  constexpr std::size_t kCoarse = 20000;
-  if (s.size() > 2 * kCoarse) {
+  // 3. Long series: first by the Whittle likelihood of its runs when it has long ones, else on every
+  // d-th sample (the same model, exact at the longer intervals; it keeps the slow terms and costs 1/d),
+  // then from there on the whole series.
+  bool started = false;
+  if (!whittle && starter.ok()) {
+    const Objective w = [&](const Eigen::VectorXd& x) {
+      return whittleM2ll(modelOf(structure, project(structure, box, x), pl_terms, &opt.fixed), starter);
+    };
+    Eigen::VectorXd wbest = best;
+    double wf = kInf;
+    for (const auto& x0 : x0s) {
+      bool conv = false;
+      const Eigen::VectorXd x1 = project(structure, box, bfgs(w, x0, opt.max_iterations, &conv, nullptr));
+      const double v = w(x1);
+      if (v < wf) {
+        wf = v;
+        wbest = x1;
+      }
+    }
+    const double v = nll(wbest);
+    if (v < fbest) {
+      fbest = v;
+      best = wbest;
+      started = true;
+    }
+  }
+  if (!whittle && !started && s.size() > 2 * kCoarse) {
     const std::size_t dec = s.size() / kCoarse;
     NoiseSeries c;
     Eigen::MatrixXd Xc(X.cols() > 0 ? static_cast<Eigen::Index>(s.size() / dec + 1) : 0, X.cols());
@@ -490,7 +663,7 @@ NoiseFit fitNoise(const NoiseSeries& s, NoiseStructure structure, const Eigen::M
     best = project(structure, box, bfgs(coarse, best, opt.max_iterations, &conv, nullptr));
   }
   // 4. Newton on the whole series from there (its last Hessian is the observed information below).
-  if (s.size() <= 2 * kCoarse) {
+  if (whittle || s.size() <= 2 * kCoarse) {
     bool conv = false;
     best = project(structure, box, bfgs(nll, best, opt.max_iterations, &conv, &why));
   }
@@ -503,7 +676,36 @@ NoiseFit fitNoise(const NoiseSeries& s, NoiseStructure structure, const Eigen::M
   }
   fit.message = why;
   fit.model = modelOf(structure, x, pl_terms);
-  fit.m2ll = minusTwoLogLikelihood(modelOf(structure, x, pl_terms, &opt.fixed), s, X, opt.reml, &fit.beta, &fit.beta_cov);
+  if (whittle) {
+    fit.m2ll = whittleM2ll(modelOf(structure, x, pl_terms, &opt.fixed), wd);
+    if (X.cols() == 1) {  // the mean of the samples, its variance from the PSD at zero frequency
+      double mean = 0;
+      for (double v : s.y) mean += v;
+      const auto n = static_cast<double>(s.size());
+      fit.beta = Eigen::VectorXd::Constant(1, mean / n / X(0, 0));
+      const double var0 = modelOf(structure, x, pl_terms, &opt.fixed).psdSampled(0.0, d.T) / (2.0 * d.T * n);
+      fit.beta_cov = Eigen::MatrixXd::Constant(1, 1, var0 / (X(0, 0) * X(0, 0)));
+    }
+  } else {
+    fit.m2ll = minusTwoLogLikelihood(modelOf(structure, x, pl_terms, &opt.fixed), s, X, opt.reml, &fit.beta, &fit.beta_cov);
+  }
+  // Whittle: the expected information of the periodogram, sum over ordinates of grad log S grad log S^T
+  // (each ordinate is S times a unit exponential); twice it is the expected Hessian of -2 log L.
+  auto whittleHessian = [&](const std::vector<Eigen::Index>& idx) {
+    const auto k = static_cast<Eigen::Index>(idx.size());
+    Eigen::MatrixXd G(static_cast<Eigen::Index>(wd.f.size()), k);
+    const double h = 1e-4;
+    for (Eigen::Index a = 0; a < k; ++a) {
+      Eigen::VectorXd xp = x, xm = x;
+      xp[idx[static_cast<std::size_t>(a)]] += h;
+      xm[idx[static_cast<std::size_t>(a)]] -= h;
+      const NoiseModel mp = modelOf(structure, xp, pl_terms, &opt.fixed), mm = modelOf(structure, xm, pl_terms, &opt.fixed);
+      for (std::size_t b = 0; b < wd.f.size(); ++b)
+        G(static_cast<Eigen::Index>(b), a) = (std::log(mp.psdSampled(wd.f[b], wd.T)) - std::log(mm.psdSampled(wd.f[b], wd.T))) / (2 * h);
+    }
+    const Eigen::Map<const Eigen::VectorXd> m(wd.m.data(), static_cast<Eigen::Index>(wd.m.size()));
+    return Eigen::MatrixXd(2.0 * G.transpose() * m.asDiagonal() * G);
+  };
 
   // 5. Uncertainties: the observed information of the parameters that are not on a bound.
   std::vector<Eigen::Index> free;
@@ -524,8 +726,8 @@ NoiseFit fitNoise(const NoiseSeries& s, NoiseStructure structure, const Eigen::M
     Eigen::VectorXd z(static_cast<Eigen::Index>(free.size()));
     for (std::size_t k = 0; k < free.size(); ++k) z[static_cast<Eigen::Index>(k)] = x[free[k]];
     // Newton's last Hessian when it was taken at this point with every parameter free.
-    const bool reuse = fit.converged && free.size() == static_cast<std::size_t>(np) && H_final.rows() == np;
-    const Eigen::MatrixXd H = reuse ? H_final : hessian(sub, z, 2e-3);
+    const bool reuse = !whittle && fit.converged && free.size() == static_cast<std::size_t>(np) && H_final.rows() == np;
+    const Eigen::MatrixXd H = whittle ? whittleHessian(free) : reuse ? H_final : hessian(sub, z, 2e-3);
     const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(0.5 * (H + H.transpose()));
     if (es.info() == Eigen::Success && es.eigenvalues().minCoeff() > 1e-9 * std::max(1.0, es.eigenvalues().maxCoeff())) {
       const Eigen::MatrixXd C = 2.0 * es.eigenvectors() * es.eigenvalues().cwiseInverse().asDiagonal() * es.eigenvectors().transpose();
@@ -537,7 +739,10 @@ NoiseFit fitNoise(const NoiseSeries& s, NoiseStructure structure, const Eigen::M
   }
 
   // 6. Parameters, with what the span and the sampling can determine.
-  const double f_det_lo = opt.band_lo / d.span, f_det_hi = 1.0 / (d.T * opt.band_hi);
+  // (Whittle: the runs are taken as independent, so the longest one sets the slow end.)
+  const double f_det_lo = opt.band_lo / (whittle ? wd.longest_s : d.span), f_det_hi = 1.0 / (d.T * opt.band_hi);
+  fit.f_det_lo = f_det_lo;
+  fit.f_det_hi = f_det_hi;
   for (Eigen::Index i = 0; i < np; ++i) {
     NoiseParam p;
     p.name = defs[static_cast<std::size_t>(i)].name;
@@ -583,7 +788,7 @@ NoiseFit fitNoise(const NoiseSeries& s, NoiseStructure structure, const Eigen::M
   }
   const auto k = static_cast<double>(np + X.cols());
   fit.aic = fit.m2ll + 2 * k;
-  fit.bic = fit.m2ll + k * std::log(static_cast<double>(s.size()));
+  fit.bic = fit.m2ll + k * std::log(static_cast<double>(whittle ? wd.samples : s.size()));
   return fit;
 }
 
@@ -632,7 +837,26 @@ NoiseFit fitWhiteFromDifferences(const NoiseSeries& s) {
 NoiseSelection selectNoise(const NoiseSeries& s, const std::vector<NoiseStructure>& structures, const Eigen::MatrixXd& X,
                            const NoiseFitOptions& opt) {
   NoiseSelection sel;
+  // Nested shortcut: when one Gauss-Markov term on top of white does not lower BIC, the structures with
+  // more coloured terms (two terms, a power law) are not fitted: the series shows no colour that one
+  // term could take up, and each of them costs a full fit.
+  auto fitOf = [&](NoiseStructure st) -> const NoiseFit* {
+    for (const auto& f : sel.fits)
+      if (f.structure == st && !f.model.empty()) return &f;
+    return nullptr;
+  };
   for (NoiseStructure st : structures) {
+    if (opt.skip_when_no_colour && (st == NoiseStructure::WhiteTwoGaussMarkov || st == NoiseStructure::WhitePowerLaw)) {
+      const NoiseFit *w = fitOf(NoiseStructure::White), *g = fitOf(NoiseStructure::WhiteGaussMarkov);
+      if (w && g && !(g->bic < w->bic)) {
+        NoiseFit skipped;
+        skipped.structure = st;
+        skipped.n = s.size();
+        skipped.message = "not fitted: white+gauss_markov does not improve BIC on white (no colour to take up)";
+        sel.fits.push_back(skipped);
+        continue;
+      }
+    }
     sel.fits.push_back(fitNoise(s, st, X, opt));
     const auto i = static_cast<int>(sel.fits.size()) - 1;
     const NoiseFit& f = sel.fits.back();

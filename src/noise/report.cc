@@ -64,6 +64,9 @@ Json fitJson(const model::NoiseFit& f) {
   }
   j["params"] = ps;
   if (f.beta.size() > 0) j["mean"] = num(f.beta[0]);
+  j["likelihood"] = model::noiseLikelihoodName(f.likelihood);
+  j["evaluations"] = f.evaluations;
+  if (f.likelihood == model::NoiseLikelihood::Whittle) j["whittle_samples"] = f.whittle_samples;
   return j;
 }
 
@@ -254,19 +257,23 @@ bool writeNoiseReport(const std::string& dir, const NoiseOutput& out, std::strin
     for (const auto& s : out.notes) md << "- " << s << "\n";
   }
   md << "\n## Chosen models (BIC)\n\n";
-  md << "| sensor | axis | series | samples | chosen | parameters | configured |\n|---|---|---|---|---|---|---|\n";
+  md << "| sensor | axis | series | samples | likelihood | chosen | parameters | configured |\n|---|---|---|---|---|---|---|---|\n";
   for (const auto& a : out.axes) {
     md << "| " << a.sensor << " | " << a.axis << " | " << (a.series.rfind("block", 0) == 0 ? "slow (blocks)" : "white/full")
        << " | " << a.samples << " | ";
     if (a.fitted()) {
       const auto& f = a.selection.chosen();
-      md << f.model.describe(1.0, "") << " | " << paramsText(f) << " | " << a.configured.describe(1.0, "") << " |\n";
+      md << model::noiseLikelihoodName(f.likelihood);
+      if (f.likelihood == model::NoiseLikelihood::Whittle) md << " (" << f.whittle_samples << ")";
+      md << " | " << f.model.describe(1.0, "") << " | " << paramsText(f) << " | " << a.configured.describe(1.0, "") << " |\n";
     } else {
-      md << "not fitted | - | " << a.configured.describe(1.0, "") << " |\n";
+      md << "- | not fitted | - | " << a.configured.describe(1.0, "") << " |\n";
     }
   }
   md << "\nUnits: heads in arcsec, the accelerometer in rad/s^2. Correlation times and corner frequencies are\n"
-        "determined only between 20 / span and 1 / (20 interval); outside, a parameter says \"not determined\".\n";
+        "determined only between 20 / span and 1 / (20 interval) (Whittle: 20 / the longest gap-free run);\n"
+        "outside, a parameter says \"not determined\". Likelihood: exact (state space, every sample) or\n"
+        "whittle (the periodograms of the long gap-free runs; in brackets the samples they hold).\n";
   md << "\n## Spectra\n\nThe data's Welch spectrum against the chosen model (log-log), the configured model, and for the\n"
         "heads what the other heads add (the contamination the fit carries).\n\n";
   for (const auto& a : out.axes) {

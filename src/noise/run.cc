@@ -255,6 +255,7 @@ void fitAxis(AxisResult& a, const model::NoiseSeries& s, const NoiseOptions& opt
   a.interval_s = s.medianInterval();
   model::NoiseFitOptions fo;
   fo.fixed = fixed;
+  fo.likelihood = opt.likelihood;
   band(a, fo);
   a.contamination = fixed;
   if (s.size() < 16) {
@@ -275,6 +276,10 @@ void fitAxis(AxisResult& a, const model::NoiseSeries& s, const NoiseOptions& opt
                       " s) cannot determine a coloured part: only the white level is fitted");
   const Eigen::MatrixXd X = Eigen::MatrixXd::Ones(static_cast<Eigen::Index>(s.size()), 1);  // the mean (a misalignment, a bias)
   a.selection = model::selectNoise(s, st, X, fo);
+  if (a.fitted() && a.selection.chosen().f_det_hi > 0) {  // the band of the likelihood used (Whittle: the longest run)
+    a.f_det_lo = a.selection.chosen().f_det_lo;
+    a.f_det_hi = a.selection.chosen().f_det_hi;
+  }
   if (white_only && short_from_differences) {
     // The differences see the white parts only (the slow content cancels): the series' white variance,
     // minus the white part the other heads add (their slow part cancels too).
@@ -421,6 +426,11 @@ bool runNoise(const NoiseRequest& req, NoiseOutput& out, std::string* error) {
     out.notes.push_back("no epoch with every configured head present: no head noise series");
   const int passes = n >= 2 ? 1 + std::max(0, req.options.contamination_passes) : 0;
   for (int pass = 0; pass < passes && heads.fullEpochs() > 0; ++pass) {
+    // The passes before the last only supply the other heads' models for the next one: they use the
+    // Whittle likelihood (milliseconds per fit; the gap-free runs taken as independent); the last one
+    // uses the likelihood asked for.
+    NoiseOptions pass_opt = req.options;
+    if (pass + 1 < passes) pass_opt.likelihood = model::NoiseLikelihood::Whittle;
     parallelFor(static_cast<std::size_t>(3 * n), [&](std::size_t idx) {
       const int i = static_cast<int>(idx) / 3, k = static_cast<int>(idx) % 3;
       model::NoiseModel fixed;
@@ -438,11 +448,18 @@ bool runNoise(const NoiseRequest& req, NoiseOutput& out, std::string* error) {
       a.series = "the head against the fused attitude of the other heads, head axes";
       a.decimation = heads.series(i, k).stride();
       a.configured = configuredOf(i, k);
-      fitAxis(a, heads.series(i, k).series(), req.options, fixed, /*short_from_differences=*/true);
+      fitAxis(a, heads.series(i, k).series(), pass_opt, fixed, /*short_from_differences=*/true);
       head_axes[idx] = std::move(a);
     });
     for (std::size_t idx = 0; idx < head_axes.size(); ++idx)
       if (head_axes[idx].fitted()) current[idx] = head_axes[idx].selection.chosen().model;
+    if (req.progress) {
+      char b[160];
+      std::snprintf(b, sizeof b, "noise: heads, pass %d of %d (%s likelihood) done at %.1f s", pass + 1, passes,
+                    model::noiseLikelihoodName(pass_opt.likelihood),
+                    std::chrono::duration<double>(std::chrono::steady_clock::now() - w0).count());
+      req.progress(b);
+    }
   }
   for (auto& a : head_axes)
     if (!a.sensor.empty()) out.axes.push_back(std::move(a));

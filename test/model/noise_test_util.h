@@ -9,14 +9,14 @@
 namespace boresight::model::noisetest {
 
 /// `slots` grid times k T (each moved by up to +-jitter T, uniformly), a fraction of about
-/// `gap_fraction` of them removed in gaps of exponential length with a mean of 40 samples; the
-/// model drawn at the remaining times (NoiseSimulator, so the gaps are exact).
+/// `gap_fraction` of them removed in gaps of exponential length with a mean of `mean_len` samples
+/// (40: many short gaps; hundreds: a few long ones); the model drawn at the remaining times
+/// (NoiseSimulator, so the gaps are exact).
 inline NoiseSeries gappedSeries(const NoiseModel& m, std::size_t slots, double T, double gap_fraction, std::uint64_t seed,
-                                double jitter) {
+                                double jitter, double mean_len = 40) {
   NoiseSeries s;
   const CounterRng gaps(seed, Stream::HeadGap, 77), jit(seed, Stream::HeadTagJitter, 77);
   NoiseSimulator sim(m, CounterRng(seed, Stream::HeadNoise, 77));
-  const double mean_len = 40;
   const double p = gap_fraction > 0 ? gap_fraction / (mean_len * (1 - gap_fraction)) : 0;
   double gap_until = -1;
   for (std::size_t k = 0; k < slots; ++k) {
@@ -78,25 +78,37 @@ inline std::vector<FitCase> fitCases(double span_s, double T) {
 struct FitMcResult {
   std::map<std::string, int> within3, determined;
   int runs = 0, converged = 0, chosen_right = 0, truth_not_rejected = 0;
+  int whittle = 0;  ///< fits that used the Whittle likelihood
   double nees_sum = 0;
   int nees_dof = 0;
   double seconds_per_fit = 0;
 };
 
-inline FitMcResult runFitMc(const FitCase& c, int runs, std::size_t slots, double T, double gap_fraction, std::uint64_t seed0,
+/// The series of the Monte Carlo runs: how many gaps and how long, and the likelihood fitted.
+struct McSetup {
+  double gap_fraction = 0.05;
+  double gap_mean_len = 40;  ///< samples
+  NoiseLikelihood likelihood = NoiseLikelihood::Exact;
+};
+
+inline FitMcResult runFitMc(const FitCase& c, int runs, std::size_t slots, double T, const McSetup& setup, std::uint64_t seed0,
                             bool also_select = false) {
   FitMcResult r;
+  NoiseFitOptions opt;
+  opt.likelihood = setup.likelihood;
   for (int k = 0; k < runs; ++k) {
-    const NoiseSeries s = gappedSeries(c.truth, slots, T, gap_fraction, seed0 + static_cast<std::uint64_t>(k), 0.0);
+    const NoiseSeries s = gappedSeries(c.truth, slots, T, setup.gap_fraction, seed0 + static_cast<std::uint64_t>(k), 0.0,
+                                       setup.gap_mean_len);
     Eigen::MatrixXd X = Eigen::MatrixXd::Ones(static_cast<Eigen::Index>(s.size()), 1);  // an unknown mean
     // With the BIC choice, the fit of the simulated structure is the selection's own.
     NoiseSelection sel;
-    if (also_select) sel = selectNoise(s, defaultNoiseStructures(), X);
+    if (also_select) sel = selectNoise(s, defaultNoiseStructures(), X, opt);
     NoiseFit f;
     for (const auto& g : sel.fits)
       if (g.structure == c.structure) f = g;
-    if (!also_select) f = fitNoise(s, c.structure, X);
+    if (!also_select) f = fitNoise(s, c.structure, X, opt);
     ++r.runs;
+    r.whittle += f.likelihood == NoiseLikelihood::Whittle;
     r.converged += f.converged;
     std::vector<int> idx;
     std::vector<double> err;

@@ -18,12 +18,13 @@ namespace {
 
 const char* kUsage =
     "usage: boresight noise --config FILE INPUT... --out DIR [--overlay FILE] [--models LIST]\n"
-    "                       [--max-samples N] [--acc-block S] [--lookahead S] [--strict] [--quiet]\n"
+    "                       [--max-samples N] [--acc-block S] [--likelihood L] [--lookahead S] [--strict]\n"
+    "                       [--quiet]\n"
     "\n"
     "Noise as the data has it: for every head axis (cross-boresight x, y and about the boresight, head\n"
-    "axes) and every accelerometer axis (A frame), a noise model fitted to the data by exact likelihood\n"
-    "(gaps and irregular sampling included) and chosen among candidates by BIC, with uncertainties and\n"
-    "what the span and the sampling can determine.\n"
+    "axes) and every accelerometer axis (A frame), a noise model fitted to the data by maximum\n"
+    "likelihood and chosen among candidates by BIC, with uncertainties and what the span and the\n"
+    "sampling can determine.\n"
     "\n"
     "Heads: each head against the fused attitude of the other heads, in its own axes, at epochs where\n"
     "every configured head is present: the attitude cancels; what the other heads add is known from\n"
@@ -47,6 +48,10 @@ const char* kUsage =
     "                       white+2gauss_markov, white+power_law (default: all four)\n"
     "  --max-samples N      samples kept per axis; longer series keep every 2nd, 4th, ... (default 65536)\n"
     "  --acc-block S        block of the star-minus-accelerometer series, s (default 100)\n"
+    "  --likelihood L       exact (state space: every sample, any gaps; seconds per axis on a day),\n"
+    "                       whittle (periodograms of the gap-free runs, taken as independent;\n"
+    "                       milliseconds), auto (default: whittle when 95 % of the samples lie in runs\n"
+    "                       of at least a quarter of the span, else exact)\n"
     "  --lookahead S        out-of-order tolerance of the inputs, seconds (default 2)\n"
     "  --strict             stop at the first malformed input line\n"
     "  --quiet              print the table only\n"
@@ -80,6 +85,8 @@ int runNoise(int argc, char** argv) {
   app.add_option("--max-samples", req.options.max_samples)->check(CLI::Range(std::size_t{64}, std::size_t{1} << 24));
   app.add_option("--acc-block", req.options.acc_block_s)->check(CLI::Range(2.0, 86400.0));
   app.add_option("--lookahead", req.lookahead_s)->check(CLI::Range(0.0, 3600.0));
+  std::string likelihood = "auto";
+  app.add_option("--likelihood", likelihood)->check(CLI::IsMember({"exact", "whittle", "auto"}));
   app.add_flag("--strict", req.strict);
   app.add_flag("--quiet", quiet);
   app.add_option("inputs", req.inputs)->required();
@@ -102,6 +109,9 @@ int runNoise(int argc, char** argv) {
       }
     }
   }
+  req.options.likelihood = likelihood == "exact" ? model::NoiseLikelihood::Exact
+                           : likelihood == "whittle" ? model::NoiseLikelihood::Whittle
+                                                     : model::NoiseLikelihood::Auto;
   std::error_code ec;
   std::filesystem::create_directories(out_dir, ec);
   if (ec) return fail(out_dir + ": cannot create the output directory: " + ec.message());

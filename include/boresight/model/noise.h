@@ -184,7 +184,7 @@ class KalmanWhitener {
   std::vector<double> phi_, q_, K_, s_, P_;
   std::vector<double> X_;  ///< filter states, column-major k_ x columns_ (column 0 serves whiten()/colour())
   int columns_ = 0;
-  double F_ = 1, logF_ = 0, t_prev_ = 0, dt_prev_ = -1, m2ll_ = 0;
+  double F_ = 1, logF_ = 0, inv_sqrt_F_ = 1, t_prev_ = 0, dt_prev_ = -1, m2ll_ = 0;
   bool started_ = false, frozen_ = false;
   std::size_t steps_ = 0;
   int settle_ = 0;
@@ -237,7 +237,24 @@ struct NoiseParam {
   std::string note;
 };
 
+/// Which likelihood a fit maximises.
+///  - Exact: the state-space likelihood of every sample (gaps and irregular sampling included); one
+///    evaluation is a Kalman pass over the series, so a fit of a day costs seconds.
+///  - Whittle: the frequency-domain approximation on the series' long gap-free runs (each run's
+///    periodogram at its Fourier frequencies, runs taken as independent, pooled in narrow
+///    log-frequency bins; the mean of each run drops out with its zero frequency). One evaluation
+///    costs microseconds. Valid when the runs are long against the slowest correlation time fitted:
+///    the determinable band then starts at band_lo / (longest run) instead of band_lo / span.
+///    Uncertainties from the expected (Fisher) information of the periodogram.
+///  - Auto: Whittle when at least `whittle_min_coverage` of the samples lie in runs of at least
+///    `whittle_min_run` of the span (few, long gaps), else Exact.
+enum class NoiseLikelihood : std::uint8_t { Exact, Whittle, Auto };
+const char* noiseLikelihoodName(NoiseLikelihood l);
+
 struct NoiseFitOptions {
+  NoiseLikelihood likelihood = NoiseLikelihood::Exact;
+  double whittle_min_coverage = 0.95;  ///< Auto: fraction of samples in long runs
+  double whittle_min_run = 0.25;       ///< Auto: a long run, as a fraction of the span
   bool reml = true;
   int max_iterations = 60;
   /// Correlation times and corner frequencies are determined only inside [band_lo / span, fs /
@@ -248,6 +265,10 @@ struct NoiseFitOptions {
   /// A known part of the series' noise, added to every candidate and not fitted (e.g. what other
   /// sensors contribute to a difference series). NoiseFit::model does not include it.
   NoiseModel fixed;
+  /// selectNoise: when white+gauss_markov does not lower BIC below white's, white+2gauss_markov and
+  /// white+power_law are not fitted (listed with a message, model empty). Needs both fitted first
+  /// (converged or not: the Gauss-Markov structure holds white, so a fit worse than white found no colour).
+  bool skip_when_no_colour = true;
 };
 
 /// The power-law term count a fit uses by default: three per decade between 10 / span and 1 / (2 T)
@@ -265,13 +286,18 @@ struct NoiseFit {
   double aic = 0, bic = 0;
   std::size_t n = 0;
   bool converged = false;
-  int evaluations = 0;            ///< likelihood evaluations (each a pass over the series)
+  int evaluations = 0;            ///< likelihood evaluations (exact: each a pass over the series)
+  NoiseLikelihood likelihood = NoiseLikelihood::Exact;  ///< the one used (never Auto)
+  std::size_t whittle_samples = 0; ///< Whittle: samples in the runs used (the rest were in short runs)
+  double f_det_lo = 0, f_det_hi = 0;  ///< the band in which its times and corners count as determined, Hz
   std::string message;            ///< why not converged, or ""
   const NoiseParam* find(const std::string& name) const;
 };
 
 /// Maximum-likelihood fit of one structure to a series (gaps allowed: the exact likelihood). The
-/// columns of X (regressors such as a constant) are profiled out by GLS at every evaluation.
+/// columns of X (regressors such as a constant) are profiled out by GLS at every evaluation. The
+/// Whittle likelihood (opt.likelihood) takes X as the mean of each run (it drops out with the zero
+/// frequency); with other regressors the fit is exact.
 NoiseFit fitNoise(const NoiseSeries& s, NoiseStructure structure, const Eigen::MatrixXd& X = Eigen::MatrixXd(),
                   const NoiseFitOptions& opt = {});
 

@@ -35,6 +35,9 @@ struct NoiseOptions {
   std::size_t max_samples = std::size_t{1} << 16;  ///< per axis; more are decimated by 2 until they fit
   double acc_block_s = 100;  ///< block of the star-minus-accelerometer series, s (longer than the CRN)
   int contamination_passes = 2;  ///< fits of the head axes with the other heads' fitted models
+  /// Auto: the Whittle likelihood on series with few, long gaps (a day's fits in milliseconds), the
+  /// exact one otherwise (model/noise.h: NoiseLikelihood)
+  model::NoiseLikelihood likelihood = model::NoiseLikelihood::Auto;
   /// false: the other heads' part of a head's series is not modelled (its whole noise is put on the
   /// head: a diagnostic, the levels come out too high)
   bool model_other_heads = true;

@@ -4,8 +4,8 @@
 // the normalised error squared per degree of freedom against its chi-square 95 % bounds, how often
 // BIC chose the simulated structure, and the time per fit.
 //
-//   bench_noise_fit [--runs 200] [--span 86400] [--dt 1] [--gaps 0.05] [--seed 1000] [--jobs 2]
-//                   [--models white,gauss_markov,power_law,sum] [--select]
+//   bench_noise_fit [--runs 200] [--span 86400] [--dt 1] [--gaps 0.05] [--gap-length 40] [--seed 1000]
+//                   [--jobs 2] [--models white,gauss_markov,power_law,sum] [--likelihood exact] [--select]
 #include "../noise_test_util.h"
 
 #include <boresight/model/noise.h>
@@ -41,9 +41,11 @@ void wilson(int k, int n, double& lo, double& hi) {
 
 void usage() {
   std::puts(
-      "bench_noise_fit [--runs N] [--span S] [--dt T] [--gaps F] [--seed S0] [--jobs J] [--models a,b] [--select]\n"
+      "bench_noise_fit [--runs N] [--span S] [--dt T] [--gaps F] [--gap-length L] [--seed S0] [--jobs J]\n"
+      "                [--models a,b] [--likelihood exact|whittle|auto] [--select]\n"
       "  Monte Carlo of the noise-model fits against the simulated truth (defaults: 200 runs of one day at\n"
-      "  1 Hz with 5 % gaps, seeds 1000.., two threads, every model; --select also runs the BIC choice).");
+      "  1 Hz with 5 % gaps of 40 samples on average, seeds 1000.., two threads, every model, the exact\n"
+      "  likelihood; --select also runs the BIC choice).");
 }
 
 }  // namespace
@@ -53,6 +55,7 @@ int main(int argc, char** argv) {
   double span = 86400, dt = 1, gaps = 0.05;
   std::uint64_t seed0 = 1000;
   bool select = false;
+  McSetup setup;
   std::vector<std::string> models = {"white", "gauss_markov", "power_law", "sum"};
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -70,6 +73,17 @@ int main(int argc, char** argv) {
     else if (a == "--span") span = std::atof(next());
     else if (a == "--dt") dt = std::atof(next());
     else if (a == "--gaps") gaps = std::atof(next());
+    else if (a == "--gap-length") setup.gap_mean_len = std::atof(next());
+    else if (a == "--likelihood") {
+      const std::string l = next();
+      if (l == "exact") setup.likelihood = NoiseLikelihood::Exact;
+      else if (l == "whittle") setup.likelihood = NoiseLikelihood::Whittle;
+      else if (l == "auto") setup.likelihood = NoiseLikelihood::Auto;
+      else {
+        std::fprintf(stderr, "bench_noise_fit: --likelihood exact, whittle or auto\n");
+        return 2;
+      }
+    }
     else if (a == "--seed") seed0 = std::strtoull(next(), nullptr, 10);
     else if (a == "--jobs") jobs = std::max(1, std::atoi(next()));
     else if (a == "--select") select = true;
@@ -82,13 +96,16 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
-  if (runs < 1 || !(span > 0) || !(dt > 0) || !(gaps >= 0 && gaps < 0.9)) {
+  setup.gap_fraction = gaps;
+  if (runs < 1 || !(span > 0) || !(dt > 0) || !(gaps >= 0 && gaps < 0.9) || !(setup.gap_mean_len >= 1)) {
     std::fprintf(stderr, "bench_noise_fit: bad option value (--help)\n");
     return 2;
   }
   const auto slots = static_cast<std::size_t>(span / dt);
-  std::printf("noise-fit Monte Carlo: %d runs per model, span %.0f s at %g s (%zu slots), %.0f %% gaps, seeds %llu..%llu\n",
-              runs, span, dt, slots, gaps * 100, static_cast<unsigned long long>(seed0),
+  std::printf("noise-fit Monte Carlo: %d runs per model, span %.0f s at %g s (%zu slots), %.0f %% gaps of %g samples on "
+              "average, %s likelihood, seeds %llu..%llu\n",
+              runs, span, dt, slots, gaps * 100, setup.gap_mean_len, noiseLikelihoodName(setup.likelihood),
+              static_cast<unsigned long long>(seed0),
               static_cast<unsigned long long>(seed0 + static_cast<std::uint64_t>(runs) - 1));
   for (const FitCase& c : fitCases(span, dt)) {
     if (std::find(models.begin(), models.end(), c.name) == models.end()) continue;
@@ -101,9 +118,10 @@ int main(int argc, char** argv) {
       th.emplace_back([&, j] {
         FitMcResult& r = part[static_cast<std::size_t>(j)];
         for (int k = j; k < runs; k += jobs) {
-          const FitMcResult one = runFitMc(c, 1, slots, dt, gaps, seed0 + static_cast<std::uint64_t>(k), select);
+          const FitMcResult one = runFitMc(c, 1, slots, dt, setup, seed0 + static_cast<std::uint64_t>(k), select);
           r.runs += one.runs;
           r.converged += one.converged;
+          r.whittle += one.whittle;
           r.chosen_right += one.chosen_right;
           r.truth_not_rejected += one.truth_not_rejected;
           r.nees_sum += one.nees_sum;
@@ -118,6 +136,7 @@ int main(int argc, char** argv) {
     for (const auto& p : part) {
       r.runs += p.runs;
       r.converged += p.converged;
+      r.whittle += p.whittle;
       r.chosen_right += p.chosen_right;
       r.truth_not_rejected += p.truth_not_rejected;
       r.nees_sum += p.nees_sum;
@@ -125,8 +144,8 @@ int main(int argc, char** argv) {
       for (const auto& [n, v] : p.determined) r.determined[n] += v;
       for (const auto& [n, v] : p.within3) r.within3[n] += v;
     }
-    std::printf("  converged %d/%d; %.2f s per run (%d threads%s)\n", r.converged, r.runs, secs * jobs / r.runs, jobs,
-                select ? ", fit and BIC choice" : "");
+    std::printf("  converged %d/%d (Whittle likelihood in %d); %.3f s per run (%d threads%s)\n", r.converged, r.runs, r.whittle,
+                secs * jobs / r.runs, jobs, select ? ", fit and BIC choice" : "");
     std::printf("  %-14s %10s %12s %18s %14s\n", "parameter", "truth", "determined", "within 3 sigma", "Wilson 95 %");
     for (const auto& [name, v] : c.values) {
       const int det = r.determined.count(name) ? r.determined.at(name) : 0;
