@@ -1,4 +1,5 @@
 #include <boresight/io/config_keys.h>
+#include <boresight/io/yaml_file.h>
 #include <boresight/io/time_format.h>
 #include <boresight/sim/scenario.h>
 
@@ -209,6 +210,7 @@ bool parseScenarioAt(const std::string& text, const std::string& file, const std
     if (error) *error = file + ":1: a scenario must be a YAML map";
     return false;
   }
+  if (!io::checkDuplicateKeys(root, file, error)) return false;
   Scenario s;
   MapReader top(root, "", c);
   bool overlay = false;
@@ -468,16 +470,11 @@ bool loadScenario(const std::string& path, Scenario& out, std::string* error) {
 
 namespace {
 bool loadScenarioAt(const std::string& path, Scenario& out, std::string* error, int depth) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) {
-    if (error) *error = path + ": cannot open scenario file";
-    return false;
-  }
-  std::ostringstream ss;
-  ss << in.rdbuf();
+  std::string text;
+  if (!io::readBounded(path, io::kMaxConfigBytes, "scenario file", text, error)) return false;
   const auto slash = path.find_last_of('/');
   const std::string dir = slash == std::string::npos ? "." : path.substr(0, slash);
-  return parseScenarioAt(ss.str(), path, dir, out, error, depth);
+  return parseScenarioAt(text, path, dir, out, error, depth);
 }
 }  // namespace
 

@@ -7,6 +7,7 @@
 #include <boresight/calib/thermal_fit.h>
 #include <boresight/io/product_stream.h>
 #include <boresight/io/core_config.h>
+#include <boresight/io/files.h>
 #include <boresight/report/calibration.h>
 #include <boresight/stream/engine.h>
 #include <boresight/stream/replay.h>
@@ -120,6 +121,15 @@ bool pushOrbitFiles(const std::vector<std::string>& files, const io::ReadOptions
       *error = st.error();
       return false;
     }
+    // Every record read is used or rejected with its reason, orbit files too.
+    std::printf("%s: %zu read, %zu used", f.c_str(), st.records() + st.rejectedCount(), st.records());
+    if (st.rejectedCount() > st.implausibleCount())
+      std::printf(", %zu %s", st.rejectedCount() - st.implausibleCount(), stream::rejectName(stream::Reject::kMalformed));
+    if (st.implausibleCount())
+      std::printf(", %zu %s", st.implausibleCount(), stream::rejectName(stream::Reject::kImplausible));
+    std::printf("\n");
+    for (std::size_t k = 0; k < st.rejected().size() && k < 5; ++k)
+      std::printf("    rejected %s\n", st.rejected()[k].str().c_str());
   }
   return true;
 }
@@ -130,12 +140,7 @@ int fail(const std::string& msg) {
 }
 
 bool writeText(const std::string& path, const std::string& text, std::string* error) {
-  std::ofstream f(path);
-  if (!(f << text)) {
-    *error = "cannot write " + path;
-    return false;
-  }
-  return true;
+  return io::writeFileAtomic(path, text, error);  // whole or not at all
 }
 
 /// Wall time since `t0` in seconds, and the peak resident memory so far in MB (the stage summary).
@@ -181,15 +186,15 @@ int runCalibrate(int argc, char** argv) {
   app.add_flag("--time-offset", time_offset);
   app.add_flag("--no-whiten", no_whiten);
   app.add_flag("--moments", moments);
-  app.add_option("--huber", huber)->check(CLI::Range(0.0, 1e6));
-  app.add_option("--decimation", decimation)->check(CLI::Range(0.1, 3600.0));
+  app.add_option("--huber", huber)->check(finiteRange(0.0, 1e6));
+  app.add_option("--decimation", decimation)->check(finiteRange(0.1, 3600.0));
   app.add_option("--max-observations", max_obs);
-  app.add_option("--crn-bandwidth", crn_bw)->check(CLI::Range(1e-4, 10.0));
-  app.add_option("--crn-length", crn_len)->check(CLI::Range(1.0, 1e4));
-  app.add_option("--unobservable-sigma", unobs)->check(CLI::Range(1e-6, 1e9));
-  app.add_option("--plan-excitation", plan_exc)->check(CLI::Range(1e-12, 1.0));
-  app.add_option("--plan-sigma", plan_sigma)->check(CLI::Range(1e-6, 1e9));
-  app.add_option("--lookahead", lookahead_s)->check(CLI::Range(0.0, 3600.0));
+  app.add_option("--crn-bandwidth", crn_bw)->check(finiteRange(1e-4, 10.0));
+  app.add_option("--crn-length", crn_len)->check(finiteRange(1.0, 1e4));
+  app.add_option("--unobservable-sigma", unobs)->check(finiteRange(1e-6, 1e9));
+  app.add_option("--plan-excitation", plan_exc)->check(finiteRange(1e-12, 1.0));
+  app.add_option("--plan-sigma", plan_sigma)->check(finiteRange(1e-6, 1e9));
+  app.add_option("--lookahead", lookahead_s)->check(finiteRange(0.0, 3600.0));
   app.add_flag("--strict", strict);
   app.add_option("inputs", files)->required();
   if (int st = parseCommandLine(app, argc, argv, "calibrate", kUsage); st >= 0) return st;
@@ -208,6 +213,12 @@ int runCalibrate(int argc, char** argv) {
   Stages stages;
   io::PlatformConfig pc;
   std::string err;
+  {  // outputs never destroy inputs, checked before anything is read or written
+    std::vector<std::string> ins = files;
+    ins.push_back(config);
+    if (!io::checkOutputs(ins, {{"--json", json_path}, {"--yaml", yaml_path}, {"--report", report_dir, true}}, &err))
+      return fail(err);
+  }
   if (!io::loadPlatformConfig(config, pc, &err)) return fail(err);
   stream::ReplayInputs in;
   if (!stream::classifyInputs(files, in, &err)) return fail(err);
@@ -260,7 +271,7 @@ int runCalibrate(int argc, char** argv) {
 
   // Bad input the replay survived but a calibration must not.
   const auto& tot = engine.counters();
-  if (tot.used_heads == 0) return fail("no star sensor samples in the inputs");
+  if (tot.used_heads == 0) return fail("no star sensor samples in the inputs (every record rejected: see above)");
   if (tot.used_accel == 0) return fail("no accelerometer samples in the inputs (every record rejected?)");
   const auto unknown = h.by_status[std::size_t(core::Status::kUnknownHead)];
   if (unknown > 0) {
