@@ -41,7 +41,8 @@ for s in $spans; do
   d="$dir/calibrate_$s"
   times=()
   for ((i = 1; i <= runs; i++)); do
-    /usr/bin/time -f "%e %M %U %S" -o "$dir/time.txt" "$cli" calibrate --config "$root/config/gracefo.yaml" \
+    # the ideal noise preset: the spans carry the simulator's white 6"/48" head noise
+    /usr/bin/time -f "%e %M %U %S" -o "$dir/time.txt" "$cli" calibrate --config "$root/config/gracefo_ideal.yaml" \
       "$d"/SCA1A_*.txt "$d"/ACC1A_*.txt "$d"/QSA1B_*.txt --json "$dir/calibrate.json" ${extra[@]+"${extra[@]}"} \
       >"$dir/calibrate.log" 2>&1 || { echo "calibrate ${s} s failed:"; tail -5 "$dir/calibrate.log"; exit 1; }
     read -r secs kb usr sys <"$dir/time.txt"

@@ -89,6 +89,7 @@ bool runAudit(const RunRequest& req, RunOutput& out, std::string* error) {
   out = RunOutput{};
   io::PlatformConfig pc;
   if (!io::loadPlatformConfig(req.config, pc, error)) return false;
+  if (!req.overlay.empty() && !io::applyOverlay(req.overlay, "boresight audit", {}, pc, out.overlay, error)) return false;
   Truth truth;
   if (!req.truth.empty()) {
     if (!readTruthFile(req.truth, truth, error)) return false;
@@ -198,6 +199,10 @@ bool runAudit(const RunRequest& req, RunOutput& out, std::string* error) {
   else
     out.notes.push_back("no orbit context (GNI1B / GNV1B): no orbit-harmonic tests");
   out.result = analyse(collector, req.options, out.truth_given ? &truth : nullptr);
+  out.platform = pc;
+  out.model_in_use = io::modelInUseLines(pc, out.overlay);
+  for (const auto& w : io::validityWarnings(out.overlay, engine.firstEpoch(), engine.lastEpoch()))
+    out.model_in_use.push_back("warning: " + w);
   return true;
 }
 

@@ -3,7 +3,8 @@
 // The CRN acceleration noise of one head is stationary (white attitude noise through a fixed kernel),
 // so the noise of its decimated epochs k, m has covariance rho(|t_k - t_m| / D) Sigma (Sigma the
 // epoch's 3x3 covariance, rho = CalibrationSpan::noise_correlation, zero beyond its length). With the
-// banded Cholesky factor L of the correlation matrix (band = the length of rho minus one), the
+// banded Cholesky factor L of the correlation matrix (band = the length of rho minus one; the noise
+// library's model::BandedWhitener), the
 // sequences z = L^-1 x of every data column (alpha_S, alpha_A, jerk_A and the constant 1 that carries
 // the bias) are uncorrelated in time; the model is linear in those columns, so the residual of the
 // whitened columns is the whitened residual. Spatial: the epoch's covariance (head noise plus the
@@ -34,9 +35,5 @@ struct Whitened {
 /// remaining epochs follows their time lags).
 Whitened whiten(const CalibrationSpan& span, const std::array<Mat3, kMaxHeads>& C_S_A, const std::vector<double>& rho,
                 const std::vector<std::uint8_t>* reject = nullptr);
-
-/// Banded Cholesky of the correlation matrix of epochs at tags t (us, increasing), spacing unit D (s):
-/// row k holds L(k, k-K..k) in L[k * (K+1) + (K - (k - m))]. Exposed for the tests.
-std::vector<double> bandedCholesky(const std::vector<TimeUs>& t, double D, const std::vector<double>& rho);
 
 }  // namespace boresight::calib

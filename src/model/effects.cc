@@ -77,6 +77,44 @@ std::vector<EffectInfo> buildCatalogue() {
                {P{"rate_ppm", "ppm", 0, true, "|rate| <= 1000 ppm"},
                 P{"offset_ms", "ms", 0, false, "clock error at start_s, |offset| <= 2000 ms"},
                 P{"start_s", "s since start", 0, false, "reference epoch of the offset"}}});
+  // Appended: coloured noise, field-of-view error, thermal wander, accelerometer coloured noise and bias
+  // wander. Forms of a coloured term: Gauss-Markov (tau_s > 0) or power law (f_lo_hz, f_hi_hz, alpha).
+  const auto form = [](std::vector<P> levels) {
+    levels.push_back(P{"tau_s", "s", 0, false, "Gauss-Markov correlation time (> 0: this form)"});
+    levels.push_back(P{"alpha", "1", 1, false, "power law: PSD ~ f^-alpha inside [f_lo_hz, f_hi_hz], 0 <= alpha < 2"});
+    levels.push_back(P{"f_lo_hz", "Hz", 0, false, "power law: lower corner (> 0 with f_hi_hz: this form)"});
+    levels.push_back(P{"f_hi_hz", "Hz", 0, false, "power law: upper corner"});
+    return levels;
+  };
+  c.push_back({EffectKind::ColouredNoise, "coloured_noise", EffectTarget::Head,
+               "coloured attitude measurement error of a head: stationary 1-sigma cross_arcsec per cross-boresight "
+               "axis (each its own process) and about_arcsec about the boresight, Gauss-Markov or power law (noise.h); "
+               "each spec adds an independent term",
+               form({P{"cross_arcsec", "arcsec", 0, false, "stationary 1-sigma per cross-boresight axis"},
+                     P{"about_arcsec", "arcsec", 0, false, "stationary 1-sigma about the boresight"}})});
+  c.push_back({EffectKind::FovError, "fov_error", EffectTarget::Head,
+               "field-of-view error: every tracked star displaced by a smooth random field of its focal-plane "
+               "position (2-D Legendre terms of degree 1..order, coefficients drawn per head from the seed); the "
+               "attitude error is the least-squares rotation of the displacements of the stars in the FOV",
+               {P{"arcsec", "arcsec", 0, true, "RMS star displacement per focal-plane axis over the square detector"},
+                P{"order", "1", 3, false, "highest total degree of the field, 1..6"}}});
+  c.push_back({EffectKind::ThermalWander, "thermal_wander", EffectTarget::Head,
+               "random thermal rotation of a head's mounting (moves its boresight and star vectors): stationary "
+               "1-sigma cross_arcsec per cross-boresight axis and about_arcsec about the boresight, Gauss-Markov or "
+               "power law (noise.h); each spec adds an independent term",
+               form({P{"cross_arcsec", "arcsec", 0, false, "stationary 1-sigma per cross-boresight axis"},
+                     P{"about_arcsec", "arcsec", 0, false, "stationary 1-sigma about the boresight"}})});
+  c.push_back({EffectKind::AccColouredNoise, "acc_coloured_noise", EffectTarget::Acc,
+               "coloured angular-acceleration noise per A axis (stationary 1-sigma x, y, z), Gauss-Markov or power "
+               "law (noise.h), on top of the configured white and Gauss-Markov noise; each spec adds a term",
+               form({P{"x", "rad/s^2", 0, false, "stationary 1-sigma, A x"}, P{"y", "rad/s^2", 0, false, "A y"},
+                     P{"z", "rad/s^2", 0, false, "A z"}})});
+  c.push_back({EffectKind::AccBiasWander, "acc_bias_wander", EffectTarget::Acc,
+               "slowly varying angular-acceleration bias per A axis: a Gauss-Markov process of stationary 1-sigma "
+               "x, y, z and correlation time tau_s (over spans << tau_s a random walk of density sigma sqrt(2/tau_s))",
+               {P{"x", "rad/s^2", 0, false, "stationary 1-sigma, A x"}, P{"y", "rad/s^2", 0, false, "A y"},
+                P{"z", "rad/s^2", 0, false, "A z"},
+                P{"tau_s", "s", 864000, false, "correlation time (default 10 days)"}}});
   return c;
 }
 
@@ -114,7 +152,17 @@ ClockDriftTerm clockTerm(const EffectSpec& s) {
   return {s.get("offset_ms") * 1e-3, s.get("rate_ppm"), s.get("start_s")};
 }
 
+/// One more term of an axis model (levels of 0 add nothing).
+void addTerm(NoiseModel& m, const EffectSpec& s, double sigma) {
+  if (sigma > 0) m.add(effectNoiseTerm(s, sigma));
+}
+
 }  // namespace
+
+NoiseTerm effectNoiseTerm(const EffectSpec& s, double sigma) {
+  if (s.get("tau_s") > 0) return NoiseTerm::gaussMarkov(sigma, s.get("tau_s"));
+  return NoiseTerm::powerLaw(sigma, s.get("alpha"), s.get("f_lo_hz"), s.get("f_hi_hz"));
+}
 
 const std::vector<EffectInfo>& effectCatalogue() {
   static const std::vector<EffectInfo> c = buildCatalogue();
@@ -225,6 +273,36 @@ bool makeEffect(std::string_view name, const std::vector<std::pair<std::string, 
       for (const char* k : {"x", "y", "z"})
         if (!need(k, std::abs(s.get(k)) < 0.5, "a scale error must be within +-0.5")) return false;
       break;
+    case EffectKind::ColouredNoise:
+    case EffectKind::ThermalWander:
+    case EffectKind::AccColouredNoise: {
+      const bool acc = s.kind == EffectKind::AccColouredNoise;
+      const std::vector<const char*> levels = acc ? std::vector<const char*>{"x", "y", "z"}
+                                                  : std::vector<const char*>{"cross_arcsec", "about_arcsec"};
+      for (const char* k : levels)
+        if (!need(k, s.get(k) >= 0, "must be >= 0")) return false;
+      // The form follows from the values (truth.yaml gives every key back, defaults included).
+      const bool gm = s.get("tau_s") != 0, pl = s.get("f_lo_hz") != 0 || s.get("f_hi_hz") != 0;
+      if (gm && pl) return fail(error, origin, name, "tau_s", "give tau_s (Gauss-Markov) or f_lo_hz and f_hi_hz (power law), not both");
+      if (!gm && !pl) return fail(error, origin, name, "tau_s", "required: tau_s (Gauss-Markov) or f_lo_hz and f_hi_hz (power law)");
+      NoiseModel m;
+      m.add(effectNoiseTerm(s, 1.0));
+      const std::string why = m.validate();
+      if (!why.empty()) return fail(error, origin, name, gm ? "tau_s" : "f_lo_hz", why);
+      break;
+    }
+    case EffectKind::AccBiasWander:
+      for (const char* k : {"x", "y", "z"})
+        if (!need(k, s.get(k) >= 0, "must be >= 0")) return false;
+      if (!need("tau_s", s.get("tau_s") > 0, "must be > 0")) return false;
+      break;
+    case EffectKind::FovError: {
+      const double o = s.get("order");
+      if (!need("arcsec", s.get("arcsec") >= 0, "must be >= 0") ||
+          !need("order", o >= 1 && o <= 6 && o == std::floor(o), "must be an integer 1..6"))
+        return false;
+      break;
+    }
     default:
       break;
   }
@@ -302,6 +380,17 @@ HeadEffects headEffectsFor(const std::vector<EffectSpec>& specs, int head_id) {
       case EffectKind::SignFlips: h.sign_flip_probs.push_back(s.get("rate")); break;
       case EffectKind::Gaps: addGaps(s, h.random_gaps, h.gaps); break;
       case EffectKind::HeadDropout: h.dropouts.push_back({s.get("at_s"), s.get("at_s") + s.get("duration_s")}); break;
+      case EffectKind::ColouredNoise:
+        addTerm(h.coloured_cross, s, s.get("cross_arcsec") * kRadPerArcsec);
+        addTerm(h.coloured_about, s, s.get("about_arcsec") * kRadPerArcsec);
+        break;
+      case EffectKind::ThermalWander:
+        addTerm(h.wander_cross, s, s.get("cross_arcsec") * kRadPerArcsec);
+        addTerm(h.wander_about, s, s.get("about_arcsec") * kRadPerArcsec);
+        break;
+      case EffectKind::FovError:
+        if (s.get("arcsec") > 0) h.fov.push_back({static_cast<int>(s.get("order")), s.get("arcsec") * kRadPerArcsec});
+        break;
       default: break;  // accelerometer effects
     }
   }
@@ -323,6 +412,15 @@ AccEffects accEffectsFor(const std::vector<EffectSpec>& specs) {
         if (s.sensor == "acc") a.clock_drifts.push_back(clockTerm(s));
         break;
       case EffectKind::Gaps: addGaps(s, a.random_gaps, a.gaps); break;
+      case EffectKind::AccColouredNoise:
+        for (int k = 0; k < 3; ++k) addTerm(a.coloured[static_cast<std::size_t>(k)], s, s.get(k == 0 ? "x" : k == 1 ? "y" : "z"));
+        break;
+      case EffectKind::AccBiasWander:
+        for (int k = 0; k < 3; ++k) {
+          const double sigma = s.get(k == 0 ? "x" : k == 1 ? "y" : "z");
+          if (sigma > 0) a.bias_wander[static_cast<std::size_t>(k)].add(NoiseTerm::gaussMarkov(sigma, s.get("tau_s")));
+        }
+        break;
       default: break;
     }
   }

@@ -166,6 +166,23 @@ bool SignFlipSampler::fires(std::uint64_t n) const {
   return any;
 }
 
+NoiseProcess::NoiseProcess(const NoiseModel& m, std::uint64_t seed, Stream stream, std::uint64_t sensor, int axis)
+    : sim_(m, CounterRng(seed, stream, colouredProcessKey(sensor, axis, 0))), empty_(m.empty()) {}
+
+NoiseProcess3::NoiseProcess3(const std::array<NoiseModel, 3>& models, std::uint64_t seed, Stream stream,
+                             std::uint64_t sensor) {
+  for (int k = 0; k < 3; ++k) {
+    axis_[static_cast<std::size_t>(k)] = NoiseProcess(models[static_cast<std::size_t>(k)], seed, stream, sensor, k);
+    empty_ = empty_ && axis_[static_cast<std::size_t>(k)].empty();
+  }
+}
+
+Vec3 NoiseProcess3::next(double t_s) {
+  Vec3 v = Vec3::Zero();
+  for (int k = 0; k < 3; ++k) v[k] = axis_[static_cast<std::size_t>(k)].next(t_s);
+  return v;
+}
+
 AccNoiseModel::AccNoiseModel(const AccelConfig& c, std::uint64_t seed)
     : white_(c.white_rad_s2),
       lin_white_(c.lin_white_m_s2),
@@ -173,7 +190,13 @@ AccNoiseModel::AccNoiseModel(const AccelConfig& c, std::uint64_t seed)
       T_(1.0 / c.rate_hz),
       phi_(std::exp(-(1.0 / c.rate_hz) / c.lowfreq_tau_s)),
       white_rng_(seed, Stream::AccNoise, 0),
-      lf_rng_(seed, Stream::AccLowFreq, 0) {}
+      lf_rng_(seed, Stream::AccLowFreq, 0) {
+  for (int k = 0; k < 3; ++k) {
+    NoiseModel& m = models_[static_cast<std::size_t>(k)];
+    if (white_[k] != 0) m.add(NoiseTerm::white(std::abs(white_[k])));
+    if (lf_[k] != 0) m.add(NoiseTerm::gaussMarkov(std::abs(lf_[k]), c.lowfreq_tau_s));
+  }
+}
 
 Vec3 AccNoiseModel::lowFreqInitial() const {
   return Vec3(lf_.x() * lf_rng_.normal(0, 0), lf_.y() * lf_rng_.normal(0, 1), lf_.z() * lf_rng_.normal(0, 2));
@@ -183,7 +206,8 @@ Vec3 AccNoiseModel::lowFreqNext(const Vec3& lf_n, std::uint64_t n) const {
   double g0, g1, g2, g3;
   lf_rng_.normal2(n + 1, 0, g0, g1);
   lf_rng_.normal2(n + 1, 1, g2, g3);
-  return phi_ * lf_n + std::sqrt(1 - phi_ * phi_) * lf_.cwiseProduct(Vec3(g0, g1, g2));
+  return Vec3(gaussMarkovStep(lf_n.x(), phi_, lf_.x(), g0), gaussMarkovStep(lf_n.y(), phi_, lf_.y(), g1),
+              gaussMarkovStep(lf_n.z(), phi_, lf_.z(), g2));
 }
 
 void AccNoiseModel::white(std::uint64_t n, Vec3& ang, Vec3& lin) const {
@@ -195,18 +219,26 @@ void AccNoiseModel::white(std::uint64_t n, Vec3& ang, Vec3& lin) const {
   lin = lin_white_.cwiseProduct(Vec3(w[3], w[4], w[5]));
 }
 
-Vec3 AccNoiseModel::whiteVariance() const { return white_.cwiseAbs2(); }
-Vec3 AccNoiseModel::lowFreqVariance() const { return lf_.cwiseAbs2(); }
+Vec3 AccNoiseModel::whiteVariance() const {
+  return Vec3(models_[0].whiteVariance(), models_[1].whiteVariance(), models_[2].whiteVariance());
+}
+Vec3 AccNoiseModel::lowFreqVariance() const {
+  Vec3 v = Vec3::Zero();
+  for (int k = 0; k < 3; ++k)
+    for (const auto& m : models_[static_cast<std::size_t>(k)].markovTerms()) v[k] += m.var;
+  return v;
+}
 
 Vec3 AccNoiseModel::autocovariance(std::uint64_t k) const {
-  Vec3 c = lowFreqVariance() * std::pow(phi_, static_cast<double>(k));
-  if (k == 0) c += whiteVariance();
+  Vec3 c;
+  for (int i = 0; i < 3; ++i) c[i] = models_[static_cast<std::size_t>(i)].autocovariance(static_cast<double>(k) * T_);
   return c;
 }
 
 Vec3 AccNoiseModel::psdOneSided(double f_hz) const {
-  const double d = 1.0 - 2.0 * phi_ * std::cos(2.0 * kPi * f_hz * T_) + phi_ * phi_;
-  return 2.0 * T_ * (whiteVariance() + lowFreqVariance() * ((1.0 - phi_ * phi_) / d));
+  Vec3 p;
+  for (int i = 0; i < 3; ++i) p[i] = models_[static_cast<std::size_t>(i)].psdSampled(f_hz, T_);
+  return p;
 }
 
 }  // namespace boresight::model

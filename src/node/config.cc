@@ -3,6 +3,7 @@
 #include <boresight/io/core_config.h>
 #include <boresight/io/config_keys.h>
 #include <boresight/io/yaml_file.h>
+#include <boresight/io/overlay_apply.h>
 #include <boresight/node/node.h>
 
 #include <yaml-cpp/yaml.h>
@@ -96,17 +97,17 @@ bool loadNodeConfig(const std::string& path, NodeConfig& out, std::string* error
 namespace {
 bool loadTop(const YAML::Node& top, const std::string& path, Reader& r, NodeConfig& out) {
   auto done = [](bool ok) { return ok; };
-  if (!r.keys(top, "", {"platform", "mountings", "lcm_url", "channels", "lookahead_s", "health_period_s",
+  if (!r.keys(top, "", {"platform", "overlay", "mountings", "lcm_url", "channels", "lookahead_s", "health_period_s",
                         "max_time_jump_s", "time_jump_confirm", "max_rate_hz", "ring_capacity", "calibration"}))
     return done(false);
   if (!top["platform"]) return done(r.fail("platform", "required (the platform configuration file)", top));
   std::string platform;
   if (!r.str(top, "platform", "platform", platform)) return done(false);
   if (platform[0] != '/') platform = dirOf(path) + "/" + platform;
+  out.platform_file = platform;
   io::PlatformConfig pc;
   std::string perr;
   if (!io::loadPlatformConfig(platform, pc, &perr)) return done(r.fail("platform", perr, top["platform"]));
-  out.pipeline = pc.pipeline;
   std::string m = pc.mounting_from_qsa1b ? "log" : "config";
   if (!r.str(top, "mountings", "mountings", m)) return done(false);
   if (m != "log" && m != "config")
@@ -114,6 +115,23 @@ bool loadTop(const YAML::Node& top, const std::string& path, Reader& r, NodeConf
   if (m == "config" && pc.mounting_from_qsa1b)
     return done(r.fail("mountings", "the platform file takes its mountings from QSA1B: use 'log'", top["mountings"]));
   out.mountings_from_log = m == "log";
+  if (out.mountings_from_log)
+    for (int s = 0; s < pc.pipeline.heads.n_heads; ++s)
+      pc.mounting_source[static_cast<std::size_t>(s)] = "the first NOMINAL_MOUNTINGS message (mountings: log)";
+  io::OverlayUse ovu;
+  if (top["overlay"]) {
+    if (!r.str(top, "overlay", "overlay", out.overlay)) return done(false);
+    if (out.overlay[0] != '/') out.overlay = dirOf(path) + "/" + out.overlay;
+    if (!io::applyOverlay(out.overlay, "boresightd", {}, pc, ovu, &perr)) return done(r.fail("overlay", perr, top["overlay"]));
+    for (int s = 0; s < pc.pipeline.heads.n_heads; ++s)
+      if (pc.mounting_source[static_cast<std::size_t>(s)].rfind("overlay", 0) == 0) out.overlay_mounting_mask |= 1u << s;
+    // Every head's mounting from the overlay: nothing to wait for (later NOMINAL_MOUNTINGS messages are
+    // counted, not applied).
+    if (out.overlay_mounting_mask == (1u << pc.pipeline.heads.n_heads) - 1) out.mountings_from_log = false;
+  }
+  out.pipeline = pc.pipeline;
+  for (int a = 0; a < 3; ++a) out.acc_white_noise_radps2[a] = pc.noise_in_use.accWhiteSigma(a);
+  out.model_in_use = io::modelInUseLines(pc, ovu);
   if (!r.str(top, "lcm_url", "lcm_url", out.lcm_url)) return done(false);
   if (top["channels"]) {
     const YAML::Node c = top["channels"];

@@ -476,6 +476,7 @@ struct Node::Impl {
     core::PipelineConfig p = pcfg;
     for (int k = 0; k < p.heads.n_heads; ++k) {
       auto& h = p.heads.head[static_cast<std::size_t>(k)];
+      if ((cfg.overlay_mounting_mask >> k) & 1u) continue;  // the overlay's mounting stays
       int j = 0;
       while (j < m.n_heads && m.head_id[j] != h.id) ++j;
       if (j == m.n_heads) return reject(Reason::kUnknownHead);
@@ -781,6 +782,7 @@ struct Node::Impl {
   void workerLoop() {
     calib::SpanBuilder sb;
     calib::SpanOptions so;
+    so.acc_white_noise_radps2 = cfg.acc_white_noise_radps2;
     so.decimation_s = cfg.calibration.decimation_s;
     so.max_observations = cfg.calibration.max_observations;
     std::string err;

@@ -188,6 +188,35 @@ namespace {
 bool parseScenarioAt(const std::string& text, const std::string& file, const std::string& dir, Scenario& out,
                      std::string* error, int depth);
 bool loadScenarioAt(const std::string& path, Scenario& out, std::string* error, int depth);
+bool applyKeys(const YAML::Node& root, Ctx& c, const std::string& dir, Scenario& s, bool overlay);
+bool readText(const std::string& path, std::string& text, std::string& dir, std::string* error);
+
+std::string resolve(const std::string& dir, const std::string& p) { return (!p.empty() && p[0] == '/') ? p : dir + "/" + p; }
+
+/// A layer of a base list: the keys of `path` applied on top of s (its own `base` is an error).
+bool applyLayer(const std::string& path, Scenario& s, std::string* error) {
+  std::string text, dir;
+  if (!readText(path, text, dir, error)) return false;
+  Ctx c{path, error};
+  YAML::Node root;
+  try {
+    root = YAML::Load(text);
+  } catch (const YAML::Exception& e) {
+    if (error) *error = path + ":" + std::to_string(e.mark.line + 1) + ": YAML syntax: " + e.msg;
+    return false;
+  }
+  if (!root.IsMap()) {
+    if (error) *error = path + ":1: a scenario layer must be a YAML map";
+    return false;
+  }
+  if (!io::checkDuplicateKeys(root, path, error)) return false;
+  if (root["base"].IsDefined())
+    return c.fail(root["base"], "base", "a layer after the first file of a base list cannot have a base of its own");
+  const std::string file = s.file;
+  if (!applyKeys(root, c, dir, s, true)) return false;
+  s.file = file;  // the scenario is still named after the file that lists the layers
+  return true;
+}
 }  // namespace
 
 bool parseScenario(const std::string& text, const std::string& file, const std::string& dir, Scenario& out,
@@ -212,30 +241,44 @@ bool parseScenarioAt(const std::string& text, const std::string& file, const std
   }
   if (!io::checkDuplicateKeys(root, file, error)) return false;
   Scenario s;
-  MapReader top(root, "", c);
   bool overlay = false;
-  if (top.has("base")) {  // an overlay: start from the base scenario's values
-    std::string base;
-    top.str("base", base);
-    if (depth >= 4) {
-      c.fail(root["base"], "base", "overlays nested deeper than 4 levels");
-      return false;
+  const YAML::Node bn = root["base"];
+  if (bn.IsDefined() && !bn.IsNull()) {
+    // An overlay: start from the base scenario's values. A list: the first file's scenario, then the
+    // keys of each further file (a layer, e.g. a noise preset) in order, then this file's keys.
+    std::vector<std::string> bases;
+    if (bn.IsScalar()) bases.push_back(bn.Scalar());
+    for (std::size_t i = 0; bn.IsSequence() && i < bn.size(); ++i) {
+      if (!bn[i].IsScalar()) return c.fail(bn[i], "base[" + std::to_string(i) + "]", "expected a file name");
+      bases.push_back(bn[i].Scalar());
     }
-    const std::string base_path = (!base.empty() && base[0] == '/') ? base : dir + "/" + base;
+    if (bases.empty()) return c.fail(bn, "base", "expected a file name or a non-empty list of file names");
+    if (depth >= 4) return c.fail(bn, "base", "overlays nested deeper than 4 levels");
     std::string base_err;
-    if (c.ok && !loadScenarioAt(base_path, s, &base_err, depth + 1)) {
-      c.fail(root["base"], "base", "the base scenario does not load: " + base_err);
-      return false;
-    }
+    if (!loadScenarioAt(resolve(dir, bases[0]), s, &base_err, depth + 1))
+      return c.fail(bn, "base", "the base scenario does not load: " + base_err);
+    for (std::size_t i = 1; i < bases.size(); ++i)
+      if (!applyLayer(resolve(dir, bases[i]), s, &base_err))
+        return c.fail(bn[i], "base[" + std::to_string(i) + "]", "the layer does not apply: " + base_err);
     overlay = true;
   } else {
-    top.node("base");
     s.start = 0;
     (void)io::parseGpsCalendar("2023-06-01T00:00:00", s.start);
     s.star_catalogue = dir + "/stars_bright.csv";
     s.head_defaults.sigma_cross_rad = 6 * kRadPerArcsec;
     s.head_defaults.sigma_roll_rad = 48 * kRadPerArcsec;
   }
+  if (!applyKeys(root, c, dir, s, overlay)) return false;
+  out = std::move(s);
+  return true;
+}
+
+/// Applies the keys of one file (not `base`) to s; an overlay keeps what it does not name.
+bool applyKeys(const YAML::Node& root, Ctx& c, const std::string& dir, Scenario& s, bool overlay) {
+  const std::string& file = c.file;
+  std::string* error = c.error;
+  MapReader top(root, "", c);
+  top.node("base");
   s.file = file;
   std::string sat(1, s.satellite);
   top.str("satellite", sat);
@@ -356,6 +399,35 @@ bool parseScenarioAt(const std::string& text, const std::string& file, const std
       }
     }
   }
+  {  // head_overrides: keys of existing heads changed in place (a layer's way to set per-head values
+     // without replacing the heads, their mountings included)
+    const YAML::Node ho = top.node("head_overrides");
+    if (ho.IsDefined() && !ho.IsNull()) {
+      if (!ho.IsSequence()) c.fail(ho, "head_overrides", "expected a list of {id, keys of a head}");
+      for (std::size_t i = 0; c.ok && ho.IsSequence() && i < ho.size(); ++i) {
+        const std::string pre = "head_overrides[" + std::to_string(i) + "]";
+        MapReader r(ho[i], pre, c);
+        if (!r.has("id")) {
+          c.fail(ho[i], pre + ".id", "required (the head to change)");
+          break;
+        }
+        std::int64_t id = 0;
+        r.integer("id", id, 1, 9);
+        model::HeadConfig* h = nullptr;
+        for (auto& x : s.heads)
+          if (x.id == id) h = &x;
+        if (c.ok && !h) {
+          c.fail(ho[i]["id"], pre + ".id", "no head " + std::to_string(id) + " in the scenario");
+          break;
+        }
+        if (!c.ok) break;
+        readHead(r, *h);
+        r.finish();
+        if (h->boresight_Si.norm() < 0.5) c.fail(ho[i], pre + ".boresight", "must be a unit vector");
+        h->boresight_Si.normalize();
+      }
+    }
+  }
   {  // accelerometer
     auto& a = s.acc;
     MapReader r(top.node("accelerometer"), "accelerometer", c);
@@ -399,13 +471,19 @@ bool parseScenarioAt(const std::string& text, const std::string& file, const std
     r.str("version", s.output.version);
     r.finish();
   }
-  {  // effects
-    const YAML::Node es = top.node("effects");
+  // effects: `effects` replaces the base's list; `add_effects` appends to it (a preset's noise on top
+  // of whatever the scenario injects). Origins of added specs name their file.
+  const auto slash = file.find_last_of('/');
+  const std::string base_name = slash == std::string::npos ? file : file.substr(slash + 1);
+  for (const char* list_key : {"effects", "add_effects"}) {
+    const bool add = std::string(list_key) == "add_effects";
+    const YAML::Node es = top.node(list_key);
     if (es.IsDefined() && !es.IsNull()) {
-      if (!es.IsSequence()) c.fail(es, "effects", "expected a list of effects");
-      s.effects.clear();  // an overlay's list replaces the base's
+      if (!es.IsSequence()) c.fail(es, list_key, "expected a list of effects");
+      if (!add) s.effects.clear();  // an overlay's list replaces the base's
       for (std::size_t i = 0; c.ok && es.IsSequence() && i < es.size(); ++i) {
-        const std::string pre = "effects[" + std::to_string(i) + "]";
+        const std::string pre =
+            add ? base_name + ": add_effects[" + std::to_string(i) + "]" : "effects[" + std::to_string(i) + "]";
         if (!es[i].IsMap() || !es[i]["name"].IsDefined()) {
           c.fail(es[i], pre, "expected a map with 'name' and the effect's parameters");
           break;
@@ -440,7 +518,6 @@ bool parseScenarioAt(const std::string& text, const std::string& file, const std
         return false;
       }
     }
-    out = std::move(s);
   }
   return c.ok;
 }
@@ -469,11 +546,16 @@ bool loadScenario(const std::string& path, Scenario& out, std::string* error) {
 }
 
 namespace {
-bool loadScenarioAt(const std::string& path, Scenario& out, std::string* error, int depth) {
-  std::string text;
+bool readText(const std::string& path, std::string& text, std::string& dir, std::string* error) {
   if (!io::readBounded(path, io::kMaxConfigBytes, "scenario file", text, error)) return false;
   const auto slash = path.find_last_of('/');
-  const std::string dir = slash == std::string::npos ? "." : path.substr(0, slash);
+  dir = slash == std::string::npos ? "." : path.substr(0, slash);
+  return true;
+}
+
+bool loadScenarioAt(const std::string& path, Scenario& out, std::string* error, int depth) {
+  std::string text, dir;
+  if (!readText(path, text, dir, error)) return false;
   return parseScenarioAt(text, path, dir, out, error, depth);
 }
 }  // namespace

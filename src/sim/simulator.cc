@@ -83,6 +83,13 @@ bool Simulator::init(const Scenario& sc, std::uint64_t seed, double duration_s, 
       h.mounting_error_rad += sc_.mounting_error_sigma_rad * Vec3(r.normal(0, 0), r.normal(0, 1), r.normal(0, 2));
     }
     heads_.emplace_back(h, model::headEffectsFor(sc_.effects, h.id));
+    // fov_error: the j-th spec of this head draws its field on (HeadFovField, processKey(head, j)).
+    const auto& fov = heads_.back().effects().fov;
+    std::vector<model::FovErrorField> fields;
+    for (std::size_t j = 0; j < fov.size(); ++j)
+      fields.push_back(model::drawFovErrorField(
+          fov[j], CounterRng(seed, Stream::HeadFovField, model::processKey(static_cast<std::uint64_t>(h.id), j))));
+    heads_.back().setFovFields(std::move(fields));
   }
   acc_ = model::AccelModel(sc_.acc, model::accEffectsFor(sc_.effects));
   const std::size_t n = heads_.size();
@@ -96,6 +103,10 @@ bool Simulator::init(const Scenario& sc, std::uint64_t seed, double duration_s, 
   stats_.head_star_epochs.assign(n, 0);
   stats_.head_missing_runs.assign(n, {});
   stats_.head_missing_run_count.assign(n, 0);
+  stats_.head_coloured_ss.assign(n, Vec3::Zero());
+  stats_.head_wander_ss.assign(n, Vec3::Zero());
+  stats_.head_fov_ss.assign(n, Vec3::Zero());
+  stats_.head_fov_sum.assign(n, Vec3::Zero());
   if (sc_.output.star_vectors_per_head < 1 || sc_.output.star_vectors_per_head > kMaxSimStarsPerHead) {
     if (error) *error = sc_.file + ": output.star_vectors_per_head must be in 1.." + std::to_string(kMaxSimStarsPerHead);
     return false;
@@ -134,6 +145,9 @@ void Simulator::run(SimSink& sink, const std::function<void(double)>& progress) 
   StarVectorsOut sv;
   std::vector<FovStarCounter> counters;
   std::vector<Quat> prev_q(nh, Quat(1, 0, 0, 0));
+  // Coloured processes per head (head axes e1, e2, b), drawn at every tag's true time.
+  std::vector<model::NoiseProcess3> coloured, wander;
+  std::vector<Vec3> fov_s;  ///< the stars in a head's FOV, head frame (fov_error)
   for (std::size_t i = 0; i < nh; ++i) {
     const auto& c = heads_[i].config();
     const auto& e = heads_[i].effects();
@@ -145,6 +159,8 @@ void Simulator::run(SimSink& sink, const std::function<void(double)>& progress) 
     noise.emplace_back(seed_, Stream::HeadNoise, id);
     star_noise.emplace_back(seed_, Stream::StarNoise, id);
     counters.emplace_back(&stars_, c.fov_half_angle_rad, c.limiting_mag);
+    coloured.emplace_back(model::headAxisModels(e.coloured_cross, e.coloured_about), seed_, Stream::HeadColouredNoise, id);
+    wander.emplace_back(model::headAxisModels(e.wander_cross, e.wander_about), seed_, Stream::HeadThermalWander, id);
     head_runs[i].runs = &stats_.head_missing_runs[i];
     head_runs[i].count = &stats_.head_missing_run_count[i];
   }
@@ -157,6 +173,8 @@ void Simulator::run(SimSink& sink, const std::function<void(double)>& progress) 
   const auto acc_T_us = static_cast<std::int64_t>(std::llround(1e6 / ac.rate_hz));
   const auto acc_offset_us = static_cast<std::int64_t>(std::llround(ae.time_offset_s * 1e6));
   Vec3 lf = acc_noise.lowFreqInitial();
+  model::NoiseProcess3 acc_coloured(ae.coloured, seed_, Stream::AccColouredNoise, 0);
+  model::NoiseProcess3 acc_bias_wander(ae.bias_wander, seed_, Stream::AccBiasWander, 0);
 
   const TimeUs gnv_period = static_cast<TimeUs>(std::llround(sc_.output.gnv1b_interval_s * 1e6));
   TimeUs gnv_next = ((sc_.start + gnv_period - 1) / gnv_period) * gnv_period;
@@ -232,6 +250,14 @@ void Simulator::run(SimSink& sink, const std::function<void(double)>& progress) 
       // Low-frequency noise: one Gauss-Markov step per sample, whether or not the sample is missing.
       const Vec3 lf_now = lf;
       lf = acc_noise.lowFreqNext(lf, n);
+      const std::int64_t t_true_us =
+          ae.clock_drifts.empty()
+              ? (tmin - sc_.start) - acc_offset_us
+              : static_cast<std::int64_t>(std::llround(model::trueTimeOfTag(ae.time_offset_s, ae.clock_drifts, tag_rel) * 1e6));
+      const double t_true_s = static_cast<double>(t_true_us) * 1e-6;
+      // The coloured processes advance at every tag (missing too), at the sample's true time.
+      const Vec3 col = acc_coloured.empty() ? Vec3::Zero() : acc_coloured.next(t_true_s);
+      const Vec3 bw = acc_bias_wander.empty() ? Vec3::Zero() : acc_bias_wander.next(t_true_s);
       const bool acc_missing = acc_gaps.missing(tag_rel);
       acc_runs.sample(tag_rel, acc_missing);
       if (acc_missing) {
@@ -241,16 +267,19 @@ void Simulator::run(SimSink& sink, const std::function<void(double)>& progress) 
       AccSampleOut a;
       a.tag = tmin;
       a.index = n;
-      const std::int64_t t_true_us =
-          ae.clock_drifts.empty()
-              ? (tmin - sc_.start) - acc_offset_us
-              : static_cast<std::int64_t>(std::llround(model::trueTimeOfTag(ae.time_offset_s, ae.clock_drifts, tag_rel) * 1e6));
-      a.t_true_s = static_cast<double>(t_true_us) * 1e-6;
+      a.t_true_s = t_true_s;
       a.a_B_true = att.meanAngularAcceleration(t_true_us, acc_T_us);
       stats_.max_abs_alpha = std::max(stats_.max_abs_alpha, a.a_B_true.cwiseAbs().maxCoeff());
       Vec3 w_ang, w_lin;
       acc_noise.white(n, w_ang, w_lin);
       a.ang_A = acc_.predict(a.a_B_true) + w_ang + lf_now;
+      if (!acc_coloured.empty() || !acc_bias_wander.empty()) {
+        a.coloured_rad_s2 = col;
+        a.bias_wander_rad_s2 = bw;
+        a.ang_A += col + bw;
+        stats_.acc_coloured_ss += col.cwiseAbs2();
+        stats_.acc_bias_wander_ss += bw.cwiseAbs2();
+      }
       a.lin_A = ac.lin_bias_m_s2 + w_lin;
       ++stats_.acc_samples;
       sink.accel(a);
@@ -260,6 +289,10 @@ void Simulator::run(SimSink& sink, const std::function<void(double)>& progress) 
     const std::uint64_t n = head_tags[i].advance();
     const model::HeadModel& hm = heads_[i];
     const auto& hc = hm.config();
+    const double t_true_s = model::trueTimeOfTag(hm.effects().time_offset_s, hm.effects().clock_drifts, tag_rel);
+    // The coloured processes advance at every tag (missing and blinded too), at the sample's true time.
+    const Vec3 col = coloured[i].empty() ? Vec3::Zero() : coloured[i].next(t_true_s);
+    const Vec3 wan = wander[i].empty() ? Vec3::Zero() : wander[i].next(t_true_s);
     const bool head_missing = head_gaps[i].missing(tag_rel);
     head_runs[i].sample(tag_rel, head_missing);
     if (head_missing) {
@@ -270,11 +303,14 @@ void Simulator::run(SimSink& sink, const std::function<void(double)>& progress) 
     s.tag = tmin;
     s.head = hc.id;
     s.index = n;
-    s.t_true_s = model::trueTimeOfTag(hm.effects().time_offset_s, hm.effects().clock_drifts, tag_rel);
+    s.t_true_s = t_true_s;
+    s.coloured_rad = col;
+    s.wander_rad = wan;
     Vec3 w_B;
     att.eval(s.t_true_s, s.q_I_B, w_B);
     contextAt(s.t_true_s);
-    s.q_I_Si_expected = hm.predict(s.q_I_B, ctx);
+    const Vec3 wander_Si = wander[i].empty() ? Vec3::Zero() : hm.fromHeadAxes(wan);
+    s.q_I_Si_expected = wander[i].empty() ? hm.predict(s.q_I_B, ctx) : hm.predict(s.q_I_B, ctx, wander_Si);
     const Vec3 b_I = hm.boresightInertial(s.q_I_Si_expected);
     s.blind = model::blindMask(hc, b_I, sun_I, moon_I, r_I);
     if (s.blind) {
@@ -284,7 +320,20 @@ void Simulator::run(SimSink& sink, const std::function<void(double)>& progress) 
       sink.head(s);
       continue;
     }
-    Quat q = s.q_I_Si_expected * model::quatExp(hm.noiseRotVec(noise[i], n));
+    Vec3 err = hm.noiseRotVec(noise[i], n);
+    if (!coloured[i].empty()) err += hm.fromHeadAxes(col);
+    if (hm.hasFovError()) {
+      // The stars in the FOV through the expected attitude, in the head frame; their displacements'
+      // least-squares rotation is the attitude error (the count is the one `count` gives).
+      counters[i].select(b_I, fov);
+      const Mat3 C_Si_I = s.q_I_Si_expected.toRotationMatrix().transpose();
+      fov_s.resize(fov.size());
+      for (std::size_t k = 0; k < fov.size(); ++k) fov_s[k] = C_Si_I * stars_.stars()[static_cast<std::size_t>(fov[k])].u_I;
+      const Vec3 f = hm.fovAttitudeError(fov_s.data(), fov_s.size());
+      s.fov_rad = hm.toHeadAxes(f);
+      err += f;
+    }
+    Quat q = s.q_I_Si_expected * model::quatExp(err);
     if (outl[i].apply(n, q)) {
       s.outlier = true;
       ++stats_.head_outliers[i];
@@ -298,8 +347,12 @@ void Simulator::run(SimSink& sink, const std::function<void(double)>& progress) 
       ++stats_.head_sign_flips[i];
     }
     s.q_I_Si = q;
-    s.nstars = counters[i].count(b_I);
+    s.nstars = hm.hasFovError() ? static_cast<int>(fov.size()) : counters[i].count(b_I);
     ++stats_.head_samples[i];
+    stats_.head_coloured_ss[i] += col.cwiseAbs2();
+    stats_.head_wander_ss[i] += wan.cwiseAbs2();
+    stats_.head_fov_ss[i] += s.fov_rad.cwiseAbs2();
+    stats_.head_fov_sum[i] += s.fov_rad;
     sink.head(s);
     if (star_period > 0) {
       const std::int64_t slot = (tmin - sc_.start) / star_period;
@@ -308,7 +361,8 @@ void Simulator::run(SimSink& sink, const std::function<void(double)>& progress) 
         // The head sees the catalogue directions through its reported (aberrated) attitude; the
         // inertial directions given with them carry that aberration, so (s, r) solve for the
         // geometric attitude q_I_B q_Si_B(t)^-1 (mounting error and thermal effects included).
-        const Quat q_geom = (s.q_I_B * hm.qSiB(ctx).conjugate()).normalized();
+        const Quat q_geom =
+            (s.q_I_B * (wander[i].empty() ? hm.qSiB(ctx) : hm.qSiB(ctx, wander_Si)).conjugate()).normalized();
         const Mat3 C_exp = s.q_I_Si_expected.toRotationMatrix();
         const Mat3 C_geom = q_geom.toRotationMatrix();
         counters[i].select(b_I, fov);
@@ -329,7 +383,9 @@ void Simulator::run(SimSink& sink, const std::function<void(double)>& progress) 
           o.mag = st.mag;
           o.s_Si_true = (C_exp.transpose() * st.u_I).normalized();
           o.r_I = (C_geom * o.s_Si_true).normalized();
-          o.s_Si = hm.noisyStar(o.s_Si_true, star_noise[i], n, static_cast<std::uint64_t>(k));
+          // the measured direction: displaced by the field-of-view error, then the star noise
+          o.s_Si = hm.noisyStar(hm.hasFovError() ? hm.fovDisplacedStar(o.s_Si_true) : o.s_Si_true, star_noise[i], n,
+                                static_cast<std::uint64_t>(k));
         }
         ++stats_.head_star_epochs[i];
         sink.stars(sv);

@@ -83,8 +83,16 @@ std::vector<Vec3> starVectorsInHead(const StarCatalogue& cat, const Quat& q_I_Si
   return out;
 }
 
+void FovStarCounter::refresh(const Vec3& b) {
+  if (centre_.isZero() || b.dot(centre_) < std::cos(0.9 * margin_)) {
+    cat_->inCone(b, half_ + margin_, mag_, cand_);
+    centre_ = b;
+    ++refreshes_;
+  }
+}
+
 void FovStarCounter::select(const Vec3& b, std::vector<int>& out) {
-  count(b);  // refreshes the candidates when needed
+  refresh(b);
   out.clear();
   const double c = std::cos(half_);
   for (int i : cand_)
@@ -92,11 +100,7 @@ void FovStarCounter::select(const Vec3& b, std::vector<int>& out) {
 }
 
 int FovStarCounter::count(const Vec3& b) {
-  if (centre_.isZero() || b.dot(centre_) < std::cos(0.9 * margin_)) {
-    cat_->inCone(b, half_ + margin_, mag_, cand_);
-    centre_ = b;
-    ++refreshes_;
-  }
+  refresh(b);
   const double c = std::cos(half_);
   int n = 0;
   for (int i : cand_) n += cat_->stars()[static_cast<std::size_t>(i)].u_I.dot(b) >= c;

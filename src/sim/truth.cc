@@ -68,6 +68,44 @@ void emitRuns(YAML::Emitter& y, std::uint64_t count, const std::vector<model::In
   }
 }
 
+/// A noise.h model as a list of terms, levels times `scale` under the key `sigma_key`.
+void emitModel(YAML::Emitter& y, const char* k, const model::NoiseModel& m, double scale, const char* sigma_key) {
+  y << YAML::Key << k << YAML::Value << YAML::BeginSeq;
+  for (const auto& t : m.terms) {
+    y << YAML::Flow << YAML::BeginMap;
+    kv(y, "kind", std::string(model::noiseKindName(t.kind)));
+    kv(y, sigma_key, t.sigma * scale);
+    if (t.kind == model::NoiseKind::GaussMarkov) kv(y, "tau_s", t.tau_s);
+    if (t.kind == model::NoiseKind::PowerLaw) {
+      kv(y, "alpha", t.alpha);
+      kv(y, "f_lo_hz", t.f_lo_hz);
+      kv(y, "f_hi_hz", t.f_hi_hz);
+    }
+    y << YAML::EndMap;
+  }
+  y << YAML::EndSeq;
+}
+
+Vec3 rms(const Vec3& ss, std::uint64_t n) { return n ? Vec3((ss / static_cast<double>(n)).cwiseSqrt()) : Vec3::Zero(); }
+
+void emitHeadNoise(YAML::Emitter& y, const char* k, const model::NoiseModel& cross, const model::NoiseModel& about,
+                   const Vec3& ss, std::uint64_t n) {
+  y << YAML::Key << k << YAML::Value << YAML::BeginMap;
+  emitModel(y, "cross", cross, kArcsecPerRad, "sigma_arcsec");
+  emitModel(y, "about", about, kArcsecPerRad, "sigma_arcsec");
+  kvVec(y, "realised_rms_arcsec", rms(ss, n), kArcsecPerRad);
+  y << YAML::EndMap;
+}
+
+void emitAccNoise(YAML::Emitter& y, const char* k, const std::array<model::NoiseModel, 3>& m, const Vec3& ss, std::uint64_t n) {
+  y << YAML::Key << k << YAML::Value << YAML::BeginMap;
+  emitModel(y, "x", m[0], 1.0, "sigma_rad_s2");
+  emitModel(y, "y", m[1], 1.0, "sigma_rad_s2");
+  emitModel(y, "z", m[2], 1.0, "sigma_rad_s2");
+  kvVec(y, "realised_rms_rad_s2", rms(ss, n));
+  y << YAML::EndMap;
+}
+
 void emitAttitude(YAML::Emitter& y, const AttitudeConfig& a) {
   kv(y, "step_s", a.step_s);
   kv(y, "along_track_sign", a.along_track_sign);
@@ -186,6 +224,31 @@ bool writeTruthYaml(const std::string& path, const Simulator& sim, const std::ve
     kv(y, "expected_random_missing_fraction", model::expectedMissingFraction(e.random_gaps));
     emitRuns(y, st.head_missing_run_count[i], st.head_missing_runs[i]);
     y << YAML::EndMap;
+    if (e.hasColoured())
+      emitHeadNoise(y, "coloured_noise", e.coloured_cross, e.coloured_about, st.head_coloured_ss[i], st.head_samples[i]);
+    if (e.hasWander())
+      emitHeadNoise(y, "thermal_wander", e.wander_cross, e.wander_about, st.head_wander_ss[i], st.head_samples[i]);
+    if (h.hasFovError()) {
+      y << YAML::Key << "fov_error" << YAML::Value << YAML::BeginMap;
+      y << YAML::Key << "fields" << YAML::Value << YAML::BeginSeq;
+      for (const auto& f : h.fovFields()) {
+        y << YAML::BeginMap;
+        kv(y, "order", f.order);
+        kv(y, "rms_arcsec", f.rms_rad * kArcsecPerRad);
+        y << YAML::Key << "cx_arcsec" << YAML::Value << YAML::Flow << YAML::BeginSeq;
+        for (double v : f.cx) y << v * kArcsecPerRad;
+        y << YAML::EndSeq;
+        y << YAML::Key << "cy_arcsec" << YAML::Value << YAML::Flow << YAML::BeginSeq;
+        for (double v : f.cy) y << v * kArcsecPerRad;
+        y << YAML::EndSeq;
+        y << YAML::EndMap;
+      }
+      y << YAML::EndSeq;
+      kvVec(y, "realised_rms_arcsec", rms(st.head_fov_ss[i], st.head_samples[i]), kArcsecPerRad);
+      kvVec(y, "realised_mean_arcsec", st.head_samples[i] ? Vec3(st.head_fov_sum[i] / static_cast<double>(st.head_samples[i])) : Vec3::Zero(),
+            kArcsecPerRad);
+      y << YAML::EndMap;
+    }
     y << YAML::EndMap;
   }
   y << YAML::EndSeq;
@@ -217,6 +280,9 @@ bool writeTruthYaml(const std::string& path, const Simulator& sim, const std::ve
   kv(y, "expected_random_missing_fraction", model::expectedMissingFraction(a.effects().random_gaps));
   emitRuns(y, st.acc_missing_run_count, st.acc_missing_runs);
   y << YAML::EndMap;
+  if (a.effects().hasColoured()) emitAccNoise(y, "coloured_noise", a.effects().coloured, st.acc_coloured_ss, st.acc_samples);
+  if (a.effects().hasBiasWander())
+    emitAccNoise(y, "bias_wander", a.effects().bias_wander, st.acc_bias_wander_ss, st.acc_samples);
   y << YAML::EndMap;
 
   y << YAML::Key << "attitude" << YAML::Value << YAML::BeginMap;
@@ -395,6 +461,29 @@ void readAttitude(const Node& n, AttitudeConfig& a) {
   }
 }
 
+model::NoiseModel readModel(const Node& n, double scale, const char* sigma_key) {
+  model::NoiseModel m;
+  for (std::size_t i = 0; i < n.seqSize(); ++i) {
+    const Node t = n.at(i);
+    const std::string kind = t["kind"].str();
+    const double sigma = t[sigma_key].num() * scale;
+    if (kind == "gauss_markov") m.add(model::NoiseTerm::gaussMarkov(sigma, t["tau_s"].num()));
+    else if (kind == "power_law")
+      m.add(model::NoiseTerm::powerLaw(sigma, t["alpha"].num(), t["f_lo_hz"].num(), t["f_hi_hz"].num()));
+    else if (kind == "white") m.add(model::NoiseTerm::white(sigma));
+    else t["kind"].fail("expected gauss_markov, power_law or white");
+  }
+  const std::string why = m.validate();
+  if (!why.empty()) n.fail(why);
+  return m;
+}
+
+std::vector<double> readList(const Node& n, double scale) {
+  std::vector<double> v(n.seqSize());
+  for (std::size_t i = 0; i < v.size(); ++i) v[i] = n.at(i).num() * scale;
+  return v;
+}
+
 void readHead(const Node& n, TruthHead& h) {
   auto& c = h.config;
   const std::int64_t id = n["id"].i64();
@@ -435,6 +524,38 @@ void readHead(const Node& n, TruthHead& h) {
   h.sign_flip_probability = ev["sign_flip_probability"].num();
   h.expected_random_missing_fraction = ev["expected_random_missing_fraction"].num();
   readRuns(ev, h.missing_runs, h.missing_intervals);
+  if (n.has("coloured_noise")) {
+    const Node cn = n["coloured_noise"];
+    h.coloured_cross = readModel(cn["cross"], kRadPerArcsec, "sigma_arcsec");
+    h.coloured_about = readModel(cn["about"], kRadPerArcsec, "sigma_arcsec");
+    h.coloured_rms_rad = cn["realised_rms_arcsec"].vec(kRadPerArcsec);
+  }
+  if (n.has("thermal_wander")) {
+    const Node tw = n["thermal_wander"];
+    h.wander_cross = readModel(tw["cross"], kRadPerArcsec, "sigma_arcsec");
+    h.wander_about = readModel(tw["about"], kRadPerArcsec, "sigma_arcsec");
+    h.wander_rms_rad = tw["realised_rms_arcsec"].vec(kRadPerArcsec);
+  }
+  if (n.has("fov_error")) {
+    const Node f = n["fov_error"];
+    const Node fs = f["fields"];
+    for (std::size_t i = 0; i < fs.seqSize(); ++i) {
+      const Node x = fs.at(i);
+      model::FovErrorField fld;
+      const std::int64_t order = x["order"].i64();
+      if (order < 1 || order > 6) x["order"].fail("must be 1..6");
+      fld.order = static_cast<int>(order);
+      fld.rms_rad = x["rms_arcsec"].num() * kRadPerArcsec;
+      fld.cx = readList(x["cx_arcsec"], kRadPerArcsec);
+      fld.cy = readList(x["cy_arcsec"], kRadPerArcsec);
+      const std::size_t nt = model::fovTerms(fld.order).size();
+      if (fld.cx.size() != nt) x["cx_arcsec"].fail("expected " + std::to_string(nt) + " coefficients for order " + std::to_string(order));
+      if (fld.cy.size() != nt) x["cy_arcsec"].fail("expected " + std::to_string(nt) + " coefficients for order " + std::to_string(order));
+      h.fov_fields.push_back(std::move(fld));
+    }
+    h.fov_rms_rad = f["realised_rms_arcsec"].vec(kRadPerArcsec);
+    h.fov_mean_rad = f["realised_mean_arcsec"].vec(kRadPerArcsec);
+  }
 }
 
 void readAccel(const Node& n, TruthAccel& a) {
@@ -459,6 +580,14 @@ void readAccel(const Node& n, TruthAccel& a) {
   const Node ev = n["events"];
   a.expected_random_missing_fraction = ev["expected_random_missing_fraction"].num();
   readRuns(ev, a.missing_runs, a.missing_intervals);
+  const auto axes = [](const Node& an, std::array<model::NoiseModel, 3>& m, Vec3& rms_v) {
+    m[0] = readModel(an["x"], 1.0, "sigma_rad_s2");
+    m[1] = readModel(an["y"], 1.0, "sigma_rad_s2");
+    m[2] = readModel(an["z"], 1.0, "sigma_rad_s2");
+    rms_v = an["realised_rms_rad_s2"].vec();
+  };
+  if (n.has("coloured_noise")) axes(n["coloured_noise"], a.coloured, a.coloured_rms_rad_s2);
+  if (n.has("bias_wander")) axes(n["bias_wander"], a.bias_wander, a.bias_wander_rms_rad_s2);
 }
 
 void readEffects(const Node& n, std::vector<model::EffectSpec>& out) {

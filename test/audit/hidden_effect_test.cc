@@ -247,7 +247,7 @@ TEST(SimulatedFeed, TheBaselineIsTheNominalModel) {
   EXPECT_TRUE(cfg.C_B_A.isApprox(accToBodyDefault()));
   EXPECT_EQ(cfg.crn_attitude.fs_hz, 2.0);
   EXPECT_EQ(cfg.crn_acc.fs_hz, 10.0);
-  // on the platform file's settings (what `boresight audit --config config/gracefo.yaml` runs) the
+  // on the platform file's settings (what `boresight audit --config config/gracefo_ideal.yaml` runs) the
   // heads are the scenario's all the same
   core::PipelineConfig pf;
   ASSERT_TRUE(audit::pipelineConfigFor(sc, audittest::platformBase(), pf, &err)) << err;

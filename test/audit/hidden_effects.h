@@ -25,13 +25,14 @@ namespace boresight::audittest {
 inline std::string sourceDir() { return BORESIGHT_SOURCE_DIR; }
 inline std::string auditScenarioPath() { return sourceDir() + "/config/sim_audit.yaml"; }
 
-/// The core settings `boresight audit --config config/gracefo.yaml` runs with (CRNs, fusion); the
-/// heads and C_B_A come from the scenario (audit::pipelineConfigFor), as QSA1B gives the mountings.
+/// The core settings `boresight audit --config config/gracefo_ideal.yaml` runs with (CRNs, fusion); the
+/// heads and C_B_A come from the scenario (audit::pipelineConfigFor), as QSA1B gives the mountings. The
+/// ideal noise preset: the data are simulated from config/sim_audit.yaml (white 6"/48" heads).
 inline const core::PipelineConfig& platformBase() {
   static const core::PipelineConfig p = [] {
     io::PlatformConfig pc;
     std::string err;
-    if (!io::loadPlatformConfig(sourceDir() + "/config/gracefo.yaml", pc, &err)) {
+    if (!io::loadPlatformConfig(sourceDir() + "/config/gracefo_ideal.yaml", pc, &err)) {
       std::fprintf(stderr, "%s\n", err.c_str());
       std::abort();
     }

@@ -1,12 +1,12 @@
 // The audit's distribution functions against independent reference values (closed forms and
 // textbook quantiles), and their internal consistency (quantile inverts the tail).
-#include "../../src/audit/stats.h"
+#include <boresight/model/stats.h>
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 
-namespace st = boresight::audit::stats;
+namespace st = boresight::model::stats;
 
 TEST(AuditStats, ChiSquareTailMatchesClosedForms) {
   // k = 2: P(chi2 > x) = exp(-x/2); k = 1: erfc(sqrt(x/2)); k = 4: exp(-x/2) (1 + x/2)

@@ -14,7 +14,9 @@ cli=$build/tools/boresight
 node=$build/tools/boresightd
 work=$(mktemp -d "${TMPDIR:-/tmp}/boresight-bench-node.XXXXXX")
 trap 'rm -rf "$work"' EXIT
-sed "s#^platform: gracefo.yaml#platform: $here/config/gracefo.yaml#" "$here/config/boresightd.yaml" > "$work/node.yaml"
+# the ideal noise preset (the log is simulated from config/sim_gracefo_calibration.yaml: white 6"/48")
+sed "s#^platform: gracefo_ideal.yaml#platform: $here/config/gracefo_ideal.yaml#" "$here/config/boresightd.yaml" > "$work/node.yaml"
+grep -q "^platform: $here/config/gracefo_ideal.yaml" "$work/node.yaml"
 
 "$cli" simulate --scenario "$here/config/sim_gracefo_calibration.yaml" --seed 5 --duration 86400 --out "$work/day" --quiet
 echo "one simulated day: $(du -h "$work/day/sim.lcmlog" | cut -f1) log"

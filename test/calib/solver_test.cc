@@ -170,31 +170,6 @@ TEST(CalibSolver, MomentsGiveTheSameSolutionAsTheEpochs) {
   }
 }
 
-TEST(CalibWhitening, BandedCholeskyEqualsDenseWithGaps) {
-  // epochs on a 10 s grid with two missing (lags 2 and 3 appear at index distance 1)
-  std::vector<TimeUs> t;
-  for (int k = 0; k < 40; ++k)
-    if (k != 7 && k != 20 && k != 21) t.push_back(k * 10 * kUsPerSecond);
-  const std::vector<double> rho{1.0, 0.3992, 0.0582, 0.0045};
-  const std::vector<double> L = bandedCholesky(t, 10.0, rho);
-  const int n = static_cast<int>(t.size()), K = 3;
-  Eigen::MatrixXd C = Eigen::MatrixXd::Zero(n, n);
-  for (int a = 0; a < n; ++a)
-    for (int b = 0; b < n; ++b) {
-      const auto lag = static_cast<std::size_t>(std::llabs(t[static_cast<std::size_t>(a)] - t[static_cast<std::size_t>(b)]) / (10 * kUsPerSecond));
-      C(a, b) = lag < rho.size() ? rho[lag] : 0.0;
-    }
-  const Eigen::MatrixXd Ld = C.llt().matrixL();
-  double worst = 0;
-  for (int k = 0; k < n; ++k)
-    for (int m = std::max(0, k - K); m <= k; ++m)
-      worst = std::max(worst, std::abs(L[static_cast<std::size_t>(k * (K + 1) + (K - (k - m)))] - Ld(k, m)));
-  EXPECT_LT(worst, 1e-12);
-  // and nothing outside the band: the dense factor is banded too
-  for (int k = 0; k < n; ++k)
-    for (int m = 0; m < k - K; ++m) EXPECT_LT(std::abs(Ld(k, m)), 1e-12);
-}
-
 TEST(CalibSolver, HardAndPriorAgreeAndClosureHolds) {
   const synth::Config c = manoeuvreCase(5);
   const CalibrationSpan s = build(c);

@@ -1,12 +1,16 @@
 // Configuration files: the committed files load; unknown or misspelt keys are errors with file:line
-// and the nearest known key; scenario overlays; the one accelerometer rotation C_B_A; calendar dates.
+// and the nearest known key; scenario overlays; the one accelerometer rotation C_B_A; calendar dates;
+// the platform file's noise section (the old per-head sigma keys name its place), `base:` platform
+// files and the ideal preset config/gracefo_ideal.yaml.
 #include <boresight/io/config_keys.h>
 #include <boresight/io/core_config.h>
+#include <boresight/model/overlay.h>
 #include <boresight/io/time_format.h>
 #include <boresight/sim/scenario.h>
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <sstream>
@@ -62,19 +66,186 @@ TEST(PlatformConfig, CommittedFileLoads) {
   EXPECT_EQ(pc.pipeline.heads.n_heads, 3);
   EXPECT_TRUE(pc.mounting_from_qsa1b);
   EXPECT_TRUE(pc.pipeline.C_B_A.isApprox(accToBodyDefault()));
+  // The noise of the real excerpts: 2" across, 25" about the boresight, 5" per star direction; the
+  // accelerometer's white levels per A axis.
+  for (int s = 0; s < 3; ++s) {
+    const auto& h = pc.pipeline.heads.head[static_cast<std::size_t>(s)];
+    EXPECT_NEAR(h.sigma_cross_rad * kArcsecPerRad, 2.0, 1e-12);
+    EXPECT_NEAR(h.sigma_roll_rad * kArcsecPerRad, 25.0, 1e-12);
+    EXPECT_NEAR(h.sigma_star_rad * kArcsecPerRad, 5.0, 1e-12);
+    for (int a = 0; a < model::kHeadAxes; ++a)
+      EXPECT_EQ(pc.noise_in_use.head[static_cast<std::size_t>(s)][static_cast<std::size_t>(a)].source,
+                kConfigDir + "/gracefo.yaml noise.head_defaults");
+  }
+  EXPECT_EQ(pc.noise_in_use.accWhiteSigma(0), 1.5e-7);
+  EXPECT_EQ(pc.noise_in_use.accWhiteSigma(1), 3.0e-8);
+  EXPECT_EQ(pc.noise_in_use.accWhiteSigma(2), 5.0e-8);
+  EXPECT_EQ(pc.noise_in_use.acc[2].source, kConfigDir + "/gracefo.yaml noise.accelerometer");
+}
+
+TEST(PlatformConfig, IdealPresetIsTheSamePlatformWithTheSimulatorsNoise) {
+  io::PlatformConfig real, ideal;
+  std::string err;
+  ASSERT_TRUE(io::loadPlatformConfig(kConfigDir + "/gracefo.yaml", real, &err)) << err;
+  ASSERT_TRUE(io::loadPlatformConfig(kConfigDir + "/gracefo_ideal.yaml", ideal, &err)) << err;
+  // the noise the simulator's scenarios carry, bit for bit what the heads had before the noise section
+  for (int s = 0; s < 3; ++s) {
+    const auto& h = ideal.pipeline.heads.head[static_cast<std::size_t>(s)];
+    EXPECT_EQ(h.sigma_cross_rad, 6.0 * kRadPerArcsec);
+    EXPECT_EQ(h.sigma_roll_rad, 48.0 * kRadPerArcsec);
+    EXPECT_EQ(h.sigma_star_rad, 5.0 * kRadPerArcsec);
+    EXPECT_EQ(ideal.noise_in_use.head[static_cast<std::size_t>(s)][0].source, kConfigDir + "/gracefo_ideal.yaml noise.head_defaults");
+  }
+  sim::Scenario sc;
+  ASSERT_TRUE(sim::loadScenario(kConfigDir + "/sim_gracefo.yaml", sc, &err)) << err;
+  for (int a = 0; a < 3; ++a) {
+    EXPECT_EQ(ideal.noise_in_use.accWhiteSigma(a), sc.acc.white_rad_s2[a]) << a;  // method A's default weights
+    const auto& gm = ideal.noise_in_use.acc[static_cast<std::size_t>(a)].noise.model.markovTerms();
+    ASSERT_EQ(gm.size(), 1u);
+    EXPECT_NEAR(std::sqrt(gm[0].var), sc.acc.lowfreq_rad_s2[a], 1e-20);
+    EXPECT_EQ(gm[0].tau_s, sc.acc.lowfreq_tau_s);
+  }
+  for (const auto& h : sc.heads) {
+    EXPECT_EQ(h.sigma_cross_rad, ideal.pipeline.heads.head[0].sigma_cross_rad);
+    EXPECT_EQ(h.sigma_roll_rad, ideal.pipeline.heads.head[0].sigma_roll_rad);
+  }
+  // everything else is the base's
+  EXPECT_EQ(ideal.platform, real.platform);
+  EXPECT_EQ(ideal.mounting_from_qsa1b, real.mounting_from_qsa1b);
+  EXPECT_EQ(ideal.pipeline.heads.n_heads, real.pipeline.heads.n_heads);
+  for (int s = 0; s < 3; ++s) {
+    EXPECT_EQ(ideal.pipeline.heads.head[static_cast<std::size_t>(s)].id, real.pipeline.heads.head[static_cast<std::size_t>(s)].id);
+    EXPECT_EQ(ideal.pipeline.heads.head[static_cast<std::size_t>(s)].boresight_Si, real.pipeline.heads.head[static_cast<std::size_t>(s)].boresight_Si);
+  }
+  EXPECT_EQ(ideal.pipeline.crn_attitude.length_s, real.pipeline.crn_attitude.length_s);
+  EXPECT_EQ(ideal.pipeline.crn_acc.fs_hz, real.pipeline.crn_acc.fs_hz);
+  EXPECT_EQ(ideal.pipeline.C_B_A, real.pipeline.C_B_A);
+  EXPECT_EQ(ideal.pipeline.wahba_correction, real.pipeline.wahba_correction);
+  EXPECT_EQ(ideal.pipeline.deformation.tau_s, real.pipeline.deformation.tau_s);
+  EXPECT_EQ(ideal.pipeline.heads.relative_time_constant_s, real.pipeline.heads.relative_time_constant_s);
+  EXPECT_EQ(ideal.file, kConfigDir + "/gracefo_ideal.yaml");
 }
 
 TEST(PlatformConfig, MisspeltKeyIsAnErrorWithLineAndNearestKey) {
   const std::string base = slurp(kConfigDir + "/gracefo.yaml");
-  const std::string bad = replaced(base, "      sigma_cross_arcsec: 6.0        #", "      sigma_cros_arcsec: 6.0        #");
+  const std::string bad = replaced(base, "    cross_x: [{kind: white", "    cros_x: [{kind: white");
   const std::string path = writeTemp("misspelt.yaml", bad);
   io::PlatformConfig pc;
   std::string err;
   ASSERT_FALSE(io::loadPlatformConfig(path, pc, &err));
-  const int line = lineOfText(bad, "sigma_cros_arcsec");
+  const int line = lineOfText(bad, "cros_x");
   EXPECT_NE(err.find(path + ":" + std::to_string(line) + ":"), std::string::npos) << err;
-  EXPECT_NE(err.find("heads.list[0].sigma_cros_arcsec"), std::string::npos) << err;
-  EXPECT_NE(err.find("did you mean 'sigma_cross_arcsec'"), std::string::npos) << err;
+  EXPECT_NE(err.find("noise.head_defaults.cros_x"), std::string::npos) << err;
+  EXPECT_NE(err.find("did you mean 'cross_x'"), std::string::npos) << err;
+}
+
+TEST(PlatformConfig, OldSigmaKeysSayWhereTheValueMoved) {
+  const std::string base = slurp(kConfigDir + "/gracefo.yaml");
+  struct Case {
+    std::string key, moved;
+  } cases[] = {{"sigma_cross_arcsec", "noise.head_defaults.cross_x and .cross_y"},
+               {"sigma_roll_arcsec", "noise.head_defaults.about_boresight"},
+               {"sigma_star_arcsec", "noise.head_defaults.star_direction"}};
+  for (const auto& c : cases) {
+    const std::string bad = replaced(base, "    - id: 2\n      boresight: [0, 0, 1]\n",
+                                     "    - id: 2\n      boresight: [0, 0, 1]\n      " + c.key + ": 6.0\n");
+    const std::string path = writeTemp("old_sigma.yaml", bad);
+    io::PlatformConfig pc;
+    std::string err;
+    ASSERT_FALSE(io::loadPlatformConfig(path, pc, &err)) << c.key;
+    EXPECT_NE(err.find(path + ":" + std::to_string(lineOfText(bad, c.key)) + ": key 'heads.list[1]." + c.key +
+                       "': the head noise levels moved to the noise section: " + c.moved),
+              std::string::npos)
+        << err;
+  }
+}
+
+TEST(PlatformConfig, NoiseSectionErrors) {
+  const std::string base = slurp(kConfigDir + "/gracefo.yaml");
+  io::PlatformConfig pc;
+  std::string err;
+  // every axis needs a model
+  std::string bad = replaced(base, "    star_direction: [{kind: white, sigma_arcsec: 5.0}]", "");
+  EXPECT_FALSE(io::loadPlatformConfig(writeTemp("no_star.yaml", bad), pc, &err));
+  EXPECT_NE(err.find("key 'noise': no noise model for head 1 star_direction"), std::string::npos) << err;
+  bad = replaced(base, "    z: [{kind: white, sigma_rad_s2: 5.0e-8}]", "");
+  EXPECT_FALSE(io::loadPlatformConfig(writeTemp("no_acc_z.yaml", bad), pc, &err));
+  EXPECT_NE(err.find("no noise model for accelerometer z"), std::string::npos) << err;
+  // per-head entries name configured heads
+  bad = replaced(base, "  heads: []", "  heads: [{id: 4, about_boresight: [{kind: white, sigma_arcsec: 30}]}]");
+  std::string path = writeTemp("head4.yaml", bad);
+  EXPECT_FALSE(io::loadPlatformConfig(path, pc, &err));
+  EXPECT_NE(err.find(path + ":" + std::to_string(lineOfText(bad, "heads: [{id: 4")) + ": key 'noise.heads[0].id': head 4 is not in heads.list"),
+            std::string::npos) << err;
+  // validity spans are an overlay's
+  bad = replaced(base, "  heads: []", "  heads: [{id: 3, about_boresight: [{kind: white, sigma_arcsec: 30}], valid_from: \"2023-06-01\"}]");
+  EXPECT_FALSE(io::loadPlatformConfig(writeTemp("valid.yaml", bad), pc, &err));
+  EXPECT_NE(err.find("key 'noise.heads[0].valid_from': validity spans belong in a model overlay"), std::string::npos) << err;
+  // a key twice
+  bad = replaced(base, "    cross_y: [{kind: white, sigma_arcsec: 2.0}]\n",
+                 "    cross_y: [{kind: white, sigma_arcsec: 2.0}]\n    cross_y: [{kind: white, sigma_arcsec: 3.0}]\n");
+  path = writeTemp("twice.yaml", bad);
+  EXPECT_FALSE(io::loadPlatformConfig(path, pc, &err));
+  EXPECT_NE(err.find(path + ":" + std::to_string(lineOfText(bad, "cross_y: [{kind: white, sigma_arcsec: 3.0}]")) +
+                     ": key 'noise.head_defaults.cross_y': given twice"),
+            std::string::npos) << err;
+  // NaN
+  bad = replaced(base, "sigma_arcsec: 25.0}", "sigma_arcsec: .nan}");
+  EXPECT_FALSE(io::loadPlatformConfig(writeTemp("nan.yaml", bad), pc, &err));
+  EXPECT_NE(err.find("key 'noise.head_defaults.about_boresight[0].sigma_arcsec': not a finite number"), std::string::npos) << err;
+}
+
+TEST(PlatformConfig, PerHeadNoiseOverridesTheDefaults) {
+  const std::string base = slurp(kConfigDir + "/gracefo.yaml");
+  const std::string text = replaced(base, "  heads: []",
+                                    "  heads: [{id: 3, cross_x: [{kind: white, sigma_arcsec: 1.0}, {kind: gauss_markov, "
+                                    "sigma_arcsec: 2.0, tau_s: 600}], about_boresight: [{kind: white, sigma_arcsec: 31}]}]");
+  const std::string path = writeTemp("per_head.yaml", text);
+  io::PlatformConfig pc;
+  std::string err;
+  ASSERT_TRUE(io::loadPlatformConfig(path, pc, &err)) << err;
+  // head 3: cross x total 1 + 4 = 5 arcsec^2, y 4: RMS sqrt(4.5); about 31
+  EXPECT_NEAR(pc.pipeline.heads.head[2].sigma_cross_rad * kArcsecPerRad, std::sqrt(4.5), 1e-12);
+  EXPECT_NEAR(pc.pipeline.heads.head[2].sigma_roll_rad * kArcsecPerRad, 31.0, 1e-12);
+  EXPECT_NEAR(pc.pipeline.heads.head[1].sigma_roll_rad * kArcsecPerRad, 25.0, 1e-12);
+  EXPECT_EQ(pc.noise_in_use.head[2][2].source, path + " noise.heads[id 3]");
+  EXPECT_EQ(pc.noise_in_use.head[2][1].source, path + " noise.head_defaults");
+}
+
+TEST(PlatformConfig, BaseFileOverlayKeepsWhatItDoesNotGive) {
+  const std::string dir = kConfigDir;
+  io::PlatformConfig pc;
+  std::string err;
+  // relative to the file's own directory, or absolute
+  const std::string path = writeTemp("based.yaml", "base: " + dir + "/gracefo.yaml\nthermal:\n  tau_s: 300\n"
+                                                   "noise:\n  head_defaults:\n    about_boresight: [{kind: white, sigma_arcsec: 30}]\n");
+  ASSERT_TRUE(io::loadPlatformConfig(path, pc, &err)) << err;
+  EXPECT_EQ(pc.pipeline.deformation.tau_s, 300.0);
+  EXPECT_EQ(pc.pipeline.heads.n_heads, 3);
+  EXPECT_TRUE(pc.mounting_from_qsa1b);
+  EXPECT_NEAR(pc.pipeline.heads.head[0].sigma_roll_rad * kArcsecPerRad, 30.0, 1e-12);
+  EXPECT_NEAR(pc.pipeline.heads.head[0].sigma_cross_rad * kArcsecPerRad, 2.0, 1e-12);  // the base's axis
+  EXPECT_EQ(pc.noise_in_use.head[0][2].source, path + " noise.head_defaults");
+  EXPECT_EQ(pc.noise_in_use.head[0][0].source, dir + "/gracefo.yaml noise.head_defaults");
+  EXPECT_EQ(pc.file, path);
+  // explicit mountings from an overlay's head list
+  const std::string expl = writeTemp("explicit.yaml", "base: " + dir + "/gracefo.yaml\nheads:\n  mounting: explicit\n  list:\n"
+                                                      "    - {id: 1, q_Si_B: [1, 0, 0, 0]}\n");
+  ASSERT_TRUE(io::loadPlatformConfig(expl, pc, &err)) << err;
+  EXPECT_FALSE(pc.mounting_from_qsa1b);
+  EXPECT_EQ(pc.pipeline.heads.n_heads, 1);
+  EXPECT_EQ(pc.mounting_source[0], expl + " heads.list[0].q_Si_B");
+  // errors in the overlay name the overlay's line; a base that does not load names the base key
+  const std::string typo = writeTemp("typo.yaml", "base: " + dir + "/gracefo.yaml\nthermal:\n  tau: 300\n");
+  EXPECT_FALSE(io::loadPlatformConfig(typo, pc, &err));
+  EXPECT_NE(err.find(typo + ":3: key 'thermal.tau': unknown key; did you mean 'tau_s'?"), std::string::npos) << err;
+  const std::string missing = writeTemp("missing_base.yaml", "platform: x\nbase: no_such_platform.yaml\n");
+  EXPECT_FALSE(io::loadPlatformConfig(missing, pc, &err));
+  EXPECT_NE(err.find(missing + ":2: key 'base': the base platform file does not load: "), std::string::npos) << err;
+  EXPECT_NE(err.find("no_such_platform.yaml: cannot open"), std::string::npos) << err;
+  const std::string loop = writeTemp("loop.yaml", "base: config_test_loop.yaml\n");
+  EXPECT_FALSE(io::loadPlatformConfig(loop, pc, &err));
+  EXPECT_NE(err.find("deeper than 4"), std::string::npos) << err;
 }
 
 TEST(PlatformConfig, UnknownKeysAtEveryLevel) {

@@ -32,6 +32,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <iomanip>
 #include <map>
 #include <sstream>
 #include <string>
@@ -625,7 +626,8 @@ TEST(Boresightd, ReplayWritesSummaryWithTheLastCalibrationAndACsvPerAttitude) {
     std::ofstream o(dir + "/node.yaml");
     std::string line;
     while (std::getline(in, line)) {
-      if (line.rfind("platform:", 0) == 0) line = "platform: " + src("config/gracefo.yaml");
+      // the ideal noise preset: the log is simulated from config/sim_gracefo_node_demo.yaml (white 6"/48")
+      if (line.rfind("platform:", 0) == 0) line = "platform: " + src("config/gracefo_ideal.yaml");
       if (line.find("apply_common_rotation:") != std::string::npos) line = "  apply_common_rotation: true";
       if (line.find("cadence_s:") != std::string::npos) line = "  cadence_s: 3600";
       if (line.find("min_span_s:") != std::string::npos) line = "  min_span_s: 840";
@@ -1108,6 +1110,88 @@ TEST(Boresightd, SigtermStopsAReplayWithCompleteOutputsAndTheSummary) {
   EXPECT_LT(rows, 3600) << "the replay ran to the end: the signal was ignored";
 }
 #endif
+
+TEST(NodeConfig, OverlayKeyLaysItsNoiseAndMountingsOverThePlatform) {
+  const std::string dir = makeTempDir("node_overlay");
+  auto write = [&](const std::string& name, const std::string& text) {
+    const std::string p = dir + "/" + name;
+    std::ofstream(p) << text;
+    return p;
+  };
+  const std::string node_yaml = "platform: " + src("config/gracefo_ideal.yaml") + "\noverlay: ov.yaml\n";
+  node::NodeConfig cfg;
+  std::string err;
+  // refused with the overlay's file and line: an unknown version, an unknown key
+  write("ov.yaml", "boresight_overlay: 7\nwritten_by: test\n");
+  EXPECT_FALSE(node::loadNodeConfig(write("n.yaml", node_yaml), cfg, &err));
+  EXPECT_NE(err.find("n.yaml:2: key 'overlay': " + dir + "/ov.yaml:1: key 'boresight_overlay': unsupported version 7"), std::string::npos) << err;
+  write("ov.yaml", "boresight_overlay: 1\nwritten_by: test\nnoise:\n  head_defaults:\n    cross_z: []\n");
+  EXPECT_FALSE(node::loadNodeConfig(dir + "/n.yaml", cfg, &err));
+  EXPECT_NE(err.find(dir + "/ov.yaml:5: key 'noise.head_defaults.cross_z': unknown key"), std::string::npos) << err;
+  // the overlay's noise reaches the core's sigmas and the worker's accelerometer weight; its
+  // mountings of every head replace the NOMINAL_MOUNTINGS message
+  write("ov.yaml",
+        "boresight_overlay: 1\nwritten_by: test\n"
+        "noise:\n  heads:\n    - {id: 2, about_boresight: [{kind: white, sigma_arcsec: 90}]}\n"
+        "  accelerometer:\n    y: [{kind: white, sigma_rad_s2: 7.0e-8}]\n"
+        "mountings:\n"
+        "  - {head: 1, q_Si_B: [1, 0, 0, 0], datum: ground, epoch: \"2023-06-01\", sigma_arcsec: [1, 1, 1]}\n"
+        "  - {head: 2, q_Si_B: [0, 1, 0, 0], datum: ground, epoch: \"2023-06-01\", sigma_arcsec: [1, 1, 1]}\n"
+        "  - {head: 3, q_Si_B: [0, 0, 1, 0], datum: ground, epoch: \"2023-06-01\", sigma_arcsec: [1, 1, 1]}\n"
+        "time_offsets:\n  - {sensor: accelerometer, relative_to: heads, offset_s: 0.015, offset_sigma_s: 0.001}\n");
+  ASSERT_TRUE(node::loadNodeConfig(dir + "/n.yaml", cfg, &err)) << err;
+  EXPECT_NEAR(cfg.pipeline.heads.head[1].sigma_roll_rad * kArcsecPerRad, 90.0, 1e-12);
+  EXPECT_NEAR(cfg.pipeline.heads.head[0].sigma_roll_rad * kArcsecPerRad, 48.0, 1e-12);
+  EXPECT_EQ(cfg.acc_white_noise_radps2, Vec3(1.5e-7, 7.0e-8, 5.0e-8));
+  EXPECT_EQ(cfg.overlay_mounting_mask, 7u);
+  EXPECT_FALSE(cfg.mountings_from_log);  // nothing to wait for
+  EXPECT_TRUE(cfg.pipeline.heads.head[1].q_Si_B.coeffs() == Quat(0, 1, 0, 0).coeffs());
+  std::string lines;
+  for (const auto& l : cfg.model_in_use) lines += l + "\n";
+  for (const char* what : {"about_boresight white 90\" (overlay " , "noise.heads[id 2])", "not applied: time_offsets: boresightd",
+                           "head 3: overlay "})
+    EXPECT_NE(lines.find(what), std::string::npos) << what << " not in\n" << lines;
+  // mountings of some heads only: the message still sets the others
+  write("ov.yaml", "boresight_overlay: 1\nwritten_by: test\nmountings:\n"
+                   "  - {head: 2, q_Si_B: [0, 1, 0, 0], datum: ground, epoch: \"2023-06-01\", sigma_arcsec: [1, 1, 1]}\n");
+  ASSERT_TRUE(node::loadNodeConfig(dir + "/n.yaml", cfg, &err)) << err;
+  EXPECT_EQ(cfg.overlay_mounting_mask, 2u);
+  EXPECT_TRUE(cfg.mountings_from_log);
+}
+
+TEST(NodeReplay, OverlayMountingsSurviveTheMountingsMessage) {
+  // The log's NOMINAL_MOUNTINGS message sets heads 1 and 3; head 2 keeps the overlay's mounting (here
+  // the truth with its mounting error: the fused attitude moves, the message's value would not).
+  std::array<Quat, 4> q_true{}, q_nominal{};
+  const std::string log = simulate("overlay_mount", 300, {}, nullptr, "config/sim_gracefo.yaml", &q_true, &q_nominal);
+  node::NodeConfig plain = nodeConfig();
+  plain.calibration.enabled = false;
+  const std::string dir = makeTempDir("node_overlay_replay");
+  const Quat q2 = q_true[1];
+  std::ofstream(dir + "/ov.yaml") << "boresight_overlay: 1\nwritten_by: test\nmountings:\n  - {head: 2, q_Si_B: [" << std::setprecision(17)
+                                  << q2.w() << ", " << q2.x() << ", " << q2.y() << ", " << q2.z()
+                                  << "], datum: ground, epoch: \"2023-06-01\", sigma_arcsec: [1, 1, 1]}\n";
+  std::ofstream(dir + "/n.yaml") << "platform: " << src("config/gracefo_ideal.yaml") << "\noverlay: ov.yaml\n";
+  node::NodeConfig with;
+  std::string err;
+  ASSERT_TRUE(node::loadNodeConfig(dir + "/n.yaml", with, &err)) << err;
+  with.calibration.enabled = false;
+  const auto a = replay(log, plain), b = replay(log, with);
+  const auto qa = a->out.all<boresight_lcm::fused_attitude_t>("BORESIGHT_ATTITUDE");
+  const auto qb = b->out.all<boresight_lcm::fused_attitude_t>("BORESIGHT_ATTITUDE");
+  ASSERT_EQ(qa.size(), qb.size());
+  ASSERT_GT(qa.size(), 100u);
+  // the pipeline's head 2 mounting after the message: the overlay's, not the message's (nominal)
+  EXPECT_TRUE(with.overlay_mounting_mask == 2u);
+  double max_diff = 0;
+  for (std::size_t i = 0; i < qa.size(); ++i) {
+    const Quat x(qa[i].q_I_B[0], qa[i].q_I_B[1], qa[i].q_I_B[2], qa[i].q_I_B[3]);
+    const Quat y(qb[i].q_I_B[0], qb[i].q_I_B[1], qb[i].q_I_B[2], qb[i].q_I_B[3]);
+    max_diff = std::max(max_diff, 2 * std::asin(std::min(1.0, (x.conjugate() * y).vec().norm())) * kArcsecPerRad);
+  }
+  EXPECT_GT(max_diff, 1.0) << "head 2's mounting from the overlay did not reach the fusion";
+  EXPECT_EQ(a->c.used, b->c.used);  // the message is used (it sets heads 1 and 3) in both runs
+}
 
 }  // namespace
 }  // namespace boresight

@@ -531,7 +531,7 @@ TEST(SimEffects, EffectArgumentsAreValidated) {
   // Every catalogue entry has a unique canonical name.
   std::set<std::string> names;
   for (const auto& e : model::effectCatalogue()) EXPECT_TRUE(names.insert(e.name).second) << e.name;
-  EXPECT_EQ(names.size(), 16u);
+  EXPECT_EQ(names.size(), 21u);
 }
 
 }  // namespace

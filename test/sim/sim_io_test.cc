@@ -225,6 +225,76 @@ TEST(SimIo, EveryCommittedScenarioLoadsAndRuns) {
   EXPECT_GE(n, 2u);
 }
 
+TEST(SimIo, NoisePresetLayersStackOnAnyScenario) {
+  const std::string dir = simtest::sourceDir() + "/config";
+  sim::Scenario g, r, audit, ar, cal, cr;
+  std::string err;
+  ASSERT_TRUE(sim::loadScenario(dir + "/sim_gracefo.yaml", g, &err)) << err;
+  ASSERT_TRUE(sim::loadScenario(dir + "/sim_gracefo_realistic.yaml", r, &err)) << err;
+  ASSERT_TRUE(sim::loadScenario(dir + "/sim_audit.yaml", audit, &err)) << err;
+  ASSERT_TRUE(sim::loadScenario(dir + "/sim_audit_realistic.yaml", ar, &err)) << err;
+  ASSERT_TRUE(sim::loadScenario(dir + "/sim_gracefo_calibration.yaml", cal, &err)) << err;
+  // The preset on a scenario that injects effects: appended, not replaced.
+  ASSERT_TRUE(sim::parseScenario("base: [sim_gracefo_calibration.yaml, preset_realistic.yaml]\n", "cal_real.yaml", dir, cr, &err))
+      << err;
+  EXPECT_EQ(r.file, dir + "/sim_gracefo_realistic.yaml");
+  const double measured[3][2] = {{2.29, 21.1}, {1.69, 30.8}, {2.32, 29.9}};
+  for (const auto* s : {&r, &ar, &cr}) {
+    ASSERT_EQ(s->heads.size(), 3u);
+    for (std::size_t i = 0; i < 3; ++i) {
+      EXPECT_NEAR(s->heads[i].sigma_cross_rad * kArcsecPerRad, measured[i][0], 1e-12);
+      EXPECT_NEAR(s->heads[i].sigma_roll_rad * kArcsecPerRad, measured[i][1], 1e-12);
+    }
+  }
+  // Everything else is the scenario's: mountings (with and without errors), duration, accelerometer.
+  for (std::size_t i = 0; i < 3; ++i) {
+    EXPECT_EQ(r.heads[i].q_Si_B.coeffs(), g.heads[i].q_Si_B.coeffs());
+    EXPECT_EQ(r.heads[i].mounting_error_rad, g.heads[i].mounting_error_rad);
+    EXPECT_EQ(ar.heads[i].mounting_error_rad, audit.heads[i].mounting_error_rad);
+    EXPECT_EQ(r.heads[i].tag_offset_us, g.heads[i].tag_offset_us);
+    EXPECT_EQ(r.heads[i].sigma_star_rad, g.heads[i].sigma_star_rad);
+  }
+  EXPECT_EQ(ar.duration_s, audit.duration_s);
+  EXPECT_EQ(ar.acc.bias_rad_s2, audit.acc.bias_rad_s2);
+  EXPECT_EQ(r.acc.white_rad_s2, g.acc.white_rad_s2);
+  EXPECT_EQ(ar.output.star_vectors_interval_s, 0.0);
+  // The preset's five effects, after the scenario's own.
+  ASSERT_EQ(r.effects.size(), g.effects.size() + 5);
+  ASSERT_EQ(cr.effects.size(), cal.effects.size() + 5);
+  ASSERT_GT(cal.effects.size(), 0u);
+  for (std::size_t i = 0; i < cal.effects.size(); ++i) EXPECT_EQ(cr.effects[i].values, cal.effects[i].values);
+  const std::vector<std::string> names = {"coloured_noise", "fov_error", "thermal_wander", "acc_coloured_noise", "acc_bias_wander"};
+  for (std::size_t i = 0; i < 5; ++i) {
+    EXPECT_EQ(cr.effects[cal.effects.size() + i].name, names[i]);
+    EXPECT_EQ(cr.effects[cal.effects.size() + i].origin, "preset_realistic.yaml: add_effects[" + std::to_string(i) + "]");
+  }
+  // `effects` in the file that lists the layers still replaces the whole list.
+  sim::Scenario only;
+  ASSERT_TRUE(sim::parseScenario("base: [sim_gracefo.yaml, preset_realistic.yaml]\neffects: [{name: step, sensor: 1, at_s: 5}]\n",
+                                 "x.yaml", dir, only, &err))
+      << err;
+  ASSERT_EQ(only.effects.size(), 1u);
+  EXPECT_EQ(only.heads[0].sigma_cross_rad, r.heads[0].sigma_cross_rad);
+  // The layer alone is not a scenario (no heads); errors name the file, the line and the key.
+  EXPECT_FALSE(sim::loadScenario(dir + "/preset_realistic.yaml", only, &err));
+  sim::Scenario bad;
+  EXPECT_FALSE(sim::parseScenario("base: [sim_gracefo.yaml, sim_audit.yaml]\n", "b.yaml", dir, bad, &err));
+  EXPECT_NE(err.find("b.yaml:1: key 'base[1]': the layer does not apply:"), std::string::npos) << err;
+  EXPECT_NE(err.find("cannot have a base of its own"), std::string::npos) << err;
+  EXPECT_FALSE(sim::parseScenario("base: [sim_gracefo.yaml, nothere.yaml]\n", "b.yaml", dir, bad, &err));
+  EXPECT_NE(err.find("nothere.yaml: cannot open"), std::string::npos) << err;
+  EXPECT_FALSE(sim::parseScenario("base: []\n", "b.yaml", dir, bad, &err));
+  EXPECT_NE(err.find("key 'base'"), std::string::npos) << err;
+  EXPECT_FALSE(sim::parseScenario("base: sim_gracefo.yaml\nhead_overrides: [{id: 7, noise_cross_arcsec: 1}]\n", "b.yaml", dir, bad, &err));
+  EXPECT_NE(err.find("b.yaml:2: key 'head_overrides[0].id': no head 7"), std::string::npos) << err;
+  EXPECT_FALSE(sim::parseScenario("base: sim_gracefo.yaml\nhead_overrides: [{noise_cross_arcsec: 1}]\n", "b.yaml", dir, bad, &err));
+  EXPECT_NE(err.find("key 'head_overrides[0].id': required"), std::string::npos) << err;
+  EXPECT_FALSE(sim::parseScenario("base: sim_gracefo.yaml\nhead_overrides: [{id: 1, noise_cros_arcsec: 1}]\n", "b.yaml", dir, bad, &err));
+  EXPECT_NE(err.find("key 'head_overrides[0].noise_cros_arcsec': unknown key"), std::string::npos) << err;
+  EXPECT_FALSE(sim::parseScenario("base: sim_gracefo.yaml\nadd_effects: [{name: fov_error, sensor: 1}]\n", "b.yaml", dir, bad, &err));
+  EXPECT_NE(err.find("b.yaml: add_effects[0]: effect fov_error: key 'arcsec': required"), std::string::npos) << err;
+}
+
 std::string parseError(const std::string& yaml) {
   sim::Scenario sc;
   std::string err;

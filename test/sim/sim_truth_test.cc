@@ -35,6 +35,17 @@ void expectNearVec(const Vec3& a, const Vec3& b, const char* what) {
   EXPECT_LE((a - b).norm(), kRel * std::max(1e-300, b.norm()) + 1e-300) << what;
 }
 
+/// Terms equal (levels through arcseconds and back: relative 1e-14).
+void expectSameModel(const model::NoiseModel& a, const model::NoiseModel& b, const char* what) {
+  ASSERT_EQ(a.terms.size(), b.terms.size()) << what;
+  for (std::size_t k = 0; k < a.terms.size(); ++k) {
+    model::NoiseTerm x = a.terms[k];
+    EXPECT_NEAR(x.sigma, b.terms[k].sigma, kRel * b.terms[k].sigma) << what;
+    x.sigma = b.terms[k].sigma;
+    EXPECT_EQ(x, b.terms[k]) << what << " term " << k;
+  }
+}
+
 struct TruthRun {
   fs::path dir;
   std::unique_ptr<simtest::Run> r;
@@ -65,7 +76,12 @@ TruthRun writeOne(const std::string& name) {
            "anisotropic_noise:sensor=2,about_arcsec=15", "clock_drift:sensor=all,rate_ppm=3,offset_ms=1",
            "clock_drift:sensor=acc,rate_ppm=-2", "time_offset:sensor=all,offset_ms=30",
            "time_offset:sensor=acc,offset_ms=-15", "thermal_periodic:sensor=2,harmonic=2,y_arcsec=4,beta_gain=0.5",
-           "acc_bias:x=1e-7,z=-2e-7", "acc_scale:y=0.001", "acc_misalignment:z_arcsec=30", "aberration:sensor=all,orbital=0"});
+           "acc_bias:x=1e-7,z=-2e-7", "acc_scale:y=0.001", "acc_misalignment:z_arcsec=30", "aberration:sensor=all,orbital=0",
+           "coloured_noise:sensor=1,cross_arcsec=1.5,about_arcsec=4,tau_s=300",
+           "coloured_noise:sensor=all,cross_arcsec=0.5,alpha=1.2,f_lo_hz=1e-4,f_hi_hz=0.1",
+           "thermal_wander:sensor=3,cross_arcsec=2,tau_s=5000", "fov_error:sensor=2,arcsec=3",
+           "fov_error:sensor=2,arcsec=1,order=5", "acc_coloured_noise:x=1e-8,y=2e-8,alpha=1,f_lo_hz=1e-3,f_hi_hz=1",
+           "acc_bias_wander:z=3e-9,tau_s=1e5"});
   t.r = simtest::run(sc, 21, 300);
   t.path = (t.dir / "truth.yaml").string();
   std::string err;
@@ -171,7 +187,41 @@ TEST(SimTruth, WrittenTruthReadsBackIntoTheSameSpecsAndParameters) {
     runs_seen += th->missing_runs;
     EXPECT_NEAR(th->outlier_probability, model::OutlierSampler(h.effects().outliers, 0, 0).probability(), 1e-16);
     EXPECT_NEAR(th->expected_random_missing_fraction, model::expectedMissingFraction(h.effects().random_gaps), 1e-16);
+    // The coloured effects: models, fields and the realised RMS.
+    expectSameModel(th->coloured_cross, h.effects().coloured_cross, "coloured cross");
+    expectSameModel(th->coloured_about, h.effects().coloured_about, "coloured about");
+    expectSameModel(th->wander_cross, h.effects().wander_cross, "wander cross");
+    expectSameModel(th->wander_about, h.effects().wander_about, "wander about");
+    ASSERT_EQ(th->fov_fields.size(), h.fovFields().size());
+    for (std::size_t k = 0; k < th->fov_fields.size(); ++k) {
+      const auto &a = th->fov_fields[k], &b = h.fovFields()[k];
+      EXPECT_EQ(a.order, b.order);
+      EXPECT_NEAR(a.rms_rad, b.rms_rad, kRel * b.rms_rad);
+      ASSERT_EQ(a.cx.size(), b.cx.size());
+      for (std::size_t j = 0; j < a.cx.size(); ++j) {
+        EXPECT_NEAR(a.cx[j], b.cx[j], kRel * b.rms_rad);
+        EXPECT_NEAR(a.cy[j], b.cy[j], kRel * b.rms_rad);
+      }
+    }
+    const auto rms = [&](const Vec3& ss) { return Vec3((ss / static_cast<double>(st.head_samples[i])).cwiseSqrt()); };
+    expectNearVec(th->coloured_rms_rad, h.effects().hasColoured() ? rms(st.head_coloured_ss[i]) : Vec3::Zero(), "coloured rms");
+    expectNearVec(th->wander_rms_rad, h.effects().hasWander() ? rms(st.head_wander_ss[i]) : Vec3::Zero(), "wander rms");
+    expectNearVec(th->fov_rms_rad, h.hasFovError() ? rms(st.head_fov_ss[i]) : Vec3::Zero(), "fov rms");
+    expectNearVec(th->fov_mean_rad, h.hasFovError() ? Vec3(st.head_fov_sum[i] / static_cast<double>(st.head_samples[i])) : Vec3::Zero(),
+                  "fov mean");
   }
+  // Which heads carry what: coloured noise on all (two terms on head 1), the wander on head 3, the
+  // fields on head 2, and each realised.
+  EXPECT_EQ(t.head(1)->coloured_cross.terms.size(), 2u);
+  EXPECT_EQ(t.head(2)->coloured_cross.terms.size(), 1u);
+  EXPECT_TRUE(t.head(2)->coloured_about.empty());
+  EXPECT_EQ(t.head(3)->wander_cross.terms.size(), 1u);
+  EXPECT_TRUE(t.head(1)->wander_cross.empty());
+  EXPECT_EQ(t.head(2)->fov_fields.size(), 2u);
+  EXPECT_EQ(t.head(2)->fov_fields[1].order, 5);
+  EXPECT_GT(t.head(2)->fov_rms_rad.norm(), 0);
+  EXPECT_GT(t.head(3)->wander_rms_rad.x(), 0);
+  EXPECT_GT(t.head(1)->coloured_rms_rad.z(), 0);
   // The events are there to compare: head 1's dropout is one run [200, 220); heads 2 (two outlier
   // processes) and 3 (flips, gaps) have hits.
   const sim::TruthHead* h1 = t.head(1);
@@ -212,6 +262,17 @@ TEST(SimTruth, WrittenTruthReadsBackIntoTheSameSpecsAndParameters) {
   EXPECT_EQ(t.acc.missing_runs, s.stats().acc_missing_run_count);
   EXPECT_GT(t.acc.missing_runs, 0u);
   EXPECT_EQ(t.acc.missing_intervals.size(), s.stats().acc_missing_runs.size());
+  for (std::size_t k = 0; k < 3; ++k) {
+    expectSameModel(t.acc.coloured[k], a.effects().coloured[k], "acc coloured");
+    expectSameModel(t.acc.bias_wander[k], a.effects().bias_wander[k], "acc bias wander");
+  }
+  EXPECT_EQ(t.acc.coloured[0].terms.size(), 1u);
+  EXPECT_TRUE(t.acc.coloured[2].empty());
+  EXPECT_EQ(t.acc.bias_wander[2].terms.size(), 1u);
+  const Vec3 acc_n = Vec3::Constant(static_cast<double>(s.stats().acc_samples));
+  expectNearVec(t.acc.coloured_rms_rad_s2, s.stats().acc_coloured_ss.cwiseQuotient(acc_n).cwiseSqrt(), "acc coloured rms");
+  expectNearVec(t.acc.bias_wander_rms_rad_s2, s.stats().acc_bias_wander_ss.cwiseQuotient(acc_n).cwiseSqrt(), "acc wander rms");
+  EXPECT_GT(t.acc.bias_wander_rms_rad_s2.z(), 0);
   fs::remove_all(w.dir);
 }
 
@@ -236,6 +297,8 @@ TEST(SimTruth, BadTruthFilesNameTheFileAndTheKey) {
   expectError("    rate: 0.029999999999999999", "    rate: 3", "key 'effects[4]': --effect: effect sign_flips: key 'rate': must be a probability");
   expectError("name: cross_noise", "name: cross_nois", "unknown effect");
   expectError("    q_Si_B_true: [", "    q_Si_B_true: [0.5, ", "key 'heads[0].q_Si_B_true': expected a list of 4 numbers");
+  expectError("kind: gauss_markov", "kind: pink", "key 'heads[0].coloured_noise.cross[0].kind': expected gauss_markov, power_law or white");
+  expectError("- order: 5", "- order: 4", "key 'heads[1].fov_error.fields[1].cx_arcsec': expected 14 coefficients for order 4");
   sim::TruthFile t;
   std::string err;
   EXPECT_FALSE(sim::readTruthYaml((w.dir / "absent.yaml").string(), t, &err));

@@ -73,10 +73,12 @@ const Span& span() {
   return s;
 }
 
+/// The platform with the ideal noise preset: the spans are simulated from config/sim_gracefo.yaml
+/// (white 6"/48" heads).
 core::PipelineConfig pipelineConfig(const std::vector<io::Sca1aRecord>& sca, bool with_acc = true) {
   io::PlatformConfig pc;
   std::string err;
-  EXPECT_TRUE(io::loadPlatformConfig(sourceDir() + "/config/gracefo.yaml", pc, &err)) << err;
+  EXPECT_TRUE(io::loadPlatformConfig(sourceDir() + "/config/gracefo_ideal.yaml", pc, &err)) << err;
   auto q = io::readProduct<io::QsaRecord>(span().qsa);
   EXPECT_TRUE(q.ok) << q.error;
   TimeUs t0 = sca.empty() ? 0 : std::min_element(sca.begin(), sca.end(), [](auto& a, auto& b) { return a.t < b.t; })->t;
@@ -644,7 +646,7 @@ TEST(StreamReplay, InputsByContentIgnoredListedMixedRefused) {
   // Configuration for the inputs: mountings from QSA1B at the first head tag; no accelerometer
   // input switches its path off.
   io::PlatformConfig pc;
-  ASSERT_TRUE(io::loadPlatformConfig(sourceDir() + "/config/gracefo.yaml", pc, &err)) << err;
+  ASSERT_TRUE(io::loadPlatformConfig(sourceDir() + "/config/gracefo_ideal.yaml", pc, &err)) << err;
   ASSERT_TRUE(stream::classifyInputs({span().sca, span().qsa}, in, &err)) << err;
   ASSERT_TRUE(stream::prepareConfig(in, {}, pc, &err)) << err;
   EXPECT_FALSE(pc.pipeline.use_accelerometer);
@@ -653,7 +655,7 @@ TEST(StreamReplay, InputsByContentIgnoredListedMixedRefused) {
     EXPECT_EQ(pc.pipeline.heads.head[std::size_t(s)].q_Si_B.coeffs(), cfg.heads.head[std::size_t(s)].q_Si_B.coeffs());
   ASSERT_TRUE(stream::classifyInputs({span().sca}, in, &err));
   io::PlatformConfig pc2;
-  ASSERT_TRUE(io::loadPlatformConfig(sourceDir() + "/config/gracefo.yaml", pc2, &err)) << err;
+  ASSERT_TRUE(io::loadPlatformConfig(sourceDir() + "/config/gracefo_ideal.yaml", pc2, &err)) << err;
   EXPECT_FALSE(stream::prepareConfig(in, {}, pc2, &err));
   EXPECT_NE(err.find("give a QSA1B file"), std::string::npos) << err;
 }
@@ -715,7 +717,7 @@ TEST(StreamReplay, Qsa1bReferenceTimeIsTheEarliestFirstHeadTagOverAllInputs) {
     std::string err;
     ASSERT_TRUE(stream::classifyInputs(order, in, &err)) << err;
     io::PlatformConfig pc;
-    ASSERT_TRUE(io::loadPlatformConfig(sourceDir() + "/config/gracefo.yaml", pc, &err)) << err;
+    ASSERT_TRUE(io::loadPlatformConfig(sourceDir() + "/config/gracefo_ideal.yaml", pc, &err)) << err;
     ASSERT_TRUE(stream::prepareConfig(in, {}, pc, &err)) << err;
     for (int s = 0; s < pc.pipeline.heads.n_heads; ++s)
       EXPECT_EQ(pc.pipeline.heads.head[std::size_t(s)].q_Si_B.w(), 1.0) << "head " << s << ", first input " << order[0];

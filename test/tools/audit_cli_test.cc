@@ -17,7 +17,9 @@ namespace {
 
 using testutil::CliRun;
 CliRun run(const std::string& args) { return testutil::runProgram(BORESIGHT_CLI, args); }
-const std::string kConfig = " --config " BORESIGHT_SOURCE_DIR "/config/gracefo.yaml ";
+// The data below are simulated with the ideal noise preset (config/sim_gracefo.yaml: white 6"/48"
+// heads): the platform file with that noise.
+const std::string kConfig = " --config " BORESIGHT_SOURCE_DIR "/config/gracefo_ideal.yaml ";
 
 /// Three simulated minutes with a hidden relative misalignment of head 2, once per test program.
 const std::string& simulated() {
@@ -172,4 +174,64 @@ TEST(AuditCli, DamagedRecordsAreCountedAndLocated) {
   EXPECT_NE(a.out.find("rejected " + sca + ":" + std::to_string(line + 1) + ":"), std::string::npos) << a.out;
   const std::string md = testutil::slurp(dir + "/o/report.md");
   EXPECT_NE(md.find(sca + ":" + std::to_string(line) + ":"), std::string::npos);
+}
+
+// ---- the model overlay ---------------------------------------------------------------------------
+
+TEST(AuditCli, AnOverlayWithAnUnknownVersionOrKeyIsRefusedWithFileAndLine) {
+  const std::string& sim = simulated();
+  const std::string dir = testutil::makeTempDir("audit_cli_bad_overlay");
+  const std::string in = sim + "/SCA1A_2023-06-01_C_04.txt " + sim + "/QSA1B_2023-06-01_C_04.txt";
+  ASSERT_TRUE(testutil::writeFile(dir + "/v.yaml", "boresight_overlay: 0\nwritten_by: x\n"));
+  CliRun a = run("audit" + kConfig + in + " --overlay " + dir + "/v.yaml --out " + dir + "/o");
+  EXPECT_EQ(a.status, 1) << a.out;
+  EXPECT_NE(a.out.find(dir + "/v.yaml:1: key 'boresight_overlay': unsupported version 0"), std::string::npos) << a.out;
+  ASSERT_TRUE(testutil::writeFile(dir + "/k.yaml", "boresight_overlay: 1\nwritten_by: x\nmountings:\n"
+                                                   "  - {head: 1, q_Si_B: [1, 0, 0, 0], datum: ground, epoch: \"2023-06-01\",\n"
+                                                   "     sigma_arcsec: [1, 1, 1], valid_form: \"2023-06-01\"}\n"));
+  CliRun b = run("audit" + kConfig + in + " --overlay " + dir + "/k.yaml --out " + dir + "/o");
+  EXPECT_EQ(b.status, 1) << b.out;
+  EXPECT_NE(b.out.find(dir + "/k.yaml:5: key 'mountings[0].valid_form': unknown key; did you mean 'valid_from'?"),
+            std::string::npos) << b.out;
+}
+
+/// The noise levels the audit tests against come from the overlay: simulated 6"/48" heads audited
+/// with the real excerpts' 2"/25" (config/gracefo.yaml) have their noise named; the same with an
+/// overlay that says 6"/48" do not, and audit.json says where the noise came from.
+TEST(AuditCli, TheOverlaysNoiseIsTheLevelTheNoiseTestsCompareWith) {
+  const std::string& sim = simulated();
+  const std::string dir = testutil::makeTempDir("audit_cli_overlay");
+  const std::string real_levels = " --config " BORESIGHT_SOURCE_DIR "/config/gracefo.yaml ";
+  const std::string in = sim + "/SCA1A_2023-06-01_C_04.txt " + sim + "/QSA1B_2023-06-01_C_04.txt --quiet";
+  ASSERT_TRUE(testutil::writeFile(dir + "/ideal.yaml", "boresight_overlay: 1\nwritten_by: audit_cli_test\nnoise:\n"
+                                                       "  head_defaults:\n"
+                                                       "    cross_x: [{kind: white, sigma_arcsec: 6}]\n"
+                                                       "    cross_y: [{kind: white, sigma_arcsec: 6}]\n"
+                                                       "    about_boresight: [{kind: white, sigma_arcsec: 48}]\n"
+                                                       "thermal:\n  datum_head: 1\n  heads: []\n"));
+  auto noiseNamed = [](const nlohmann::json& j) {
+    int n = 0;
+    for (const auto& e : j["named_causes"]) n += e["name"] == "cross_noise" || e["name"] == "anisotropic_noise";
+    return n;
+  };
+  CliRun a = run("audit" + real_levels + in + " --out " + dir + "/real");
+  ASSERT_EQ(a.status, 0) << a.out;
+  const nlohmann::json ja = nlohmann::json::parse(testutil::slurp(dir + "/real/audit.json"));
+  EXPECT_GT(noiseNamed(ja), 0) << "6\"/48\" data against a 2\"/25\" model: the noise must be named";
+  EXPECT_TRUE(ja["model_in_use"]["overlay"].is_null());
+  CliRun b = run("audit" + real_levels + in + " --overlay " + dir + "/ideal.yaml --out " + dir + "/ov");
+  ASSERT_EQ(b.status, 0) << b.out;
+  const nlohmann::json jb = nlohmann::json::parse(testutil::slurp(dir + "/ov/audit.json"));
+  EXPECT_EQ(noiseNamed(jb), 0) << "with the data's own levels from the overlay, nothing to name";
+  EXPECT_NE(b.out.find("head 1: cross_x white 6\", cross_y white 6\", about_boresight white 48\" ("), std::string::npos) << b.out;
+  EXPECT_NE(b.out.find("not applied: thermal: boresight audit does not apply thermal terms"), std::string::npos) << b.out;
+  const auto& m = jb["model_in_use"];
+  EXPECT_EQ(m["overlay"]["file"], dir + "/ideal.yaml");
+  for (const auto& n : m["noise"]) {
+    if (n["axis"] == "cross_x" || n["axis"] == "about_boresight") {
+      EXPECT_EQ(n["source"], "overlay " + dir + "/ideal.yaml noise.head_defaults") << n.dump();
+    }
+  }
+  for (const auto& h : m["heads"]) EXPECT_NEAR(h["sigma_about_arcsec"].get<double>(), 48.0, 1e-9);
+  EXPECT_NE(testutil::slurp(dir + "/ov/report.md").find("overlay " + dir + "/ideal.yaml"), std::string::npos);
 }

@@ -24,7 +24,9 @@ namespace {
 CliRun run(const std::string& args) { return testutil::runProgram(BORESIGHT_CLI, args); }
 
 const std::string kSrc = BORESIGHT_SOURCE_DIR;
-const std::string kConfig = kSrc + "/config/gracefo.yaml";
+// The data are simulated with the ideal noise preset (config/sim_gracefo*.yaml: white 6"/48" heads):
+// the platform file with that noise.
+const std::string kConfig = kSrc + "/config/gracefo_ideal.yaml";
 
 struct Sim {
   std::string dir, sca, acc, qsa, gnv, lcm;
@@ -424,4 +426,111 @@ TEST(Calibrate, BadInputIsAClearErrorNotACrash) {
   r = run("calibrate --strict --config " + kConfig + " " + d + "/SCA1A_nan.txt " + sim().acc + " " + sim().qsa + j);
   EXPECT_EQ(r.status, 1) << r.out;
   EXPECT_NE(r.out.find("non-finite number"), std::string::npos) << r.out;
+}
+
+// ---- the model overlay: --overlay and --write-model ----------------------------------------------
+
+TEST(Calibrate, AnOverlayWithAnUnknownVersionOrKeyIsRefusedWithFileAndLine) {
+  const std::string d = testutil::makeTempDir("calibrate_bad_overlay");
+  ASSERT_TRUE(testutil::writeFile(d + "/v.yaml", "written_by: x\nboresight_overlay: 2\n"));
+  CliRun r = run("calibrate --config " + kConfig + " " + level1() + " --overlay " + d + "/v.yaml --json " + d + "/r.json");
+  EXPECT_EQ(r.status, 1) << r.out;
+  EXPECT_NE(r.out.find(d + "/v.yaml:2: key 'boresight_overlay': unsupported version 2"), std::string::npos) << r.out;
+  ASSERT_TRUE(testutil::writeFile(d + "/k.yaml", "boresight_overlay: 1\nwritten_by: x\nnoise:\n  head_defaults:\n"
+                                                 "    cross_x: [{kind: white, sigma_arcsec: 6}]\n  acelerometer: {}\n"));
+  r = run("calibrate --config " + kConfig + " " + level1() + " --overlay " + d + "/k.yaml --json " + d + "/r.json");
+  EXPECT_EQ(r.status, 1) << r.out;
+  EXPECT_NE(r.out.find(d + "/k.yaml:6: key 'noise.acelerometer': unknown key; did you mean 'accelerometer'?"), std::string::npos)
+      << r.out;
+  EXPECT_FALSE(std::ifstream(d + "/r.json").good()) << "nothing is written after a refusal";
+}
+
+TEST(Calibrate, TheOverlaysNoiseWeighsTheHeadsAndIsReported) {
+  // The same span with every head axis twice as noisy as the platform file says: the reported noise is
+  // the overlay's, and the sigmas of the angles grow (the head noise dominates the weights).
+  const std::string d = testutil::makeTempDir("calibrate_noise_overlay");
+  ASSERT_TRUE(testutil::writeFile(d + "/noisy.yaml", "boresight_overlay: 1\nwritten_by: calibrate_test\nnoise:\n  head_defaults:\n"
+                                                     "    cross_x: [{kind: white, sigma_arcsec: 12}]\n"
+                                                     "    cross_y: [{kind: white, sigma_arcsec: 12}]\n"
+                                                     "    about_boresight: [{kind: white, sigma_arcsec: 96}]\n"));
+  ASSERT_EQ(run("calibrate --config " + kConfig + " " + level1() + " --json " + d + "/base.json").status, 0);
+  const CliRun r = run("calibrate --config " + kConfig + " " + level1() + " --overlay " + d + "/noisy.yaml --json " + d +
+                       "/noisy.json --report " + d + "/rep");
+  ASSERT_EQ(r.status, 0) << r.out;
+  EXPECT_NE(r.out.find("cross_x white 12\", cross_y white 12\", about_boresight white 96\""), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("(overlay " + d + "/noisy.yaml noise.head_defaults)"), std::string::npos) << r.out;
+  const auto base = readJson(d + "/base.json"), noisy = readJson(d + "/noisy.json");
+  const auto& m = noisy["model_in_use"];
+  EXPECT_EQ(m["overlay"]["file"], d + "/noisy.yaml");
+  for (const auto& h : m["heads"]) {
+    EXPECT_NEAR(h["sigma_cross_arcsec"].get<double>(), 12.0, 1e-9);
+    EXPECT_NEAR(h["sigma_about_arcsec"].get<double>(), 96.0, 1e-9);
+    EXPECT_NEAR(h["sigma_star_arcsec"].get<double>(), 5.0, 1e-9);  // the platform file's star_direction
+  }
+  for (const auto& h : base["model_in_use"]["heads"]) EXPECT_NEAR(h["sigma_cross_arcsec"].get<double>(), 6.0, 1e-9);
+  EXPECT_TRUE(base["model_in_use"]["overlay"].is_null());
+  int grew = 0;
+  for (std::size_t k = 0; k < 3; ++k)
+    for (int a = 0; a < 3; ++a) {
+      const double s0 = base["heads"][k]["sigma_arcsec"][a], s1 = noisy["heads"][k]["sigma_arcsec"][a];
+      EXPECT_GT(s1, 1.3 * s0) << "head " << k << " axis " << a;
+      grew += s1 > 1.3 * s0;
+    }
+  EXPECT_EQ(grew, 9);
+  EXPECT_NE(testutil::slurp(d + "/rep/report.md").find("## Model in use"), std::string::npos);
+}
+
+TEST(Calibrate, WriteModelGivesAnOverlayThatClosesTheLoop) {
+  // calibrate --write-model: the mountings Exp([r]x) q_Si_B(nominal) in the accelerometer datum with
+  // their sigmas, the accelerometer bias, the time offset. Calibrating the same span again with that
+  // overlay finds (almost) nothing left to correct, and names what it did not apply.
+  const std::string d = testutil::makeTempDir("calibrate_write_model");
+  const CliRun r = run("calibrate --config " + kConfig + " " + level1() + " --time-offset --json " + d + "/r.json --write-model " +
+                       d + "/model.yaml");
+  ASSERT_EQ(r.status, 0) << r.out;
+  const auto j = readJson(d + "/r.json");
+  const YAML::Node m = YAML::LoadFile(d + "/model.yaml");
+  EXPECT_EQ(m["boresight_overlay"].as<int>(), 1);
+  EXPECT_EQ(m["written_by"].as<std::string>().rfind("boresight calibrate ", 0), 0u);
+  ASSERT_EQ(m["mountings"].size(), 3u);
+  const YAML::Node qsa_cfg = YAML::LoadFile(kSrc + "/config/sim_gracefo.yaml");  // the nominal mountings QSA1B carries
+  for (std::size_t k = 0; k < 3; ++k) {
+    const YAML::Node e = m["mountings"][k];
+    EXPECT_EQ(e["head"].as<int>(), j["heads"][k]["id"].get<int>());
+    EXPECT_EQ(e["datum"].as<std::string>(), "accelerometer");
+    Vec3 rr;
+    for (int a = 0; a < 3; ++a) {
+      rr[a] = j["heads"][k]["error_angles_arcsec"][a].get<double>() * boresight::kRadPerArcsec;
+      EXPECT_NEAR(e["sigma_arcsec"][a].as<double>(), j["heads"][k]["sigma_arcsec"][a].get<double>(), 1e-9);
+    }
+    const Mat3 nominal = quatMatrix(qsa_cfg["heads"][k]["q_Si_B"]);
+    const Mat3 written = quatMatrix(e["q_Si_B"]);
+    // C_S_B(true) = Exp([r]x) C_S_B(nominal)
+    EXPECT_LT((boresight::core::so3Log(written * nominal.transpose()) - rr).norm() * boresight::kArcsecPerRad, 1e-3)
+        << "head " << k;
+    EXPECT_TRUE(e["valid_from"] && e["valid_to"]);
+  }
+  EXPECT_NEAR(m["time_offsets"][0]["offset_s"].as<double>(), j["time_offset_s"].get<double>(), 1e-12);
+  EXPECT_EQ(m["time_offsets"][0]["sensor"].as<std::string>(), "accelerometer");
+  EXPECT_EQ(m["time_offsets"][0]["relative_to"].as<std::string>(), "heads");
+  EXPECT_NEAR(m["accelerometer"]["bias_rad_s2"][1].as<double>(), j["accelerometer"]["bias_radps2"][1].get<double>(), 1e-15);
+  EXPECT_FALSE(m["thermal"]) << "no orbit among the inputs: no thermal terms";
+  // Again with the model: the mountings of every head come from it (no QSA1B needed), the error angles
+  // are what is left, a small fraction of their sigma.
+  const CliRun again = run("calibrate --config " + kConfig + " " + sim().sca + " " + sim().acc + " --overlay " + d +
+                           "/model.yaml --time-offset --json " + d + "/again.json");
+  ASSERT_EQ(again.status, 0) << again.out;
+  EXPECT_NE(again.out.find("applied: mountings: heads 1, 2, 3 (every head: QSA1B not needed)"), std::string::npos) << again.out;
+  EXPECT_NE(again.out.find("not applied: accelerometer: boresight calibrate does not apply accelerometer terms"), std::string::npos)
+      << again.out;
+  EXPECT_NE(again.out.find("not applied: time_offsets: boresight calibrate does not apply time offsets"), std::string::npos)
+      << again.out;
+  const auto j2 = readJson(d + "/again.json");
+  for (std::size_t k = 0; k < 3; ++k)
+    for (int a = 0; a < 3; ++a) {
+      const double left = j2["heads"][k]["error_angles_arcsec"][a], sg = j2["heads"][k]["sigma_arcsec"][a];
+      EXPECT_LT(std::abs(left), 0.1 * sg) << "head " << k << " axis " << a << ": " << left << " +- " << sg;
+    }
+  for (const auto& h : j2["model_in_use"]["heads"])
+    EXPECT_EQ(h["mounting_source"].get<std::string>().rfind("overlay " + d + "/model.yaml (datum accelerometer", 0), 0u) << h.dump();
 }

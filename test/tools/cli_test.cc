@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <string>
 #include <sys/wait.h>
@@ -162,7 +163,10 @@ TEST(Cli, ProcessConfigErrorsNameFileAndKey) {
   }
   CliRun r = run("process --config " + dir + "/bad.yaml x.txt --out " + dir + "/o.csv");
   EXPECT_EQ(r.status, 1);
-  EXPECT_NE(r.out.find(dir + "/bad.yaml:6: key 'heads.list[0].sigma_roll_arcsec': must be > 0"), std::string::npos) << r.out;
+  // (the old per-head level: the error says where it moved)
+  EXPECT_NE(r.out.find(dir + "/bad.yaml:6: key 'heads.list[0].sigma_roll_arcsec': the head noise levels moved to the noise "
+                             "section: noise.head_defaults.about_boresight"),
+            std::string::npos) << r.out;
 }
 
 TEST(CliReal, ProcessGivesTheSameRowsFromAnLcmLogAsFromLevel1) {
@@ -251,7 +255,8 @@ TEST(Cli, ProcessStreamsTheSimulatorsOutputWhateverTheLogIsCalled) {
   CliRun sim = run("simulate --scenario " BORESIGHT_SOURCE_DIR "/config/sim_gracefo.yaml --seed 3 --duration 150 --out " +
                    dir + " --quiet");
   ASSERT_EQ(sim.status, 0) << sim.out;
-  const std::string cfg = " --config " BORESIGHT_SOURCE_DIR "/config/gracefo.yaml ";
+  // the ideal noise preset: the data are simulated from config/sim_gracefo.yaml (white 6"/48" heads)
+  const std::string cfg = " --config " BORESIGHT_SOURCE_DIR "/config/gracefo_ideal.yaml ";
   const std::string d = dir + "/";
   const std::string qsa = d + "QSA1B_2023-06-01_C_04.txt", gnv = d + "GNV1B_2023-06-01_C_04.txt";
   // Level-1, with an orbit file process does not need: listed as ignored, not an error.
@@ -286,7 +291,7 @@ TEST(Cli, ProcessCompareSca1bFilesThatCannotBeReadAreErrors) {
                    dir + " --quiet --no-lcm");
   ASSERT_EQ(sim.status, 0) << sim.out;
   const std::string d = dir + "/";
-  const std::string base = "process --config " BORESIGHT_SOURCE_DIR "/config/gracefo.yaml " + d +
+  const std::string base = "process --config " BORESIGHT_SOURCE_DIR "/config/gracefo_ideal.yaml " + d +
                            "SCA1A_2023-06-01_C_04.txt " + d + "QSA1B_2023-06-01_C_04.txt --out " + d + "p.csv";
   // A missing SCA1B: exit 1 with the file and the reason (before the replay, nothing else printed).
   CliRun a = run(base + " --compare-sca1b " + d + "no_such_SCA1B.txt");
@@ -316,4 +321,157 @@ TEST(Cli, ProcessCompareSca1bFilesThatCannotBeReadAreErrors) {
   CliRun g = run(base + " --compare-sca1b " + d + "SCA1B_2023-06-01_C_04.txt");
   EXPECT_EQ(g.status, 0) << g.out;
   EXPECT_NE(g.out.find("SCA1B comparison: no common epochs"), std::string::npos) << g.out;
+}
+
+// ---- the model overlay -------------------------------------------------------------------------
+
+namespace {
+
+/// The fused attitudes of a process CSV (time -> q_I_B).
+std::map<std::string, boresight::Quat> fusedRows(const std::string& csv) {
+  std::map<std::string, boresight::Quat> rows;
+  std::ifstream f(csv);
+  std::string line;
+  std::getline(f, line);
+  while (std::getline(f, line)) {
+    std::stringstream ls(line);
+    std::string t, c[4];
+    std::getline(ls, t, ',');
+    for (auto& x : c) std::getline(ls, x, ',');
+    rows[t] = boresight::Quat(std::stod(c[0]), std::stod(c[1]), std::stod(c[2]), std::stod(c[3]));
+  }
+  return rows;
+}
+
+/// RMS angle between the fused attitudes of two runs over their common rows, arcsec.
+double rmsAngleArcsec(const std::map<std::string, boresight::Quat>& a, const std::map<std::string, boresight::Quat>& b) {
+  double s = 0;
+  int n = 0;
+  for (const auto& [t, q] : a) {
+    const auto it = b.find(t);
+    if (it == b.end()) continue;
+    const double ang = 2 * std::asin(std::min(1.0, (q.conjugate() * it->second).vec().norm()));
+    s += ang * ang;
+    ++n;
+  }
+  EXPECT_GT(n, 100);
+  return std::sqrt(s / std::max(n, 1)) * boresight::kArcsecPerRad;
+}
+
+}  // namespace
+
+TEST(Cli, ProcessRefusesAnOverlayWithAnUnknownVersionOrKey) {
+  const std::string dir = tempDir();
+  const std::string cfg = "process --config " BORESIGHT_SOURCE_DIR "/config/gracefo_ideal.yaml x.txt --out " + dir + "/o.csv";
+  ASSERT_TRUE(testutil::writeFile(dir + "/v.yaml", "boresight_overlay: 2\nwritten_by: x\n"));
+  CliRun a = run(cfg + " --overlay " + dir + "/v.yaml");
+  EXPECT_EQ(a.status, 1) << a.out;
+  EXPECT_NE(a.out.find(dir + "/v.yaml:1: key 'boresight_overlay': unsupported version 2 (this program reads version 1)"),
+            std::string::npos) << a.out;
+  ASSERT_TRUE(testutil::writeFile(dir + "/k.yaml", "boresight_overlay: 1\nwritten_by: x\nnoise:\n  head_default:\n"
+                                                   "    cross_x: [{kind: white, sigma_arcsec: 2}]\n"));
+  CliRun b = run(cfg + " --overlay " + dir + "/k.yaml");
+  EXPECT_EQ(b.status, 1) << b.out;
+  EXPECT_NE(b.out.find(dir + "/k.yaml:4: key 'noise.head_default': unknown key; did you mean 'head_defaults'?"),
+            std::string::npos) << b.out;
+}
+
+TEST(Cli, ProcessTakesNoiseAndMountingsFromAnOverlay) {
+  // A platform with nominal fusion (no in-flight alignment: the fusion is the weighted mean of the heads
+  // through their mountings) over two simulated minutes.
+  const std::string dir = tempDir();
+  ASSERT_EQ(run("simulate --scenario " BORESIGHT_SOURCE_DIR "/config/sim_gracefo.yaml --seed 4 --duration 240 --out " + dir +
+                " --quiet --no-lcm").status, 0);
+  const std::string d = dir + "/";
+  ASSERT_TRUE(testutil::writeFile(d + "nominal.yaml", "base: " BORESIGHT_SOURCE_DIR "/config/gracefo_ideal.yaml\n"
+                                                      "heads:\n  fusion_alignment: nominal\n"));
+  const std::string cfg = "process --config " + d + "nominal.yaml ";
+  const std::string sca = d + "SCA1A_2023-06-01_C_04.txt", qsa = d + "QSA1B_2023-06-01_C_04.txt";
+  CliRun base = run(cfg + sca + " " + qsa + " --out " + d + "base.csv");
+  ASSERT_EQ(base.status, 0) << base.out;
+  EXPECT_NE(base.out.find("noise in use"), std::string::npos) << base.out;
+  EXPECT_NE(base.out.find("(" BORESIGHT_SOURCE_DIR "/config/gracefo_ideal.yaml noise.head_defaults)"), std::string::npos) << base.out;
+  EXPECT_NE(base.out.find("head 1: QSA1B"), std::string::npos) << base.out;
+
+  // 1. Noise: head 3 made 500 times noisier across (75 about the boresight) by the overlay weighs nothing: the fused attitude becomes
+  //    that of heads 1 and 2 (the same data without head 3's samples), from tens of arcsec away.
+  ASSERT_TRUE(testutil::writeFile(d + "h3.yaml", "boresight_overlay: 1\nwritten_by: cli_test\nnoise:\n  heads:\n    - id: 3\n"
+                                                 "      cross_x: [{kind: white, sigma_arcsec: 3000}]\n"
+                                                 "      cross_y: [{kind: white, sigma_arcsec: 3000}]\n"
+                                                 "      about_boresight: [{kind: white, sigma_arcsec: 3600}]\n"
+                                                 "time_offsets:\n  - {sensor: head3, relative_to: heads, offset_s: 0.01, offset_sigma_s: 0.001}\n"));
+  CliRun ov = run(cfg + sca + " " + qsa + " --overlay " + d + "h3.yaml --out " + d + "h3.csv");
+  ASSERT_EQ(ov.status, 0) << ov.out;
+  EXPECT_NE(ov.out.find("head 3: cross_x white 3e+03\", cross_y white 3e+03\", about_boresight white 3.6e+03\" (overlay " + d +
+                        "h3.yaml noise.heads[id 3]); star_direction white 5\""),
+            std::string::npos) << ov.out;
+  EXPECT_NE(ov.out.find("applied: noise: head 3 cross_x, head 3 cross_y, head 3 about_boresight"), std::string::npos) << ov.out;
+  EXPECT_NE(ov.out.find("not applied: time_offsets: boresight process does not apply time offsets (head3 against heads)"),
+            std::string::npos) << ov.out;
+  {
+    std::istringstream in(testutil::slurp(sca));
+    std::ofstream o(d + "SCA1A_no3.txt");
+    std::string line;
+    while (std::getline(in, line)) {
+      const auto p = line.find(" C 3 ");
+      if (p != std::string::npos && p < 30) continue;
+      o << line << "\n";
+    }
+  }
+  ASSERT_EQ(run(cfg + d + "SCA1A_no3.txt " + qsa + " --out " + d + "no3.csv").status, 0);
+  const auto rows_base = fusedRows(d + "base.csv"), rows_h3 = fusedRows(d + "h3.csv"), rows_12 = fusedRows(d + "no3.csv");
+  const double before = rmsAngleArcsec(rows_base, rows_12), after = rmsAngleArcsec(rows_h3, rows_12);
+  std::printf("fused attitude against heads 1 and 2 alone: %.3f\" RMS with head 3 at 6\"/48\", %.5f\" with the overlay's "
+              "3000\"/3600\"\n", before, after);
+  EXPECT_GT(before, 2.0);
+  EXPECT_LT(after, 0.01 * before);
+
+  // 2. Mountings: an overlay with every head's QSA1B mounting replaces QSA1B (none given): the same rows.
+  const auto qsa_records = readProduct<QsaRecord>(qsa);
+  ASSERT_TRUE(qsa_records.ok) << qsa_records.error;
+  std::ostringstream m;
+  m.precision(17);
+  m << "boresight_overlay: 1\nwritten_by: cli_test\nmountings:\n";
+  for (int id = 1; id <= 3; ++id) {
+    const QsaRecord* r = nullptr;
+    for (const auto& q : qsa_records.records)
+      if (q.sensor == id) r = &q;
+    ASSERT_NE(r, nullptr) << id;
+    m << "  - {head: " << id << ", q_Si_B: [" << r->q[0] << ", " << r->q[1] << ", " << r->q[2] << ", " << r->q[3]
+      << "], datum: ground, epoch: \"2023-06-01\", sigma_arcsec: [null, null, null]}\n";
+  }
+  ASSERT_TRUE(testutil::writeFile(d + "mount.yaml", m.str()));
+  CliRun mo = run(cfg + sca + " --overlay " + d + "mount.yaml --out " + d + "mount.csv");
+  ASSERT_EQ(mo.status, 0) << mo.out;
+  EXPECT_NE(mo.out.find("applied: mountings: heads 1, 2, 3 (every head: QSA1B not needed)"), std::string::npos) << mo.out;
+  EXPECT_NE(mo.out.find("head 2: overlay " + d + "mount.yaml (datum ground, epoch 2023-06-01 00:00:00.000000"), std::string::npos)
+      << mo.out;
+  const std::string csv_base = testutil::slurp(d + "base.csv"), csv_mount = testutil::slurp(d + "mount.csv");
+  EXPECT_GT(csv_base.size(), 10000u);
+  // QSA1B's quaternions are normalised when read; written with 17 digits and read back they are the same rows
+  EXPECT_LT(rmsAngleArcsec(fusedRows(d + "mount.csv"), rows_base), 1e-6);
+
+  // 3. One head's mounting from the overlay (QSA1B's turned by 90" about the head's x axis), the others
+  //    from QSA1B: QSA1B does not overwrite it, and the fusion moves (by part of it).
+  const QsaRecord* r2 = nullptr;
+  for (const auto& q : qsa_records.records)
+    if (q.sensor == 2) r2 = &q;
+  ASSERT_NE(r2, nullptr);
+  const boresight::Quat q2 = (boresight::Quat(Eigen::AngleAxisd(90 * boresight::kRadPerArcsec, boresight::Vec3::UnitX())) *
+                              boresight::Quat(r2->q[0], r2->q[1], r2->q[2], r2->q[3]).normalized())
+                                 .normalized();
+  std::ostringstream one;
+  one.precision(17);
+  one << "boresight_overlay: 1\nwritten_by: cli_test\nmountings:\n  - {head: 2, q_Si_B: [" << q2.w() << ", " << q2.x() << ", "
+      << q2.y() << ", " << q2.z() << "], datum: ground, epoch: \"2023-06-01\", sigma_arcsec: [1, 1, 1]}\n";
+  ASSERT_TRUE(testutil::writeFile(d + "one.yaml", one.str()));
+  CliRun o1 = run(cfg + sca + " " + qsa + " --overlay " + d + "one.yaml --out " + d + "one.csv");
+  ASSERT_EQ(o1.status, 0) << o1.out;
+  EXPECT_NE(o1.out.find("  head 1: QSA1B"), std::string::npos) << o1.out;
+  EXPECT_NE(o1.out.find("  head 2: overlay " + d + "one.yaml"), std::string::npos) << o1.out;
+  EXPECT_NE(o1.out.find("  head 3: QSA1B"), std::string::npos) << o1.out;
+  const double moved = rmsAngleArcsec(fusedRows(d + "one.csv"), rows_base);
+  std::printf("fused attitude moved by %.2f\" RMS with head 2 turned by 90\"\n", moved);
+  EXPECT_GT(moved, 10.0);
+  EXPECT_LT(moved, 90.0);
 }

@@ -8,10 +8,12 @@
 
 #include "cli_common.h"
 #include "commands.h"
+#include "model_json.h"
 
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <string>
 #include <vector>
 
@@ -20,7 +22,8 @@ namespace {
 
 const char* kUsage =
     "usage: boresight audit --config FILE INPUT... --out DIR [--truth truth.yaml] [--false-alarm P]\n"
-    "                       [--holdout-blocks N] [--max-harmonic N] [--lookahead S] [--strict] [--quiet]\n"
+    "                       [--overlay FILE] [--holdout-blocks N] [--max-harmonic N] [--lookahead S] [--strict]\n"
+    "                       [--quiet]\n"
     "\n"
     "The model audit: shows what the configured model gets wrong in measured data, names the cause from\n"
     "the effect catalogue (boresight simulate --list-effects), extends the model with it and measures\n"
@@ -41,7 +44,11 @@ const char* kUsage =
     "causes the evidence supports are named, groups the data cannot separate are reported with what\n"
     "would separate them, and significant residuals nothing explains are reported as not explained.\n"
     "\n"
-    "  --config FILE          platform file (config/gracefo.yaml)\n"
+    "  --config FILE          platform file (config/gracefo.yaml; config/gracefo_ideal.yaml for data simulated\n"
+    "                         with the ideal noise preset)\n"
+    "  --overlay FILE         a model overlay (README \"The model overlay\"): its noise models replace the\n"
+    "                         platform file's (the levels the noise tests compare with), its mountings the\n"
+    "                         nominal ones; the parts the audit does not use are listed as not applied\n"
     "  --out DIR              writes DIR/report.md (findings, evidence, gain table, plots), DIR/audit.json\n"
     "                         (keys: baseline, effects[], named_causes[], not_explained[], ambiguous[],\n"
     "                         extended, gain, gains[], truth[] with --truth) and the SVG plots\n"
@@ -137,6 +144,7 @@ int runAudit(int argc, char** argv) {
   app.add_option("--config", req.config)->required();
   app.add_option("--out", out_dir)->required();
   app.add_option("--truth", req.truth);
+  app.add_option("--overlay", req.overlay);
   app.add_option("--false-alarm", req.options.false_alarm)->check(finiteRange(1e-12, 0.5));
   app.add_option("--holdout-blocks", req.options.holdout_blocks)->check(finiteRange(1, 1000));
   app.add_option("--max-harmonic", req.options.max_harmonic)->check(finiteRange(0, 20));
@@ -153,6 +161,7 @@ int runAudit(int argc, char** argv) {
     std::vector<std::string> ins = req.inputs;
     ins.push_back(req.config);
     if (!req.truth.empty()) ins.push_back(req.truth);
+    if (!req.overlay.empty()) ins.push_back(req.overlay);
     if (!io::checkOutputs(ins, {{"--out", out_dir, true}}, &err)) return fail(err);
   }
   io::OutputDir dir;
@@ -178,17 +187,24 @@ int runAudit(int argc, char** argv) {
       if (s.find(" rejected") != std::string::npos || s.find(" read, ") != std::string::npos) std::printf("%s\n", s.c_str());
     if (!out.reference_time_base.empty()) std::printf("outside reference SCA1B: %s\n", out.reference_time_base.c_str());
   }
+  for (const auto& s : out.model_in_use) std::printf("%s\n", s.c_str());
   printResult(out.result);
 
   audit::ReportContext ctx;
   ctx.command = "boresight audit --config " + req.config;
+  if (!req.overlay.empty()) ctx.command += " --overlay " + req.overlay;
   for (const auto& f : req.inputs) ctx.command += " " + f;
   ctx.command += " --out " + out_dir;
   if (!req.truth.empty()) ctx.command += " --truth " + req.truth;
   ctx.inputs = out.inputs;
   ctx.notes = out.notes;
+  ctx.notes.insert(ctx.notes.end(), out.model_in_use.begin(), out.model_in_use.end());
   const std::string json = out_dir + "/audit.json";
-  if (!audit::writeAuditJson(out.result, json, &err)) return fail(err);
+  {  // the audit's keys, then the model it ran with
+    nlohmann::ordered_json j = nlohmann::ordered_json::parse(audit::auditJsonText(out.result));
+    j["model_in_use"] = modelInUseJson(out.platform, out.overlay);
+    if (!io::writeFileAtomic(json, j.dump(2) + "\n", &err)) return fail(err);
+  }
   if (!audit::writeAuditReport(out.result, out_dir, &err, &ctx)) return fail(err);
   dir.keep();
   std::printf("-> %s/report.md, %s", out_dir.c_str(), json.c_str());

@@ -5,18 +5,24 @@
 #include <boresight/calib/solver.h>
 #include <boresight/calib/span_builder.h>
 #include <boresight/calib/thermal_fit.h>
+#include <boresight/core/rotation.h>
 #include <boresight/io/product_stream.h>
 #include <boresight/io/core_config.h>
 #include <boresight/io/files.h>
+#include <boresight/io/overlay_apply.h>
+#include <boresight/io/overlay_yaml.h>
+#include <boresight/io/time_format.h>
 #include <boresight/report/calibration.h>
 #include <boresight/stream/engine.h>
 #include <boresight/stream/replay.h>
 
 #include "cli_common.h"
 #include "commands.h"
+#include "model_json.h"
 #include "replay_summary.h"
 
 #include <chrono>
+#include <limits>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -30,6 +36,7 @@ namespace {
 
 const char* kUsage =
     "usage: boresight calibrate --config FILE INPUT... --json FILE [--yaml FILE] [--report DIR]\n"
+    "                           [--overlay FILE] [--write-model FILE]\n"
     "                           [--relative hard|prior] [--no-acc-bias] [--acc-scale] [--acc-nonorthogonality]\n"
     "                           [--time-offset] [--huber S] [--no-whiten] [--decimation S] [--max-observations N]\n"
     "                           [--crn-bandwidth HZ --crn-length S] [--moments]\n"
@@ -51,7 +58,16 @@ const char* kUsage =
     "rotation of the accelerometer cannot be told from a common rotation of all heads. Error angles:\n"
     "rotation vector r in the head frame, C_S_B(true) = Exp([r]x) C_S_B(nominal), arcsec.\n"
     "\n"
-    "  --config FILE            platform file (config/gracefo.yaml)\n"
+    "  --config FILE            platform file (config/gracefo.yaml; config/gracefo_ideal.yaml for data simulated\n"
+    "                           with the ideal noise preset)\n"
+    "  --overlay FILE           a model overlay (README \"The model overlay\"): its noise models replace the\n"
+    "                           platform file's (the weights of the heads and the accelerometer), its mountings\n"
+    "                           the nominal ones (the error angles are then relative to them); the parts\n"
+    "                           calibrate does not use are listed as not applied\n"
+    "  --write-model FILE       the result as a model overlay: per head the mounting Exp([r]x) q_Si_B(nominal)\n"
+    "                           with its sigma (datum: the accelerometer frame; epoch: the middle of the span;\n"
+    "                           valid over the span), the accelerometer terms, the thermal harmonics and the\n"
+    "                           time offset when estimated\n"
     "  --json FILE              the result (keys: heads[] {id, error_angles_arcsec, sigma_arcsec (null: not\n"
     "                           determined), crlb_arcsec, observable}, unobservable_directions_B,\n"
     "                           covariance_arcsec2, accelerometer, time_offset_s, time_offset_sigma_s,\n"
@@ -165,11 +181,107 @@ std::string fmt(const char* f, double v) {
   return b;
 }
 
+/// A sigma given in arcsec (empty: not determined) -> rad (NaN: not determined).
+double sigmaRad(const std::optional<double>& arcsec) {
+  return arcsec ? *arcsec * kRadPerArcsec : std::numeric_limits<double>::quiet_NaN();
+}
+
+model::Uncertain3 uncertain(const calib::Estimate3& e, double scale) {
+  model::Uncertain3 u;
+  for (int i = 0; i < 3; ++i) {
+    u.value[i] = e.value[static_cast<std::size_t>(i)] * scale;
+    u.sigma[i] = e.sigma[static_cast<std::size_t>(i)] ? *e.sigma[static_cast<std::size_t>(i)] * scale
+                                                      : std::numeric_limits<double>::quiet_NaN();
+  }
+  return u;
+}
+
+/// The result as a model overlay (--write-model): mountings in the accelerometer datum, the
+/// accelerometer terms, the thermal harmonics and the time offset, valid over the data's span.
+model::Overlay resultOverlay(const calib::SolveResult& r, const io::PlatformConfig& pc, const calib::ThermalFitResult* tf,
+                             TimeUs t0, TimeUs t1, const std::string& config) {
+  model::Overlay o;
+  o.written_by = std::string("boresight calibrate ") + BORESIGHT_VERSION;
+  o.platform = pc.platform;
+  o.note = "method A over " + fmt("%.1f", toSeconds(t1 - t0)) + " s of data from " + io::formatTime(t0) + " (platform file " +
+           config + ")";
+  model::Validity span;
+  span.from = t0;
+  span.to = t1;
+  for (std::size_t k = 0; k < r.heads.size(); ++k) {
+    const calib::HeadResult& hr = r.heads[k];
+    const int s = core::slotOf(pc.pipeline.heads, hr.id);
+    if (s < 0) continue;
+    model::MountingEntry m;
+    m.head = hr.id;
+    m.q_Si_B = (core::quatExp(r.estimate.r_S[static_cast<std::size_t>(s)]) * pc.pipeline.heads.head[static_cast<std::size_t>(s)].q_Si_B).normalized();
+    m.datum = model::MountingDatum::Accelerometer;
+    m.epoch = t0 + (t1 - t0) / 2;
+    for (int a = 0; a < 3; ++a) m.sigma_rad[a] = sigmaRad(hr.sigma_arcsec[static_cast<std::size_t>(a)]);
+    m.valid = span;
+    o.mountings.push_back(m);
+  }
+  if (r.acc_bias_radps2 || r.acc_scale || r.acc_nonorthogonality_arcsec) {
+    model::AccelerometerTerms a;
+    if (r.acc_bias_radps2) a.bias_rad_s2 = uncertain(*r.acc_bias_radps2, 1.0);
+    if (r.acc_scale) a.scale = uncertain(*r.acc_scale, 1.0);
+    if (r.acc_nonorthogonality_arcsec) a.nonorthogonality_rad = uncertain(*r.acc_nonorthogonality_arcsec, kRadPerArcsec);
+    a.valid = span;
+    o.accelerometer = a;
+  }
+  if (r.time_offset_s) {
+    model::TimeOffsetEntry t;
+    t.sensor = "accelerometer";
+    t.relative_to = "heads";
+    t.offset_s = *r.time_offset_s;
+    t.sigma_s = r.time_offset_sigma_s.value_or(std::numeric_limits<double>::quiet_NaN());
+    t.valid = span;
+    o.time_offsets.push_back(t);
+  }
+  if (tf && tf->ok) {
+    model::ThermalTerms th;
+    th.valid = span;
+    if (tf->beta_determined) th.beta_ref_rad = tf->beta_ref_deg * kRadPerDeg;
+    for (const calib::ThermalHeadFit& h : tf->heads) {
+      th.datum_head = h.datum_id;
+      if (!h.determined) continue;
+      model::ThermalHeadEntry e;
+      e.head = h.id;
+      for (int a = 0; a < 3; ++a) {
+        e.constant_rad.value[a] = h.axis[static_cast<std::size_t>(a)].constant_arcsec * kRadPerArcsec;
+        e.constant_rad.sigma[a] = h.axis[static_cast<std::size_t>(a)].sigma_constant_arcsec * kRadPerArcsec;
+      }
+      auto harmonics = [&](bool beta) {
+        std::vector<model::ThermalHarmonicEntry> out;
+        const std::size_t n = beta ? h.axis[0].beta_terms.size() : h.axis[0].terms.size();
+        for (std::size_t i = 0; i < n; ++i) {
+          model::ThermalHarmonicEntry x;
+          for (int a = 0; a < 3; ++a) {
+            const auto& t = beta ? h.axis[static_cast<std::size_t>(a)].beta_terms[i] : h.axis[static_cast<std::size_t>(a)].terms[i];
+            x.harmonic = t.harmonic;
+            x.cos_rad.value[a] = t.cos_arcsec * kRadPerArcsec;
+            x.cos_rad.sigma[a] = t.sigma_cos_arcsec * kRadPerArcsec;
+            x.sin_rad.value[a] = t.sin_arcsec * kRadPerArcsec;
+            x.sin_rad.sigma[a] = t.sigma_sin_arcsec * kRadPerArcsec;
+          }
+          out.push_back(x);
+        }
+        return out;
+      };
+      e.harmonics = harmonics(false);
+      e.beta_harmonics = harmonics(true);
+      th.heads.push_back(e);
+    }
+    if (!th.heads.empty()) o.thermal = th;
+  }
+  return o;
+}
+
 }  // namespace
 
 int runCalibrate(int argc, char** argv) {
   CLI::App app{"boresight calibrate"};
-  std::string config, json_path, yaml_path, report_dir, relative = "hard";
+  std::string config, json_path, yaml_path, report_dir, relative = "hard", overlay, write_model;
   std::vector<std::string> files;
   bool moments = false, no_whiten = false, no_bias = false, acc_scale = false, acc_nonorth = false, time_offset = false, strict = false;
   double huber = 5.0, decimation = 10.0, unobs = 3600.0, lookahead_s = 2.0, plan_exc = 4.9e-5, plan_sigma = 30.0;
@@ -179,6 +291,8 @@ int runCalibrate(int argc, char** argv) {
   app.add_option("--json", json_path)->required();
   app.add_option("--yaml", yaml_path);
   app.add_option("--report", report_dir);
+  app.add_option("--overlay", overlay);
+  app.add_option("--write-model", write_model);
   app.add_option("--relative", relative)->check(CLI::IsMember({"hard", "prior"}));
   app.add_flag("--no-acc-bias", no_bias);
   app.add_flag("--acc-scale", acc_scale);
@@ -216,10 +330,15 @@ int runCalibrate(int argc, char** argv) {
   {  // outputs never destroy inputs, checked before anything is read or written
     std::vector<std::string> ins = files;
     ins.push_back(config);
-    if (!io::checkOutputs(ins, {{"--json", json_path}, {"--yaml", yaml_path}, {"--report", report_dir, true}}, &err))
+    if (!overlay.empty()) ins.push_back(overlay);
+    if (!io::checkOutputs(ins, {{"--json", json_path}, {"--yaml", yaml_path}, {"--report", report_dir, true},
+                                {"--write-model", write_model}},
+                          &err))
       return fail(err);
   }
   if (!io::loadPlatformConfig(config, pc, &err)) return fail(err);
+  io::OverlayUse ovu;
+  if (!overlay.empty() && !io::applyOverlay(overlay, "boresight calibrate", {}, pc, ovu, &err)) return fail(err);
   stream::ReplayInputs in;
   if (!stream::classifyInputs(files, in, &err)) return fail(err);
   for (const auto& [f, product] : in.ignored)
@@ -240,6 +359,8 @@ int runCalibrate(int argc, char** argv) {
     return fail("no accelerometer input: method A compares the heads' angular acceleration with the "
                 "accelerometer's; give ACC1A files or an LCM log with accelerometer messages");
 
+  for (const auto& l : io::modelInUseLines(pc, ovu)) std::printf("%s\n", l.c_str());
+
   stream::AssemblerConfig acfg;
   acfg.lookahead_us = static_cast<TimeUs>(std::llround(lookahead_s * 1e6));
   stream::Engine engine(acfg);
@@ -247,6 +368,9 @@ int runCalibrate(int argc, char** argv) {
   calib::SpanBuilder builder;
   calib::SpanOptions spo;
   spo.decimation_s = decimation;
+  // The accelerometer's weight: the white part of each A axis's noise model (the span builder models
+  // white noise through the CRN low-pass).
+  for (int a = 0; a < 3; ++a) spo.acc_white_noise_radps2[a] = pc.noise_in_use.accWhiteSigma(a);
   spo.max_observations = max_obs;
   if ((crn_bw > 0) != (crn_len > 0)) return fail("--crn-bandwidth and --crn-length go together");
   spo.crn_bandwidth_hz = crn_bw;
@@ -268,6 +392,7 @@ int runCalibrate(int argc, char** argv) {
   printSourceCounters(engine);
   const core::Health h = engine.health();
   printCoreHealth(h);
+  for (const auto& w : io::validityWarnings(ovu, engine.firstEpoch(), engine.lastEpoch())) std::printf("warning: %s\n", w.c_str());
 
   // Bad input the replay survived but a calibration must not.
   const auto& tot = engine.counters();
@@ -341,6 +466,7 @@ int runCalibrate(int argc, char** argv) {
   }
 
   std::string thermal_text;
+  calib::ThermalFitResult thermal_fit;
   report::CalibrationContext ctx;
   ctx.config = config;
   ctx.inputs = in.sca;
@@ -350,7 +476,8 @@ int runCalibrate(int argc, char** argv) {
   ctx.options = so;
   ctx.span_options = spo;
   if (with_thermal) {
-    const calib::ThermalFitResult tf = thermal.fit();
+    thermal_fit = thermal.fit();
+    const calib::ThermalFitResult& tf = thermal_fit;
     ctx.thermal = report::thermalJson(tf);
     thermal_text = calib::formatThermalFit(tf);
     stages.mark("thermal fit");
@@ -363,10 +490,25 @@ int runCalibrate(int argc, char** argv) {
   ctx.ignored.clear();
   for (const auto& ig : in.ignored)
     if (ig.second != "GNV1B" && ig.second != "GNI1B") ctx.ignored.push_back(ig);
-  const report::Json j = report::calibrationJson(r, ctx);
+  report::Json j = report::calibrationJson(r, ctx);
+  j["model_in_use"] = modelInUseJson(pc, ovu);
   if (!writeText(json_path, j.dump(2) + "\n", &err)) return fail(err);
   if (!yaml_path.empty() && !writeText(yaml_path, report::toYaml(j), &err)) return fail(err);
-  if (!report_dir.empty() && !report::writeCalibrationReport(report_dir, span, r, j, &err)) return fail(err);
+  if (!report_dir.empty()) {
+    if (!report::writeCalibrationReport(report_dir, span, r, j, &err)) return fail(err);
+    std::string text = "\n## Model in use\n\n```\n";
+    for (const auto& l : io::modelInUseLines(pc, ovu)) text += l + "\n";
+    // Appended by rewriting the whole file (whole or not at all, as every output).
+    const std::string md_path = report_dir + "/report.md";
+    std::string md;
+    if (!io::readBounded(md_path, io::kMaxTableBytes, "report", md, &err) ||
+        !io::writeFileAtomic(md_path, md + text + "```\n", &err))
+      return fail(err);
+  }
+  if (!write_model.empty()) {
+    const model::Overlay m = resultOverlay(r, pc, with_thermal ? &thermal_fit : nullptr, span.t_first, span.t_last, config);
+    if (!io::writeOverlay(write_model, m, &err)) return fail(err);
+  }
   stages.mark("output");
 
   std::printf("\n%s (%zu epochs over %.1f s, residual RMS %.3e rad/s^2, relative attitude as a %s)\n",
@@ -387,8 +529,9 @@ int runCalibrate(int argc, char** argv) {
   if (!thermal_text.empty()) std::printf("\nthermal harmonic model:\n%s", thermal_text.c_str());
   else std::printf("thermal: %s\n", ctx.thermal["status"].get<std::string>().c_str());
   std::printf("stages: %s\n", stages.text.c_str());
-  std::printf("-> %s%s%s%s%s\n", json_path.c_str(), yaml_path.empty() ? "" : ", ", yaml_path.c_str(),
-              report_dir.empty() ? "" : ", ", report_dir.empty() ? "" : (report_dir + "/report.md").c_str());
+  std::printf("-> %s%s%s%s%s%s%s\n", json_path.c_str(), yaml_path.empty() ? "" : ", ", yaml_path.c_str(),
+              report_dir.empty() ? "" : ", ", report_dir.empty() ? "" : (report_dir + "/report.md").c_str(),
+              write_model.empty() ? "" : ", model overlay ", write_model.c_str());
   return 0;
 }
 

@@ -4,6 +4,7 @@
 #include <boresight/io/core_config.h>
 #include <boresight/io/files.h>
 #include <boresight/io/lcm_log.h>
+#include <boresight/io/overlay_apply.h>
 #include <boresight/io/level1.h>
 #include <boresight/io/product_stream.h>
 #include <boresight/io/time_format.h>
@@ -28,7 +29,7 @@ namespace {
 
 const char* kUsage =
     "usage: boresight process --config FILE INPUT... --out FILE.csv [--compare-sca1b FILE] [--clk1b FILE]\n"
-    "                         [--stars-out FILE.csv] [--lookahead S] [--strict]\n"
+    "                         [--stars-out FILE.csv] [--overlay FILE] [--lookahead S] [--strict]\n"
     "\n"
     "Runs the real-time core (head fusion, CRN rates and angular acceleration, accelerometer angular\n"
     "acceleration through the same CRN, inter-boresight monitor) over Level-1 files (SCA1A, ACC1A, and\n"
@@ -46,8 +47,12 @@ const char* kUsage =
     "Star vectors (SCV1A files, STAR_VECTORS messages) among the inputs go to the multi-head Wahba solver\n"
     "with the thermally corrected relative matrices (config: thermal.wahba_correction).\n"
     "\n"
-    "  --config FILE         platform file (config/gracefo.yaml)\n"
+    "  --config FILE         platform file (config/gracefo.yaml; config/gracefo_ideal.yaml for data simulated\n"
+    "                        with the ideal noise preset)\n"
     "  --out FILE.csv        output table\n"
+    "  --overlay FILE        a model overlay (README \"The model overlay\"): its noise models replace the\n"
+    "                        platform file's (fusion weights), its mountings the platform file's or QSA1B's;\n"
+    "                        the parts process does not use are listed as not applied\n"
     "  --compare-sca1b FILE  compare the fused attitude with the official SCA1B product: per-axis mean\n"
     "                        and scatter of the difference (arcsec, body axes)\n"
     "  --clk1b FILE          receiver-to-GPS clock offsets for that comparison (Level-1A tags are\n"
@@ -109,7 +114,7 @@ bool compareSca1b(const std::vector<std::pair<TimeUs, Quat>>& rows, const std::s
 
 int runProcess(int argc, char** argv) {
   CLI::App app{"boresight process"};
-  std::string config, out, compare, clk1b, stars_out;
+  std::string config, out, compare, clk1b, stars_out, overlay;
   std::vector<std::string> files;
   bool strict = false;
   double lookahead_s = 2.0;
@@ -118,6 +123,7 @@ int runProcess(int argc, char** argv) {
   app.add_option("--compare-sca1b", compare);
   app.add_option("--clk1b", clk1b);
   app.add_option("--stars-out", stars_out);
+  app.add_option("--overlay", overlay);
   app.add_option("--lookahead", lookahead_s)->check(finiteRange(0.0, 3600.0));
   app.add_flag("--strict", strict);
   app.add_option("inputs", files)->required();
@@ -127,13 +133,18 @@ int runProcess(int argc, char** argv) {
   std::string err;
   {  // outputs never destroy inputs, checked before anything is read or written
     std::vector<std::string> ins = files;
-    for (const auto* p : {&config, &compare, &clk1b}) ins.push_back(*p);
+    for (const auto* p : {&config, &compare, &clk1b, &overlay}) ins.push_back(*p);
     if (!io::checkOutputs(ins, {{"--out", out}, {"--stars-out", stars_out}}, &err)) {
       std::fprintf(stderr, "boresight process: %s\n", err.c_str());
       return 1;
     }
   }
   if (!io::loadPlatformConfig(config, pc, &err)) {
+    std::fprintf(stderr, "boresight process: %s\n", err.c_str());
+    return 1;
+  }
+  io::OverlayUse ovu;
+  if (!overlay.empty() && !io::applyOverlay(overlay, "boresight process", {}, pc, ovu, &err)) {
     std::fprintf(stderr, "boresight process: %s\n", err.c_str());
     return 1;
   }
@@ -163,6 +174,7 @@ int runProcess(int argc, char** argv) {
     std::fprintf(stderr, "boresight process: %s\n", err.c_str());
     return 1;
   }
+  for (const auto& l : io::modelInUseLines(pc, ovu)) std::printf("%s\n", l.c_str());
   stream::AssemblerConfig acfg;
   acfg.lookahead_us = static_cast<TimeUs>(std::llround(lookahead_s * 1e6));
   stream::Engine engine(acfg);
@@ -172,7 +184,8 @@ int runProcess(int argc, char** argv) {
   }
   stream::CsvRowSink csv(out);
   stream::CsvStarSink stars_csv(stars_out);
-  // no defer
+  // Both appear at their paths only when the run has succeeded (commit below).
+  csv.deferCommit();
   stars_csv.deferCommit();
   AttitudeTrack track;
   engine.addSink(&csv);
@@ -210,6 +223,7 @@ int runProcess(int argc, char** argv) {
                   stars_out.c_str());
   }
   printCoreHealth(engine.health());
+  for (const auto& w : io::validityWarnings(ovu, engine.firstEpoch(), engine.lastEpoch())) std::printf("warning: %s\n", w.c_str());
   if (!csv.commit(&err) || (!stars_out.empty() && !stars_csv.commit(&err))) {
     std::fprintf(stderr, "boresight process: %s\n", err.c_str());
     return 1;

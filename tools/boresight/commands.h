@@ -13,5 +13,6 @@ int runCalibrate(int argc, char** argv);
 int runGround(int argc, char** argv);
 int runSimulateGround(int argc, char** argv);
 int runAudit(int argc, char** argv);
+int runNoise(int argc, char** argv);
 
 }  // namespace boresight::cli

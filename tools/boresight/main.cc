@@ -35,6 +35,10 @@ const Command kCommands[] = {
     {"audit", "model audit: what the model gets wrong in measured data, the named cause, the gain of extending it",
      boresight::cli::runAudit},
 #endif
+#ifdef BORESIGHT_HAVE_NOISE
+    {"noise", "the noise of every head and accelerometer axis from the data: a fitted model per axis",
+     boresight::cli::runNoise},
+#endif
 #ifdef BORESIGHT_HAVE_GROUND
     {"ground", "star sensor to IMU mounting from a ground measurement (method C)", boresight::cli::runGround},
     {"simulate-ground", "simulate a method C ground measurement with its truth", boresight::cli::runSimulateGround},

@@ -146,6 +146,13 @@ int run(int argc, char** argv) {
     std::fprintf(stderr, "boresightd: %s\n", err.c_str());
     return 1;
   }
+  // ... nor the files the configuration names.
+  if (!io::checkOutputs({config, replay, cfg.platform_file, cfg.overlay},
+                        {{"--record", record}, {"--csv", csv}, {"--summary-json", summary_json}}, &err)) {
+    std::fprintf(stderr, "boresightd: %s\n", err.c_str());
+    return 1;
+  }
+  for (const auto& l : cfg.model_in_use) std::printf("%s\n", l.c_str());
   if (!replay.empty()) {  // the data's rates against the platform's, before anything is computed
     stream::ReplayInputs in;
     in.lcm.push_back(replay);
@@ -206,7 +213,7 @@ int run(int argc, char** argv) {
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const bool interrupted = !replay.empty() && g_stop.load();
   const node::Counters& c0 = n.counters();
-  if (false) {
+  if (!replay.empty() && !interrupted && c0.received == 0) {
     std::fprintf(stderr, "boresightd: %s: an empty LCM log (no event): nothing to replay\n", replay.c_str());
     return 1;
   }
@@ -299,6 +306,7 @@ int run(int argc, char** argv) {
   j["core_health"] = ch;
   const bool balanced = c.received == c.used + c.rejectedTotal();
   j["accounted"] = balanced;
+  j["model_in_use"] = cfg.model_in_use;
   std::printf("boresightd: %llu messages received, %llu used, %llu rejected, %llu lost; %llu head epochs, "
               "%llu calibrations; %.2f s wall (%.0f messages/s); step latency p50 %.2f us, p99 %.2f us, "
               "p99.9 %.2f us, max %.1f us (head epochs: p50 %.2f us, p99 %.2f us, p99.9 %.2f us)\n",

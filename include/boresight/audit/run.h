@@ -12,6 +12,8 @@
 
 #include <boresight/audit/audit.h>
 #include <boresight/core/pipeline.h>
+#include <boresight/io/core_config.h>
+#include <boresight/io/overlay_apply.h>
 #include <boresight/stream/source.h>
 
 #include <functional>
@@ -23,6 +25,9 @@ namespace boresight::audit {
 
 struct RunRequest {
   std::string config;               ///< platform file (config/gracefo.yaml)
+  /// A model overlay (io/overlay_apply.h): its noise replaces the platform file's (the noise levels the
+  /// tests compare with), its mountings the nominal ones; the rest is reported as not applied.
+  std::string overlay;
   std::vector<std::string> inputs;  ///< Level-1 files or LCM logs, recognised by content
   AuditOptions options;
   std::string truth;                ///< a simulator's truth.yaml (empty: none)
@@ -44,6 +49,9 @@ struct RunOutput {
                 reference_dropped = 0;
   double span_s = 0;
   bool truth_given = false;
+  io::PlatformConfig platform;        ///< the configuration the audit ran with (noise and mountings in use)
+  io::OverlayUse overlay;             ///< what was taken from --overlay (empty file: none)
+  std::vector<std::string> model_in_use;  ///< io::modelInUseLines plus validity warnings, for people
 };
 
 /// Runs the audit. False with *error (file:line: reason) on bad input; the analysis' own limits (too

@@ -18,6 +18,16 @@
 //   cross_noise: the head's white noise per cross-boresight axis (real GRACE-FO heads are about 2.5x
 //     quieter than the 6" GROOPS value); anisotropic_noise: the same about the boresight.
 //   acc_*: a_A = (I + diag(scale)) R(Exp(misalignment)) C_A_B a_B + bias + noise.
+//   coloured_noise: a coloured MEASUREMENT error of a head (the attitude it reports, not its mounting),
+//     per head axis: each cross-boresight axis (e1, e2 of boresightBasis) draws its own process of
+//     the cross model, the boresight axis the about model; noise.h's Gauss-Markov or power-law term.
+//   thermal_wander: a random ROTATION of a head's mounting (like thermal_periodic, so it moves the
+//     star vectors' geometric attitude too), per head axis with the same forms.
+//   fov_error: every star the head tracks is displaced on the detector by a smooth random field of its
+//     focal-plane position (model/sensors.h FovErrorField); the head's attitude error is the
+//     least-squares rotation of its stars' displacements, so it follows the stars across the detector.
+//   acc_coloured_noise, acc_bias_wander: coloured angular-acceleration noise and a slowly varying bias
+//     per A axis (noise.h terms), added to the configured white and Gauss-Markov noise.
 //   aberration (uncorrected): the apparent boresight moves towards the observer velocity v by
 //     |b x v| / c: the head frame is rotated by b_I x v / c (annual: Earth about the Sun; orbital:
 //     the satellite about the Earth).
@@ -28,6 +38,10 @@
 //   Noise levels (anisotropic_noise about the boresight, cross_noise per cross axis) are independent
 //     white sources: variances add, sigma = sqrt(sum sigma_j^2), and that sum REPLACES the head's
 //     configured level on its axes (one spec sets the level, as it always did).
+//   coloured_noise, thermal_wander, acc_coloured_noise, acc_bias_wander: each spec is one more
+//     independent term of its axis's noise.h model (variances add; the configured white noise stays);
+//     a term's draws do not change when later specs are added. fov_error: each spec is its own field
+//     (own random coefficients); displacements add, and so do the attitude errors (linear).
 //   outliers, sign_flips and random gaps (gaps with per_day > 0): independent processes, each with its
 //     own rate (size, mean length) and its own random stream (model/stochastic.h); a sample is hit
 //     when any process fires (the rotations of the outlier processes that fire compose; a sign flip
@@ -39,7 +53,9 @@
 #pragma once
 
 #include <boresight/core/conventions.h>
+#include <boresight/model/noise.h>
 
+#include <array>
 #include <cmath>
 #include <cstddef>
 #include <map>
@@ -54,6 +70,7 @@ enum class EffectKind : std::uint8_t {
   RelativeMisalignment, AnisotropicNoise, ThermalPeriodic, Drift, Step, TimeOffset,
   AccBias, AccScale, AccMisalignment, Aberration, Outliers, SignFlips, Gaps, HeadDropout,
   CrossNoise, ClockDrift,  // appended: the catalogue order of the older entries is unchanged
+  ColouredNoise, FovError, ThermalWander, AccColouredNoise, AccBiasWander,  // appended (noise as the data has it)
 };
 
 /// Which sensors an effect may target.
@@ -145,6 +162,17 @@ struct ClockDriftTerm {
   double start_s = 0;
 };
 
+/// One fov_error spec: a random smooth field of star displacements over the detector (its coefficients
+/// are drawn per head and spec from the seed: model/sensors.h drawFovErrorField).
+struct FovErrorSpec {
+  int order = 3;       ///< highest total degree of the 2-D Legendre terms (1..6; degree 0, a shift, is a mounting error)
+  double rms_rad = 0;  ///< RMS displacement per focal-plane axis (both axes' mean square) over the square [-1, 1]^2
+};
+
+/// The noise.h term of a coloured_noise / thermal_wander / acc_* spec with stationary 1-sigma `sigma`
+/// (rad or rad/s^2): Gauss-Markov when tau_s > 0, else the power law (alpha, f_lo_hz, f_hi_hz).
+NoiseTerm effectNoiseTerm(const EffectSpec& s, double sigma);
+
 /// Everything that acts on one head. Each spec is its own term (see the composition rules above).
 struct HeadEffects {
   Vec3 misalignment_rad = Vec3::Zero();
@@ -168,6 +196,14 @@ struct HeadEffects {
   std::vector<RandomGaps> random_gaps;  ///< one independent process per gaps spec with per_day > 0
   std::vector<Interval> gaps;      ///< explicit gaps
   std::vector<Interval> dropouts;  ///< head_dropout intervals
+  /// coloured_noise: the measurement error's model per cross-boresight axis (each axis its own
+  /// process) and about the boresight, rad; one term per spec with a nonzero level.
+  NoiseModel coloured_cross, coloured_about;
+  /// thermal_wander: the mounting's random rotation per head axis, rad (as coloured_*).
+  NoiseModel wander_cross, wander_about;
+  std::vector<FovErrorSpec> fov;  ///< one per fov_error spec
+  bool hasColoured() const { return !coloured_cross.empty() || !coloured_about.empty(); }
+  bool hasWander() const { return !wander_cross.empty() || !wander_about.empty(); }
 };
 
 struct AccEffects {
@@ -178,6 +214,10 @@ struct AccEffects {
   std::vector<ClockDriftTerm> clock_drifts;
   std::vector<RandomGaps> random_gaps;
   std::vector<Interval> gaps;
+  std::array<NoiseModel, 3> coloured;     ///< acc_coloured_noise per A axis, rad/s^2 (one term per spec)
+  std::array<NoiseModel, 3> bias_wander;  ///< acc_bias_wander per A axis, rad/s^2
+  bool hasColoured() const { return !coloured[0].empty() || !coloured[1].empty() || !coloured[2].empty(); }
+  bool hasBiasWander() const { return !bias_wander[0].empty() || !bias_wander[1].empty() || !bias_wander[2].empty(); }
 };
 
 /// t_tag - t_true (s) at true time t_true_s (since the start): time_offset plus the clock drifts.

@@ -22,7 +22,9 @@ constexpr std::uint64_t mix64(std::uint64_t z) {
 /// Named random streams. Values are part of the reproducibility contract: do not renumber.
 enum class Stream : std::uint64_t {
   HeadNoise = 1, HeadOutlier = 2, HeadSignFlip = 3, HeadGap = 4, HeadTagJitter = 5, StarNoise = 6,
+  HeadColouredNoise = 7, HeadFovField = 8, HeadThermalWander = 9,  // appended: coloured_noise, fov_error, thermal_wander
   AccNoise = 11, AccLowFreq = 12, AccGap = 13, AccTagJitter = 14,
+  AccColouredNoise = 15, AccBiasWander = 16,                       // appended: acc_coloured_noise, acc_bias_wander
   Attitude = 21, MountingDraw = 22, Magnetic = 23,
 };
 
@@ -30,6 +32,14 @@ class CounterRng {
  public:
   CounterRng(std::uint64_t seed, Stream stream, std::uint64_t sensor)
       : key_(mix64(mix64(seed) ^ mix64(static_cast<std::uint64_t>(stream) * 0x1000193ULL + sensor))) {}
+  /// Another independent stream derived from this one (c > 0; c = 0 is this stream): for a consumer
+  /// that needs more than the eight normals one index carries per sample.
+  CounterRng derived(std::uint64_t c) const {
+    CounterRng r = *this;
+    if (c > 0) r.key_ = mix64(key_ ^ mix64(0x6a09e667f3bcc909ULL + c));
+    return r;
+  }
+  /// sub must be < 8: bits(index, 8) is bits(index + 1, 0).
   std::uint64_t bits(std::uint64_t index, std::uint64_t sub = 0) const {
     return mix64(key_ ^ mix64(index * 8 + sub));
   }

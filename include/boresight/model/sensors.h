@@ -7,6 +7,9 @@
 //   head i:  q_I_Si_meas = q_I_B (x) q_Si_B(t)^-1 (x) Exp(phi_aberration) (x) Exp(n)
 //            q_Si_B(t)   = Exp(phi_eff(t)) (x) Exp(phi_mount) (x) q_Si_B (nominal)      (see effects.h)
 //            n ~ N(0, sigma_cross^2 (e1 e1^T + e2 e2^T) + sigma_about^2 b b^T)  (head frame, per sample)
+//            the simulator adds to n the coloured_noise process and the fov_error rotation (measurement
+//            errors) and to phi_eff the thermal_wander process (a rotation of the mounting)
+//   head axes: (e1, e2, b) of boresightBasis(boresight); "cross" = e1 and e2, "about" = b.
 //   acc:     a_A = (I + diag(scale)) R(Exp(m)) C_A_B a_B + bias + white + low-frequency noise
 #pragma once
 
@@ -15,7 +18,40 @@
 #include <boresight/model/effects.h>
 #include <boresight/model/random.h>
 
+#include <Eigen/Core>
+
+#include <cstddef>
+#include <utility>
+#include <vector>
+
 namespace boresight::model {
+
+/// One fov_error field of a head: the displacement of a star on the detector as a smooth function of
+/// its normalised focal-plane position (u, v) = (s.e1, s.e2) / (s.b tan(FOV half-angle)), in tangent-
+/// plane radians along (e1, e2):
+///   d_x(u, v) = sum_k cx[k] L_i(u) L_j(v),   d_y(u, v) = sum_k cy[k] L_i(u) L_j(v),
+/// k over the terms (i, j) of fovTerms(order) (1 <= i + j <= order: degree 0, a uniform shift, is a
+/// mounting error), L_n = sqrt(2n + 1) P_n (Legendre polynomials scaled to unit mean square on
+/// [-1, 1]). The terms are orthonormal over the square [-1, 1]^2, so the mean square displacement over
+/// the square is |cx|^2 along e1 and |cy|^2 along e2; drawFovErrorField sets the RMS per axis (the
+/// root of their mean, (|cx|^2 + |cy|^2) / 2) to rms_rad exactly.
+struct FovErrorField {
+  int order = 3;
+  double rms_rad = 0;
+  std::vector<double> cx, cy;  ///< rad, one per fovTerms(order) entry
+  Eigen::Vector2d displacement(double u, double v) const;
+  bool operator==(const FovErrorField& o) const { return order == o.order && rms_rad == o.rms_rad && cx == o.cx && cy == o.cy; }
+};
+
+/// The (i, j) degrees of the field's terms: by total degree 1..order, then i from high to low.
+std::vector<std::pair<int, int>> fovTerms(int order);
+
+/// A field with the spec's order and RMS: coefficient k is (normal(k, 0), normal(k, 1)) of `rng`; the
+/// uniform rotation about the boresight that the degree-1 terms can hold (dx = -t v, dy = t u: a
+/// mounting error) is taken out; both axes are then scaled by one factor to an RMS per axis of
+/// spec.rms_rad (random shape, exact size). The attitude error can still have a mean over a day (the field's average over the stars
+/// seen): truth.yaml reports it (fov_error.realised_mean_arcsec); it acts as a relative misalignment.
+FovErrorField drawFovErrorField(const FovErrorSpec& spec, const CounterRng& rng);
 
 /// One head. The common fields are the core's HeadConfig, the one definition of a head (core/heads.h):
 ///   id, q_Si_B (the NOMINAL / ground mounting, as in QSA1B), boresight_Si, sigma_cross_rad /
@@ -51,8 +87,34 @@ class HeadModel {
   Quat qSiBTrue() const { return q_Si_B_true_; }
   /// Mounting at an epoch, with relative_misalignment, thermal_periodic, drift and step.
   Quat qSiB(const OrbitContext& ctx) const;
+  /// The same with a further rotation (Si, rad) added to phi_eff: the thermal_wander process.
+  Quat qSiB(const OrbitContext& ctx, const Vec3& extra_rad) const;
   /// Expected measurement (noise-free) for a true body attitude q_I_B at the TRUE time of ctx.
   Quat predict(const Quat& q_I_B, const OrbitContext& ctx) const;
+  /// The same through qSiB(ctx, extra_rad).
+  Quat predict(const Quat& q_I_B, const OrbitContext& ctx, const Vec3& extra_rad) const;
+  /// A vector given in head axes (components along e1, e2, b) in Si coordinates.
+  Vec3 fromHeadAxes(const Vec3& c) const { return c.x() * e1_ + c.y() * e2_ + c.z() * b_; }
+  /// Si coordinates to head axes (e1, e2, b).
+  Vec3 toHeadAxes(const Vec3& v) const { return Vec3(v.dot(e1_), v.dot(e2_), v.dot(b_)); }
+
+  /// fov_error: the head's fields (the simulator draws them from the seed; empty: none).
+  void setFovFields(std::vector<FovErrorField> f) { fov_ = std::move(f); }
+  const std::vector<FovErrorField>& fovFields() const { return fov_; }
+  bool hasFovError() const { return !fov_.empty(); }
+  /// Normalised focal-plane position (u, v) of a head-frame direction (FovErrorField).
+  Eigen::Vector2d focalPlane(const Vec3& s_Si) const;
+  /// The displacement (e1, e2 tangent-plane rad) of a star at s_Si: the sum of the fields.
+  Eigen::Vector2d fovDisplacement(const Vec3& s_Si) const;
+  /// The star's direction as the head measures it: s_Si moved by fovDisplacement on the tangent plane.
+  Vec3 fovDisplacedStar(const Vec3& s_Si) const;
+  /// The attitude error (Si rotation vector) of a head whose stars at s_Si[0..n) are displaced by
+  /// d[0..n) (tangent-plane rad along e1, e2): the least-squares phi of d_k = J(s_k) phi, J the tangent-
+  /// plane displacement a rotation of the head frame by phi makes (the stars move by -phi x s); the
+  /// delivered attitude is q_I_Si Exp(phi). Zero with fewer than two stars (no attitude).
+  Vec3 rotationFromDisplacements(const Vec3* s_Si, const Eigen::Vector2d* d, std::size_t n) const;
+  /// rotationFromDisplacements of the stars' fovDisplacement: the fov_error attitude error.
+  Vec3 fovAttitudeError(const Vec3* s_Si, std::size_t n) const;
   /// Boresight direction in I for an attitude q_I_Si.
   Vec3 boresightInertial(const Quat& q_I_Si) const { return q_I_Si * b_; }
 
@@ -73,6 +135,8 @@ class HeadModel {
   HeadEffects eff_;
   Quat q_Si_B_true_ = Quat::Identity();
   Vec3 e1_ = Vec3::UnitX(), e2_ = Vec3::UnitY(), b_ = Vec3::UnitZ();
+  std::vector<FovErrorField> fov_;
+  double tan_half_fov_ = 0;
 };
 
 /// Exclusion-cone bits (the simulator's BlindReason values).

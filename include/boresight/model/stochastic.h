@@ -17,9 +17,13 @@
 //              gap still covers it. P(t free) = prod_k (1 - p exp(-(k + f)/mean_s)), f the fraction
 //              of t in its slot, averaged over f (expectedMissingFraction); processes multiply.
 //   acc noise: per A axis, x_n = w_n + g_n, w white (sigma_w), g an AR(1) g_{n+1} = phi g_n +
-//              sqrt(1 - phi^2) sigma_g e_n, phi = exp(-T / tau), stationary from the first sample.
-//              Autocovariance sigma_w^2 [k = 0] + sigma_g^2 phi^|k|; one-sided PSD at f (Hz)
-//              2 T (sigma_w^2 + sigma_g^2 (1 - phi^2) / (1 - 2 phi cos(2 pi f T) + phi^2)).
+//              sqrt(1 - phi^2) sigma_g e_n, phi = exp(-T / tau), stationary from the first sample:
+//              the noise.h model white(sigma_w) + GaussMarkov(sigma_g, tau) sampled every T, whose
+//              autocovariance and PSD (noise.h) AccNoiseModel returns.
+//   coloured processes (coloured_noise, thermal_wander, acc_coloured_noise, acc_bias_wander): one
+//              noise.h model per axis drawn with noise.h's NoiseSimulator at the sensor's true sample
+//              times, every tag (a missing or blinded sample advances the process too), so irregular
+//              sampling and gaps are exact; stream and keys in NoiseProcess.
 #pragma once
 
 #include <boresight/core/conventions.h>
@@ -27,6 +31,9 @@
 #include <boresight/model/random.h>
 #include <boresight/model/sensors.h>
 
+#include <boresight/model/noise.h>
+
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -138,17 +145,65 @@ class SignFlipSampler {
 };
 
 // ---------------------------------------------------------------------------------------------
+// Coloured processes (noise.h models drawn at the sensor's sample times)
+
+/// Sensor key of a coloured process on its stream: sensor (head id, 0 for the accelerometer), axis
+/// (0, 1: cross-boresight e1, e2 or A x, y; 2: about the boresight or A z); chunk 0 (a chunk > 0 was
+/// a work-around of a simulator limit that no longer exists).
+constexpr std::uint64_t colouredProcessKey(std::uint64_t sensor, int axis, std::size_t chunk) {
+  return sensor + 0x100ULL * static_cast<std::uint64_t>(axis) + 0x1000ULL * static_cast<std::uint64_t>(chunk);
+}
+
+/// One axis of a noise.h model drawn by noise.h's NoiseSimulator on CounterRng(seed, stream,
+/// colouredProcessKey(sensor, axis, 0)) (any number of terms: the simulator spreads them over as many
+/// counter indices per sample as it needs).
+class NoiseProcess {
+ public:
+  NoiseProcess() = default;
+  NoiseProcess(const NoiseModel& m, std::uint64_t seed, Stream stream, std::uint64_t sensor, int axis);
+  bool empty() const { return empty_; }
+  /// The value at t_s (non-decreasing over calls; the first call starts from the stationary state).
+  double next(double t_s) { return empty_ ? 0.0 : sim_.next(t_s); }
+
+ private:
+  NoiseSimulator sim_;
+  bool empty_ = true;
+};
+
+/// Three axes of NoiseProcess: models[0..2] on axes 0..2 (see colouredProcessKey).
+class NoiseProcess3 {
+ public:
+  NoiseProcess3() = default;
+  NoiseProcess3(const std::array<NoiseModel, 3>& models, std::uint64_t seed, Stream stream, std::uint64_t sensor);
+  bool empty() const { return empty_; }
+  Vec3 next(double t_s);
+
+ private:
+  std::array<NoiseProcess, 3> axis_;
+  bool empty_ = true;
+};
+
+/// A head's coloured_noise or thermal_wander models on its three axes: (cross, cross, about).
+inline std::array<NoiseModel, 3> headAxisModels(const NoiseModel& cross, const NoiseModel& about) {
+  return {cross, cross, about};
+}
+
+// ---------------------------------------------------------------------------------------------
 // Accelerometer noise
 
 /// White + first-order Gauss-Markov angular-acceleration noise per A axis, and white linear noise
 /// (header comment). Sample n's low-frequency value is the AR(1) state after n steps from the
 /// stationary draw lowFreqInitial(); the state advances once per sample, delivered or missing.
+/// model(k) is the angular noise of axis k as a noise.h model; variances, autocovariance and PSD are
+/// the library's.
 class AccNoiseModel {
  public:
   AccNoiseModel() = default;
   AccNoiseModel(const AccelConfig& c, std::uint64_t seed);
   double phi() const { return phi_; }
   double sampleInterval() const { return T_; }
+  /// The angular noise of A axis k (0..2): white(sigma_w) + GaussMarkov(sigma_g, tau), rad/s^2.
+  const NoiseModel& model(int k) const { return models_[static_cast<std::size_t>(k)]; }
   Vec3 lowFreqInitial() const;
   /// The state of sample n + 1 from that of sample n.
   Vec3 lowFreqNext(const Vec3& lf_n, std::uint64_t n) const;
@@ -164,6 +219,7 @@ class AccNoiseModel {
  private:
   Vec3 white_ = Vec3::Zero(), lin_white_ = Vec3::Zero(), lf_ = Vec3::Zero();
   double T_ = 0.1, phi_ = 0;
+  std::array<NoiseModel, 3> models_;
   CounterRng white_rng_{0, Stream::AccNoise, 0}, lf_rng_{0, Stream::AccLowFreq, 0};
 };
 

@@ -43,6 +43,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <vector>
 
 namespace boresight::node {
 
@@ -93,8 +94,20 @@ struct CalibrationConfig {
 
 struct NodeConfig {
   std::string file;                 ///< the configuration file (for messages)
-  core::PipelineConfig pipeline;    ///< platform (heads, CRNs, C_B_A)
+  std::string platform_file;        ///< the platform file it names (an input: outputs never go over it)
+  core::PipelineConfig pipeline;    ///< platform (heads, CRNs, C_B_A), the head sigmas from its noise section
   bool mountings_from_log = false;  ///< wait for a NOMINAL_MOUNTINGS message before stepping
+  /// `overlay: FILE` (io/overlay_apply.h): its noise replaces the platform file's, its mountings the
+  /// platform file's or the NOMINAL_MOUNTINGS message's (slots in this mask keep the overlay's; when it
+  /// gives every head the node does not wait for the message).
+  std::string overlay;
+  std::uint32_t overlay_mounting_mask = 0;
+  /// The accelerometer's white noise per A axis for the worker's method A (the platform's noise
+  /// section, or the overlay's), rad/s^2 per sample.
+  Vec3 acc_white_noise_radps2 = Vec3(1.5e-7, 3.0e-8, 5.0e-8);
+  /// The noise and mountings in use with their sources, and the overlay's applied / not applied parts
+  /// (io::modelInUseLines): printed at start and written into the summary.
+  std::vector<std::string> model_in_use;
   std::string lcm_url = "udpm://239.255.76.67:7667?ttl=0";
   Channels channels;
   double lookahead_s = 2.0;         ///< assembler look-ahead, s

@@ -1,6 +1,7 @@
 // SVG plots for the reports the tools write: line plots of series against x (`boresight plot`), and
-// points with error bars (the calibration report's estimates against the Cramer-Rao bound). One
-// renderer for every program: axes with "nice" ticks, a legend, gaps where y is not finite.
+// points with error bars (the calibration report's estimates against the Cramer-Rao bound), linear or
+// logarithmic axes (spectra). One renderer for every program: axes with "nice" ticks, a legend that
+// wraps into rows (every series listed), gaps where y is not finite.
 //
 //   report::Plot p;  p.title = "residuals";  p.xlabel = "t - t0 [s]";
 //   p.series.push_back({"head 1 x", x, y});
@@ -26,6 +27,8 @@ struct Plot {
   double width = 900, height = 420;
   /// Labels at x = 0, 1, 2, ... instead of numeric ticks (categorical x axis), when not empty.
   std::vector<std::string> xcategories;
+  /// Logarithmic axes (spectra): ticks at powers of ten; values <= 0 are gaps.
+  bool logx = false, logy = false;
 };
 
 /// The plot as an SVG document. Empty series or all-gap data give an empty frame, not an error.

@@ -45,6 +45,11 @@ struct Scenario {
 /// Parses YAML text. `file` names it in messages; relative paths (stars, GNV1B, base) resolve against `dir`.
 /// Overlays: a top-level `base: FILE` loads that scenario first and the keys given here replace its
 /// values (a list - heads, manoeuvres, effects - replaces the base's list whole); at most 4 levels.
+/// `base: [FILE, LAYER...]`: the first file's scenario, then the keys of each layer in order (a layer
+/// is an overlay without a base of its own, e.g. a noise preset such as config/preset_realistic.yaml),
+/// then this file's keys. Two keys serve layers that must stack on any scenario: `add_effects` (appended
+/// to the effects so far; `effects` replaces them) and `head_overrides: [{id, KEY: value...}]` (keys of
+/// an existing head changed in place, the others kept; an unknown id is an error).
 bool parseScenario(const std::string& yaml_text, const std::string& file, const std::string& dir, Scenario& out,
                    std::string* error);
 bool loadScenario(const std::string& path, Scenario& out, std::string* error);

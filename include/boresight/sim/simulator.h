@@ -34,7 +34,11 @@ struct HeadSampleOut {
   // Truth, for tests and the audit:
   double t_true_s = 0;           ///< seconds since the start at which the sample describes the truth
   Quat q_I_B = Quat::Identity();
-  Quat q_I_Si_expected = Quat::Identity();  ///< model prediction without noise
+  Quat q_I_Si_expected = Quat::Identity();  ///< model prediction without noise (thermal_wander included)
+  // The coloured parts, head axes (e1, e2, b), rad (zero when the effect is off):
+  Vec3 coloured_rad = Vec3::Zero();  ///< coloured_noise at t_true_s (in q_I_Si, not in q_I_Si_expected)
+  Vec3 wander_rad = Vec3::Zero();    ///< thermal_wander at t_true_s (a mounting rotation: in q_I_Si_expected)
+  Vec3 fov_rad = Vec3::Zero();       ///< fov_error attitude error (in q_I_Si; 0 for a blinded sample)
 };
 
 /// Most star vectors one head delivers per epoch (the core's kMaxStarsPerHead, the LCM message's 16).
@@ -66,6 +70,8 @@ struct AccSampleOut {
   Vec3 lin_A = Vec3::Zero();   ///< m/s^2, frame A
   double t_true_s = 0;
   Vec3 a_B_true = Vec3::Zero();  ///< true mean angular acceleration over the sample, B
+  Vec3 coloured_rad_s2 = Vec3::Zero();     ///< acc_coloured_noise at t_true_s, frame A (in ang_A)
+  Vec3 bias_wander_rad_s2 = Vec3::Zero();  ///< acc_bias_wander at t_true_s, frame A (in ang_A)
 };
 
 struct OrbitSampleOut {
@@ -98,6 +104,11 @@ struct SimStats {
   std::vector<model::Interval> acc_missing_runs;
   std::uint64_t acc_missing_run_count = 0;
   double max_abs_alpha = 0;  ///< rad/s^2, largest true angular acceleration component seen by the accelerometer
+  /// Sums of squares over the delivered samples, head axes (rad^2): coloured_noise, thermal_wander,
+  /// fov_error; frame A ((rad/s^2)^2): acc_coloured_noise, acc_bias_wander (truth.yaml's realised RMS).
+  std::vector<Vec3> head_coloured_ss, head_wander_ss, head_fov_ss;
+  std::vector<Vec3> head_fov_sum;  ///< sum of the fov_error attitude errors (its mean acts as a misalignment)
+  Vec3 acc_coloured_ss = Vec3::Zero(), acc_bias_wander_ss = Vec3::Zero();
 };
 
 class Simulator {

@@ -49,6 +49,7 @@ class FovStarCounter {
   std::uint64_t refreshes() const { return refreshes_; }
 
  private:
+  void refresh(const Vec3& boresight_I);
   const StarCatalogue* cat_;
   double half_, mag_, margin_;
   Vec3 centre_ = Vec3::Zero();

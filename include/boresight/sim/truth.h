@@ -19,12 +19,21 @@
 //                    drift_ppm}, geometry {fov_half_angle_deg, limiting_magnitude, sun/earth/moon_exclusion_deg},
 //                    samples_written, blinded_sun/earth/moon, missing_gaps_dropouts, outliers, sign_flips,
 //                    events {outlier_probability, sign_flip_probability, expected_random_missing_fraction,
-//                    missing_runs, missing_intervals_s [[start, end], ...] (only when missing_runs <= 500)}
+//                    missing_runs, missing_intervals_s [[start, end], ...] (only when missing_runs <= 500)},
+//                    and only when the effect is on (so older files and clean runs are unchanged):
+//                    coloured_noise / thermal_wander {cross: [TERM...], about: [TERM...], realised_rms_arcsec
+//                    [e1, e2, b]}, TERM = {kind: gauss_markov, sigma_arcsec, tau_s} or {kind: power_law,
+//                    sigma_arcsec, alpha, f_lo_hz, f_hi_hz} (one per spec, in spec order);
+//                    fov_error {fields: [{order, rms_arcsec, cx_arcsec: [...], cy_arcsec: [...]}] (the drawn
+//                    coefficients, model/sensors.h FovErrorField), realised_rms_arcsec [e1, e2, b],
+//                    realised_mean_arcsec [e1, e2, b] (the mean acts as a relative misalignment)}
 //   accelerometer    C_B_A_nominal, C_B_A_true, misalignment_arcsec, bias_rad_s2 (nominal + injected),
 //                    nominal_bias_rad_s2, injected_bias_rad_s2, scale_error, white_noise_rad_s2,
 //                    lowfreq_noise_rad_s2, lowfreq_tau_s, lin_bias_m_s2, lin_white_noise_m_s2, rate_hz,
 //                    tags {...}, time_offset_s, clock_drifts[], samples_written, missing_gaps,
-//                    events {expected_random_missing_fraction, missing_runs, missing_intervals_s}
+//                    events {expected_random_missing_fraction, missing_runs, missing_intervals_s}, and when on:
+//                    coloured_noise / bias_wander {x: [TERM...], y: [...], z: [...], realised_rms_rad_s2},
+//                    TERM with sigma_rad_s2 in place of sigma_arcsec
 //   files
 #pragma once
 
@@ -33,6 +42,7 @@
 #include <boresight/sim/attitude.h>
 #include <boresight/sim/orbit.h>
 
+#include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -60,6 +70,12 @@ struct TruthHead {
                 sign_flips = 0, missing_runs = 0;
   double outlier_probability = 0, sign_flip_probability = 0, expected_random_missing_fraction = 0;
   std::vector<model::Interval> missing_intervals;  ///< empty when missing_runs exceeds the recorded limit
+  /// coloured_noise and thermal_wander models (rad), the fov_error fields, and the realised RMS of each
+  /// over the delivered samples (head axes e1, e2, b; rad). Empty / zero when the effect is off.
+  model::NoiseModel coloured_cross, coloured_about, wander_cross, wander_about;
+  std::vector<model::FovErrorField> fov_fields;
+  Vec3 coloured_rms_rad = Vec3::Zero(), wander_rms_rad = Vec3::Zero(), fov_rms_rad = Vec3::Zero();
+  Vec3 fov_mean_rad = Vec3::Zero();
 };
 
 struct TruthAccel {
@@ -73,6 +89,9 @@ struct TruthAccel {
   std::uint64_t samples = 0, missing = 0, missing_runs = 0;
   double expected_random_missing_fraction = 0;
   std::vector<model::Interval> missing_intervals;
+  /// acc_coloured_noise and acc_bias_wander per A axis (rad/s^2) and their realised RMS.
+  std::array<model::NoiseModel, 3> coloured, bias_wander;
+  Vec3 coloured_rms_rad_s2 = Vec3::Zero(), bias_wander_rms_rad_s2 = Vec3::Zero();
 };
 
 struct TruthFile {

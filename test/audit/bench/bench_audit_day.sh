@@ -24,7 +24,8 @@ echo "simulate ${duration} s: ${sim_wall} s, peak RSS $((sim_rss / 1024)) MB; fi
 walls=()
 rsss=()
 for i in $(seq 1 "$runs"); do
-  /usr/bin/time -v -o "$work/time_$i" "$cli" audit --config "$here/config/gracefo.yaml" \
+  # the ideal noise preset: the day carries config/sim_audit.yaml's white 6"/48" head noise
+  /usr/bin/time -v -o "$work/time_$i" "$cli" audit --config "$here/config/gracefo_ideal.yaml" \
     "$work"/day/SCA1A_*.txt "$work"/day/ACC1A_*.txt "$work"/day/QSA1B_*.txt "$work"/day/GNV1B_*.txt \
     --truth "$work/day/truth.yaml" --out "$work/audit_$i" --quiet > "$work/out_$i"
   wall=$(awk -F': ' '/Elapsed \(wall clock\)/ {n = split($2, p, ":"); s = 0; for (k = 1; k <= n; k++) s = s * 60 + p[k]; print s}' "$work/time_$i")

@@ -16,7 +16,8 @@ trap 'rm -rf "$work"' EXIT
 for s in $(seq "$first" $((first + seeds - 1))); do
   d=$work/s$s
   "$cli" simulate --scenario "$here/config/sim_audit.yaml" --seed "$s" --duration "$duration" --out "$d" --quiet --no-lcm
-  "$cli" audit --config "$here/config/gracefo.yaml" "$d"/SCA1A_*.txt "$d"/QSA1B_*.txt --out "$d/o" --quiet > /dev/null
+  # the ideal noise preset: the spans carry config/sim_audit.yaml's white 6"/48" head noise
+  "$cli" audit --config "$here/config/gracefo_ideal.yaml" "$d"/SCA1A_*.txt "$d"/QSA1B_*.txt --out "$d/o" --quiet > /dev/null
   python3 - "$d/o/audit.json" "$s" >> "$work/z.txt" <<'PY'
 import json, math, sys
 j = json.load(open(sys.argv[1]))

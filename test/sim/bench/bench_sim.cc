@@ -11,7 +11,9 @@
 #include <benchmark/benchmark.h>
 
 #include <filesystem>
+#include <string>
 #include <sys/resource.h>
+#include <vector>
 
 namespace {
 
@@ -87,6 +89,45 @@ void BM_SimulateOnly(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_SimulateOnly)->Arg(24 * 3600)->Iterations(1)->UseRealTime()->Unit(benchmark::kSecond);
+
+/// The simulation alone with the noise preset `realistic` (config/sim_gracefo_realistic.yaml), and with
+/// each of its coloured parts alone on top of sim_gracefo.yaml: what they cost (range(1): 0 the whole
+/// preset, 1 coloured_noise, 2 fov_error, 3 thermal_wander, 4 acc_coloured_noise + acc_bias_wander).
+void BM_SimulateNoisePreset(benchmark::State& state) {
+  sim::Scenario sc;
+  std::string err;
+  const std::vector<std::vector<std::string>> parts = {
+      {},
+      {"coloured_noise:sensor=all,cross_arcsec=0.4,about_arcsec=3,alpha=1,f_lo_hz=1e-4,f_hi_hz=2e-2"},
+      {"fov_error:sensor=all,arcsec=1,order=3"},
+      {"thermal_wander:sensor=all,cross_arcsec=1,about_arcsec=2,alpha=1.5,f_lo_hz=2e-5,f_hi_hz=2e-3"},
+      {"acc_coloured_noise:x=1e-8,y=3e-9,z=3e-9,alpha=1,f_lo_hz=1e-4,f_hi_hz=1e-2", "acc_bias_wander:x=1e-8,y=3e-9,z=3e-9"}};
+  const auto part = static_cast<std::size_t>(state.range(1));
+  const std::string file = part == 0 ? "/config/sim_gracefo_realistic.yaml" : "/config/sim_gracefo.yaml";
+  if (!sim::loadScenario(std::string(BORESIGHT_SOURCE_DIR) + file, sc, &err) || !sim::addEffectArgs(sc, parts[part], &err)) {
+    state.SkipWithError(err.c_str());
+    return;
+  }
+  struct Null : sim::SimSink {
+  } sink;
+  for (auto _ : state) {
+    sim::Simulator s;
+    if (!s.init(sc, 1, static_cast<double>(state.range(0)), &err)) {
+      state.SkipWithError(err.c_str());
+      return;
+    }
+    s.run(sink);
+  }
+}
+BENCHMARK(BM_SimulateNoisePreset)
+    ->Args({24 * 3600, 0})
+    ->Args({24 * 3600, 1})
+    ->Args({24 * 3600, 2})
+    ->Args({24 * 3600, 3})
+    ->Args({24 * 3600, 4})
+    ->Iterations(1)
+    ->UseRealTime()
+    ->Unit(benchmark::kSecond);
 
 // 3 h, 12 h, 24 h: run in this order, so a growing peak RSS would show a duration-dependent memory.
 BENCHMARK(BM_SimulateAndWrite)->Arg(3 * 3600)->Arg(12 * 3600)->Arg(24 * 3600)->Iterations(1)->UseRealTime()->Unit(benchmark::kSecond);

@@ -1,0 +1,54 @@
+// A model overlay laid over a platform configuration, as every program that takes `--overlay FILE`
+// (process, calibrate, audit) and the node (`overlay:` in its configuration) does:
+//   - noise: the overlay's noise section over the platform file's, axis by axis (per-head entries over
+//     the overlay's head defaults, both over whatever the platform file gave); the heads' core sigmas
+//     are derived again (io::deriveHeadSigmas);
+//   - mountings: the overlay's q_Si_B of a head replaces the platform file's or QSA1B's; when it gives
+//     every configured head, no QSA1B is needed;
+//   - every other part (thermal terms, accelerometer terms, time offsets, noise or mountings of heads
+//     the platform does not configure, and parts the program does not use) is named as not applied,
+//     with the reason: never silently ignored.
+// Call before stream::prepareConfig (which applies QSA1B to the heads the overlay leaves).
+#pragma once
+
+#include <boresight/io/core_config.h>
+#include <boresight/model/overlay.h>
+
+#include <string>
+#include <vector>
+
+namespace boresight::io {
+
+/// The parts of an overlay a program uses.
+struct OverlayUses {
+  bool noise = true;
+  bool mountings = true;
+};
+
+/// What a program did with an overlay (for its terminal output and its JSON / report).
+struct OverlayUse {
+  std::string file;                      ///< the overlay file; empty: no overlay
+  model::Overlay overlay;                ///< as read
+  std::vector<std::string> applied;      ///< "noise: head 1 cross_x, ...", "mountings: heads 1, 2, 3 (datum ...)"
+  std::vector<std::string> not_applied;  ///< "thermal: PROGRAM does not use thermal terms", ...
+};
+
+/// Reads the overlay at `path` (refusing an unknown version or key with FILE:LINE) and lays it over
+/// `pc` for `program` (its name in the messages, e.g. "boresight process"). False with *error; an
+/// overlay whose `platform` names another platform than pc.platform is refused.
+bool applyOverlay(const std::string& path, const std::string& program, const OverlayUses& uses, PlatformConfig& pc,
+                  OverlayUse& use, std::string* error);
+
+/// The same with an overlay already read (`path` names it in the messages).
+bool applyOverlay(const model::Overlay& ov, const std::string& path, const std::string& program, const OverlayUses& uses,
+                  PlatformConfig& pc, OverlayUse& use, std::string* error);
+
+/// After a run over data from t0 to t1 (GPS): one warning per applied item whose validity span does not
+/// cover the data ("overlay FILE: mountings of head 1 valid until ..., the data run to ...").
+std::vector<std::string> validityWarnings(const OverlayUse& use, TimeUs t0, TimeUs t1);
+
+/// The model a program runs with, for people: the noise of every head and accelerometer axis with its
+/// source, every head's mounting with its source, and the overlay's applied / not applied parts.
+std::vector<std::string> modelInUseLines(const PlatformConfig& pc, const OverlayUse& use);
+
+}  // namespace boresight::io

@@ -1,0 +1,178 @@
+// A model overlay laid over a platform configuration (io/overlay_apply.h).
+#include <boresight/io/overlay_apply.h>
+#include <boresight/io/overlay_yaml.h>
+#include <boresight/io/time_format.h>
+
+#include <cmath>
+#include <cstdio>
+
+namespace boresight::io {
+namespace {
+
+std::string ids(const std::vector<int>& v) {
+  std::string s;
+  for (std::size_t i = 0; i < v.size(); ++i) s += (i ? ", " : "") + std::to_string(v[i]);
+  return s;
+}
+
+std::string arcsec3(const Vec3& v) {
+  char b[96];
+  std::string s = "[";
+  for (int i = 0; i < 3; ++i) {
+    if (std::isnan(v[i])) std::snprintf(b, sizeof b, "%snot determined", i ? ", " : "");
+    else std::snprintf(b, sizeof b, "%s%.3g", i ? ", " : "", v[i] * kArcsecPerRad);
+    s += b;
+  }
+  return s + "]\"";
+}
+
+std::string validityText(const model::Validity& v) {
+  if (v.open()) return "";
+  return ", valid " + (v.from ? formatTime(*v.from) : std::string("(open)")) + " to " +
+         (v.to ? formatTime(*v.to) : std::string("(open)"));
+}
+
+int slotOf(const PlatformConfig& pc, int id) {
+  for (int s = 0; s < pc.pipeline.heads.n_heads; ++s)
+    if (pc.pipeline.heads.head[static_cast<std::size_t>(s)].id == id) return s;
+  return -1;
+}
+
+}  // namespace
+
+bool applyOverlay(const std::string& path, const std::string& program, const OverlayUses& uses, PlatformConfig& pc,
+                  OverlayUse& use, std::string* error) {
+  model::Overlay ov;
+  if (!readOverlay(path, ov, error)) return false;
+  return applyOverlay(ov, path, program, uses, pc, use, error);
+}
+
+bool applyOverlay(const model::Overlay& ov, const std::string& path, const std::string& program, const OverlayUses& uses,
+                  PlatformConfig& pc, OverlayUse& use, std::string* error) {
+  use = OverlayUse{};
+  use.file = path;
+  use.overlay = ov;
+  if (!ov.platform.empty() && !pc.platform.empty() && ov.platform != pc.platform) {
+    if (error)
+      *error = path + ": platform '" + ov.platform + "' is not the platform file's ('" + pc.platform + "', " + pc.file +
+               "): an overlay describes one instrument set";
+    return false;
+  }
+  const std::string src = "overlay " + path;
+
+  // Noise.
+  if (!ov.noise.empty()) {
+    if (uses.noise) {
+      std::vector<std::string> unused;
+      const model::NoiseInUse before = pc.noise_in_use;
+      pc.noise_in_use.layer(ov.noise, src, &unused);
+      std::vector<std::string> axes;
+      for (int s = 0; s < pc.noise_in_use.n_heads; ++s)
+        for (int a = 0; a < model::kHeadAxes; ++a)
+          if (pc.noise_in_use.head[static_cast<std::size_t>(s)][static_cast<std::size_t>(a)].source !=
+              before.head[static_cast<std::size_t>(s)][static_cast<std::size_t>(a)].source)
+            axes.push_back("head " + std::to_string(pc.noise_in_use.head_id[static_cast<std::size_t>(s)]) + " " +
+                           model::headAxisKey(model::HeadAxis(a)));
+      for (int a = 0; a < 3; ++a)
+        if (pc.noise_in_use.acc[static_cast<std::size_t>(a)].source != before.acc[static_cast<std::size_t>(a)].source)
+          axes.push_back(std::string("accelerometer ") + model::accAxisKey(a));
+      std::string list;
+      for (std::size_t i = 0; i < axes.size(); ++i) list += (i ? ", " : "") + axes[i];
+      use.applied.push_back("noise: " + (axes.empty() ? std::string("no configured axis") : list) + " (over the platform file's)");
+      for (const auto& u : unused)
+        use.not_applied.push_back("noise " + u + ": no such head in the platform file (" + pc.file + ")");
+      deriveHeadSigmas(pc);
+    } else {
+      use.not_applied.push_back("noise: " + program + " does not use noise models");
+    }
+  }
+
+  // Mountings.
+  if (!ov.mountings.empty()) {
+    if (uses.mountings) {
+      std::vector<int> applied;
+      for (const model::MountingEntry& m : ov.mountings) {
+        const int s = slotOf(pc, m.head);
+        if (s < 0) {
+          use.not_applied.push_back("mountings of head " + std::to_string(m.head) + ": no such head in the platform file (" +
+                                    pc.file + ")");
+          continue;
+        }
+        pc.pipeline.heads.head[static_cast<std::size_t>(s)].q_Si_B = m.q_Si_B;
+        pc.mounting_source[static_cast<std::size_t>(s)] = src + " (datum " + model::mountingDatumKey(m.datum) + ", epoch " +
+                                                          formatTime(m.epoch) + ", sigma " + arcsec3(m.sigma_rad) +
+                                                          validityText(m.valid) + ")";
+        applied.push_back(m.head);
+      }
+      if (!applied.empty()) {
+        bool every = static_cast<int>(applied.size()) == pc.pipeline.heads.n_heads;
+        use.applied.push_back("mountings: head" + std::string(applied.size() > 1 ? "s " : " ") + ids(applied) +
+                              (every && pc.mounting_from_qsa1b ? " (every head: QSA1B not needed)" : ""));
+        if (every) pc.mounting_from_qsa1b = false;
+      }
+    } else {
+      use.not_applied.push_back("mountings: " + program + " does not use mountings");
+    }
+  }
+
+  // What no program applies yet.
+  if (ov.thermal) {
+    std::vector<int> h;
+    for (const auto& x : ov.thermal->heads) h.push_back(x.head);
+    use.not_applied.push_back("thermal: " + program + " does not apply thermal terms (head" + (h.size() == 1 ? " " : "s ") +
+                              ids(h) + " relative to head " + std::to_string(ov.thermal->datum_head) + ")");
+  }
+  if (ov.accelerometer)
+    use.not_applied.push_back("accelerometer: " + program +
+                              " does not apply accelerometer terms (bias, scale, misalignment, non-orthogonality)");
+  for (const auto& t : ov.time_offsets)
+    use.not_applied.push_back("time_offsets: " + program + " does not apply time offsets (" + t.sensor + " against " +
+                              t.relative_to + ")");
+  return true;
+}
+
+std::vector<std::string> validityWarnings(const OverlayUse& use, TimeUs t0, TimeUs t1) {
+  std::vector<std::string> w;
+  if (use.file.empty()) return w;
+  auto check = [&](const model::Validity& v, const std::string& what, bool applied) {
+    if (!applied || v.covers(t0, t1)) return;
+    w.push_back("overlay " + use.file + ": " + what + " valid " + (v.from ? formatTime(*v.from) : std::string("(open)")) +
+                " to " + (v.to ? formatTime(*v.to) : std::string("(open)")) + ", but the data run from " + formatTime(t0) +
+                " to " + formatTime(t1));
+  };
+  bool noise_applied = false, mountings_applied = false;
+  for (const auto& a : use.applied) {
+    noise_applied = noise_applied || a.rfind("noise:", 0) == 0;
+    mountings_applied = mountings_applied || a.rfind("mountings:", 0) == 0;
+  }
+  const model::Overlay& o = use.overlay;
+  for (const auto& m : o.mountings) {
+    bool not_applied = false;
+    for (const auto& n : use.not_applied) not_applied = not_applied || n.rfind("mountings of head " + std::to_string(m.head) + ":", 0) == 0;
+    check(m.valid, "the mounting of head " + std::to_string(m.head), mountings_applied && !not_applied);
+  }
+  if (o.noise.head_defaults) check(o.noise.head_defaults->valid, "noise.head_defaults", noise_applied);
+  for (const auto& h : o.noise.heads) check(h.valid, "noise.heads[id " + std::to_string(h.id) + "]", noise_applied);
+  if (o.noise.accelerometer) check(o.noise.accelerometer->valid, "noise.accelerometer", noise_applied);
+  return w;
+}
+
+std::vector<std::string> modelInUseLines(const PlatformConfig& pc, const OverlayUse& use) {
+  std::vector<std::string> out;
+  out.push_back("noise in use (per-sample 1-sigma; the core weights the heads with the total, cross-boresight the RMS of x and y):");
+  for (const auto& l : pc.noise_in_use.describe()) out.push_back("  " + l);
+  out.push_back("mountings in use:");
+  for (int s = 0; s < pc.pipeline.heads.n_heads; ++s) {
+    const auto& src = pc.mounting_source[static_cast<std::size_t>(s)];
+    out.push_back("  head " + std::to_string(pc.pipeline.heads.head[static_cast<std::size_t>(s)].id) + ": " +
+                  (src.empty() ? std::string("not set") : src));
+  }
+  if (!use.file.empty()) {
+    out.push_back("overlay " + use.file + " (written by " + use.overlay.written_by + "):");
+    for (const auto& a : use.applied) out.push_back("  applied: " + a);
+    for (const auto& n : use.not_applied) out.push_back("  not applied: " + n);
+  }
+  return out;
+}
+
+}  // namespace boresight::io

@@ -1,0 +1,645 @@
+// Fitting noise models to a residual series (noise.h): maximum likelihood through the exact
+// state-space likelihood (gaps and irregular sampling included), started from a least-squares fit of
+// the model's spectrum to the data's Welch spectrum; uncertainties from the observed information
+// (a finite-difference Hessian of -2 log L on the fitting scale); model choice by BIC.
+#include <boresight/model/noise.h>
+
+#include <Eigen/Eigenvalues>
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <sstream>
+
+namespace boresight::model {
+namespace {
+
+constexpr double kTwoPi = 6.283185307179586;
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+struct ParamDef {
+  const char* name;
+  bool log_scale;
+};
+
+std::vector<ParamDef> paramDefs(NoiseStructure s) {
+  switch (s) {
+    case NoiseStructure::White: return {{"white.sigma", true}};
+    case NoiseStructure::WhiteGaussMarkov: return {{"white.sigma", true}, {"gm1.sigma", true}, {"gm1.tau_s", true}};
+    case NoiseStructure::WhiteTwoGaussMarkov:
+      return {{"white.sigma", true}, {"gm1.sigma", true}, {"gm1.tau_s", true}, {"gm2.sigma", true}, {"gm2.tau_s", true}};
+    case NoiseStructure::WhitePowerLaw:
+      return {{"white.sigma", true}, {"pl.sigma", true}, {"pl.alpha", false}, {"pl.f_lo_hz", true}, {"pl.f_hi_hz", true}};
+    case NoiseStructure::GaussMarkov: return {{"gm1.sigma", true}, {"gm1.tau_s", true}};
+  }
+  return {};
+}
+
+NoiseModel modelOf(NoiseStructure s, const Eigen::VectorXd& x, int pl_terms, const NoiseModel* fixed = nullptr) {
+  NoiseModel m;
+  if (fixed) m.terms = fixed->terms;
+  auto e = [&](int i) { return std::exp(x[i]); };
+  switch (s) {
+    case NoiseStructure::White: m.add(NoiseTerm::white(e(0))); break;
+    case NoiseStructure::WhiteGaussMarkov:
+      m.add(NoiseTerm::white(e(0))).add(NoiseTerm::gaussMarkov(e(1), e(2)));
+      break;
+    case NoiseStructure::WhiteTwoGaussMarkov:
+      m.add(NoiseTerm::white(e(0))).add(NoiseTerm::gaussMarkov(e(1), e(2))).add(NoiseTerm::gaussMarkov(e(3), e(4)));
+      break;
+    case NoiseStructure::WhitePowerLaw:
+      m.add(NoiseTerm::white(e(0))).add(NoiseTerm::powerLaw(e(1), x[2], e(3), e(4), pl_terms));
+      break;
+    case NoiseStructure::GaussMarkov: m.add(NoiseTerm::gaussMarkov(e(0), e(1))); break;
+  }
+  return m;
+}
+
+/// The box the fit stays in (fitting scale), from the data's scale, interval and span.
+struct Box {
+  Eigen::VectorXd lo, hi;
+  Eigen::VectorXd clamp(const Eigen::VectorXd& x) const { return x.cwiseMax(lo).cwiseMin(hi); }
+};
+
+Box boxOf(NoiseStructure s, double sd, double T, double span) {
+  const auto defs = paramDefs(s);
+  Box b;
+  const auto n = static_cast<Eigen::Index>(defs.size());
+  b.lo.resize(n);
+  b.hi.resize(n);
+  const double ls = std::log(sd);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const std::string name = defs[static_cast<std::size_t>(i)].name;
+    if (name.find("sigma") != std::string::npos) {
+      b.lo[i] = ls - 12;
+      b.hi[i] = ls + 4;
+    } else if (name.find("tau") != std::string::npos) {
+      b.lo[i] = std::log(T / 10);
+      b.hi[i] = std::log(std::max(span, T) * 100);
+    } else if (name == "pl.alpha") {
+      b.lo[i] = 0.02;
+      b.hi[i] = 1.98;
+    } else {  // corner frequencies
+      b.lo[i] = std::log(1.0 / (std::max(span, T) * 100));
+      b.hi[i] = std::log(5.0 / T);
+    }
+  }
+  return b;
+}
+
+/// Keeps structural orderings: f_hi above f_lo, the two Gauss-Markov terms' times apart.
+Eigen::VectorXd project(NoiseStructure s, const Box& box, const Eigen::VectorXd& x0) {
+  Eigen::VectorXd x = box.clamp(x0);
+  if (s == NoiseStructure::WhitePowerLaw) x[4] = std::max(x[4], x[3] + std::log(1.05));
+  return x;
+}
+
+// --- minimisers ------------------------------------------------------------------------------
+
+using Objective = std::function<double(const Eigen::VectorXd&)>;
+
+Eigen::VectorXd nelderMead(const Objective& f, const Eigen::VectorXd& x0, double step, int max_eval, double* fbest) {
+  const auto n = x0.size();
+  std::vector<Eigen::VectorXd> p(static_cast<std::size_t>(n + 1), x0);
+  std::vector<double> v(static_cast<std::size_t>(n + 1));
+  for (Eigen::Index i = 0; i < n; ++i) p[static_cast<std::size_t>(i + 1)][i] += step;
+  for (std::size_t i = 0; i < p.size(); ++i) v[i] = f(p[i]);
+  int evals = static_cast<int>(p.size());
+  while (evals < max_eval) {
+    std::vector<std::size_t> idx(p.size());
+    for (std::size_t i = 0; i < idx.size(); ++i) idx[i] = i;
+    std::sort(idx.begin(), idx.end(), [&](std::size_t a, std::size_t b) { return v[a] < v[b]; });
+    const std::size_t best = idx.front(), worst = idx.back(), second = idx[idx.size() - 2];
+    if (std::abs(v[worst] - v[best]) < 1e-10 * (std::abs(v[best]) + 1e-10)) break;
+    Eigen::VectorXd c = Eigen::VectorXd::Zero(n);
+    for (std::size_t i = 0; i < p.size(); ++i)
+      if (i != worst) c += p[i];
+    c /= static_cast<double>(n);
+    const Eigen::VectorXd xr = c + (c - p[worst]);
+    const double fr = f(xr);
+    ++evals;
+    if (fr < v[best]) {
+      const Eigen::VectorXd xe = c + 2.0 * (c - p[worst]);
+      const double fe = f(xe);
+      ++evals;
+      if (fe < fr) {
+        p[worst] = xe;
+        v[worst] = fe;
+      } else {
+        p[worst] = xr;
+        v[worst] = fr;
+      }
+    } else if (fr < v[second]) {
+      p[worst] = xr;
+      v[worst] = fr;
+    } else {
+      const Eigen::VectorXd xc = fr < v[worst] ? Eigen::VectorXd(c + 0.5 * (xr - c)) : Eigen::VectorXd(c + 0.5 * (p[worst] - c));
+      const double fc = f(xc);
+      ++evals;
+      if (fc < std::min(fr, v[worst])) {
+        p[worst] = xc;
+        v[worst] = fc;
+      } else {
+        for (std::size_t i = 0; i < p.size(); ++i) {
+          if (i == best) continue;
+          p[i] = p[best] + 0.5 * (p[i] - p[best]);
+          v[i] = f(p[i]);
+          ++evals;
+        }
+      }
+    }
+  }
+  std::size_t b = 0;
+  for (std::size_t i = 1; i < v.size(); ++i)
+    if (v[i] < v[b]) b = i;
+  if (fbest) *fbest = v[b];
+  return p[b];
+}
+
+Eigen::VectorXd gradient(const Objective& f, const Eigen::VectorXd& x, double h) {
+  Eigen::VectorXd g(x.size());
+  for (Eigen::Index i = 0; i < x.size(); ++i) {
+    Eigen::VectorXd a = x, b = x;
+    a[i] += h;
+    b[i] -= h;
+    g[i] = (f(a) - f(b)) / (2 * h);
+  }
+  return g;
+}
+
+/// BFGS with a step capped at one unit of the fitting scale and an Armijo backtracking line search.
+Eigen::VectorXd bfgs(const Objective& f, Eigen::VectorXd x, int max_iter, bool* converged, std::string* why) {
+  const auto n = x.size();
+  double fx = f(x);
+  Eigen::VectorXd g = gradient(f, x, 1e-4);
+  Eigen::MatrixXd H = Eigen::MatrixXd::Identity(n, n);
+  *converged = false;
+  for (int it = 0; it < max_iter; ++it) {
+    Eigen::VectorXd d = -H * g;
+    if (g.dot(d) >= 0) {
+      H.setIdentity();
+      d = -g;
+    }
+    const double dmax = d.cwiseAbs().maxCoeff();
+    if (dmax > 1.0) d /= dmax;
+    double t = 1.0, fn = kInf;
+    Eigen::VectorXd xn = x;
+    const double slope = g.dot(d);
+    int k = 0;
+    for (; k < 40; ++k) {
+      xn = x + t * d;
+      fn = f(xn);
+      if (std::isfinite(fn) && fn <= fx + 1e-4 * t * slope) break;
+      t *= 0.5;
+    }
+    if (k == 40) {
+      // no decrease along the search direction: a minimum to the precision of the gradient
+      *converged = g.cwiseAbs().maxCoeff() < 1e-2 * std::max(1.0, std::sqrt(std::abs(fx)));
+      if (!*converged && why) *why = "the line search found no decrease";
+      return x;
+    }
+    const Eigen::VectorXd s = xn - x;
+    const Eigen::VectorXd gn = gradient(f, xn, 1e-4);
+    const Eigen::VectorXd y = gn - g;
+    const double sy = s.dot(y);
+    const double df = fx - fn;
+    x = xn;
+    fx = fn;
+    g = gn;
+    if (sy > 1e-12) {
+      if (it == 0) H *= sy / y.squaredNorm();
+      const double rho = 1.0 / sy;
+      const Eigen::MatrixXd I = Eigen::MatrixXd::Identity(n, n);
+      H = (I - rho * s * y.transpose()) * H * (I - rho * y * s.transpose()) + rho * s * s.transpose();
+    }
+    // Converged when the quasi-Newton decrement g^T H g (the expected further decrease of -2 log L,
+    // times two) is far below the one unit of -2 log L that a standard error spans.
+    if ((it >= 1 && g.dot(H * g) < 1e-3) || (df < 1e-7 && s.cwiseAbs().maxCoeff() < 1e-6)) {
+      *converged = true;
+      return x;
+    }
+  }
+  if (why) *why = "no convergence in " + std::to_string(max_iter) + " iterations";
+  return x;
+}
+
+/// Central finite-difference Hessian of f at x; g (optional) receives the central-difference gradient
+/// from the same stencil.
+Eigen::MatrixXd hessian(const Objective& f, const Eigen::VectorXd& x, double h, Eigen::VectorXd* g = nullptr) {
+  const auto n = x.size();
+  Eigen::MatrixXd H(n, n);
+  if (g) g->resize(n);
+  const double f0 = f(x);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    Eigen::VectorXd a = x, b = x;
+    a[i] += h;
+    b[i] -= h;
+    const double fa = f(a), fb = f(b);
+    H(i, i) = (fa - 2 * f0 + fb) / (h * h);
+    if (g) (*g)[i] = (fa - fb) / (2 * h);
+    for (Eigen::Index j = 0; j < i; ++j) {
+      Eigen::VectorXd pp = x, pm = x, mp = x, mm = x;
+      pp[i] += h, pp[j] += h;
+      pm[i] += h, pm[j] -= h;
+      mp[i] -= h, mp[j] += h;
+      mm[i] -= h, mm[j] -= h;
+      H(i, j) = H(j, i) = (f(pp) - f(pm) - f(mp) + f(mm)) / (4 * h * h);
+    }
+  }
+  return H;
+}
+
+/// Damped Newton steps with the finite-difference Hessian (eigenvalues floored, so a step always
+/// descends), from a point near the minimum: two or three iterations where BFGS needs many.
+/// H_out: the Hessian at the returned point when converged.
+Eigen::VectorXd newton(const Objective& f, Eigen::VectorXd x, int max_iter, bool* converged, Eigen::MatrixXd* H_out) {
+  *converged = false;
+  for (int it = 0; it < max_iter; ++it) {
+    Eigen::VectorXd g;
+    const Eigen::MatrixXd H = hessian(f, x, 2e-3, &g);
+    if (H_out) *H_out = H;
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(0.5 * (H + H.transpose()));
+    if (es.info() != Eigen::Success) return x;
+    const double lmax = std::max(es.eigenvalues().cwiseAbs().maxCoeff(), 1e-12);
+    const Eigen::VectorXd lam = es.eigenvalues().cwiseAbs().cwiseMax(1e-8 * lmax);
+    Eigen::VectorXd d = -es.eigenvectors() * (es.eigenvalues().size() > 0 ? (es.eigenvectors().transpose() * g).cwiseQuotient(lam) : g);
+    const double decrement = -g.dot(d);
+    if (decrement < 1e-3) {
+      *converged = true;
+      return x;
+    }
+    const double dmax = d.cwiseAbs().maxCoeff();
+    if (dmax > 1.0) d /= dmax;
+    const double f0 = f(x);
+    double t = 1.0;
+    for (int k = 0; k < 20; ++k, t *= 0.5) {
+      const Eigen::VectorXd xn = x + t * d;
+      if (f(xn) < f0) {
+        x = xn;
+        break;
+      }
+      if (k == 19) return x;
+    }
+  }
+  return x;
+}
+
+// --- starting values ---------------------------------------------------------------------------
+
+struct DataScale {
+  double T = 1, span = 1, var = 1, white_var = 1;
+};
+
+DataScale scaleOf(const NoiseSeries& s, const Eigen::MatrixXd& X) {
+  DataScale d;
+  d.T = std::max(s.medianInterval(), 1e-9);
+  d.span = std::max(s.span(), d.T);
+  Eigen::Map<const Eigen::VectorXd> y(s.y.data(), static_cast<Eigen::Index>(s.y.size()));
+  Eigen::VectorXd r = y;
+  if (X.cols() > 0) r -= X * X.colPivHouseholderQr().solve(y);
+  else r.array() -= r.mean();
+  d.var = std::max(r.squaredNorm() / std::max<double>(1.0, static_cast<double>(r.size()) - static_cast<double>(X.cols())), 1e-300);
+  // white level from first differences on regular steps (an upper bound: slow terms add little)
+  double sd = 0;
+  std::size_t nd = 0;
+  for (std::size_t i = 1; i < s.size(); ++i) {
+    if (std::abs(s.t_s[i] - s.t_s[i - 1] - d.T) > 0.1 * d.T) continue;
+    const double v = r[static_cast<Eigen::Index>(i)] - r[static_cast<Eigen::Index>(i - 1)];
+    sd += v * v;
+    ++nd;
+  }
+  d.white_var = nd > 0 ? std::min(d.var, sd / (2.0 * static_cast<double>(nd))) : d.var;
+  d.white_var = std::max(d.white_var, 1e-6 * d.var);
+  return d;
+}
+
+/// Log-binned log-spectrum of the data (geometric mean per bin of 1/8 decade).
+struct LogSpectrum {
+  std::vector<double> f, logp;
+};
+
+LogSpectrum logSpectrum(const NoiseSeries& s, double T) {
+  LogSpectrum out;
+  // the longest run on the regular grid decides the segment length
+  std::size_t longest = 0, run = 1;
+  for (std::size_t i = 1; i < s.size(); ++i) {
+    if (std::abs(s.t_s[i] - s.t_s[i - 1] - T) <= 0.1 * T) ++run;
+    else run = 1;
+    longest = std::max(longest, run);
+  }
+  std::size_t seg = 32;
+  while (seg * 2 <= std::min<std::size_t>(longest, s.size() / 4)) seg *= 2;
+  if (longest < 32) return out;
+  const Spectrum sp = welchPsdGapped(s, T, seg);
+  if (sp.segments == 0) return out;
+  const double f0 = sp.f_hz.front();
+  double bin_lo = f0;
+  double acc = 0;
+  int cnt = 0;
+  double facc = 0;
+  for (std::size_t k = 0; k < sp.f_hz.size(); ++k) {
+    if (sp.f_hz[k] >= bin_lo * std::pow(10.0, 0.125) && cnt > 0) {
+      out.f.push_back(std::exp(facc / cnt));
+      out.logp.push_back(acc / cnt);
+      acc = facc = 0;
+      cnt = 0;
+      bin_lo = sp.f_hz[k];
+    }
+    if (sp.psd[k] > 0) {
+      acc += std::log(sp.psd[k]);
+      facc += std::log(sp.f_hz[k]);
+      ++cnt;
+    }
+  }
+  if (cnt > 0) {
+    out.f.push_back(std::exp(facc / cnt));
+    out.logp.push_back(acc / cnt);
+  }
+  return out;
+}
+
+/// Starting points per structure, from the data's scale.
+std::vector<Eigen::VectorXd> starts(NoiseStructure s, const DataScale& d) {
+  const double lw = 0.5 * std::log(d.white_var);
+  const double lc = 0.5 * std::log(std::max(d.var - d.white_var, 0.05 * d.var));
+  const double tau_lo = 10 * d.T, tau_hi = d.span / 50;
+  std::vector<double> taus;
+  for (double t = tau_lo; t <= std::max(tau_lo, tau_hi) * 1.0001; t *= 10) taus.push_back(t);
+  std::vector<Eigen::VectorXd> out;
+  switch (s) {
+    case NoiseStructure::White: out.push_back((Eigen::VectorXd(1) << 0.5 * std::log(d.var)).finished()); break;
+    case NoiseStructure::WhiteGaussMarkov:
+      for (double t : taus) out.push_back((Eigen::VectorXd(3) << lw, lc, std::log(t)).finished());
+      break;
+    case NoiseStructure::GaussMarkov:
+      for (double t : taus) out.push_back((Eigen::VectorXd(2) << 0.5 * std::log(d.var), std::log(t)).finished());
+      break;
+    case NoiseStructure::WhiteTwoGaussMarkov:
+      for (std::size_t i = 0; i < taus.size(); ++i)
+        for (std::size_t j = i + 1; j < taus.size(); ++j)
+          out.push_back((Eigen::VectorXd(5) << lw, lc - 0.35, std::log(taus[i]), lc - 0.35, std::log(taus[j])).finished());
+      if (out.empty()) out.push_back((Eigen::VectorXd(5) << lw, lc - 0.35, std::log(tau_lo), lc - 0.35, std::log(tau_lo * 30)).finished());
+      break;
+    case NoiseStructure::WhitePowerLaw: {
+      const double flo = 1.0 / std::max(d.span / 20, 20 * d.T), fhi = 1.0 / (kTwoPi * 5 * d.T);
+      for (double a : {0.5, 1.0, 1.5})
+        out.push_back((Eigen::VectorXd(5) << lw, lc, a, std::log(flo), std::log(std::max(fhi, 3 * flo))).finished());
+      break;
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+const char* noiseStructureName(NoiseStructure s) {
+  switch (s) {
+    case NoiseStructure::White: return "white";
+    case NoiseStructure::WhiteGaussMarkov: return "white+gauss_markov";
+    case NoiseStructure::WhiteTwoGaussMarkov: return "white+2gauss_markov";
+    case NoiseStructure::WhitePowerLaw: return "white+power_law";
+    case NoiseStructure::GaussMarkov: return "gauss_markov";
+  }
+  return "?";
+}
+
+std::vector<NoiseStructure> defaultNoiseStructures() {
+  return {NoiseStructure::White, NoiseStructure::WhiteGaussMarkov, NoiseStructure::WhiteTwoGaussMarkov,
+          NoiseStructure::WhitePowerLaw};
+}
+
+int powerLawFitTerms(double span_s, double T_s) {
+  const double decades = std::log10(std::max(10.0, span_s / (2 * T_s)) / 10.0);
+  return std::clamp(static_cast<int>(std::lround(3.0 * decades)) + 1, 3, 16);
+}
+
+const NoiseParam* NoiseFit::find(const std::string& name) const {
+  for (const auto& p : params)
+    if (p.name == name) return &p;
+  return nullptr;
+}
+
+NoiseFit fitNoise(const NoiseSeries& s, NoiseStructure structure, const Eigen::MatrixXd& X, const NoiseFitOptions& opt) {
+  NoiseFit fit;
+  fit.structure = structure;
+  fit.n = s.size();
+  const auto defs = paramDefs(structure);
+  const auto np = static_cast<Eigen::Index>(defs.size());
+  if (s.size() < static_cast<std::size_t>(np + X.cols() + 3)) {
+    fit.message = "too few samples (" + std::to_string(s.size()) + ") for " + noiseStructureName(structure);
+    return fit;
+  }
+  DataScale d = scaleOf(s, X);
+  if (!opt.fixed.empty()) {  // the starting values are for the part that is fitted
+    d.white_var = std::max(d.white_var - opt.fixed.whiteVariance(), 1e-6 * d.var);
+    d.var = std::max(d.var - opt.fixed.variance(), 1e-3 * d.var);
+  }
+  const Box box = boxOf(structure, std::sqrt(d.var), d.T, d.span);
+
+  // The power law's number of terms is fixed for the whole fit (the model is smooth in its parameters
+  // only for a fixed count): three per decade of the widest band the data can show, at most 16.
+  const int pl_terms = opt.pl_terms > 0 ? opt.pl_terms : powerLawFitTerms(d.span, d.T);
+  // 1. Starting values: the model spectrum fitted to the data's log spectrum (cheap), from several starts.
+  const LogSpectrum ls = logSpectrum(s, d.T);
+  std::vector<Eigen::VectorXd> x0s = starts(structure, d);
+  if (ls.f.size() >= static_cast<std::size_t>(np + 2)) {
+    const Objective spec = [&](const Eigen::VectorXd& x) {
+      const NoiseModel m = modelOf(structure, project(structure, box, x), pl_terms, &opt.fixed);
+      double r = 0;
+      for (std::size_t k = 0; k < ls.f.size(); ++k) {
+        const double e = std::log(m.psdSampled(ls.f[k], d.T)) - ls.logp[k];
+        r += e * e;
+      }
+      return r;
+    };
+    for (auto& x : x0s) x = project(structure, box, nelderMead(spec, x, 0.5, 300 * static_cast<int>(np), nullptr));
+  }
+  // 2. Exact likelihood from the best start.
+  const Objective nll = [&](const Eigen::VectorXd& x) {
+    ++fit.evaluations;
+    return minusTwoLogLikelihood(modelOf(structure, project(structure, box, x), pl_terms, &opt.fixed), s, X, opt.reml);
+  };
+  Eigen::VectorXd best = x0s.front();
+  double fbest = kInf;
+  for (const auto& x : x0s) {
+    const double v = nll(x);
+    if (v < fbest) {
+      fbest = v;
+      best = x;
+    }
+  }
+  std::string why;
+  // 3. Long series: first on every d-th sample (the same model, exact at the longer intervals; it
+  // keeps the slow terms and costs 1/d), then from there on the whole series.
+  constexpr std::size_t kCoarse = 20000;
+  if (s.size() > 2 * kCoarse) {
+    const std::size_t dec = s.size() / kCoarse;
+    NoiseSeries c;
+    Eigen::MatrixXd Xc(X.cols() > 0 ? static_cast<Eigen::Index>(s.size() / dec + 1) : 0, X.cols());
+    for (std::size_t i = 0; i < s.size(); i += dec) {
+      if (X.cols() > 0) Xc.row(static_cast<Eigen::Index>(c.size())) = X.row(static_cast<Eigen::Index>(i));
+      c.t_s.push_back(s.t_s[i]);
+      c.y.push_back(s.y[i]);
+    }
+    Xc.conservativeResize(X.cols() > 0 ? static_cast<Eigen::Index>(c.size()) : 0, X.cols());
+    const Objective coarse = [&](const Eigen::VectorXd& x) {
+      return minusTwoLogLikelihood(modelOf(structure, project(structure, box, x), pl_terms, &opt.fixed), c, Xc, opt.reml);
+    };
+    bool conv = false;
+    best = project(structure, box, bfgs(coarse, best, opt.max_iterations, &conv, nullptr));
+  }
+  // 4. Newton on the whole series from there (its last Hessian is the observed information below).
+  if (s.size() <= 2 * kCoarse) {
+    bool conv = false;
+    best = project(structure, box, bfgs(nll, best, opt.max_iterations, &conv, &why));
+  }
+  Eigen::MatrixXd H_final;
+  Eigen::VectorXd x = project(structure, box, newton(nll, best, 8, &fit.converged, &H_final));
+  why = fit.converged ? std::string() : "Newton's method did not settle in 8 iterations";
+  if (structure == NoiseStructure::WhiteTwoGaussMarkov && x[2] > x[4]) {  // order the terms by time
+    std::swap(x[1], x[3]);
+    std::swap(x[2], x[4]);
+  }
+  fit.message = why;
+  fit.model = modelOf(structure, x, pl_terms);
+  fit.m2ll = minusTwoLogLikelihood(modelOf(structure, x, pl_terms, &opt.fixed), s, X, opt.reml, &fit.beta, &fit.beta_cov);
+
+  // 5. Uncertainties: the observed information of the parameters that are not on a bound.
+  std::vector<Eigen::Index> free;
+  std::vector<bool> at_bound(static_cast<std::size_t>(np), false);
+  for (Eigen::Index i = 0; i < np; ++i) {
+    const double tol = 1e-3;
+    at_bound[static_cast<std::size_t>(i)] = x[i] <= box.lo[i] + tol || x[i] >= box.hi[i] - tol;
+    if (!at_bound[static_cast<std::size_t>(i)]) free.push_back(i);
+  }
+  fit.cov = Eigen::MatrixXd::Constant(np, np, std::numeric_limits<double>::quiet_NaN());
+  bool info_ok = false;
+  if (!free.empty()) {
+    const Objective sub = [&](const Eigen::VectorXd& z) {
+      Eigen::VectorXd full = x;
+      for (std::size_t k = 0; k < free.size(); ++k) full[free[k]] = z[static_cast<Eigen::Index>(k)];
+      return nll(full);
+    };
+    Eigen::VectorXd z(static_cast<Eigen::Index>(free.size()));
+    for (std::size_t k = 0; k < free.size(); ++k) z[static_cast<Eigen::Index>(k)] = x[free[k]];
+    // Newton's last Hessian when it was taken at this point with every parameter free.
+    const bool reuse = fit.converged && free.size() == static_cast<std::size_t>(np) && H_final.rows() == np;
+    const Eigen::MatrixXd H = reuse ? H_final : hessian(sub, z, 2e-3);
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(0.5 * (H + H.transpose()));
+    if (es.info() == Eigen::Success && es.eigenvalues().minCoeff() > 1e-9 * std::max(1.0, es.eigenvalues().maxCoeff())) {
+      const Eigen::MatrixXd C = 2.0 * es.eigenvectors() * es.eigenvalues().cwiseInverse().asDiagonal() * es.eigenvectors().transpose();
+      for (std::size_t a = 0; a < free.size(); ++a)
+        for (std::size_t b = 0; b < free.size(); ++b)
+          fit.cov(free[a], free[b]) = C(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(b));
+      info_ok = true;
+    }
+  }
+
+  // 6. Parameters, with what the span and the sampling can determine.
+  const double f_det_lo = opt.band_lo / d.span, f_det_hi = 1.0 / (d.T * opt.band_hi);
+  for (Eigen::Index i = 0; i < np; ++i) {
+    NoiseParam p;
+    p.name = defs[static_cast<std::size_t>(i)].name;
+    p.log_scale = defs[static_cast<std::size_t>(i)].log_scale;
+    p.value = p.log_scale ? std::exp(x[i]) : x[i];
+    const double v = fit.cov(i, i);
+    const double se = std::isfinite(v) && v >= 0 ? std::sqrt(v) : std::numeric_limits<double>::quiet_NaN();
+    p.log_sigma = p.log_scale ? se : 0.0;
+    p.sigma = p.log_scale ? p.value * se : se;
+    if (at_bound[static_cast<std::size_t>(i)]) {
+      p.determined = false;
+      p.note = "at the bound of its range (the data do not pull it inside)";
+    } else if (!info_ok || !std::isfinite(se)) {
+      p.determined = false;
+      p.note = "the likelihood is flat in this parameter (no finite uncertainty)";
+    }
+    double fc = 0;
+    if (p.name.find("tau_s") != std::string::npos) fc = 1.0 / (kTwoPi * p.value);
+    if (p.name.find("f_lo_hz") != std::string::npos || p.name.find("f_hi_hz") != std::string::npos) fc = p.value;
+    if (fc > 0 && p.determined && (fc < f_det_lo || fc > f_det_hi)) {
+      std::ostringstream o;
+      o.precision(3);
+      o << "corner frequency " << fc << " Hz outside what " << d.span << " s sampled every " << d.T
+        << " s determine (" << f_det_lo << " to " << f_det_hi << " Hz)";
+      p.determined = false;
+      p.note = o.str();
+    }
+    fit.params.push_back(p);
+  }
+  // A coloured term whose level is not significant leaves its time or band undetermined.
+  auto level_weak = [&](const std::string& prefix) {
+    const NoiseParam* sp = fit.find(prefix + ".sigma");
+    return sp && (!sp->determined || !(sp->log_sigma < 0.5));
+  };
+  for (auto& p : fit.params) {
+    const auto dot = p.name.find('.');
+    const std::string prefix = p.name.substr(0, dot);
+    if (prefix == "white" || p.name == prefix + ".sigma" || !p.determined) continue;
+    if (level_weak(prefix)) {
+      p.determined = false;
+      p.note = "its term's level is not significant";
+    }
+  }
+  const auto k = static_cast<double>(np + X.cols());
+  fit.aic = fit.m2ll + 2 * k;
+  fit.bic = fit.m2ll + k * std::log(static_cast<double>(s.size()));
+  return fit;
+}
+
+NoiseFit fitWhiteFromDifferences(const NoiseSeries& s) {
+  NoiseFit fit;
+  fit.structure = NoiseStructure::White;
+  const double T = s.medianInterval();
+  std::vector<std::int64_t> t_us;
+  std::vector<double> d;
+  for (std::size_t i = 1; i < s.size(); ++i) {
+    if (!(T > 0) || std::abs(s.t_s[i] - s.t_s[i - 1] - T) > 0.1 * T) continue;
+    t_us.push_back(static_cast<std::int64_t>(std::llround(s.t_s[i] * 1e6)));
+    d.push_back(s.y[i] - s.y[i - 1]);
+  }
+  fit.n = d.size();
+  if (d.size() < 3) {
+    fit.message = "fewer than three consecutive pairs of samples";
+    return fit;
+  }
+  // Differences one interval apart share a sample (correlation -1/2); further apart they share none.
+  const BandedWhitener w(t_us, T, {1.0, -0.5});
+  const std::vector<double> z = w.whiten(d);
+  double q = 0;
+  for (double v : z) q += v * v;
+  const auto n = static_cast<double>(d.size());
+  const double var_d = q / n;  // ML variance of the differences: 2 sigma^2
+  const double sigma = std::sqrt(var_d / 2);
+  fit.model = NoiseModel::white(sigma);
+  NoiseParam p;
+  p.name = "white.sigma";
+  p.value = sigma;
+  p.log_sigma = 1.0 / std::sqrt(2 * n);  // var of an ML variance of n: 2 var^2 / n
+  p.sigma = sigma * p.log_sigma;
+  p.note = "from the differences of consecutive samples";
+  fit.params.push_back(p);
+  fit.cov = Eigen::MatrixXd::Constant(1, 1, p.log_sigma * p.log_sigma);
+  double logdet = 0;
+  for (std::size_t k = 0; k < d.size(); ++k) logdet += 2 * std::log(w.factor(k, k));
+  fit.m2ll = n * std::log(kTwoPi * var_d) + logdet + n;
+  fit.aic = fit.m2ll + 2;
+  fit.bic = fit.m2ll + std::log(n);
+  fit.converged = true;
+  return fit;
+}
+
+NoiseSelection selectNoise(const NoiseSeries& s, const std::vector<NoiseStructure>& structures, const Eigen::MatrixXd& X,
+                           const NoiseFitOptions& opt) {
+  NoiseSelection sel;
+  for (NoiseStructure st : structures) {
+    sel.fits.push_back(fitNoise(s, st, X, opt));
+    const auto i = static_cast<int>(sel.fits.size()) - 1;
+    const NoiseFit& f = sel.fits.back();
+    if (f.model.empty()) continue;
+    if (sel.best < 0 || f.bic < sel.fits[static_cast<std::size_t>(sel.best)].bic) sel.best = i;
+  }
+  return sel;
+}
+
+}  // namespace boresight::model

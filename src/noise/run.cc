@@ -1,0 +1,512 @@
+// `boresight noise` over recorded telemetry: see include/boresight/noise/run.h.
+#include <boresight/core/rotation.h>
+#include <boresight/io/core_config.h>
+#include <boresight/io/overlay_apply.h>
+#include <boresight/noise/run.h>
+#include <boresight/stream/engine.h>
+#include <boresight/stream/replay.h>
+
+#include <Eigen/Dense>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <thread>
+
+namespace boresight::noise {
+namespace {
+
+constexpr double kArcsec = kArcsecPerRad;
+
+/// A series that keeps at most `cap` samples: when full, every other sample is dropped and from then
+/// on only every second (fourth, ...) input is kept. Decimation by whole factors keeps white noise
+/// white and a Gauss-Markov term Gauss-Markov, so the kept series has the same noise model.
+class CappedSeries {
+ public:
+  CappedSeries() = default;
+  explicit CappedSeries(std::size_t cap) : cap_(std::max<std::size_t>(cap, 16)) {}
+  void push(double t, double y) {
+    if (count_++ % stride_ != 0) return;
+    if (s_.size() >= cap_) {
+      std::size_t k = 0;
+      for (std::size_t i = 0; i < s_.size(); i += 2, ++k) {
+        s_.t_s[k] = s_.t_s[i];
+        s_.y[k] = s_.y[i];
+      }
+      s_.t_s.resize(k);
+      s_.y.resize(k);
+      stride_ *= 2;
+      if ((count_ - 1) % stride_ != 0) return;
+    }
+    s_.t_s.push_back(t);
+    s_.y.push_back(y);
+  }
+  /// A gap in the input (a missing sample): the decimation counts input slots, so the kept samples
+  /// stay on a regular grid of the input's.
+  void skip() { ++count_; }
+  const model::NoiseSeries& series() const { return s_; }
+  int stride() const { return static_cast<int>(stride_); }
+
+ private:
+  std::size_t cap_ = std::size_t{1} << 16;
+  std::uint64_t count_ = 0, stride_ = 1;
+  model::NoiseSeries s_;
+};
+
+const char* const kHeadAxis[3] = {"cross_x", "cross_y", "about_boresight"};
+
+/// An orthonormal basis of a head frame with the boresight last: (u, v, b). For a +z boresight it is
+/// the head's own x, y, z.
+Mat3 headAxes(const Vec3& boresight) {
+  const Vec3 b = boresight.normalized();
+  Vec3 u = std::abs(b.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY();
+  u = (u - u.dot(b) * b).normalized();
+  const Vec3 v = b.cross(u);
+  Mat3 E;
+  E.col(0) = u;
+  E.col(1) = v;
+  E.col(2) = b;
+  return E;  // columns: the axes in head coordinates
+}
+
+/// Per head axis: the head against the information-weighted fused attitude of the other heads, in the
+/// head's axes, at epochs where every configured head is present (the contamination is then fixed).
+class HeadResiduals final : public stream::InputObserver {
+ public:
+  HeadResiduals(const core::HeadSetConfig& hs, std::size_t cap) : n_(hs.n_heads) {
+    for (int i = 0; i < n_; ++i) {
+      const auto& h = hs.head[static_cast<std::size_t>(i)];
+      ids_[static_cast<std::size_t>(i)] = h.id;
+      q_Si_B_[static_cast<std::size_t>(i)] = h.q_Si_B;
+      const Mat3 E = headAxes(h.boresight_Si);
+      // axes of the residual: head-frame rotation vector components along (u, v, b)
+      E_[static_cast<std::size_t>(i)] = E;
+      const Vec3 s2(h.sigma_cross_rad * h.sigma_cross_rad, h.sigma_cross_rad * h.sigma_cross_rad,
+                    h.sigma_roll_rad * h.sigma_roll_rad);
+      const Mat3 C_B_S = h.q_Si_B.toRotationMatrix().transpose();
+      // information of the head's body-frame attitude error: C_B_S E diag(1/s2) E^T C_S_B
+      W_[static_cast<std::size_t>(i)] = C_B_S * E * s2.cwiseInverse().asDiagonal() * E.transpose() * C_B_S.transpose();
+      for (int k = 0; k < 3; ++k) series_[static_cast<std::size_t>(i)][static_cast<std::size_t>(k)] = CappedSeries(cap);
+    }
+    // Contamination: residual_i = n_i - E_i^T C_Si_B nu_o with nu_o = (sum_j W_j)^-1 sum_j W_j C_B_Sj E_j n_j
+    // (n_j: head j's noise along its axes), so residual_i[k] = n_i[k] + sum_j M_ij[k][l] n_j[l].
+    for (int i = 0; i < n_; ++i) {
+      Mat3 Wsum = Mat3::Zero();
+      for (int j = 0; j < n_; ++j)
+        if (j != i) Wsum += W_[static_cast<std::size_t>(j)];
+      const Mat3 Winv = Wsum.inverse();
+      const Mat3 C_Si_B = q_Si_B_[static_cast<std::size_t>(i)].toRotationMatrix();
+      for (int j = 0; j < n_; ++j) {
+        if (j == i) continue;
+        const Mat3 C_B_Sj = q_Si_B_[static_cast<std::size_t>(j)].toRotationMatrix().transpose();
+        M_[static_cast<std::size_t>(i)][static_cast<std::size_t>(j)] =
+            -E_[static_cast<std::size_t>(i)].transpose() * C_Si_B * Winv * W_[static_cast<std::size_t>(j)] * C_B_Sj *
+            E_[static_cast<std::size_t>(j)];
+      }
+    }
+  }
+
+  void onHeads(const core::HeadEpoch& e, core::Status) override {
+    ++epochs_;
+    if (n_ < 2) return;
+    std::array<Quat, core::kMaxHeads> q_B{};
+    std::uint32_t mask = 0;
+    for (int s = 0; s < e.n; ++s) {
+      const auto& hs = e.sample[static_cast<std::size_t>(s)];
+      for (int k = 0; k < n_; ++k)
+        if (ids_[static_cast<std::size_t>(k)] == hs.head_id) {
+          q_B[static_cast<std::size_t>(k)] = hs.q_I_Si.normalized() * q_Si_B_[static_cast<std::size_t>(k)];
+          mask |= 1u << k;
+        }
+    }
+    const std::uint32_t full = (1u << n_) - 1;
+    if (t0_ < 0) t0_ = e.t;
+    const double t = toSeconds(e.t - t0_);
+    if (mask != full) {
+      for (auto& h : series_)
+        for (auto& a : h) a.skip();
+      return;
+    }
+    ++full_;
+    for (int i = 0; i < n_; ++i) {
+      // the other heads' body attitudes as rotation vectors about a reference (one of them)
+      const int ref = i == 0 ? 1 : 0;
+      const Quat q_ref = q_B[static_cast<std::size_t>(ref)];
+      Vec3 acc = Vec3::Zero();
+      Mat3 Wsum = Mat3::Zero();
+      for (int j = 0; j < n_; ++j) {
+        if (j == i) continue;
+        const Vec3 nu = core::quatLog(q_ref.conjugate() * q_B[static_cast<std::size_t>(j)]);
+        acc += W_[static_cast<std::size_t>(j)] * nu;
+        Wsum += W_[static_cast<std::size_t>(j)];
+      }
+      const Quat q_o = q_ref * core::quatExp(Wsum.inverse() * acc);
+      // head i against what the others predict for it, in head i's frame, along its axes
+      const Vec3 r = core::quatLog((q_o * q_Si_B_[static_cast<std::size_t>(i)].conjugate()).conjugate() *
+                                   (q_B[static_cast<std::size_t>(i)] * q_Si_B_[static_cast<std::size_t>(i)].conjugate()));
+      const Vec3 ra = E_[static_cast<std::size_t>(i)].transpose() * r;
+      for (int k = 0; k < 3; ++k) series_[static_cast<std::size_t>(i)][static_cast<std::size_t>(k)].push(t, ra[k] * kArcsec);
+    }
+  }
+
+  int heads() const { return n_; }
+  int id(int i) const { return ids_[static_cast<std::size_t>(i)]; }
+  const CappedSeries& series(int i, int k) const { return series_[static_cast<std::size_t>(i)][static_cast<std::size_t>(k)]; }
+  /// d residual_i[k] / d n_j[l]
+  double weight(int i, int k, int j, int l) const { return M_[static_cast<std::size_t>(i)][static_cast<std::size_t>(j)](k, l); }
+  std::uint64_t epochs() const { return epochs_; }
+  std::uint64_t fullEpochs() const { return full_; }
+
+ private:
+  int n_;
+  std::array<int, core::kMaxHeads> ids_{};
+  std::array<Quat, core::kMaxHeads> q_Si_B_{};
+  std::array<Mat3, core::kMaxHeads> E_{}, W_{};
+  std::array<std::array<Mat3, core::kMaxHeads>, core::kMaxHeads> M_{};
+  std::array<std::array<CappedSeries, 3>, core::kMaxHeads> series_{};
+  std::uint64_t epochs_ = 0, full_ = 0;
+  TimeUs t0_ = -1;
+};
+
+/// The accelerometer: raw first differences (white level) and block means of star minus accelerometer
+/// angular acceleration in the accelerometer frame (low-frequency part).
+class AccSeries final : public stream::InputObserver, public stream::RowSink {
+ public:
+  AccSeries(const core::PipelineConfig& cfg, std::size_t cap, double block_s)
+      : C_A_B_(cfg.C_B_A.transpose()), block_us_(static_cast<TimeUs>(std::llround(block_s * 1e6))) {
+    for (auto& d : diffs_) d = CappedSeries(cap);
+    for (auto& b : blocks_) b = CappedSeries(cap);
+    row_period_us_ = cfg.crn_attitude.output_period_us > 0 ? cfg.crn_attitude.output_period_us : kUsPerSecond;
+  }
+  void onAcc(TimeUs t, const Vec3& a_A, core::Status) override {
+    ++samples_;
+    if (t0_ < 0) t0_ = t;
+    // non-overlapping pairs (a_{2m+1} - a_{2m}): independent differences of the white part
+    if (have_prev_ && !odd_) {
+      const Vec3 d = a_A - prev_;
+      for (int k = 0; k < 3; ++k) diffs_[static_cast<std::size_t>(k)].push(toSeconds(t - t0_), d[k]);
+    }
+    odd_ = !odd_;
+    prev_ = a_A;
+    have_prev_ = true;
+  }
+  bool begin(const core::PipelineConfig&) override { return true; }
+  bool write(const core::PipelineRow& row) override {
+    if (!row.has_rates || !row.has_acc) return true;
+    const Vec3 d = C_A_B_ * (row.a_acc_B - row.a_sc_B);
+    if (!d.allFinite()) return true;
+    if (t0_rows_ < 0) t0_rows_ = row.t;
+    const TimeUs b = (row.t - t0_rows_) / block_us_;
+    if (b != block_) {
+      closeBlock();
+      block_ = b;
+    }
+    sum_ += d;
+    ++count_;
+    return true;
+  }
+  bool end() override {
+    closeBlock();
+    return true;
+  }
+  std::string error() const override { return {}; }
+  const CappedSeries& diffs(int k) const { return diffs_[static_cast<std::size_t>(k)]; }
+  const CappedSeries& blocks(int k) const { return blocks_[static_cast<std::size_t>(k)]; }
+  std::uint64_t samples() const { return samples_; }
+  std::uint64_t completeBlocks() const { return complete_; }
+  double blockSeconds() const { return static_cast<double>(block_us_) * 1e-6; }
+
+ private:
+  void closeBlock() {
+    // only complete blocks (every row present): their means share one noise model
+    const auto expected = static_cast<std::uint64_t>(block_us_ / row_period_us_);
+    if (block_ >= 0 && count_ >= expected && count_ > 0) {
+      const Vec3 m = sum_ / static_cast<double>(count_);
+      const double t = (static_cast<double>(block_) + 0.5) * blockSeconds();
+      for (int k = 0; k < 3; ++k) blocks_[static_cast<std::size_t>(k)].push(t, m[k]);
+      ++complete_;
+    }
+    sum_.setZero();
+    count_ = 0;
+  }
+  Mat3 C_A_B_;
+  TimeUs block_us_, row_period_us_ = kUsPerSecond;
+  std::array<CappedSeries, 3> diffs_, blocks_;
+  Vec3 prev_ = Vec3::Zero(), sum_ = Vec3::Zero();
+  bool have_prev_ = false, odd_ = false;
+  std::uint64_t samples_ = 0, count_ = 0, complete_ = 0;
+  TimeUs t0_ = -1, t0_rows_ = -1, block_ = -1;
+};
+
+/// The band in which a fit of this series can determine correlation times and corners.
+void band(AxisResult& a, const model::NoiseFitOptions& o) {
+  a.f_det_lo = a.span_s > 0 ? o.band_lo / a.span_s : 0;
+  a.f_det_hi = a.interval_s > 0 ? 1.0 / (a.interval_s * o.band_hi) : 0;
+}
+
+/// `short_from_differences`: when the series cannot show a coloured part, its white level comes from
+/// the differences of consecutive samples (content slower than one interval, which a whole-variance fit
+/// would put into the white level, cancels), with the whole-variance fit kept as the second candidate.
+void fitAxis(AxisResult& a, const model::NoiseSeries& s, const NoiseOptions& opt, const model::NoiseModel& fixed,
+             bool short_from_differences = false) {
+  a.samples = s.size();
+  a.span_s = s.span();
+  a.interval_s = s.medianInterval();
+  model::NoiseFitOptions fo;
+  fo.fixed = fixed;
+  band(a, fo);
+  a.contamination = fixed;
+  if (s.size() < 16) {
+    a.selection = model::NoiseSelection{};
+    a.notes.push_back("too few samples (" + std::to_string(s.size()) + ") to fit a noise model");
+    return;
+  }
+  // Structures with a coloured part only where the series is long enough to show one.
+  std::vector<model::NoiseStructure> st;
+  for (auto x : opt.structures) {
+    const bool coloured = x != model::NoiseStructure::White;
+    if (coloured && (s.size() < 200 || !(a.f_det_hi > a.f_det_lo))) continue;
+    st.push_back(x);
+  }
+  const bool white_only = st.size() < opt.structures.size();
+  if (white_only)
+    a.notes.push_back("the span (" + std::to_string(static_cast<long long>(std::llround(a.span_s))) +
+                      " s) cannot determine a coloured part: only the white level is fitted");
+  const Eigen::MatrixXd X = Eigen::MatrixXd::Ones(static_cast<Eigen::Index>(s.size()), 1);  // the mean (a misalignment, a bias)
+  a.selection = model::selectNoise(s, st, X, fo);
+  if (white_only && short_from_differences) {
+    // The differences see the white parts only (the slow content cancels): the series' white variance,
+    // minus the white part the other heads add (their slow part cancels too).
+    const model::NoiseFit d = model::fitWhiteFromDifferences(s);
+    if (d.converged && a.fitted()) {
+      const double v = d.model.terms.front().sigma * d.model.terms.front().sigma;
+      const double own = v - fixed.whiteVariance();
+      const double se_v = v * std::sqrt(2.0 / static_cast<double>(d.n));
+      model::NoiseFit f = d;
+      model::NoiseParam& p = f.params.front();
+      if (own > 0) {
+        p.value = std::sqrt(own);
+        p.sigma = se_v / (2 * p.value);
+        p.log_sigma = p.sigma / p.value;
+      } else {
+        p.value = 0;
+        p.sigma = std::sqrt(se_v);
+        p.determined = false;
+        p.note = "below what the other heads add to the series";
+      }
+      f.model = model::NoiseModel::white(p.value);
+      f.cov = Eigen::MatrixXd::Constant(1, 1, p.log_sigma * p.log_sigma);
+      const double whole = a.selection.chosen().model.terms.front().sigma;
+      char b[320];
+      std::snprintf(b, sizeof b,
+                    "white level from the differences of consecutive samples %.3g +- %.2g (a fit of the whole variance "
+                    "gives %.3g: the rest is content slower than one interval that a %.0f s span cannot resolve)",
+                    p.value, p.sigma, whole, a.span_s);
+      a.notes.push_back(b);
+      a.selection.fits.insert(a.selection.fits.begin(), f);
+      a.selection.best = 0;
+    }
+  }
+  if (s.size() >= 64) {
+    std::size_t seg = 32;
+    std::size_t longest = 0, run = 1;
+    for (std::size_t i = 1; i < s.size(); ++i) {
+      run = std::abs(s.t_s[i] - s.t_s[i - 1] - a.interval_s) <= 0.1 * a.interval_s ? run + 1 : 1;
+      longest = std::max(longest, run);
+    }
+    while (seg * 2 <= std::min(longest, s.size() / 4)) seg *= 2;
+    a.spectrum = model::welchPsdGapped(s, a.interval_s, seg);
+  }
+}
+
+/// A model with every term's level scaled by |w| (the noise of w n).
+model::NoiseModel scaled(const model::NoiseModel& m, double w) {
+  model::NoiseModel o = m;
+  for (auto& t : o.terms) t.sigma *= std::abs(w);
+  return o;
+}
+
+/// Runs f(i) for i in [0, n) on two threads.
+template <class F>
+void parallelFor(std::size_t n, F f) {
+  std::vector<std::thread> th;
+  const unsigned workers = std::max(1u, std::min(2u, std::thread::hardware_concurrency()));
+  std::atomic<std::size_t> next{0};
+  for (unsigned w = 0; w < workers; ++w)
+    th.emplace_back([&] {
+      for (std::size_t i = next++; i < n; i = next++) f(i);
+    });
+  for (auto& t : th) t.join();
+}
+
+}  // namespace
+
+bool runNoise(const NoiseRequest& req, NoiseOutput& out, std::string* error) {
+  out = NoiseOutput{};
+  io::PlatformConfig pc;
+  if (!io::loadPlatformConfig(req.config, pc, error)) return false;
+  io::OverlayUse ovu;
+  if (!req.overlay.empty() && !io::applyOverlay(req.overlay, "boresight noise", {true, true}, pc, ovu, error)) return false;
+  out.platform = pc.platform;
+  stream::ReplayInputs in;
+  if (!stream::classifyInputs(req.inputs, in, error)) return false;
+  for (const auto& [f, product] : in.ignored)
+    out.notes.push_back(f + ": " + product + " is not an input of noise (SCA1A, ACC1A, QSA1B, LCM log): ignored");
+  for (const auto& f : in.scv) out.notes.push_back(f + ": SCV1A is not an input of noise: ignored");
+  in.scv.clear();
+  io::ReadOptions ropt;
+  if (req.strict) ropt.on_error = io::OnError::Stop;
+  if (!stream::prepareConfig(in, ropt, pc, error)) return false;
+  for (const auto& f : in.sca) out.inputs.push_back(f + ": SCA1A heads");
+  for (const auto& f : in.acc) out.inputs.push_back(f + ": accelerometer");
+  for (const auto& f : in.qsa) out.inputs.push_back(f + ": QSA1B nominal mountings");
+  for (const auto& f : in.lcm) out.inputs.push_back(f + ": LCM log");
+
+  stream::AssemblerConfig acfg;
+  acfg.lookahead_us = static_cast<TimeUs>(std::llround(req.lookahead_s * 1e6));
+  stream::Engine engine(acfg);
+  if (!engine.configure(pc.pipeline, error) || !stream::addSources(in, ropt, true, engine, error)) return false;
+  HeadResiduals heads(pc.pipeline.heads, req.options.max_samples);
+  AccSeries acc(pc.pipeline, req.options.max_samples, req.options.acc_block_s);
+  engine.addObserver(&heads);
+  engine.addObserver(&acc);
+  engine.addSink(&acc);
+  const auto w0 = std::chrono::steady_clock::now();
+  if (engine.run() != stream::Engine::Result::kDone) {
+    if (error) *error = engine.error();
+    return false;
+  }
+  out.counters = engine.counters();
+  out.health = engine.health();
+  out.epochs = engine.epochs();
+  out.full_epochs = heads.fullEpochs();
+  out.acc_samples = acc.samples();
+  out.span_s = toSeconds(engine.lastEpoch() - engine.firstEpoch());
+  out.t0 = engine.firstEpoch();
+  out.t1 = engine.lastEpoch();
+  out.model_in_use = io::modelInUseLines(pc, ovu);
+  for (const auto& w : io::validityWarnings(ovu, out.t0, out.t1)) out.notes.push_back(w);
+  if (out.counters.used_heads == 0) {
+    if (error) *error = "no star sensor samples in the inputs";
+    return false;
+  }
+  if (req.progress) {
+    char b[160];
+    std::snprintf(b, sizeof b, "noise: %.1f h replayed in %.1f s; fitting", out.span_s / 3600.0,
+                  std::chrono::duration<double>(std::chrono::steady_clock::now() - w0).count());
+    req.progress(b);
+  }
+
+  // Heads: every axis, then again with the other heads' fitted models as their contamination.
+  const int n = heads.heads();
+  const auto& hs = pc.pipeline.heads;
+  std::vector<AxisResult> head_axes(static_cast<std::size_t>(3 * n));
+  // The configured model of an axis (the platform file's noise section, or the overlay's), in arcsec.
+  auto configuredOf = [&](int i, int k) {
+    const auto& ax = pc.noise_in_use.head[static_cast<std::size_t>(i)][static_cast<std::size_t>(k)];
+    if (!ax.set) {
+      const auto& h = hs.head[static_cast<std::size_t>(i)];
+      return model::NoiseModel::white((k == 2 ? h.sigma_roll_rad : h.sigma_cross_rad) * kArcsec);
+    }
+    return scaled(ax.noise.model, kArcsec);
+  };
+  // The model of head j's axis l used for the contamination: the configured one at first.
+  std::vector<model::NoiseModel> current(static_cast<std::size_t>(3 * n));
+  for (int i = 0; i < n; ++i)
+    for (int k = 0; k < 3; ++k) current[static_cast<std::size_t>(3 * i + k)] = configuredOf(i, k);
+  if (n < 2)
+    out.notes.push_back("one head: its noise cannot be told from the attitude (a second head is needed)");
+  if (n >= 2 && heads.fullEpochs() == 0)
+    out.notes.push_back("no epoch with every configured head present: no head noise series");
+  const int passes = n >= 2 ? 1 + std::max(0, req.options.contamination_passes) : 0;
+  for (int pass = 0; pass < passes && heads.fullEpochs() > 0; ++pass) {
+    parallelFor(static_cast<std::size_t>(3 * n), [&](std::size_t idx) {
+      const int i = static_cast<int>(idx) / 3, k = static_cast<int>(idx) % 3;
+      model::NoiseModel fixed;
+      for (int j = 0; j < n && req.options.model_other_heads; ++j) {
+        if (j == i) continue;
+        for (int l = 0; l < 3; ++l) {
+          const auto add = scaled(current[static_cast<std::size_t>(3 * j + l)], heads.weight(i, k, j, l));
+          fixed.terms.insert(fixed.terms.end(), add.terms.begin(), add.terms.end());
+        }
+      }
+      AxisResult a;
+      a.sensor = "head " + std::to_string(heads.id(i));
+      a.axis = kHeadAxis[k];
+      a.unit = "arcsec";
+      a.series = "the head against the fused attitude of the other heads, head axes";
+      a.decimation = heads.series(i, k).stride();
+      a.configured = configuredOf(i, k);
+      fitAxis(a, heads.series(i, k).series(), req.options, fixed, /*short_from_differences=*/true);
+      head_axes[idx] = std::move(a);
+    });
+    for (std::size_t idx = 0; idx < head_axes.size(); ++idx)
+      if (head_axes[idx].fitted()) current[idx] = head_axes[idx].selection.chosen().model;
+  }
+  for (auto& a : head_axes)
+    if (!a.sensor.empty()) out.axes.push_back(std::move(a));
+
+  // Accelerometer: the white level per A axis from the raw differences; the slow part from blocks.
+  if (acc.samples() > 0) {
+    std::vector<AxisResult> acc_axes(6);
+    parallelFor(6, [&](std::size_t idx) {
+      const int k = static_cast<int>(idx % 3);
+      AxisResult a;
+      a.sensor = "accelerometer";
+      a.axis = std::string(1, "xyz"[k]);
+      a.unit = "rad/s^2";
+      if (pc.noise_in_use.acc[static_cast<std::size_t>(k)].set) a.configured = pc.noise_in_use.acc[static_cast<std::size_t>(k)].noise.model;
+      if (idx < 3) {
+        // a_{2m+1} - a_{2m} = w_{2m+1} - w_{2m} + (signal and slow noise change over one sample):
+        // white with twice the per-sample variance; thruster pulses are outliers, so the level is a
+        // robust one (median absolute deviation) before the likelihood fit of the clipped series.
+        const model::NoiseSeries& d = acc.diffs(k).series();
+        model::NoiseSeries c;
+        std::vector<double> v(d.y.begin(), d.y.end());
+        double mad = 0;
+        if (!v.empty()) {
+          std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
+          const double med = v[v.size() / 2];
+          for (auto& x : v) x = std::abs(x - med);
+          std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
+          mad = 1.4826 * v[v.size() / 2];
+        }
+        std::size_t clipped = 0;
+        for (std::size_t i = 0; i < d.size(); ++i) {
+          if (std::abs(d.y[i]) > 5 * mad) {
+            ++clipped;
+            continue;
+          }
+          c.t_s.push_back(d.t_s[i]);
+          c.y.push_back(d.y[i] / std::sqrt(2.0));  // per-sample scale
+        }
+        a.series = "independent first differences of the raw samples / sqrt(2) (white level)";
+        a.decimation = acc.diffs(k).stride();
+        NoiseOptions o = req.options;
+        o.structures.assign(1, model::NoiseStructure::White);
+        fitAxis(a, c, o, model::NoiseModel());
+        a.notes.push_back(std::to_string(clipped) + " differences beyond 5 robust sigmas left out (thruster pulses)");
+        a.notes.push_back("clipping at 5 sigma lowers a Gaussian level by 1e-5 relative: negligible");
+      } else {
+        a.series = "block means (" + std::to_string(static_cast<int>(acc.blockSeconds())) +
+                   " s) of accelerometer minus star-sensor angular acceleration, A frame (slow part)";
+        a.decimation = acc.blocks(k).stride();
+        fitAxis(a, acc.blocks(k).series(), req.options, model::NoiseModel());
+        a.notes.push_back("the white part of this series is the star sensors' (differentiated attitude noise at the block "
+                          "scale), not the accelerometer's; its coloured part is the accelerometer's slow noise");
+      }
+      acc_axes[idx] = std::move(a);
+    });
+    if (acc.completeBlocks() < 50)
+      out.notes.push_back("accelerometer: " + std::to_string(acc.completeBlocks()) + " complete blocks of " +
+                          std::to_string(static_cast<int>(acc.blockSeconds())) +
+                          " s star-minus-accelerometer: too short a span for its slow noise");
+    for (auto& a : acc_axes) out.axes.push_back(std::move(a));
+  } else {
+    out.notes.push_back("no accelerometer samples: no accelerometer noise");
+  }
+  return true;
+}
+
+}  // namespace boresight::noise

@@ -1,0 +1,139 @@
+// Seeded series for the noise library's tests and benches: a model drawn on a grid with random gaps.
+#pragma once
+
+#include <boresight/model/noise.h>
+
+#include <cmath>
+#include <cstdint>
+
+namespace boresight::model::noisetest {
+
+/// `slots` grid times k T (each moved by up to +-jitter T, uniformly), a fraction of about
+/// `gap_fraction` of them removed in gaps of exponential length with a mean of 40 samples; the
+/// model drawn at the remaining times (NoiseSimulator, so the gaps are exact).
+inline NoiseSeries gappedSeries(const NoiseModel& m, std::size_t slots, double T, double gap_fraction, std::uint64_t seed,
+                                double jitter) {
+  NoiseSeries s;
+  const CounterRng gaps(seed, Stream::HeadGap, 77), jit(seed, Stream::HeadTagJitter, 77);
+  NoiseSimulator sim(m, CounterRng(seed, Stream::HeadNoise, 77));
+  const double mean_len = 40;
+  const double p = gap_fraction > 0 ? gap_fraction / (mean_len * (1 - gap_fraction)) : 0;
+  double gap_until = -1;
+  for (std::size_t k = 0; k < slots; ++k) {
+    if (p > 0 && gaps.uniform(k, 0) < p) gap_until = std::max(gap_until, static_cast<double>(k) - mean_len * std::log(gaps.uniform(k, 1)));
+    if (static_cast<double>(k) < gap_until) continue;
+    const double t = (static_cast<double>(k) + jitter * (2 * jit.uniform(k) - 1)) * T;
+    s.t_s.push_back(t);
+    s.y.push_back(sim.next(t));
+  }
+  return s;
+}
+
+}  // namespace boresight::model::noisetest
+
+#include <boresight/model/stats.h>
+
+#include <Eigen/Cholesky>
+
+#include <map>
+#include <string>
+#include <vector>
+
+namespace boresight::model::noisetest {
+
+/// One Monte Carlo case of the fitting tests: a true model, the structure fitted, and the true
+/// parameter values by the fit's parameter names.
+struct FitCase {
+  std::string name;
+  NoiseModel truth;
+  NoiseStructure structure;
+  std::map<std::string, double> values;
+};
+
+/// The four cases of the issue (white, Gauss-Markov, power law, a sum), with correlation times and
+/// corner frequencies inside [20 / span, fs / 20] for a span of `span_s` sampled every T.
+inline std::vector<FitCase> fitCases(double span_s, double T) {
+  const double f_lo = 20.0 / span_s, f_hi = 1.0 / (20.0 * T);  // the determinable band
+  const double g = std::sqrt(f_lo * f_hi);                      // its geometric middle
+  const double tau = 1.0 / (6.283185307179586 * g);
+  const double tau1 = 1.0 / (6.283185307179586 * std::sqrt(g * f_hi)), tau2 = 1.0 / (6.283185307179586 * std::sqrt(g * f_lo));
+  std::vector<FitCase> c;
+  c.push_back({"white", NoiseModel::white(2.0), NoiseStructure::White, {{"white.sigma", 2.0}}});
+  c.push_back({"gauss_markov", NoiseModel::white(1.0).add(NoiseTerm::gaussMarkov(1.5, tau)), NoiseStructure::WhiteGaussMarkov,
+               {{"white.sigma", 1.0}, {"gm1.sigma", 1.5}, {"gm1.tau_s", tau}}});
+  const double pl_lo = f_lo * 2, pl_hi = f_hi / 2;
+  // the fit's own term count (the truth is a member of the family fitted)
+  const int K = powerLawFitTerms(span_s, T);
+  c.push_back({"power_law", NoiseModel::white(1.0).add(NoiseTerm::powerLaw(3.0, 1.0, pl_lo, pl_hi, K)), NoiseStructure::WhitePowerLaw,
+               {{"white.sigma", 1.0}, {"pl.sigma", 3.0}, {"pl.alpha", 1.0}, {"pl.f_lo_hz", pl_lo}, {"pl.f_hi_hz", pl_hi}}});
+  c.push_back({"sum", NoiseModel::white(1.0).add(NoiseTerm::gaussMarkov(1.5, tau1)).add(NoiseTerm::gaussMarkov(2.0, tau2)),
+               NoiseStructure::WhiteTwoGaussMarkov,
+               {{"white.sigma", 1.0}, {"gm1.sigma", 1.5}, {"gm1.tau_s", tau1}, {"gm2.sigma", 2.0}, {"gm2.tau_s", tau2}}});
+  return c;
+}
+
+/// Per parameter: how often |error| <= 3 sigma among the runs where it was determined; and the
+/// normalised error squared over the determined parameters (its sum over runs is chi-square with
+/// the summed degrees of freedom when the sigmas are right).
+struct FitMcResult {
+  std::map<std::string, int> within3, determined;
+  int runs = 0, converged = 0, chosen_right = 0, truth_not_rejected = 0;
+  double nees_sum = 0;
+  int nees_dof = 0;
+  double seconds_per_fit = 0;
+};
+
+inline FitMcResult runFitMc(const FitCase& c, int runs, std::size_t slots, double T, double gap_fraction, std::uint64_t seed0,
+                            bool also_select = false) {
+  FitMcResult r;
+  for (int k = 0; k < runs; ++k) {
+    const NoiseSeries s = gappedSeries(c.truth, slots, T, gap_fraction, seed0 + static_cast<std::uint64_t>(k), 0.0);
+    Eigen::MatrixXd X = Eigen::MatrixXd::Ones(static_cast<Eigen::Index>(s.size()), 1);  // an unknown mean
+    // With the BIC choice, the fit of the simulated structure is the selection's own.
+    NoiseSelection sel;
+    if (also_select) sel = selectNoise(s, defaultNoiseStructures(), X);
+    NoiseFit f;
+    for (const auto& g : sel.fits)
+      if (g.structure == c.structure) f = g;
+    if (!also_select) f = fitNoise(s, c.structure, X);
+    ++r.runs;
+    r.converged += f.converged;
+    std::vector<int> idx;
+    std::vector<double> err;
+    for (std::size_t i = 0; i < f.params.size(); ++i) {
+      const NoiseParam& p = f.params[i];
+      if (!p.determined) continue;
+      const double t = c.values.at(p.name);
+      const double e = p.log_scale ? std::log(p.value) - std::log(t) : p.value - t;
+      const double se = p.log_scale ? p.log_sigma : p.sigma;
+      ++r.determined[p.name];
+      r.within3[p.name] += std::abs(e) <= 3 * se;
+      idx.push_back(static_cast<int>(i));
+      err.push_back(e);
+    }
+    if (!idx.empty()) {
+      Eigen::MatrixXd C(static_cast<Eigen::Index>(idx.size()), static_cast<Eigen::Index>(idx.size()));
+      Eigen::VectorXd e(static_cast<Eigen::Index>(idx.size()));
+      for (std::size_t a = 0; a < idx.size(); ++a) {
+        e[static_cast<Eigen::Index>(a)] = err[a];
+        for (std::size_t b = 0; b < idx.size(); ++b) C(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(b)) = f.cov(idx[a], idx[b]);
+      }
+      r.nees_sum += e.dot(C.ldlt().solve(e));
+      r.nees_dof += static_cast<int>(idx.size());
+    }
+    if (also_select) {
+      r.chosen_right += sel.best >= 0 && sel.chosen().structure == c.structure;
+      for (const auto& g : sel.fits)
+        if (g.structure == c.structure) r.truth_not_rejected += sel.best >= 0 && g.bic - sel.chosen().bic < 10;
+    }
+  }
+  return r;
+}
+
+/// Two-sided 95 % bounds of a chi-square variable with k degrees of freedom, divided by k.
+inline void neesBounds(int k, double& lo, double& hi) {
+  lo = stats::chi2Quantile(0.975, k) / k;
+  hi = stats::chi2Quantile(0.025, k) / k;
+}
+
+}  // namespace boresight::model::noisetest

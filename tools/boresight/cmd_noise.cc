@@ -1,0 +1,150 @@
+// boresight noise --config FILE INPUT... --out DIR: the noise of every head axis and accelerometer axis
+// from the data, a model fitted per axis. Option parsing and printing only: noise::runNoise() replays
+// the inputs and fits, noise::writeNoise* write the results.
+#include <boresight/noise/run.h>
+
+#include "cli_common.h"
+#include "commands.h"
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace boresight::cli {
+namespace {
+
+const char* kUsage =
+    "usage: boresight noise --config FILE INPUT... --out DIR [--overlay FILE] [--models LIST]\n"
+    "                       [--max-samples N] [--acc-block S] [--lookahead S] [--strict] [--quiet]\n"
+    "\n"
+    "Noise as the data has it: for every head axis (cross-boresight x, y and about the boresight, head\n"
+    "axes) and every accelerometer axis (A frame), a noise model fitted to the data by exact likelihood\n"
+    "(gaps and irregular sampling included) and chosen among candidates by BIC, with uncertainties and\n"
+    "what the span and the sampling can determine.\n"
+    "\n"
+    "Heads: each head against the fused attitude of the other heads, in its own axes, at epochs where\n"
+    "every configured head is present: the attitude cancels; what the other heads add is known from\n"
+    "their fusion weights and is carried in the fit as a fixed part (fitted again with the other heads'\n"
+    "fitted models). Accelerometer: the white level from independent first differences of the raw\n"
+    "samples (thruster pulses left out as outliers); the slow part from block means of accelerometer\n"
+    "minus star-sensor angular acceleration (the same CRN on both) where the span allows.\n"
+    "\n"
+    "INPUT: Level-1 files recognised by content (SCA1A, ACC1A, QSA1B for the nominal mountings when\n"
+    "the config says heads.mounting: qsa1b) or an LCM log. Other products are listed as ignored.\n"
+    "\n"
+    "  --config FILE        platform file (config/gracefo.yaml)\n"
+    "  --out DIR            writes DIR/noise.json (every axis: candidates, chosen model, parameters with\n"
+    "                       sigmas, the determinable band), DIR/noise.yaml (the chosen models in the\n"
+    "                       platform file's noise form), DIR/overlay.yaml (the same as a model overlay for\n"
+    "                       --overlay of process, calibrate, audit) and DIR/report.md with a log-log\n"
+    "                       spectrum per axis against the fitted and the configured model\n"
+    "  --overlay FILE       a model overlay whose noise replaces the platform file's (the configured model\n"
+    "                       the data are compared with, and the other heads' part at the first fit)\n"
+    "  --models LIST        candidate structures, comma-separated, of white, white+gauss_markov,\n"
+    "                       white+2gauss_markov, white+power_law (default: all four)\n"
+    "  --max-samples N      samples kept per axis; longer series keep every 2nd, 4th, ... (default 65536)\n"
+    "  --acc-block S        block of the star-minus-accelerometer series, s (default 100)\n"
+    "  --lookahead S        out-of-order tolerance of the inputs, seconds (default 2)\n"
+    "  --strict             stop at the first malformed input line\n"
+    "  --quiet              print the table only\n"
+    "\n"
+    "Exit status: 0 done (whatever a short span could determine); 1 bad input (file:line: reason) or\n"
+    "an output that cannot be written; 2 usage error.\n";
+
+int fail(const std::string& msg) {
+  std::fprintf(stderr, "boresight noise: %s\n", msg.c_str());
+  return 1;
+}
+
+std::string fmt(double v, const char* f = "%.3g") {
+  if (!std::isfinite(v)) return "-";
+  char b[64];
+  std::snprintf(b, sizeof b, f, v);
+  return b;
+}
+
+}  // namespace
+
+int runNoise(int argc, char** argv) {
+  CLI::App app{"boresight noise"};
+  noise::NoiseRequest req;
+  std::string out_dir, models;
+  bool quiet = false;
+  app.add_option("--config", req.config)->required();
+  app.add_option("--out", out_dir)->required();
+  app.add_option("--overlay", req.overlay);
+  app.add_option("--models", models);
+  app.add_option("--max-samples", req.options.max_samples)->check(CLI::Range(std::size_t{64}, std::size_t{1} << 24));
+  app.add_option("--acc-block", req.options.acc_block_s)->check(CLI::Range(2.0, 86400.0));
+  app.add_option("--lookahead", req.lookahead_s)->check(CLI::Range(0.0, 3600.0));
+  app.add_flag("--strict", req.strict);
+  app.add_flag("--quiet", quiet);
+  app.add_option("inputs", req.inputs)->required();
+  if (int st = parseCommandLine(app, argc, argv, "noise", kUsage); st >= 0) return st;
+  if (!models.empty()) {
+    req.options.structures.clear();
+    std::stringstream ss(models);
+    for (std::string m; std::getline(ss, m, ',');) {
+      bool found = false;
+      for (auto s : {model::NoiseStructure::White, model::NoiseStructure::WhiteGaussMarkov,
+                     model::NoiseStructure::WhiteTwoGaussMarkov, model::NoiseStructure::WhitePowerLaw})
+        if (m == model::noiseStructureName(s)) {
+          req.options.structures.push_back(s);
+          found = true;
+        }
+      if (!found) {
+        std::fprintf(stderr, "boresight noise: --models: unknown structure '%s' (white, white+gauss_markov, "
+                             "white+2gauss_markov, white+power_law)\n", m.c_str());
+        return 2;
+      }
+    }
+  }
+  std::error_code ec;
+  std::filesystem::create_directories(out_dir, ec);
+  if (ec) return fail(out_dir + ": cannot create the output directory: " + ec.message());
+  if (!quiet) req.progress = [](const std::string& s) { std::fprintf(stderr, "%s\n", s.c_str()); };
+
+  noise::NoiseOutput out;
+  std::string err;
+  if (!noise::runNoise(req, out, &err)) return fail(err);
+  if (!quiet) {
+    for (const auto& s : out.inputs) std::printf("%s\n", s.c_str());
+    const auto& c = out.counters;
+    std::printf("inputs: %llu read = %llu used + %llu rejected; span %.1f s, %llu head epochs (%llu with every head), "
+                "%llu accelerometer samples\n",
+                static_cast<unsigned long long>(c.read), static_cast<unsigned long long>(c.used()),
+                static_cast<unsigned long long>(c.rejectedTotal()), out.span_s, static_cast<unsigned long long>(out.epochs),
+                static_cast<unsigned long long>(out.full_epochs), static_cast<unsigned long long>(out.acc_samples));
+  }
+  if (!quiet)
+    for (const auto& s : out.model_in_use) std::printf("configured: %s\n", s.c_str());
+  for (const auto& s : out.notes) std::printf("note: %s\n", s.c_str());
+  std::printf("\n%-14s %-8s %-6s %8s  %-22s %s\n", "sensor", "axis", "part", "samples", "chosen (BIC)", "parameters [unit]");
+  for (const auto& a : out.axes) {
+    const bool slow = a.series.rfind("block", 0) == 0;
+    std::printf("%-14s %-8s %-6s %8zu  ", a.sensor.c_str(), a.axis.c_str(), slow ? "slow" : "white", a.samples);
+    if (!a.fitted()) {
+      std::printf("%-22s %s\n", "not fitted", a.notes.empty() ? "" : a.notes.front().c_str());
+      continue;
+    }
+    const auto& f = a.selection.chosen();
+    std::string p;
+    for (const auto& q : f.params) {
+      p += (p.empty() ? "" : ", ") + q.name + " " + fmt(q.value, "%.4g");
+      p += q.determined ? " +- " + fmt(q.sigma, "%.2g") : std::string(" (not determined)");
+    }
+    std::printf("%-22s %s [%s]\n", model::noiseStructureName(f.structure), p.c_str(), a.unit.c_str());
+  }
+  const std::string json = out_dir + "/noise.json", yaml = out_dir + "/noise.yaml", ovl = out_dir + "/overlay.yaml";
+  if (!noise::writeNoiseJson(json, out, &err) || !noise::writeNoiseYaml(yaml, out, &err) ||
+      !noise::writeNoiseOverlay(ovl, out, std::string("boresight noise ") + BORESIGHT_VERSION, &err) ||
+      !noise::writeNoiseReport(out_dir, out, &err))
+    return fail(err);
+  std::printf("-> %s/report.md, %s, %s, %s\n", out_dir.c_str(), json.c_str(), yaml.c_str(), ovl.c_str());
+  return 0;
+}
+
+}  // namespace boresight::cli
