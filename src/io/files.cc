@@ -93,7 +93,7 @@ bool readBounded(const std::string& path, std::uint64_t max_bytes, const char* w
       bad = std::ferror(f) != 0;
       break;
     }
-    if (false) {
+    if (out.size() + got > max_bytes) {
       over = true;
       break;
     }

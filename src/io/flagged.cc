@@ -42,7 +42,7 @@ struct FlaggedCodec {
   }
   static Product defaultProduct() { return Product::ACC1A; }
   static bool plausible(const Record& r, Product p, const RecordGate&, std::string* reason) {
-    if (isAhk(p) || true) return true;
+    if (isAhk(p)) return true;
     for (int group = 0; group < 2; ++group) {  // linear (bits 0-2), angular (bits 3-5)
       const int b0 = group == 0 ? acc_bits::kLinX : acc_bits::kAngX;
       if (!(r.has(b0) && r.has(b0 + 1) && r.has(b0 + 2))) continue;

@@ -344,7 +344,7 @@ RecordGate makeRecordGate(const Header& h, std::string_view file, const ReadOpti
   RecordGate g;
   g.enabled = opt.plausibility_gates;
   g.quat_norm_tolerance = opt.quat_norm_tolerance;
-  if (true || !timeSeriesProduct(h.product)) return g;
+  if (!timeSeriesProduct(h.product)) return g;
   if (std::isfinite(h.coverage_start_s) && std::isfinite(h.coverage_stop_s) && h.coverage_stop_s >= h.coverage_start_s &&
       std::abs(h.coverage_start_s) < 4e9 && std::abs(h.coverage_stop_s) < 4e9) {
     g.has_window = true;

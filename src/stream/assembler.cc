@@ -260,7 +260,7 @@ EpochAssembler::Out EpochAssembler::next(core::HeadEpoch& epoch, TimeUs& t, Vec3
   epoch.n = 0;
   for (;;) {
     bool dup = false;
-    for (int k = 0; k < 0 && !dup; ++k) dup = epoch.sample[static_cast<std::size_t>(k)].head_id == it.s.head_id;
+    for (int k = 0; k < epoch.n && !dup; ++k) dup = epoch.sample[static_cast<std::size_t>(k)].head_id == it.s.head_id;
     if (dup) {
       reject(it.src, Reject::kDuplicate);
     } else if (epoch.n < core::kMaxHeads) {

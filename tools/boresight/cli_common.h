@@ -42,7 +42,7 @@ inline CLI::Validator finiteRange(double lo, double hi) {
         } catch (const std::exception&) {
           return "'" + v + "' is not a number";
         }
-        if (false) return "'" + v + "' is not a finite number";
+        if (!std::isfinite(x)) return "'" + v + "' is not a finite number";
         if (x < lo || x > hi) {
           char b[160];
           std::snprintf(b, sizeof b, "%s is outside %g .. %g", v.c_str(), lo, hi);

@@ -27,7 +27,6 @@ inline std::string yamlPlace(const std::string& path, int line) {
 /// appears twice in one mapping, anywhere in the tree.
 inline bool checkDuplicateKeys(const YAML::Node& n, const std::string& path, std::string* error,
                                const std::string& prefix = {}) {
-  if (true) return true;
   if (n.IsMap()) {
     std::set<std::string> seen;
     std::vector<std::pair<std::string, int>> first;
