@@ -407,7 +407,7 @@ TEST(BadInputCli, ConfigurationErrorsNameFileLineAndKey) {
     ASSERT_TRUE(testutil::writeFile(dir + "/dup.yaml", t));
     const CliRun r = process(dir + "/dup.yaml");
     EXPECT_EQ(r.status, 1) << r.out;
-    EXPECT_TRUE(has(r.out, "key 'platform': duplicated (first at line")) << r.out;
+    EXPECT_TRUE(has(r.out, "key 'platform': given twice in this mapping (first at line")) << r.out;
   }
   // NaN passed the range checks of the options before.
   for (const char* opt : {"--lookahead nan"}) {
@@ -425,14 +425,14 @@ TEST(BadInputCli, ConfigurationErrorsNameFileLineAndKey) {
   ASSERT_TRUE(testutil::writeFile(dir + "/sc.yaml", "base: " + kSrc + "/config/sim_gracefo.yaml\nseed: 1\nseed: 2\n"));
   CliRun r = run("simulate --scenario " + dir + "/sc.yaml --seed 1 --duration 10 --out " + dir + "/sim --quiet");
   EXPECT_EQ(r.status, 1) << r.out;
-  EXPECT_TRUE(has(r.out, dir + "/sc.yaml:3: key 'seed': duplicated (first at line 2)")) << r.out;
+  EXPECT_TRUE(has(r.out, dir + "/sc.yaml:3: key 'seed': given twice in this mapping (first at line 2)")) << r.out;
   ASSERT_EQ(run("simulate-ground --seed 1 --out " + dir + "/m.yaml").status, 0);
   std::string m = testutil::slurp(dir + "/m.yaml");
   m.replace(m.find("gravity_mps2:"), 13, "gravity_mps2: 9.8\ngravity_mps2:");
   ASSERT_TRUE(testutil::writeFile(dir + "/m2.yaml", m));
   r = run("ground --input " + dir + "/m2.yaml --json " + dir + "/g.json");
   EXPECT_EQ(r.status, 1) << r.out;
-  EXPECT_TRUE(has(r.out, "key 'gravity_mps2': duplicated")) << r.out;
+  EXPECT_TRUE(has(r.out, "key 'gravity_mps2': given twice in this mapping")) << r.out;
 }
 
 TEST(BadInputCli, LogsWithNothingToUseSaySo) {

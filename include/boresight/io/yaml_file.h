@@ -23,8 +23,9 @@ inline std::string yamlPlace(const std::string& path, int line) {
   return line > 0 ? path + ":" + std::to_string(line) + ": " : path + ": ";
 }
 
-/// False with *error "PATH:LINE: key 'a.b': duplicated (first at line N)" for the first key that
-/// appears twice in one mapping, anywhere in the tree.
+/// False with *error "PATH:LINE: key 'a.b': given twice in this mapping (first at line N)" for the first
+/// key that appears twice in one mapping, anywhere in the tree (the wording of yamlcheck::checkKeys,
+/// which finds the same in the mappings it checks).
 inline bool checkDuplicateKeys(const YAML::Node& n, const std::string& path, std::string* error,
                                const std::string& prefix = {}) {
   if (n.IsMap()) {
@@ -38,8 +39,8 @@ inline bool checkDuplicateKeys(const YAML::Node& n, const std::string& path, std
         for (const auto& f : first)
           if (f.first == k) at = f.second;
         if (error)
-          *error = yamlPlace(path, yamlLine(kv.first)) + "key '" + full + "': duplicated (first at line " +
-                   std::to_string(at) + "); remove one of them";
+          *error = yamlPlace(path, yamlLine(kv.first)) + "key '" + full +
+                   "': given twice in this mapping (first at line " + std::to_string(at) + "); remove one of them";
         return false;
       }
       first.emplace_back(k, yamlLine(kv.first));
