@@ -26,7 +26,10 @@ namespace {
 
 using testutil::CliRun;
 const std::string kSrc = BORESIGHT_SOURCE_DIR;
-const std::string kConfig = kSrc + "/config/gracefo.yaml";
+// The platform file of simulated data (the ideal noise preset, as every test on simulated data); the
+// edited copies of platformWith() start from its base, config/gracefo.yaml (self-contained).
+const std::string kConfig = kSrc + "/config/gracefo_ideal.yaml";
+const std::string kBaseConfig = kSrc + "/config/gracefo.yaml";
 
 CliRun run(const std::string& args) { return testutil::runProgram(BORESIGHT_CLI, args); }
 
@@ -107,9 +110,9 @@ std::string copyTo(const std::string& dir, const std::string& path, const std::s
   return out;
 }
 
-/// The platform file with line `key: value` replaced (the first line holding `key:`).
+/// config/gracefo.yaml with line `key: value` replaced (the first line holding `key:`).
 std::string platformWith(const std::string& dir, const std::string& key, const std::string& line_text) {
-  std::ifstream in(kConfig);
+  std::ifstream in(kBaseConfig);
   std::ostringstream o;
   std::string line;
   bool done = false;
@@ -399,7 +402,7 @@ TEST(BadInputCli, ConfigurationErrorsNameFileLineAndKey) {
   }
   // A duplicated key: the first value won silently before.
   {
-    std::ifstream in(kConfig);
+    std::ifstream in(kBaseConfig);
     std::stringstream ss;
     ss << in.rdbuf();
     std::string t = ss.str();
