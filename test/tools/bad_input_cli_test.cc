@@ -445,3 +445,78 @@ TEST(BadInputCli, LogsWithNothingToUseSaySo) {
   EXPECT_EQ(r.status, 1) << r.out;
   EXPECT_TRUE(has(r.out, "empty.lcm")) << r.out;
 }
+
+// ---- the model overlay and `boresight noise` (added on main after the cases above) ----------------
+
+TEST(BadInputCli, TheModelOverlayIsReadBoundedAndChecked) {
+  const Sim& s = sim();
+  const std::string dir = testutil::makeTempDir("bad_overlay");
+  auto process = [&](const std::string& overlay, const std::string& out = "") {
+    return run("process --config " + kConfig + " --overlay " + overlay + " " + s.sca + " " + s.acc + " " + s.qsa +
+               " --out " + (out.empty() ? dir + "/o.csv" : out));
+  };
+  // A directory and an endless input: refused with the reason, not read.
+  const std::string ov_dir = testutil::makeTempDir("bad_overlay_dir");
+  CliRun r = process(ov_dir);
+  EXPECT_EQ(r.status, 1) << r.out;
+  EXPECT_TRUE(has(r.out, ov_dir + ": is a directory, not a model overlay")) << r.out;
+  r = process("/dev/zero");
+  EXPECT_EQ(r.status, 1) << r.out;
+  EXPECT_TRUE(has(r.out, "/dev/zero: more than 4 MiB (the limit for a model overlay)")) << r.out;
+  // A duplicated key anywhere in the tree, with its line and the first one's.
+  const std::string ov = dir + "/ov.yaml";
+  ASSERT_TRUE(testutil::writeFile(ov, "boresight_overlay: 1\nwritten_by: test\nnoise:\n  head_defaults:\n"
+                                      "    cross_x: [{kind: white, sigma_arcsec: 6}]\n"
+                                      "    cross_x: [{kind: white, sigma_arcsec: 7}]\n"));
+  r = process(ov);
+  EXPECT_EQ(r.status, 1) << r.out;
+  EXPECT_TRUE(has(r.out, ov + ":6: key 'noise.head_defaults.cross_x': given twice in this mapping (first at line 5)")) << r.out;
+  // NaN as a level: refused with file, line and key.
+  ASSERT_TRUE(testutil::writeFile(ov, "boresight_overlay: 1\nwritten_by: test\nnoise:\n  head_defaults:\n"
+                                      "    cross_x: [{kind: white, sigma_arcsec: .nan}]\n"));
+  r = process(ov);
+  EXPECT_EQ(r.status, 1) << r.out;
+  EXPECT_TRUE(has(r.out, ov + ":5: key 'noise.head_defaults.cross_x")) << r.out;
+  EXPECT_TRUE(has(r.out, "not a finite number")) << r.out;
+  // An output over the overlay: refused before anything is written.
+  ASSERT_TRUE(testutil::writeFile(ov, "boresight_overlay: 1\nwritten_by: test\nnoise:\n  head_defaults:\n"
+                                      "    cross_x: [{kind: white, sigma_arcsec: 6}]\n"));
+  const std::string before = testutil::slurp(ov);
+  r = process(ov, ov);
+  EXPECT_EQ(r.status, 1) << r.out;
+  EXPECT_TRUE(has(r.out, "is also an input")) << r.out;
+  r = run("calibrate --config " + kConfig + " --overlay " + ov + " " + s.sca + " " + s.acc + " " + s.qsa + " --json " +
+          dir + "/c.json --write-model " + ov);
+  EXPECT_EQ(r.status, 1) << r.out;
+  EXPECT_TRUE(has(r.out, "--write-model " + ov + ": is also an input")) << r.out;
+  EXPECT_EQ(testutil::slurp(ov), before) << "the overlay was overwritten";
+}
+
+TEST(BadInputCli, TheNoiseCommandRefusesNanOutputsOverInputsAndLeavesNoFolderWhenItFails) {
+  const Sim& s = sim();
+  const std::string dir = testutil::makeTempDir("bad_noise");
+  const std::string ins = " " + s.sca + " " + s.acc + " " + s.qsa;
+  for (const char* opt : {"--lookahead nan", "--acc-block inf"}) {
+    const CliRun r = run("noise --config " + kConfig + ins + " --out " + dir + "/n " + opt);
+    EXPECT_EQ(r.status, 2) << opt << "\n" << r.out;
+    EXPECT_TRUE(has(r.out, "not a finite number")) << opt << "\n" << r.out;
+  }
+  // A directory as --config: an error with the reason, and no output folder left behind.
+  const std::string cfg_dir = testutil::makeTempDir("bad_noise_cfg");
+  CliRun r = run("noise --quiet --config " + cfg_dir + ins + " --out " + dir + "/failed");
+  EXPECT_EQ(r.status, 1) << r.out;
+  EXPECT_TRUE(has(r.out, cfg_dir + ": is a directory, not a platform configuration file")) << r.out;
+  EXPECT_NE(::access((dir + "/failed").c_str(), F_OK), 0) << "a failed noise run left its output folder";
+  // An input in the output folder under a name noise writes (the overlay it compares with, kept as
+  // DIR/overlay.yaml): refused, not overwritten.
+  const std::string out = dir + "/out";
+  ::mkdir(out.c_str(), 0777);
+  const std::string ov = out + "/overlay.yaml";
+  ASSERT_TRUE(testutil::writeFile(ov, "boresight_overlay: 1\nwritten_by: test\nnoise:\n  head_defaults:\n"
+                                      "    cross_x: [{kind: white, sigma_arcsec: 6}]\n"));
+  const std::string before = testutil::slurp(ov);
+  r = run("noise --quiet --config " + kConfig + " --overlay " + ov + ins + " --out " + out);
+  EXPECT_EQ(r.status, 1) << r.out;
+  EXPECT_TRUE(has(r.out, "--out " + ov + ": is also an input")) << r.out;
+  EXPECT_EQ(testutil::slurp(ov), before);
+}
