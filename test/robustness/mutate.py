@@ -66,12 +66,15 @@ def make_inputs(work, cli, duration):
     run_quiet([cli, "simulate-ground", "--seed", "1", "--targets", "12", "--accel-samples", "50", "--out", ground])
     inp["ground"] = ground
     # configuration files, with absolute paths where they name other files
-    inp["platform"] = os.path.join(work, "gracefo.yaml")
-    shutil.copy(os.path.join(SRC, "config/gracefo.yaml"), inp["platform"])
+    # the platform file of simulated data (the ideal noise preset), its base named absolutely
+    inp["platform"] = os.path.join(work, "gracefo_ideal.yaml")
+    platform = open(os.path.join(SRC, "config/gracefo_ideal.yaml")).read()
+    platform = re.sub(r"(?m)^base:.*$", "base: " + os.path.join(SRC, "config/gracefo.yaml"), platform)
+    open(inp["platform"], "w").write(platform)
     node = open(os.path.join(SRC, "config/boresightd.yaml")).read()
     node = re.sub(r"(?m)^platform:.*$", "platform: " + inp["platform"], node)
-    node = re.sub(r"(?m)^(\s*)cadence_s:.*$", r"\1cadence_s: 120", node)
-    node = re.sub(r"(?m)^(\s*)min_span_s:.*$", r"\1min_span_s: 120", node)
+    node = re.sub(r"(?m)^(\s*)cadence_s:.*$", r"\1cadence_s: 300", node)
+    node = re.sub(r"(?m)^(\s*)min_span_s:.*$", r"\1min_span_s: 300", node)
     node = re.sub(r"(?m)^(\s*)apply_lag_epochs:.*$", r"\1apply_lag_epochs: 20", node)
     inp["node"] = os.path.join(work, "boresightd.yaml")
     open(inp["node"], "w").write(node)
@@ -83,6 +86,12 @@ def make_inputs(work, cli, duration):
     csv = os.path.join(work, "rows.csv")
     run_quiet([cli, "process", "--config", inp["platform"], inp["sca1a"], inp["acc1a"], inp["qsa1b"], "--out", csv])
     inp["csv"] = csv
+    # a model overlay (io/overlay_yaml.h) as `boresight noise` writes one: noise of every head axis and
+    # of the accelerometer
+    noise = os.path.join(work, "noise")
+    run_quiet([cli, "noise", "--quiet", "--config", inp["platform"], inp["sca1a"], inp["acc1a"], inp["qsa1b"], "--out",
+               noise])
+    inp["overlay"] = os.path.join(noise, "overlay.yaml")
     # the real samples, when present
     real = os.environ.get("BORESIGHT_REAL_DATA", os.path.join(SRC, "..", "shared", "data", "real"))
     l1a = os.path.join(real, "gracefo", "2023-06-01_L1A")
@@ -97,7 +106,7 @@ def make_inputs(work, cli, duration):
 # mutations: (name, garbage?) -> function(src_bytes, rng) -> bytes, or a special marker
 
 TEXT_KINDS = {"sca1a", "acc1a", "qsa1b", "gnv1b", "real_sca1a", "real_acc1a", "real_qsa1b"}
-YAML_KINDS = {"platform", "node", "scenario", "ground"}
+YAML_KINDS = {"platform", "node", "scenario", "ground", "overlay"}
 
 
 def split_body(text):
@@ -248,13 +257,28 @@ def commands(inp):
 
     def calibrate(x, o):
         return (["calibrate", "--config", x["platform"], x["sca1a"], x["acc1a"], x["qsa1b"], x["gnv1b"], "--json",
-                 o + "/cal.json"], [o + "/cal.json"])
+                 o + "/cal.json", "--write-model", o + "/model.yaml"], [o + "/cal.json", o + "/model.yaml"])
     p["calibrate"] = (["platform", "sca1a", "acc1a", "qsa1b", "gnv1b"], calibrate)
 
+    def calibrate_overlay(x, o):
+        return (["calibrate", "--config", x["platform"], "--overlay", x["overlay"], x["sca1a"], x["acc1a"], x["qsa1b"],
+                 "--json", o + "/cal.json"], [o + "/cal.json"])
+    p["calibrate_overlay"] = (["overlay", "sca1a", "acc1a"], calibrate_overlay)
+
+    def process_overlay(x, o):
+        return (["process", "--config", x["platform"], "--overlay", x["overlay"], x["sca1a"], x["acc1a"], x["qsa1b"],
+                 "--out", o + "/rows.csv"], [o + "/rows.csv"])
+    p["process_overlay"] = (["overlay", "platform"], process_overlay)
+
+    def noise(x, o):
+        return (["noise", "--config", x["platform"], "--overlay", x["overlay"], x["sca1a"], x["acc1a"],
+                 x["qsa1b"], "--out", o + "/noise"], [o + "/noise/noise.json", o + "/noise/overlay.yaml"])
+    p["noise"] = (["platform", "overlay", "sca1a", "acc1a", "qsa1b"], noise)
+
     def audit(x, o):
-        return (["audit", "--quiet", "--config", x["platform"], x["sca1a"], x["acc1a"], x["qsa1b"], "--out", o + "/audit"],
-                [o + "/audit/audit.json"])
-    p["audit"] = (["platform", "sca1a", "acc1a", "qsa1b"], audit)
+        return (["audit", "--quiet", "--config", x["platform"], "--overlay", x["overlay"], x["sca1a"], x["acc1a"],
+                 x["qsa1b"], "--out", o + "/audit"], [o + "/audit/audit.json"])
+    p["audit"] = (["platform", "overlay", "sca1a", "acc1a", "qsa1b"], audit)
 
     def inspect(x, o):
         return (["inspect", x["sca1a"], x["acc1a"], x["qsa1b"], x["gnv1b"], x["lcm"], "--json", o + "/i.json"],
@@ -355,6 +379,28 @@ def temporaries(folder):
 
 
 # ---------------------------------------------------------------------------------------------------
+
+
+CATEGORIES = ["crash", "hang", "half-written output", "unaccounted records", "exit 0 on garbage",
+              "failure without a place", "other"]
+
+
+def category(f):
+    """The summary's kind of a finding."""
+    if f.startswith("signal") or f.startswith("exit status") or f.startswith("sanitizer"):
+        return "crash"
+    if f.startswith("hang"):
+        return "hang"
+    if "temporary files" in f or "changed by a failed run" in f or "cut mid-line" in f or "not complete" in f \
+            or "several widths" in f or "summary unreadable" in f:
+        return "half-written output"
+    if "counts" in f:
+        return "unaccounted records"
+    if f.startswith("exit 0 on"):
+        return "exit 0 on garbage"
+    if f.startswith("a failure without a place"):
+        return "failure without a place"
+    return "other"
 
 
 def one_run(k, args, clean, progs, rng_seed):
@@ -497,7 +543,8 @@ def main():
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--timeout", type=float, default=60.0, help="seconds per run (a hang)")
     ap.add_argument("--mem-mb", type=int, default=3072, help="address-space limit per run, MiB (0: none; sanitizers)")
-    ap.add_argument("--duration", type=int, default=240, help="simulated seconds of the clean inputs")
+    ap.add_argument("--duration", type=int, default=900,
+                    help="simulated seconds of the clean inputs (900: calibrate and the node's worker solve)")
     ap.add_argument("--work", help="folder for the runs (default: a temporary one, removed)")
     ap.add_argument("--keep-failures", action="store_true", help="keep the folders of runs with findings")
     ap.add_argument("--src", help="source tree whose config/ files to use (default: this one)")
@@ -536,11 +583,16 @@ def main():
         by_rc[r[4]] = by_rc.get(r[4], 0) + 1
         by_prog[r[1]] = by_prog.get(r[1], 0) + 1
     n_find = sum(1 for r in results if r[5])
+    cats = {c: 0 for c in CATEGORIES}
+    for r in results:
+        for f in r[5]:
+            cats[category(f)] += 1
     slow = max(results, key=lambda r: r[6])
     print("mutation harness: %d runs (seed %d) of %d programs x %d mutations in %.0f s: exit 0: %d, 1: %d, 2: %d; "
           "runs with findings: %d; slowest run %.1f s (%s, %s)" %
           (len(results), args.seed, len(progs), len(MUTATIONS), time.time() - t0, by_rc.get(0, 0), by_rc.get(1, 0),
            by_rc.get(2, 0), n_find, slow[6], slow[1], slow[3]))
+    print("findings by kind: " + ", ".join("%s %d" % (c, cats[c]) for c in CATEGORIES))
     print("runs per program: " + ", ".join("%s %d" % kv for kv in sorted(by_prog.items())))
     return 1 if n_find else 0
 
