@@ -219,6 +219,7 @@ bool ReferenceFeed::next(TimeUs& t_rcv, Quat& q) {
       }
     }
     if (!got) {
+      dropped_ += reader_->stream.rejectedCount();  // lines the reader refused (its gates included)
       reader_.reset();
       continue;
     }

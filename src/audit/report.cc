@@ -1,5 +1,6 @@
 // audit.json and report.md with plots: see include/boresight/audit/report.h.
 #include <boresight/audit/report.h>
+#include <boresight/io/files.h>
 #include <boresight/report/svg_plot.h>
 
 #include <nlohmann/json.hpp>
@@ -99,14 +100,7 @@ Json resultJson(const AuditResult& r) {
 }
 
 bool writeText(const std::string& path, const std::string& text, std::string* error) {
-  std::ofstream f(path, std::ios::binary);
-  if (f) f << text;
-  if (f) f.close();
-  if (!f) {
-    if (error) *error = "cannot write " + path + ": " + std::strerror(errno ? errno : EIO);
-    return false;
-  }
-  return true;
+  return io::writeFileAtomic(path, text, error);  // whole or not at all
 }
 
 /// A file-name part: lower-case letters, digits and '_' (runs of anything else become one '_').

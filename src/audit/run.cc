@@ -49,7 +49,7 @@ class Progress final : public stream::InputObserver {
 
 /// Orbit records (GNI1B inertial, GNV1B Earth-fixed) into the collector. Counts what it could not use.
 bool feedOrbit(const std::vector<std::string>& files, const io::ReadOptions& opt, Collector& c, std::uint64_t& used,
-               std::uint64_t& rejected, std::string* error) {
+               std::uint64_t& rejected, std::vector<std::string>& notes, std::string* error) {
   for (const auto& f : files) {
     io::ProductStream<io::GnvRecord> st;
     if (!st.open(f, opt, error)) return false;
@@ -69,6 +69,7 @@ bool feedOrbit(const std::vector<std::string>& files, const io::ReadOptions& opt
       return false;
     }
     rejected += st.rejectedCount();
+    for (std::size_t k = 0; k < st.rejected().size() && k < 5; ++k) notes.push_back("  rejected " + st.rejected()[k].str());
   }
   return true;
 }
@@ -138,7 +139,7 @@ bool runAudit(const RunRequest& req, RunOutput& out, std::string* error) {
   if (!engine.configure(pc.pipeline, error) || !stream::addSources(in, opt, true, engine, error)) return false;
   Collector collector;
   if (!collector.configure(pc.pipeline, req.options, error)) return false;
-  if (!feedOrbit(orbit, opt, collector, out.orbit_samples, out.orbit_rejected, error)) return false;
+  if (!feedOrbit(orbit, opt, collector, out.orbit_samples, out.orbit_rejected, out.notes, error)) return false;
 
   ClockMap clock;
   if (!sca1b.empty() && !loadClk1b(clk1b, clock, error)) return false;

@@ -85,9 +85,34 @@ bool SpanBuilder::configure(const core::PipelineConfig& cfg, const SpanOptions& 
     if (std::abs(r) < 1e-4) break;
     span_.noise_correlation.push_back(r);
   }
+  // The second-derivative kernel passes no power at zero frequency and little above its band, so at a
+  // decimation finer than about 1/B the epochs' correlation spectrum S(f) = 1 + 2 sum rho_k cos(2 pi f k)
+  // nearly vanishes (and, cut at |rho| < 1e-4, goes negative: at 0.5, 1, 2, 4 and 5 s the whitening of
+  // the bias column divided by ~0 and the residuals came out NaN). Its minimum is held at
+  // kMinNoiseSpectrum by a white part (rho_k / (1 + eps), k > 0): the whitening then amplifies by at most
+  // 1/sqrt(kMinNoiseSpectrum), and the weights err on the safe side (less information claimed in the
+  // directions the kernel does not excite). Decimations of 8 s and more (S_min >= 0.3) are untouched.
+  {
+    constexpr double kMinNoiseSpectrum = 0.05;
+    std::vector<double>& rho = span_.noise_correlation;
+    double s_min = 1.0;
+    for (int i = 0; i <= 4096 && rho.size() > 1; ++i) {
+      const double f = 0.5 * i / 4096.0;
+      double S = 1.0;
+      for (std::size_t k = 1; k < rho.size(); ++k) S += 2.0 * rho[k] * std::cos(2.0 * kPi * f * static_cast<double>(k));
+      s_min = std::min(s_min, S);
+    }
+    if (s_min < kMinNoiseSpectrum) {
+      const double eps = (kMinNoiseSpectrum - s_min) / (1.0 - kMinNoiseSpectrum);
+      for (std::size_t k = 1; k < rho.size(); ++k) rho[k] /= 1.0 + eps;
+      span_.noise_white_fraction = eps / (1.0 + eps);
+    }
+  }
   pending_.clear();
   for (auto& w : wstate_) w = WhitenState{};
   have_head_ = false;
+  have_emitted_ = false;
+  last_emitted_t_ = 0;
   configured_ = true;
   return true;
 }
@@ -188,6 +213,10 @@ void SpanBuilder::relativeStep(const core::ValidHeads& v) {
 
 void SpanBuilder::addHeadOutput(int slot, const core::RateOutput& o) {
   if (!o.alpha_X.allFinite()) return;
+  if (have_emitted_ && o.t <= last_emitted_t_) {  // its observation is in the span already: one left out
+    ++span_.late_head_outputs;
+    return;
+  }
   // pending_ is in time order; heads of one epoch share the tag, so the match is at the back
   auto it = pending_.end();
   while (it != pending_.begin() && std::prev(it)->t > o.t) --it;
@@ -288,6 +317,8 @@ void SpanBuilder::accumulate(const Observation& ob) {
 }
 
 void SpanBuilder::emit(Observation&& ob) {
+  have_emitted_ = true;
+  last_emitted_t_ = ob.t;
   accumulate(ob);
   if (!opt_.keep_observations) return;
   if (opt_.max_observations > 0 && span_.obs.size() >= opt_.max_observations) {

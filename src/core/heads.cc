@@ -28,6 +28,7 @@ const char* statusName(Status s) {
     case Status::kNotReady: return "not_ready";
     case Status::kUnavailable: return "unavailable";
     case Status::kCapacityExceeded: return "capacity_exceeded";
+    case Status::kImplausible: return "implausible";
     case Status::kCount_: break;
   }
   return "unknown_status";

@@ -1,4 +1,5 @@
 #include "boresight/core/pipeline.h"
+#include "boresight/core/plausibility.h"
 
 #include "boresight/core/clones.h"
 
@@ -211,6 +212,10 @@ Status Pipeline::stepAcc(TimeUs t, const Vec3& a_A) {
     return Status::kNotConfigured;
   }
   if (!cfg_.use_accelerometer) return Status::kOk;
+  if (a_A.allFinite() && !plausibility::angularAccelPlausible(a_A)) {  // NaN: the filter's own count
+    health_.record(Status::kImplausible);
+    return Status::kImplausible;
+  }
   const Status s = acc_.step(t, a_A);
   // only when the oldest row waiting for the accelerometer may have become ready (or a gap changed it)
   if (accepted(s) && (s != Status::kOk || t >= acc_next_check_)) resolve();

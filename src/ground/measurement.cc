@@ -1,5 +1,7 @@
 // Reader, validator and writer of the method C measurement file (format in measurement.h).
 #include <boresight/ground/measurement.h>
+#include <boresight/io/files.h>
+#include <boresight/io/yaml_file.h>
 
 #include <boresight/core/rotation.h>
 
@@ -524,6 +526,10 @@ bool parseMeasurement(const std::string& yaml_text, const std::string& name, Mea
     std::vector<SampleBlock> blocks;
     const YAML::Node root = YAML::Load(SampleReader(yaml_text).run(blocks));
     if (!root || !root.IsMap()) throw Located{0, "not a YAML map (is this a measurement file?)"};
+    if (std::string dup; !io::checkDuplicateKeys(root, name, &dup)) {
+      if (error) *error = dup;
+      return false;
+    }
     checkKeys(root, "file", {"gravity_mps2", "camera", "design_q_s_t", "noise", "positions"});
     m.gravity_mps2 = positive(need(root, "gravity_mps2", "file"), "gravity_mps2");
     readCamera(need(root, "camera", "file"), m.camera);
@@ -558,22 +564,15 @@ bool parseMeasurement(const std::string& yaml_text, const std::string& name, Mea
 }
 
 bool loadMeasurement(const std::string& path, Measurement& out, std::string* error) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) {
-    if (error) *error = path + ": cannot open";
-    return false;
-  }
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return parseMeasurement(ss.str(), path, out, error);
+  std::string text;
+  if (!io::readBounded(path, io::kMaxMeasurementBytes, "ground measurement file", text, error)) return false;
+  return parseMeasurement(text, path, out, error);
 }
 
 bool writeMeasurement(const std::string& path, const Measurement& m, std::string* error) {
-  std::FILE* f = std::fopen(path.c_str(), "w");
-  if (!f) {
-    if (error) *error = path + ": cannot write";
-    return false;
-  }
+  io::AtomicFile af;  // complete or not there: a failed write never leaves half a measurement
+  if (!af.open(path, error)) return false;
+  std::FILE* f = af.file();
   const CameraPrior& c = m.camera;
   double q[4];
   quatToScalarFirst(m.q_s_t_design, q);
@@ -610,9 +609,7 @@ bool writeMeasurement(const std::string& path, const Measurement& m, std::string
     std::fprintf(f, "    accel_mps2:\n");
     for (const Vec3& a : p.accel_mps2) std::fprintf(f, "      - [%.9f, %.9f, %.9f]\n", a.x(), a.y(), a.z());
   }
-  const bool ok = std::fclose(f) == 0;
-  if (!ok && error) *error = path + ": write failed";
-  return ok;
+  return af.commit(error);
 }
 
 }  // namespace boresight::ground

@@ -1,5 +1,6 @@
 // Ground set-up simulator (model and noise in simulate.h).
 #include <boresight/core/rotation.h>
+#include <boresight/io/files.h>
 #include <boresight/ground/simulate.h>
 
 #include <cmath>
@@ -156,11 +157,9 @@ bool simulateGround(const SimConfig& cfg, Measurement& m, SimTruth& truth, std::
 }
 
 bool writeTruth(const std::string& path, const SimConfig& cfg, const SimTruth& t, std::string* error) {
-  std::FILE* f = std::fopen(path.c_str(), "w");
-  if (!f) {
-    if (error) *error = path + ": cannot write";
-    return false;
-  }
+  io::AtomicFile af;
+  if (!af.open(path, error)) return false;
+  std::FILE* f = af.file();
   double q[4];
   quatToScalarFirst(t.q_s_t, q);
   const double ug = 1e-6 * 9.80665;
@@ -182,9 +181,7 @@ bool writeTruth(const std::string& path, const SimConfig& cfg, const SimTruth& t
     quatToScalarFirst(Quat(C).normalized(), qq);
     std::fprintf(f, "  - {q_t_m: [%.15g, %.15g, %.15g, %.15g]}\n", qq[0], qq[1], qq[2], qq[3]);
   }
-  const bool ok = std::fclose(f) == 0;
-  if (!ok && error) *error = path + ": write failed";
-  return ok;
+  return af.commit(error);
 }
 
 }  // namespace boresight::ground

@@ -35,6 +35,15 @@ struct Acc1aCodec {
   using Record = Acc1aRecord;
   static bool accepts(Product p) { return p == Product::ACC1A || p == Product::ACT1A; }
   static Product defaultProduct() { return Product::ACC1A; }
+  static bool plausible(const Record& r, Product, const RecordGate&, std::string* reason) {
+    if (r.has(acc_bits::kLinX) && r.has(acc_bits::kLinY) && r.has(acc_bits::kLinZ) &&
+        !detail::axesPlausible(r.lin, plausibility::kMaxLinearAccelMS2, "linear acceleration", "m/s^2", reason))
+      return false;
+    if (r.has(acc_bits::kAngX) && r.has(acc_bits::kAngY) && r.has(acc_bits::kAngZ) &&
+        !detail::axesPlausible(r.ang, plausibility::kMaxAngularAccelRadS2, "angular acceleration", "rad/s^2", reason))
+      return false;
+    return true;
+  }
   static bool parse(FieldScanner& s, Record& r, Product) {
     if (!(detail::scanTimeIntgFrac(s, r.t) && s.ch(r.time_ref, "time_ref") && s.ch(r.satellite, "GRACEFO_id") &&
           s.bits(r.qualflg, "qualflg") && s.bits(r.prod_flag, "prod_flag")))

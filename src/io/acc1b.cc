@@ -18,6 +18,10 @@ struct Acc1bCodec {
   using Record = Acc1bRecord;
   static bool accepts(Product p) { return p == Product::ACC1B || p == Product::ACT1B; }
   static Product defaultProduct() { return Product::ACC1B; }
+  static bool plausible(const Record& r, Product, const RecordGate&, std::string* reason) {
+    return detail::axesPlausible(r.lin, plausibility::kMaxLinearAccelMS2, "linear acceleration", "m/s^2", reason) &&
+           detail::axesPlausible(r.ang, plausibility::kMaxAngularAccelRadS2, "angular acceleration", "rad/s^2", reason);
+  }
   static bool parse(FieldScanner& s, Record& r, Product) {
     return detail::scanTimeSeconds(s, r.t) && s.ch(r.satellite, "GRACEFO_id") && s.f64(r.lin[0], "lin_accl_x") &&
            s.f64(r.lin[1], "lin_accl_y") && s.f64(r.lin[2], "lin_accl_z") && s.f64(r.ang[0], "ang_accl_x") &&

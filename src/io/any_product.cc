@@ -131,8 +131,9 @@ bool preadAll(int fd, std::uint64_t from, std::uint64_t to, std::vector<char>& b
 /// that runs past e is read to its end. Memory: one block plus the longest line.
 template <typename Rec>
 void scanBlock(int fd, std::uint64_t body_begin, std::uint64_t body_end, std::uint64_t b, std::uint64_t e,
-               Product product, const std::string& file, const ReadOptions& opt, std::vector<char>& buf,
-               BlockResult& res) {
+               Product product, const std::string& file, const ReadOptions& opt, const RecordGate& gate,
+               std::vector<char>& buf, BlockResult& res) {
+  std::string why;
   buf.clear();
   const std::uint64_t from = b > body_begin ? b - 1 : b;  // one byte before: does a line start at b?
   if (!preadAll(fd, from, e, buf)) {
@@ -159,6 +160,7 @@ void scanBlock(int fd, std::uint64_t body_begin, std::uint64_t body_end, std::ui
         return;
       }
       if (std::memchr(buf.data() + before, '\n', buf.size() - before)) break;
+      if (buf.size() > block_end + kMaxLineBytes) break;  // no record line is that long: the parse says so
       at = to;
     }
   }
@@ -174,7 +176,8 @@ void scanBlock(int fd, std::uint64_t body_begin, std::uint64_t body_end, std::ui
     FieldScanner s(ls, le);
     if (s.atEnd()) continue;
     r = Rec{};
-    if (parseRecord<Rec>(s, r, product)) {
+    const bool formed = parseRecord<Rec>(s, r, product);
+    if (formed && checkRecord<Rec>(r, product, gate, &why)) {
       if (!res.has_time) {
         res.has_time = true;
         res.first = r.t;
@@ -185,7 +188,11 @@ void scanBlock(int fd, std::uint64_t body_begin, std::uint64_t body_end, std::ui
       continue;
     }
     ++res.rejected;
-    if (res.issues.size() < opt.max_issues_kept) res.issues.push_back(ParseIssue{file, res.lines, s.reason()});
+    if (!formed && static_cast<std::size_t>(le - ls) > kMaxLineBytes)
+      why = "line longer than " + std::to_string(kMaxLineBytes >> 10) + " KiB: not a Level-1 record line";
+    else if (!formed)
+      why = s.reason();
+    if (res.issues.size() < opt.max_issues_kept) res.issues.push_back(ParseIssue{file, res.lines, why});
     if (opt.on_error == OnError::Stop) return;
   }
 }
@@ -204,6 +211,7 @@ void summarizeBlocks(int fd, std::uint64_t body_begin, std::uint64_t body_end, c
   std::vector<BlockResult> res(nblocks);
   std::atomic<std::size_t> next{0};
   std::atomic<bool> stop{false};
+  const RecordGate gate = makeRecordGate(h, s.file, opt);
   auto work = [&] {
     std::vector<char> buf;
     buf.reserve(static_cast<std::size_t>(kBlock) + (64u << 10) + 1);
@@ -211,7 +219,7 @@ void summarizeBlocks(int fd, std::uint64_t body_begin, std::uint64_t body_end, c
       const std::size_t k = next.fetch_add(1);
       if (k >= nblocks || stop.load()) return;
       const std::uint64_t b = body_begin + k * kBlock, e = std::min(body_end, b + kBlock);
-      scanBlock<Rec>(fd, body_begin, body_end, b, e, h.product, s.file, opt, buf, res[k]);
+      scanBlock<Rec>(fd, body_begin, body_end, b, e, h.product, s.file, opt, gate, buf, res[k]);
       if (opt.on_error == OnError::Stop && (res[k].rejected || res[k].read_error)) stop = true;
     }
   };
@@ -268,6 +276,10 @@ bool summarizeStreaming(const std::string& path, const ReadOptions& opt, Product
   s = ProductSummary{};
   s.file = path;
   const std::uint64_t b = ls.dataOffset(), e = ls.fileSize();
+  if (e > maxFileBytes(h.product) || e < b) {  // not a regular file of a plausible size: the whole-file path says why
+    ::close(fd);
+    return false;
+  }
   bool done = true;
   switch (h.product) {
     case Product::SCA1A: summarizeBlocks<Sca1aRecord>(fd, b, e, h, opt, s); break;
@@ -361,7 +373,7 @@ ProductSummary summarizeProduct(const std::string& path, const ReadOptions& opt)
     if (summarizeStreaming(path, opt, s)) return s;
   }
   std::string text, err;
-  if (!readFileToString(path, text, &err)) {
+  if (!readFileToString(path, text, &err, maxFileBytes(productFromName(productNameFromPath(path))))) {
     ProductSummary s;
     s.file = path;
     s.ok = false;

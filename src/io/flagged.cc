@@ -41,6 +41,19 @@ struct FlaggedCodec {
     return p == Product::ACC1A || p == Product::ACT1A || isAhk(p);
   }
   static Product defaultProduct() { return Product::ACC1A; }
+  static bool plausible(const Record& r, Product p, const RecordGate&, std::string* reason) {
+    if (isAhk(p)) return true;
+    for (int group = 0; group < 2; ++group) {  // linear (bits 0-2), angular (bits 3-5)
+      const int b0 = group == 0 ? acc_bits::kLinX : acc_bits::kAngX;
+      if (!(r.has(b0) && r.has(b0 + 1) && r.has(b0 + 2))) continue;
+      const double* v = &r.value[static_cast<std::size_t>(b0)];
+      if (!detail::axesPlausible(v, group == 0 ? plausibility::kMaxLinearAccelMS2 : plausibility::kMaxAngularAccelRadS2,
+                                 group == 0 ? "linear acceleration" : "angular acceleration",
+                                 group == 0 ? "m/s^2" : "rad/s^2", reason))
+        return false;
+    }
+    return true;
+  }
   static bool parse(FieldScanner& s, Record& r, Product p) {
     if (!(detail::scanTimeIntgFrac(s, r.t) && s.ch(r.time_ref, "time_ref") && s.ch(r.satellite, "GRACEFO_id") &&
           s.bits(r.qualflg, "qualflg") && s.bits(r.prod_flag, "prod_flag")))

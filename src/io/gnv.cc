@@ -19,6 +19,22 @@ struct GnvCodec {
   using Record = GnvRecord;
   static bool accepts(Product p) { return p == Product::GNV1B || p == Product::GNI1B; }
   static Product defaultProduct() { return Product::GNV1B; }
+  static bool plausible(const Record& r, Product, const RecordGate&, std::string* reason) {
+    char b[200];
+    if (!plausibility::orbitRadiusPlausible(r.pos)) {
+      std::snprintf(b, sizeof b, "implausible: orbit radius %.6g m outside %.3g .. %.3g m", plausibility::norm3(r.pos),
+                    plausibility::kMinOrbitRadiusM, plausibility::kMaxOrbitRadiusM);
+      if (reason) *reason = b;
+      return false;
+    }
+    if (!plausibility::orbitSpeedPlausible(r.vel)) {
+      std::snprintf(b, sizeof b, "implausible: orbit speed %.6g m/s beyond %.3g m/s", plausibility::norm3(r.vel),
+                    plausibility::kMaxOrbitSpeedMS);
+      if (reason) *reason = b;
+      return false;
+    }
+    return true;
+  }
   static bool parse(FieldScanner& s, Record& r, Product) {
     return detail::scanTimeSeconds(s, r.t) && s.ch(r.satellite, "GRACEFO_id") && s.ch(r.coord_ref, "coord_ref") &&
            s.f64(r.pos[0], "xpos") && s.f64(r.pos[1], "ypos") && s.f64(r.pos[2], "zpos") &&

@@ -3,11 +3,11 @@
 #include "noise_yaml.h"
 
 #include <boresight/io/overlay_yaml.h>
+#include <boresight/io/yaml_file.h>
 
 #include <algorithm>
 #include <cstdio>
 #include <cstring>
-#include <fstream>
 #include <sstream>
 
 namespace boresight::io {
@@ -397,6 +397,7 @@ bool parseOverlay(const std::string& text, const std::string& file, model::Overl
     if (error) *error = file + ":" + std::to_string(e.mark.line + 1) + ":" + std::to_string(e.mark.column + 1) + ": YAML syntax: " + e.msg;
     return false;
   }
+  if (!checkDuplicateKeys(root, file, error)) return false;
   try {
     readOverlayRoot(root, out);
   } catch (const Error& e) {
@@ -414,14 +415,9 @@ bool parseOverlay(const std::string& text, const std::string& file, model::Overl
 }
 
 bool readOverlay(const std::string& path, model::Overlay& out, std::string* error) {
-  std::ifstream f(path);
-  if (!f) {
-    if (error) *error = path + ": cannot open";
-    return false;
-  }
-  std::ostringstream s;
-  s << f.rdbuf();
-  return parseOverlay(s.str(), path, out, error);
+  std::string text;
+  if (!readBounded(path, kMaxConfigBytes, "model overlay", text, error)) return false;
+  return parseOverlay(text, path, out, error);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -630,12 +626,7 @@ std::string overlayYaml(const model::Overlay& o) {
 }
 
 bool writeOverlay(const std::string& path, const model::Overlay& o, std::string* error) {
-  std::ofstream f(path);
-  if (!(f << overlayYaml(o)) || !(f.flush())) {
-    if (error) *error = "cannot write " + path;
-    return false;
-  }
-  return true;
+  return writeFileAtomic(path, overlayYaml(o), error);  // whole or not at all
 }
 
 }  // namespace boresight::io

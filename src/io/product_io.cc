@@ -1,4 +1,5 @@
 #include "product_io.h"
+#include <boresight/io/files.h>
 
 #include <cerrno>
 #include <cstring>
@@ -172,15 +173,7 @@ bool resolveProduct(Header& h, std::string_view file, const ReadOptions& opt, st
 }
 
 bool writeText(const std::string& path, const std::string& text, std::string* error) {
-  std::FILE* f = std::fopen(path.c_str(), "wb");
-  if (!f) {
-    if (error) *error = path + ": cannot create: " + std::strerror(errno);
-    return false;
-  }
-  bool ok = std::fwrite(text.data(), 1, text.size(), f) == text.size();
-  ok = (std::fclose(f) == 0) && ok;
-  if (!ok && error) *error = path + ": write failed";
-  return ok;
+  return writeFileAtomic(path, text, error);  // whole or not at all
 }
 
 }  // namespace boresight::io::detail

@@ -22,6 +22,7 @@
 #include <boresight/io/level1.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <exception>
 #include <thread>
@@ -132,6 +133,60 @@ struct HasBinary : std::false_type {};
 template <typename C>
 struct HasBinary<C, std::void_t<decltype(C::kBinarySize)>> : std::true_type {};
 
+template <typename C, typename = void>
+struct HasPlausible : std::false_type {};
+template <typename C>
+struct HasPlausible<C, std::void_t<decltype(&C::plausible)>> : std::true_type {};
+
+/// The record's time tag inside the gate's window (when it has one).
+template <typename Rec>
+bool timePlausible(const Rec& r, const RecordGate& g, std::string* reason) {
+  if (!g.has_window || (r.t >= g.t_min && r.t <= g.t_max)) return true;
+  if (reason) {
+    char b[160];
+    std::snprintf(b, sizeof b, "implausible: time tag %.6f s outside %.0f .. %.0f s (%s)", toSeconds(r.t),
+                  toSeconds(g.t_min), toSeconds(g.t_max), g.window.c_str());
+    *reason = b;
+  }
+  return false;
+}
+
+/// The quaternion gate, with the reason ("implausible: quatangle..quatkcoeff: ...").
+inline bool quaternionPlausible(const double* q, double tol, const char* what, std::string* reason) {
+  const plausibility::Quaternion v = plausibility::checkQuaternion(q, tol);
+  if (v == plausibility::Quaternion::kOk) return true;
+  if (reason) {
+    char b[200];
+    std::snprintf(b, sizeof b, "implausible: %s: %s (|q| - 1 = %.3g, tolerance %.3g)", what,
+                  plausibility::quaternionReason(v), plausibility::quaternionNormError(q), tol);
+    *reason = b;
+  }
+  return false;
+}
+/// Per-axis magnitude gate of a 3-vector (accelerations), with the reason.
+inline bool axesPlausible(const double* v, double limit, const char* what, const char* unit, std::string* reason) {
+  for (int i = 0; i < 3; ++i)
+    if (!(std::abs(v[i]) <= limit)) {
+      if (reason) {
+        char b[200];
+        std::snprintf(b, sizeof b, "implausible: %s %c = %.6g %s, beyond %.3g %s", what, "xyz"[i], v[i], unit, limit, unit);
+        *reason = b;
+      }
+      return false;
+    }
+  return true;
+}
+
+/// Every gate of a codec's record: the time window, then the codec's own (Codec::plausible, when it
+/// has one: quaternions, accelerations, orbit).
+template <typename Codec>
+bool checkWith(const typename Codec::Record& r, Product p, const RecordGate& g, std::string* reason) {
+  if (!g.enabled) return true;
+  if (!timePlausible(r, g, reason)) return false;
+  if constexpr (HasPlausible<Codec>::value) return Codec::plausible(r, p, g, reason);
+  return true;
+}
+
 /// Synthesised header: YAML for GRACE-FO (satellites C, D), fixed for GRACE (A, B) and static products.
 std::vector<std::string> synthHeader(Product p, char satellite, const std::vector<std::string>& columns,
                                      const std::array<std::string, 32>* flag_fields);
@@ -148,7 +203,8 @@ bool writeText(const std::string& path, const std::string& text, std::string* er
 /// header_lines + k, with the record number and byte offset in the reason; a truncated trailing
 /// record is reported, never read past.
 template <typename Codec>
-void parseBinaryBody(std::string_view body, const ReadOptions& opt, ProductFile<typename Codec::Record>& f) {
+void parseBinaryBody(std::string_view body, const ReadOptions& opt, const RecordGate& gate,
+                     ProductFile<typename Codec::Record>& f) {
   constexpr std::size_t n = Codec::kBinarySize;
   const auto* p = reinterpret_cast<const unsigned char*>(body.data());
   const std::size_t full = body.size() / n;
@@ -169,10 +225,13 @@ void parseBinaryBody(std::string_view body, const ReadOptions& opt, ProductFile<
   for (std::size_t k = 0; k < full; ++k) {
     typename Codec::Record r{};
     if (Codec::decode(p + k * n, r, reason)) {
-      f.records.push_back(r);
-    } else if (!reject(k, reason)) {
-      return;
+      if (checkWith<Codec>(r, f.header.product, gate, &reason)) {
+        f.records.push_back(r);
+        continue;
+      }
+      ++f.implausible_count;
     }
+    if (!reject(k, reason)) return;
   }
   const std::size_t rest = body.size() - full * n;
   if (rest != 0)
@@ -187,7 +246,8 @@ constexpr std::size_t kParallelMinBytes = 8u << 20;
 /// rejected line sets f.ok = false and f.error and ends the parse.
 template <typename Codec>
 void parseLines(const char* p, const char* end, std::size_t line_base, Product product, const ReadOptions& opt,
-                ProductFile<typename Codec::Record>& f, std::size_t& lines) {
+                const RecordGate& gate, ProductFile<typename Codec::Record>& f, std::size_t& lines) {
+  std::string gate_reason;
   std::size_t line_no = line_base;
   // Reserve from the first record's length: avoids regrowth on full-day files.
   if (p < end && f.records.empty()) {
@@ -203,13 +263,16 @@ void parseLines(const char* p, const char* end, std::size_t line_base, Product p
     p = nl ? nl + 1 : end;
     if (s.atEnd()) continue;  // blank line
     auto& r = f.records.emplace_back();
-    if (Codec::parse(s, r, product) && s.finish()) continue;
+    const bool formed = Codec::parse(s, r, product) && s.finish();
+    if (formed && checkWith<Codec>(r, product, gate, &gate_reason)) continue;
     f.records.pop_back();
     ++f.rejected_count;
-    if (f.rejected.size() < opt.max_issues_kept) f.rejected.push_back(ParseIssue{f.file, line_no, s.reason()});
+    if (formed) ++f.implausible_count;
+    const std::string& why = formed ? gate_reason : s.reason();
+    if (f.rejected.size() < opt.max_issues_kept) f.rejected.push_back(ParseIssue{f.file, line_no, why});
     if (opt.on_error == OnError::Stop) {
       f.ok = false;
-      f.error = f.file + ":" + std::to_string(line_no) + ": " + s.reason();
+      f.error = f.file + ":" + std::to_string(line_no) + ": " + why;
       break;
     }
   }
@@ -240,9 +303,10 @@ ProductFile<typename Codec::Record> parseText(std::string_view text, std::string
     return f;
   }
   const Product product = f.header.product;
+  const RecordGate gate = makeRecordGate(f.header, file, opt);
   if (f.header.binary) {
     if constexpr (HasBinary<Codec>::value) {
-      parseBinaryBody<Codec>(text.substr(off), opt, f);
+      parseBinaryBody<Codec>(text.substr(off), opt, gate, f);
     } else {
       f.ok = false;
       f.error = f.file + ":" + std::to_string(f.header.line_count) + ": binary " + f.header.product_name +
@@ -259,7 +323,7 @@ ProductFile<typename Codec::Record> parseText(std::string_view text, std::string
   threads = std::max(1u, std::min(threads, 8u));
   if (threads == 1) {
     std::size_t lines = 0;
-    parseLines<Codec>(body, end, f.header.line_count, product, opt, f, lines);
+    parseLines<Codec>(body, end, f.header.line_count, product, opt, gate, f, lines);
     return f;
   }
   // Chunks of whole lines, parsed concurrently; results appended in file order. Line numbers of
@@ -280,7 +344,7 @@ ProductFile<typename Codec::Record> parseText(std::string_view text, std::string
     part[k].file = f.file;
     auto work = [&, k] {
       try {
-        parseLines<Codec>(cut[k], cut[k + 1], 0, product, opt, part[k], lines[k]);
+        parseLines<Codec>(cut[k], cut[k + 1], 0, product, opt, gate, part[k], lines[k]);
       } catch (...) {
         failure[k] = std::current_exception();
       }
@@ -298,6 +362,7 @@ ProductFile<typename Codec::Record> parseText(std::string_view text, std::string
   for (unsigned k = 0; k < threads; ++k) {
     f.records.insert(f.records.end(), part[k].records.begin(), part[k].records.end());
     f.rejected_count += part[k].rejected_count;
+    f.implausible_count += part[k].implausible_count;
     for (auto& issue : part[k].rejected) {
       if (f.rejected.size() >= opt.max_issues_kept) break;
       issue.line += base;
@@ -363,7 +428,7 @@ ProductFile<typename Codec::Record> makeEmpty(Product p, char satellite) {
   template <>                                                                                                  \
   ProductFile<Codec::Record> readProduct<Codec::Record>(const std::string& path, const ReadOptions& opt) {     \
     std::string text, err;                                                                                     \
-    if (!readFileToString(path, text, &err)) {                                                                 \
+    if (!readFileToString(path, text, &err, maxFileBytes(productFromName(productNameFromPath(path))))) {      \
       ProductFile<Codec::Record> f;                                                                            \
       f.file = path;                                                                                           \
       f.ok = false;                                                                                            \
@@ -392,5 +457,9 @@ ProductFile<typename Codec::Record> makeEmpty(Product p, char satellite) {
   template <>                                                                                                  \
   bool recordAccepts<Codec::Record>(Product p) {                                                               \
     return Codec::accepts(p);                                                                                  \
+  }                                                                                                            \
+  template <>                                                                                                  \
+  bool checkRecord<Codec::Record>(const Codec::Record& r, Product p, const RecordGate& g, std::string* why) {  \
+    return detail::checkWith<Codec>(r, p, g, why);                                                             \
   }                                                                                                            \
   }

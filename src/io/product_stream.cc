@@ -20,6 +20,7 @@ bool LineStream::open(const std::string& path, const ReadOptions& opt, std::stri
   begin_ = end_ = 0;
   eof_ = false;
   line_no_ = 0;
+  read_ = 0;
   error_.clear();
   auto fail = [&](std::size_t line, const std::string& why) {
     if (error) *error = path + ":" + std::to_string(line) + ": " + why;
@@ -36,7 +37,7 @@ bool LineStream::open(const std::string& path, const ReadOptions& opt, std::stri
     std::fseek(f_, 0, SEEK_SET);
   }
   // The header is read from a prefix that grows until the header parses (headers are a few kB).
-  constexpr std::size_t kMaxHeader = 64u << 20;
+  constexpr std::size_t kMaxHeader = kMaxHeaderBytes + 4096;
   std::string prefix;
   std::size_t want = 64u << 10;
   std::size_t off = 0;
@@ -55,7 +56,12 @@ bool LineStream::open(const std::string& path, const ReadOptions& opt, std::stri
     want *= 2;
   }
   if (!detail::resolveProduct(header_, path, opt, &err)) return fail(1, err);
+  max_bytes_ = maxFileBytes(header_.product);
+  if (file_size_ > max_bytes_)
+    return fail(0, std::to_string(file_size_) + " bytes, more than the limit of " + std::to_string(max_bytes_) +
+                       " bytes for a " + header_.product_name + " file");
   data_offset_ = off;
+  read_ = prefix.size();
   line_no_ = header_.line_count;
   buf_.resize(std::max<std::size_t>(chunk_bytes, 4096));
   if (header_.binary) return true;  // the caller decides; nothing is read as text
@@ -76,9 +82,24 @@ bool LineStream::refill() {
     end_ -= begin_;
     begin_ = 0;
   }
-  if (end_ == buf_.size()) buf_.resize(buf_.size() * 2);  // a line longer than the buffer
+  if (end_ == buf_.size()) {  // a line longer than the buffer
+    if (buf_.size() > kMaxLineBytes) {
+      error_ = file_ + ":" + std::to_string(line_no_ + 1) + ": line longer than " + std::to_string(kMaxLineBytes >> 10) +
+               " KiB: not a Level-1 record line (binary data or an endless input?): the file is refused";
+      eof_ = true;
+      return false;
+    }
+    buf_.resize(buf_.size() * 2);
+  }
   const std::size_t got = std::fread(buf_.data() + end_, 1, buf_.size() - end_, f_);
   end_ += got;
+  read_ += got;
+  if (read_ > max_bytes_) {
+    error_ = file_ + ":" + std::to_string(line_no_ + 1) + ": more than " + std::to_string(max_bytes_) +
+             " bytes, the limit for a " + header_.product_name + " file: refused (an endless input?)";
+    eof_ = true;
+    return false;
+  }
   if (got == 0) {
     eof_ = true;
     if (std::ferror(f_)) error_ = file_ + ":" + std::to_string(line_no_ + 1) + ": read error";
@@ -93,12 +114,18 @@ bool LineStream::next(std::string_view& line, std::size_t& line_no) {
     const void* nl = std::memchr(b, '\n', end_ - begin_);
     if (!nl && !eof_) {
       refill();  // moves the unread bytes to the front (or sets eof_): look again
+      if (!error_.empty()) return false;
       continue;
     }
     if (!nl && begin_ == end_) return false;
     const char* e = nl ? static_cast<const char*>(nl) : buf_.data() + end_;
     ++line_no_;
     const std::size_t len = static_cast<std::size_t>(e - b);
+    if (len > kMaxLineBytes) {
+      error_ = file_ + ":" + std::to_string(line_no_) + ": line longer than " + std::to_string(kMaxLineBytes >> 10) +
+               " KiB: not a Level-1 record line (binary data or an endless input?): the file is refused";
+      return false;
+    }
     begin_ += len + (nl ? 1 : 0);
     // Blank lines (spaces, tabs, CR only) count for the numbering but are not handed out.
     if (FieldScanner(b, e).atEnd()) continue;

@@ -14,6 +14,9 @@ struct QsaCodec {
   using Record = QsaRecord;
   static bool accepts(Product p) { return p == Product::QSA1B || p == Product::QKS1B; }
   static Product defaultProduct() { return Product::QSA1B; }
+  static bool plausible(const Record& r, Product, const RecordGate&, std::string* reason) {
+    return detail::quaternionPlausible(r.q, plausibility::kAlignmentNormTolerance, "alignment quaternion", reason);
+  }
   static bool parse(FieldScanner& s, Record& r, Product) {
     return detail::scanTimeSeconds(s, r.t) && s.ch(r.satellite, "id") && s.integerIn(r.sensor, 0, 99, "sca_id") &&
            s.f64(r.q[0], "q0") && s.f64(r.q[1], "qi") && s.f64(r.q[2], "qj") && s.f64(r.q[3], "qk") &&

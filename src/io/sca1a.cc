@@ -17,6 +17,9 @@ struct Sca1aCodec {
   using Record = Sca1aRecord;
   static bool accepts(Product p) { return p == Product::SCA1A; }
   static Product defaultProduct() { return Product::SCA1A; }
+  static bool plausible(const Record& r, Product, const RecordGate& g, std::string* reason) {
+    return detail::quaternionPlausible(r.q, g.quat_norm_tolerance, "quaternion", reason);
+  }
   static bool parse(FieldScanner& s, Record& r, Product) {
     int head = 0;
     return detail::scanTimeIntgFrac(s, r.t) && s.ch(r.satellite, "GRACEFO_id") &&

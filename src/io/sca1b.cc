@@ -21,6 +21,9 @@ struct Sca1bCodec {
   using Record = Sca1bRecord;
   static bool accepts(Product p) { return p == Product::SCA1B; }
   static Product defaultProduct() { return Product::SCA1B; }
+  static bool plausible(const Record& r, Product, const RecordGate& g, std::string* reason) {
+    return detail::quaternionPlausible(r.q, g.quat_norm_tolerance, "quaternion", reason);
+  }
   static bool parse(FieldScanner& s, Record& r, Product) {
     return detail::scanTimeSeconds(s, r.t) && s.ch(r.satellite, "GRACEFO_id") &&
            s.integerIn(r.sca_id, -128, 127, "sca_id") && s.f64(r.q[0], "quatangle") && s.f64(r.q[1], "quaticoeff") &&

@@ -13,6 +13,8 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <sys/stat.h>
+#include <unistd.h>
 #include <string>
 #include <vector>
 
@@ -40,22 +42,57 @@ bool writeMsg(lcm::LogFile& log, const char* channel, std::int64_t utime, const 
 
 struct LcmLogWriter::Impl {
   std::unique_ptr<lcm::LogFile> log;
+  std::string path, tmp;  ///< the destination, and the temporary name written until close()
   std::vector<char> buf;
   lcm::LogEvent raw{};  ///< writeRaw's event: its channel keeps its capacity (no allocation per event)
 };
 
 LcmLogWriter::LcmLogWriter() : impl_(new Impl) {}
-LcmLogWriter::~LcmLogWriter() { close(); }
+LcmLogWriter::~LcmLogWriter() { abandon(); }
 
 bool LcmLogWriter::open(const std::string& path, std::string* error) {
-  impl_->log.reset(new lcm::LogFile(path, "w"));
+  abandon();
+  // Written under a temporary name in the destination's folder, renamed over it by close(): a run that
+  // fails leaves the previous log or none, never a cut one. A device or pipe is written in place.
+  struct stat st {};
+  const bool special = ::stat(path.c_str(), &st) == 0 && !S_ISREG(st.st_mode);
+  if (special && S_ISDIR(st.st_mode)) {
+    if (error) *error = path + ": is a directory: cannot write an LCM log there";
+    return false;
+  }
+  impl_->path = path;
+  impl_->tmp.clear();
+  std::string target = path;
+  if (!special) {
+    std::string t = path + ".tmp-XXXXXX";
+    const int fd = ::mkstemp(t.data());
+    if (fd < 0) {
+      if (error) *error = path + ": cannot create LCM log: " + std::strerror(errno);
+      return false;
+    }
+    const mode_t u = ::umask(0);
+    ::umask(u);
+    ::fchmod(fd, static_cast<mode_t>(0666 & ~u));
+    ::close(fd);
+    impl_->tmp = t;
+    target = t;
+  }
+  impl_->log.reset(new lcm::LogFile(target, "w"));
   if (!impl_->log->good()) {
     impl_->log.reset();
+    if (!impl_->tmp.empty()) ::unlink(impl_->tmp.c_str());
+    impl_->tmp.clear();
     if (error) *error = path + ": cannot create LCM log: " + std::strerror(errno);
     return false;
   }
   written_ = 0;
   return true;
+}
+
+void LcmLogWriter::abandon() {
+  impl_->log.reset();
+  if (!impl_->tmp.empty()) ::unlink(impl_->tmp.c_str());
+  impl_->tmp.clear();
 }
 
 bool LcmLogWriter::write(const HeadSample& s) {
@@ -208,7 +245,18 @@ bool decodeOrbit(const void* data, int size, OrbitSample& out) {
   return true;
 }
 
-void LcmLogWriter::close() { impl_->log.reset(); }
+bool LcmLogWriter::close(std::string* error) {
+  if (!impl_->log) return true;
+  impl_->log.reset();  // flushes and closes
+  if (impl_->tmp.empty()) return true;
+  const bool ok = std::rename(impl_->tmp.c_str(), impl_->path.c_str()) == 0;
+  if (!ok) {
+    if (error) *error = impl_->path + ": cannot write the LCM log: " + std::strerror(errno);
+    ::unlink(impl_->tmp.c_str());
+  }
+  impl_->tmp.clear();
+  return ok;
+}
 
 // The reader parses the log format itself (with a 1 MB buffer) instead of lcm::LogFile, which reads
 // field by field with a seek per event. An event: sync word 0xEDA1DA01, int64 event number, int64

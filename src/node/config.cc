@@ -1,12 +1,15 @@
 // The node's configuration file: the platform file it names plus the node's own keys, validated at
 // start-up with "FILE: KEY: reason" errors. Unknown keys are errors (a typo never passes silently).
 #include <boresight/io/core_config.h>
+#include <boresight/io/config_keys.h>
+#include <boresight/io/yaml_file.h>
 #include <boresight/io/overlay_apply.h>
 #include <boresight/node/node.h>
 
 #include <yaml-cpp/yaml.h>
 
 #include <cmath>
+#include <vector>
 #include <set>
 #include <sstream>
 
@@ -16,35 +19,40 @@ namespace {
 struct Reader {
   std::string file;
   std::string err;
-  bool fail(const std::string& key, const std::string& why) {
-    if (err.empty()) err = file + ": " + key + ": " + why;
+  /// "FILE:LINE: key 'KEY': reason" (the line of `at` when it has one).
+  bool fail(const std::string& key, const std::string& why, const YAML::Node& at = YAML::Node()) {
+    if (err.empty()) err = io::yamlPlace(file, io::yamlLine(at)) + "key '" + key + "': " + why;
     return false;
   }
   bool keys(const YAML::Node& n, const std::string& where, const std::set<std::string>& allowed) {
-    if (!n.IsMap()) return fail(where.empty() ? "(top)" : where, "expected a map");
+    if (!n.IsMap()) return fail(where.empty() ? "(top)" : where, "expected a map", n);
     for (const auto& kv : n) {
       const std::string k = kv.first.as<std::string>();
-      if (!allowed.count(k)) return fail(where.empty() ? k : where + "." + k, "unknown key");
+      if (!allowed.count(k))
+        return fail(where.empty() ? k : where + "." + k,
+                    io::unknownKeyMessage(k, std::vector<std::string>(allowed.begin(), allowed.end())), kv.first);
     }
     return true;
   }
   bool num(const YAML::Node& n, const std::string& key, const std::string& path, double& v, double lo, double hi) {
     if (!n[key]) return true;
+    double x = 0;
     try {
-      v = n[key].as<double>();
+      x = n[key].as<double>();
     } catch (const YAML::Exception&) {
-      return fail(path, "expected a number");
+      return fail(path, "expected a number", n[key]);
     }
-    if (!std::isfinite(v) || v < lo || v > hi) {
+    if (!std::isfinite(x) || x < lo || x > hi) {
       std::ostringstream s;
-      s << "must be within " << lo << " .. " << hi;
-      return fail(path, s.str());
+      s << "must be within " << lo << " .. " << hi << " (not " << n[key].Scalar() << ")";
+      return fail(path, s.str(), n[key]);
     }
+    v = x;
     return true;
   }
   bool str(const YAML::Node& n, const std::string& key, const std::string& path, std::string& v) {
     if (!n[key]) return true;
-    if (!n[key].IsScalar() || n[key].as<std::string>().empty()) return fail(path, "expected a non-empty string");
+    if (!n[key].IsScalar() || n[key].as<std::string>().empty()) return fail(path, "expected a non-empty string", n[key]);
     v = n[key].as<std::string>();
     return true;
   }
@@ -53,7 +61,7 @@ struct Reader {
     try {
       v = n[key].as<bool>();
     } catch (const YAML::Exception&) {
-      return fail(path, "expected true or false");
+      return fail(path, "expected true or false", n[key]);
     }
     return true;
   }
@@ -64,6 +72,8 @@ std::string dirOf(const std::string& p) {
   return k == std::string::npos ? std::string(".") : p.substr(0, k);
 }
 
+bool loadTop(const YAML::Node& top, const std::string& path, Reader& r, NodeConfig& out);
+
 }  // namespace
 
 bool loadNodeConfig(const std::string& path, NodeConfig& out, std::string* error) {
@@ -71,34 +81,39 @@ bool loadNodeConfig(const std::string& path, NodeConfig& out, std::string* error
   out.file = path;
   Reader r{path, {}};
   YAML::Node top;
-  try {
-    top = YAML::LoadFile(path);
-  } catch (const YAML::BadFile&) {
-    if (error) *error = path + ": cannot read the file";
-    return false;
-  } catch (const YAML::ParserException& e) {
-    if (error) *error = path + ":" + std::to_string(e.mark.line + 1) + ":" + std::to_string(e.mark.column + 1) + ": " + e.msg;
-    return false;
-  }
+  if (!io::loadYamlFile(path, top, error, "node configuration file")) return false;
   auto done = [&](bool ok) {
     if (!ok && error) *error = r.err;
     return ok;
   };
+  try {
+    return done(loadTop(top, path, r, out));
+  } catch (const YAML::Exception& e) {  // a value of the wrong shape (a map where a string goes)
+    if (error) *error = io::yamlPlace(path, e.mark.line + 1) + e.msg;
+    return false;
+  }
+}
+
+namespace {
+bool loadTop(const YAML::Node& top, const std::string& path, Reader& r, NodeConfig& out) {
+  auto done = [](bool ok) { return ok; };
   if (!r.keys(top, "", {"platform", "overlay", "mountings", "lcm_url", "channels", "lookahead_s", "health_period_s",
                         "max_time_jump_s", "time_jump_confirm", "max_rate_hz", "ring_capacity", "calibration"}))
     return done(false);
-  if (!top["platform"]) return done(r.fail("platform", "required (the platform configuration file)"));
+  if (!top["platform"]) return done(r.fail("platform", "required (the platform configuration file)", top));
   std::string platform;
   if (!r.str(top, "platform", "platform", platform)) return done(false);
   if (platform[0] != '/') platform = dirOf(path) + "/" + platform;
+  out.platform_file = platform;
   io::PlatformConfig pc;
   std::string perr;
-  if (!io::loadPlatformConfig(platform, pc, &perr)) return done(r.fail("platform", perr));
+  if (!io::loadPlatformConfig(platform, pc, &perr)) return done(r.fail("platform", perr, top["platform"]));
   std::string m = pc.mounting_from_qsa1b ? "log" : "config";
   if (!r.str(top, "mountings", "mountings", m)) return done(false);
-  if (m != "log" && m != "config") return done(r.fail("mountings", "expected 'log' (NOMINAL_MOUNTINGS message) or 'config'"));
+  if (m != "log" && m != "config")
+    return done(r.fail("mountings", "expected 'log' (NOMINAL_MOUNTINGS message) or 'config'", top["mountings"]));
   if (m == "config" && pc.mounting_from_qsa1b)
-    return done(r.fail("mountings", "the platform file takes its mountings from QSA1B: use 'log'"));
+    return done(r.fail("mountings", "the platform file takes its mountings from QSA1B: use 'log'", top["mountings"]));
   out.mountings_from_log = m == "log";
   if (out.mountings_from_log)
     for (int s = 0; s < pc.pipeline.heads.n_heads; ++s)
@@ -107,7 +122,7 @@ bool loadNodeConfig(const std::string& path, NodeConfig& out, std::string* error
   if (top["overlay"]) {
     if (!r.str(top, "overlay", "overlay", out.overlay)) return done(false);
     if (out.overlay[0] != '/') out.overlay = dirOf(path) + "/" + out.overlay;
-    if (!io::applyOverlay(out.overlay, "boresightd", {}, pc, ovu, &perr)) return done(r.fail("overlay", perr));
+    if (!io::applyOverlay(out.overlay, "boresightd", {}, pc, ovu, &perr)) return done(r.fail("overlay", perr, top["overlay"]));
     for (int s = 0; s < pc.pipeline.heads.n_heads; ++s)
       if (pc.mounting_source[static_cast<std::size_t>(s)].rfind("overlay", 0) == 0) out.overlay_mounting_mask |= 1u << s;
     // Every head's mounting from the overlay: nothing to wait for (later NOMINAL_MOUNTINGS messages are
@@ -132,7 +147,7 @@ bool loadNodeConfig(const std::string& path, NodeConfig& out, std::string* error
       if (!r.str(c, p.first, std::string("channels.") + p.first, *p.second)) return done(false);
     std::set<std::string> names{ch.star_head, ch.accel, ch.star_vectors, ch.mountings, ch.orbit,
                                 ch.attitude, ch.monitor, ch.calibration, ch.health};
-    if (names.size() != 9) return done(r.fail("channels", "every channel needs its own name"));
+    if (names.size() != 9) return done(r.fail("channels", "every channel needs its own name", c));
   }
   double v = 0;
   if (!r.num(top, "lookahead_s", "lookahead_s", out.lookahead_s, 0.001, 600)) return done(false);
@@ -140,9 +155,10 @@ bool loadNodeConfig(const std::string& path, NodeConfig& out, std::string* error
   if (!r.num(top, "max_time_jump_s", "max_time_jump_s", out.max_time_jump_s, 1, 1e7)) return done(false);
   v = out.time_jump_confirm;
   if (!r.num(top, "time_jump_confirm", "time_jump_confirm", v, 1, 1000)) return done(false);
+  if (v != std::floor(v)) return done(r.fail("time_jump_confirm", "expected a whole number", top["time_jump_confirm"]));
   out.time_jump_confirm = static_cast<int>(v);
   if (out.max_time_jump_s < 2 * out.lookahead_s)
-    return done(r.fail("max_time_jump_s", "must be at least twice lookahead_s"));
+    return done(r.fail("max_time_jump_s", "must be at least twice lookahead_s", top["max_time_jump_s"]));
   if (top["max_rate_hz"]) {
     const YAML::Node c = top["max_rate_hz"];
     if (!r.keys(c, "max_rate_hz", {"star_head", "accel", "star_vectors"})) return done(false);
@@ -155,7 +171,7 @@ bool loadNodeConfig(const std::string& path, NodeConfig& out, std::string* error
   if (!r.num(top, "ring_capacity", "ring_capacity", v, 16, 1 << 24)) return done(false);
   out.ring_capacity = static_cast<std::size_t>(v);
   if ((out.ring_capacity & (out.ring_capacity - 1)) != 0 || static_cast<double>(out.ring_capacity) != v)
-    return done(r.fail("ring_capacity", "must be a power of two"));
+    return done(r.fail("ring_capacity", "must be a power of two", top["ring_capacity"]));
   if (top["calibration"]) {
     const YAML::Node c = top["calibration"];
     CalibrationConfig& k = out.calibration;
@@ -168,6 +184,11 @@ bool loadNodeConfig(const std::string& path, NodeConfig& out, std::string* error
         !r.num(c, "min_span_s", "calibration.min_span_s", k.min_span_s, 60, 1e8) ||
         !r.num(c, "decimation_s", "calibration.decimation_s", k.decimation_s, 0.5, 3600))
       return done(false);
+    const double head_dt = 1.0 / out.pipeline.crn_attitude.fs_hz;
+    if (k.decimation_s < head_dt * (1 - 1e-9))
+      return done(r.fail("calibration.decimation_s",
+                         "must be at least the head sampling interval (" + std::to_string(head_dt) + " s at crn_attitude.fs_hz)",
+                         c["decimation_s"]));
     v = k.apply_lag_epochs;
     if (!r.num(c, "apply_lag_epochs", "calibration.apply_lag_epochs", v, 1, 1e6)) return done(false);
     k.apply_lag_epochs = static_cast<int>(v);
@@ -177,5 +198,6 @@ bool loadNodeConfig(const std::string& path, NodeConfig& out, std::string* error
   }
   return done(true);
 }
+}  // namespace
 
 }  // namespace boresight::node

@@ -3,6 +3,7 @@
 
 #include <boresight/calib/solver.h>
 #include <boresight/calib/span_builder.h>
+#include <boresight/core/plausibility.h>
 #include <boresight/io/lcm_log.h>
 #include <boresight/stream/assembler.h>
 
@@ -45,6 +46,7 @@ const char* reasonName(Reason r) {
     case Reason::kNoMountings: return "no_mountings";
     case Reason::kOtherChannel: return "other_channel";
     case Reason::kAssembler: return "assembler";
+    case Reason::kImplausible: return "implausible";
     case Reason::kCount: break;
   }
   return "?";
@@ -167,6 +169,8 @@ struct ChannelState {
   int in_bucket = 0;
   int jump_votes = 0;
   TimeUs jump_last = 0;
+  bool have_cand = false;   ///< a sequence jump beyond the reorder window, waiting for the next number
+  std::int32_t cand_seq = 0;
 };
 
 struct Mailbox {
@@ -175,6 +179,7 @@ struct Mailbox {
   bool ok = false;
   std::array<Quat, kMaxHeads> q_Si_B{};
   boresight_lcm::calibration_t msg{};
+  std::array<char, 512> reason{};  ///< why a calibration was refused (the solver's message), NUL-terminated
 };
 
 int64_t toI64(std::uint64_t v) { return static_cast<int64_t>(v); }
@@ -228,6 +233,7 @@ struct Node::Impl {
   std::array<std::pair<std::uint64_t, std::uint64_t>, 64> due{};
   int due_head = 0, due_n = 0;
   std::atomic<std::uint64_t> worker_published{0};
+  std::array<char, 512> last_reason{};  ///< the last refused calibration's reason (real-time thread's copy)
 
   // frame change (calibration.apply_common_rotation): rows with t >= frame_from_t are published
   // rotated by q_frame (q_B_Bpub), older ones by q_frame_old. The real-time thread only fills a slot of
@@ -261,6 +267,10 @@ struct Node::Impl {
 
   /// Sequence gaps are lost messages. A message that arrives late (out of order, within 64 numbers)
   /// takes back the loss counted for it; a repeat of a number already seen is no loss and no gain.
+  /// A forward jump of the sequence number beyond the reorder window (kSeqWindow) is a loss only when
+  /// the next message continues from it; otherwise it was one corrupt number (that message is no loss
+  /// and moves nothing), so a single bad number never counts a million lost.
+  static constexpr std::int32_t kSeqWindow = 64;
   void seqCheck(ChannelState& s, std::int32_t seq) {
     if (!s.have_seq) {
       s.have_seq = true;
@@ -268,11 +278,33 @@ struct Node::Impl {
       s.seen = 1;
       return;
     }
+    bool credit = false;  // an unconfirmed jump: that message stood for the next missing number
+    if (s.have_cand) {
+      s.have_cand = false;
+      credit = true;
+      const auto dc = static_cast<std::int32_t>(static_cast<std::uint32_t>(seq) - static_cast<std::uint32_t>(s.cand_seq));
+      if (dc > 0 && dc < kSeqWindow) {  // confirmed: the numbers between were lost
+        const auto jump = static_cast<std::int32_t>(static_cast<std::uint32_t>(s.cand_seq) - static_cast<std::uint32_t>(s.last_seq));
+        c.lost += static_cast<std::uint64_t>(jump - 1) + static_cast<std::uint64_t>(dc - 1);
+        s.last_seq = seq;
+        s.seen = 1u | (std::uint64_t{1} << static_cast<unsigned>(dc));
+        return;
+      }
+    }
     const auto d = static_cast<std::int32_t>(static_cast<std::uint32_t>(seq) - static_cast<std::uint32_t>(s.last_seq));
+    if (d >= kSeqWindow && d < (1 << 24)) {  // far ahead: wait for the next number to confirm it
+      s.have_cand = true;
+      s.cand_seq = seq;
+      return;
+    }
     if (d > 0 && d < (1 << 24)) {  // forward: d - 1 numbers have not arrived (yet)
       c.lost += static_cast<std::uint64_t>(d - 1);
       s.seen = d < 64 ? (s.seen << d) | 1u : 1u;
       s.last_seq = seq;
+      if (credit && d >= 2 && c.lost > 0) {  // the corrupt-numbered message was the one before this
+        --c.lost;
+        s.seen |= 2u;
+      }
     } else if (d >= (1 << 24) || d <= -(1 << 24)) {  // a counter reset (sender restart): a new start
       s.last_seq = seq;
       s.seen = 1;
@@ -296,12 +328,15 @@ struct Node::Impl {
       if (s.jump_votes > 0 && std::abs(t - s.jump_last) <= jump_us) ++s.jump_votes;
       else s.jump_votes = 1;
       s.jump_last = t;
-      if (s.jump_votes < cfg.time_jump_confirm || t < last_emit_t) {
+      if (s.jump_votes < cfg.time_jump_confirm) {
         reject(Reason::kTimeJump);
         return false;
       }
       ++c.time_resyncs;
       now = t;
+      // A confirmed step back (a sender clock set back): what is buffered goes to the core, then the
+      // assembler and the core start again at the new time (the filters restart, the counts stay).
+      if (emitted && t <= last_emit_t) resyncBack();
     }
     s.jump_votes = 0;
     for (int i = 0; i < s.n_recent; ++i)
@@ -320,6 +355,20 @@ struct Node::Impl {
     }
     return true;
   }
+  void resyncBack() {
+    asm_->restart();
+    drain();  // hands out what the assembler holds, in order, then it forgets its time
+    pipe.flush();
+    publishRows();
+    core_base.add(pipe.health());
+    pipe.reset();
+    if (mounting_version > 0) pipe.handMountings(handed_q);  // the calibration in use stays in use
+    emitted = false;
+    last_emit_t = 0;
+  }
+  core::Health core_base{};  ///< core counts before the last re-synchronisation (reset() clears them)
+  std::array<Quat, kMaxHeads> handed_q{};  ///< the mountings last handed to the core
+
   bool floodCheck(ChannelState& s, double max_hz) {
     if (++s.in_bucket > static_cast<int>(std::ceil(max_hz))) {
       reject(Reason::kFlood);
@@ -372,6 +421,7 @@ struct Node::Impl {
     if (!(m.flags & 1)) return reject(Reason::kInvalidFlag);
     const Vec3 a(m.ang_accel[0], m.ang_accel[1], m.ang_accel[2]);
     if (!a.allFinite()) return reject(Reason::kNonFinite);
+    if (!plausibility::angularAccelPlausible(a)) return reject(Reason::kImplausible);
     if (!timeCheck(ch_acc, m.utime, false) || !floodCheck(ch_acc, cfg.max_accel_rate_hz)) return;
     stream::Sample x;
     x.kind = stream::Sample::Kind::kAccel;
@@ -504,18 +554,23 @@ struct Node::Impl {
       }
       publishRows();
     }
-    // Samples the assembler refused (kLate, kTooManyHeads, kTooManyStars): moved from used.
+    // Samples the assembler refused, moved from used: kLate and kTooManyHeads (kAssembler), a tag far
+    // from its neighbours (kTimeJump), the same head twice at a tag (kDuplicate).
     const auto& ac = asm_->counters();
-    const std::uint64_t refused = ac.rejected[static_cast<std::size_t>(stream::Reject::kLate)] +
-                                  ac.rejected[static_cast<std::size_t>(stream::Reject::kTooManyHeads)];
-    if (refused > asm_refused) {
-      c.used -= refused - asm_refused;
-      c.rejected[static_cast<std::size_t>(Reason::kAssembler)] += refused - asm_refused;
-      asm_refused = refused;
-    }
+    auto take = [&](std::uint64_t now_count, std::uint64_t& seen, Reason r) {
+      if (now_count <= seen) return;
+      c.used -= now_count - seen;
+      c.rejected[static_cast<std::size_t>(r)] += now_count - seen;
+      seen = now_count;
+    };
+    take(ac.rejected[static_cast<std::size_t>(stream::Reject::kLate)] +
+             ac.rejected[static_cast<std::size_t>(stream::Reject::kTooManyHeads)],
+         asm_refused, Reason::kAssembler);
+    take(ac.rejected[static_cast<std::size_t>(stream::Reject::kTimeOutlier)], asm_outliers, Reason::kTimeJump);
+    take(ac.rejected[static_cast<std::size_t>(stream::Reject::kDuplicate)], asm_duplicates, Reason::kDuplicate);
     c.stars_dropped = stars_dropped_push + ac.rejected[static_cast<std::size_t>(stream::Reject::kTooManyStars)];
   }
-  std::uint64_t asm_refused = 0, stars_dropped_push = 0;
+  std::uint64_t asm_refused = 0, asm_outliers = 0, asm_duplicates = 0, stars_dropped_push = 0;
 
   void stepHeads() {
     applyMailbox();
@@ -538,8 +593,11 @@ struct Node::Impl {
         first_head_t = epoch.t;
         next_cal_t = epoch.t + static_cast<TimeUs>(cfg.calibration.min_span_s * 1e6);
       }
-      if (epoch.t >= next_cal_t) {
+      // Replay: one calibration in flight at a time (the lockstep waits for it; several queued behind a
+      // jump in the data would have the worker, the solver and this thread wait on each other).
+      if (epoch.t >= next_cal_t && !(mode == Mode::kReplay && due_n > 0)) {
         next_cal_t += static_cast<TimeUs>(cfg.calibration.cadence_s * 1e6);
+        if (next_cal_t <= epoch.t) next_cal_t = epoch.t + static_cast<TimeUs>(cfg.calibration.cadence_s * 1e6);
         RingItem s;
         s.kind = RingItem::kSolve;
         s.t = epoch.t;
@@ -579,6 +637,7 @@ struct Node::Impl {
     m.applied = 0;
     if (mail.ok && cfg.calibration.apply) {
       if (pipe.handMountings(mail.q_Si_B) == core::Status::kOk) {
+        handed_q = mail.q_Si_B;
         m.applied = 1;
         ++mounting_version;
         mounting_from_t = from_t;
@@ -604,7 +663,10 @@ struct Node::Impl {
         }
       }
     }
-    if (!mail.ok) ++c.calibrations_refused;
+    if (!mail.ok) {
+      ++c.calibrations_refused;
+      last_reason = mail.reason;
+    }
     m.seq = seq_cal++;
     publish(cfg.channels.calibration, m.utime, m);
     ++c.calibrations_published;
@@ -697,7 +759,8 @@ struct Node::Impl {
     h.step_latency_us[1] = wall ? l.p99_us : 0;
     h.step_latency_us[2] = wall ? l.p999_us : 0;
     h.step_latency_us[3] = wall ? l.max_us : 0;
-    const core::Health ch = pipe.health();
+    core::Health ch = pipe.health();
+    ch.add(core_base);
     for (int s = 0; s < core::kStatusCount; ++s) h.core_status[s] = toI64(ch.by_status[static_cast<std::size_t>(s)]);
     publish(cfg.channels.health, t, h);
   }
@@ -794,6 +857,12 @@ struct Node::Impl {
     m = boresight_lcm::calibration_t{};
     mail.solve_id = it.solve_id;
     mail.ok = r.ok;
+    const std::size_t n = std::min(r.message.size(), mail.reason.size() - 1);
+    std::copy(r.message.begin(), r.message.begin() + static_cast<std::ptrdiff_t>(n), mail.reason.begin());
+    mail.reason[n] = '\0';
+    if (!r.ok)  // the worker's own thread, never the real-time one
+      std::fprintf(stderr, "boresightd: calibration at data time %lld us refused: %s\n", static_cast<long long>(it.t),
+                   r.message.c_str());
     m.utime = it.t;
     m.span_start_utime = sp.t_first;
     m.span_end_utime = sp.t_last;
@@ -936,17 +1005,22 @@ void Node::finish() {
 const Counters& Node::counters() const { return impl_->c; }
 LatencySummary Node::stepLatency() const { return impl_->lat.summary(); }
 LatencySummary Node::headStepLatency() const { return impl_->lat_heads.summary(); }
-core::Health Node::coreHealth() const { return impl_->pipe.health(); }
+core::Health Node::coreHealth() const {
+  core::Health h = impl_->pipe.health();
+  h.add(impl_->core_base);
+  return h;
+}
+std::string Node::lastCalibrationReason() const { return std::string(impl_->last_reason.data()); }
 const core::Pipeline& Node::pipeline() const { return impl_->pipe; }
 TimeUs Node::dataTime() const { return impl_->now; }
 std::uint64_t Node::mountingVersion() const { return impl_->mounting_version; }
 Quat Node::frameRotation() const { return impl_->q_frame; }
 
-bool replayLog(Node& node, const std::string& path, std::string* error) {
+bool replayLog(Node& node, const std::string& path, std::string* error, const std::atomic<bool>* stop) {
   io::LcmLogReader r;
   if (!r.open(path, error)) return false;
   io::LcmLogReader::RawEvent ev;
-  while (r.nextRaw(ev)) {
+  while ((!stop || !stop->load(std::memory_order_relaxed)) && r.nextRaw(ev)) {
     if (ev.size < 0) node.onGarbage();
     else node.onMessage(*ev.channel, ev.data, ev.size);
   }

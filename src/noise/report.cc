@@ -1,6 +1,7 @@
 // The outputs of `boresight noise`: noise.json, noise.yaml (the platform file's `noise` form) and
 // report.md with a log-log spectrum per axis (include/boresight/noise/run.h).
 #include <boresight/core/conventions.h>
+#include <boresight/io/files.h>
 #include <boresight/io/overlay_yaml.h>
 #include <boresight/noise/run.h>
 #include <boresight/report/svg_plot.h>
@@ -13,7 +14,6 @@
 #include <limits>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <sstream>
 
 namespace boresight::noise {
@@ -71,12 +71,7 @@ Json fitJson(const model::NoiseFit& f) {
 }
 
 bool writeText(const std::string& path, const std::string& text, std::string* error) {
-  std::ofstream o(path);
-  if (!(o << text) || !(o.flush())) {
-    if (error) *error = path + ": cannot write";
-    return false;
-  }
-  return true;
+  return io::writeFileAtomic(path, text, error);  // whole or not at all
 }
 
 std::string fmt(double v, const char* f = "%.3g") {

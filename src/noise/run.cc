@@ -383,6 +383,18 @@ bool runNoise(const NoiseRequest& req, NoiseOutput& out, std::string* error) {
     return false;
   }
   out.counters = engine.counters();
+  // Every record is used or rejected with a reason: per source "NAME: N read, M used, K REASON" and
+  // the first rejected lines (as process, calibrate and audit say it).
+  for (std::size_t i = 0; i < engine.sourceCount(); ++i) {
+    const auto& c = engine.counters(i);
+    std::string s = engine.source(i).name() + ": " + std::to_string(c.read) + " read, " + std::to_string(c.used()) + " used";
+    for (int r = 0; r < stream::kRejectCount; ++r)
+      if (c.rejected[static_cast<std::size_t>(r)])
+        s += ", " + std::to_string(c.rejected[static_cast<std::size_t>(r)]) + " " + stream::rejectName(stream::Reject(r));
+    out.sources.push_back(s);
+    const auto issues = engine.source(i).issues();
+    for (std::size_t k = 0; k < issues.size() && k < 5; ++k) out.sources.push_back("    rejected " + issues[k]);
+  }
   out.health = engine.health();
   out.epochs = engine.epochs();
   out.full_epochs = heads.fullEpochs();

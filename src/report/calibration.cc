@@ -1,5 +1,6 @@
 // The calibration result as JSON, YAML and report.md (include/boresight/report/calibration.h).
 #include <boresight/core/crn.h>
+#include <boresight/io/files.h>
 #include <boresight/core/rotation.h>
 #include <boresight/report/calibration.h>
 #include <boresight/report/svg_plot.h>
@@ -431,12 +432,7 @@ bool writeCalibrationReport(const std::string& dir, const calib::CalibrationSpan
   for (const auto& f : result["inputs"]) md << "- " << f.get<std::string>() << "\n";
   for (const auto& f : result["ignored"])
     md << "- " << f["file"].get<std::string>() << " (" << f["product"].get<std::string>() << ", ignored)\n";
-  std::ofstream out(dir + "/report.md");
-  if (!(out << md.str())) {
-    if (error) *error = "cannot write " + dir + "/report.md";
-    return false;
-  }
-  return true;
+  return io::writeFileAtomic(dir + "/report.md", md.str(), error);
 }
 
 SpanNeed spanNeed(const core::PipelineConfig& cfg, double decimation_s, double excitation_rms_radps2,

@@ -1,5 +1,6 @@
 // SVG plot renderer (include/boresight/report/svg_plot.h).
 #include <boresight/report/svg_plot.h>
+#include <boresight/io/files.h>
 
 #include <algorithm>
 #include <cmath>
@@ -177,12 +178,7 @@ std::string svgPlot(const Plot& p) {
 }
 
 bool writeSvgPlot(const std::string& path, const Plot& p, std::string* error) {
-  std::ofstream out(path);
-  if (!(out << svgPlot(p))) {
-    if (error) *error = "cannot write " + path;
-    return false;
-  }
-  return true;
+  return io::writeFileAtomic(path, svgPlot(p), error);
 }
 
 }  // namespace boresight::report

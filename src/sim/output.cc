@@ -30,9 +30,7 @@ std::size_t afterLines(const std::string& s, std::size_t lines) {
 }  // namespace
 
 template <typename Rec>
-ChunkedProductWriter<Rec>::~ChunkedProductWriter() {
-  if (body_) std::fclose(body_);
-}
+ChunkedProductWriter<Rec>::~ChunkedProductWriter() = default;  // not closed: the temporary file goes
 
 template <typename Rec>
 bool ChunkedProductWriter<Rec>::open(const std::string& path, const io::ProductFile<Rec>& proto, std::string* error,
@@ -61,11 +59,8 @@ bool ChunkedProductWriter<Rec>::open(const std::string& path, const io::ProductF
     count_width_ = key[0] == ' ' ? kCountWidth : header.find('\n', p) - v;
     break;
   }
-  body_ = std::fopen(path_.c_str(), "wb");
-  if (!body_) {
-    if (error) *error = path_ + ": " + std::strerror(errno);
-    return false;
-  }
+  if (!file_.open(path_, error)) return false;  // whole at close() or not at all (io::AtomicFile)
+  body_ = file_.file();
   if (std::fwrite(header.data(), 1, header.size(), body_) != header.size()) io_error_ = true;
   return true;
 }
@@ -92,10 +87,13 @@ bool ChunkedProductWriter<Rec>::close(std::string* error) {
     ok = std::fseek(body_, static_cast<long>(count_offset_), SEEK_SET) == 0 &&
          std::fwrite(n.data(), 1, n.size(), body_) == n.size();
   }
-  ok = (std::fclose(body_) == 0) && ok;
   body_ = nullptr;
-  if (!ok && error) *error = path_ + ": write failed";
-  return ok;
+  if (!ok) {
+    file_.abandon();
+    if (error) *error = path_ + ": write failed";
+    return false;
+  }
+  return file_.commit(error);
 }
 
 template class ChunkedProductWriter<io::Sca1aRecord>;

@@ -1,4 +1,5 @@
 #include <boresight/io/config_keys.h>
+#include <boresight/io/yaml_file.h>
 #include <boresight/io/time_format.h>
 #include <boresight/sim/scenario.h>
 
@@ -208,6 +209,7 @@ bool applyLayer(const std::string& path, Scenario& s, std::string* error) {
     if (error) *error = path + ":1: a scenario layer must be a YAML map";
     return false;
   }
+  if (!io::checkDuplicateKeys(root, path, error)) return false;
   if (root["base"].IsDefined())
     return c.fail(root["base"], "base", "a layer after the first file of a base list cannot have a base of its own");
   const std::string file = s.file;
@@ -237,6 +239,7 @@ bool parseScenarioAt(const std::string& text, const std::string& file, const std
     if (error) *error = file + ":1: a scenario must be a YAML map";
     return false;
   }
+  if (!io::checkDuplicateKeys(root, file, error)) return false;
   Scenario s;
   bool overlay = false;
   const YAML::Node bn = root["base"];
@@ -544,14 +547,7 @@ bool loadScenario(const std::string& path, Scenario& out, std::string* error) {
 
 namespace {
 bool readText(const std::string& path, std::string& text, std::string& dir, std::string* error) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) {
-    if (error) *error = path + ": cannot open scenario file";
-    return false;
-  }
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  text = ss.str();
+  if (!io::readBounded(path, io::kMaxConfigBytes, "scenario file", text, error)) return false;
   const auto slash = path.find_last_of('/');
   dir = slash == std::string::npos ? "." : path.substr(0, slash);
   return true;

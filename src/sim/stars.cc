@@ -1,4 +1,6 @@
 #include <boresight/sim/stars.h>
+#include <boresight/io/files.h>
+#include <sstream>
 
 #include <algorithm>
 #include <cmath>
@@ -8,11 +10,9 @@
 namespace boresight::sim {
 
 bool StarCatalogue::load(const std::string& path, std::string* error) {
-  std::ifstream in(path);
-  if (!in) {
-    if (error) *error = path + ": cannot open star catalogue";
-    return false;
-  }
+  std::string text;
+  if (!io::readBounded(path, io::kMaxTableBytes, "star catalogue", text, error)) return false;
+  std::istringstream in(text);
   stars_.clear();
   std::string line;
   std::size_t line_no = 0;

@@ -1,5 +1,6 @@
 // truth.yaml: writer and reader (keys in sim/truth.h).
 #include <boresight/io/time_format.h>
+#include <boresight/io/yaml_file.h>
 #include <boresight/model/stochastic.h>
 #include <boresight/sim/simulator.h>
 #include <boresight/sim/truth.h>
@@ -291,13 +292,7 @@ bool writeTruthYaml(const std::string& path, const Simulator& sim, const std::ve
   y << YAML::EndMap;
   y << YAML::Key << "files" << YAML::Value << files;
   y << YAML::EndMap;
-  std::ofstream out(path);
-  out << y.c_str() << "\n";
-  if (!out) {
-    if (error) *error = path + ": write failed";
-    return false;
-  }
-  return true;
+  return io::writeFileAtomic(path, std::string(y.c_str()) + "\n", error);
 }
 
 // ------------------------------------------------------------------------------------------ reader
@@ -625,15 +620,7 @@ const TruthHead* TruthFile::head(int id) const {
 
 bool readTruthYaml(const std::string& path, TruthFile& out, std::string* error) {
   YAML::Node root;
-  try {
-    root = YAML::LoadFile(path);
-  } catch (const YAML::BadFile&) {
-    if (error) *error = path + ": cannot open";
-    return false;
-  } catch (const YAML::Exception& e) {
-    if (error) *error = path + ":" + std::to_string(e.mark.line + 1) + ": YAML syntax: " + e.msg;
-    return false;
-  }
+  if (!io::loadYamlFile(path, root, error, "truth file")) return false;
   TruthFile t;
   try {
     const Node top(root, "", &path);

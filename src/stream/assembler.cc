@@ -30,35 +30,122 @@ void EpochAssembler::reject(std::size_t i, Reject why) {
   ++total_.rejected[static_cast<std::size_t>(why)];
 }
 
+void EpochAssembler::enqueue(std::size_t i, const Sample& s) {
+  SourceState& ss = src_[i];
+  if (!ss.have_frontier) {
+    ss.frontier = s.t;
+  } else if (s.t > ss.frontier) {
+    // The source's typical step (a sampling interval, not a gap): what a jump is measured against.
+    const TimeUs d = s.t - ss.frontier;
+    if (ss.step == 0) ss.step = d;
+    else if (d <= 4 * ss.step) ss.step = (3 * ss.step + d) / 4;
+    ss.frontier = s.t;
+  }
+  ss.have_frontier = true;
+  // Late: something after it was handed out already. A head sample at the tag of the last
+  // hand-out is late too (its epoch, or an accelerometer sample that sorts after it, is gone), and
+  // so is a star vector at the tag of a star epoch already handed out.
+  if (emitted_ && (s.t < last_t_ || (s.t == last_t_ && (s.kind == Sample::Kind::kHead ||
+                                                         (s.kind == Sample::Kind::kStar &&
+                                                          last_kind_ == Sample::Kind::kStar))))) {
+    reject(i, Reject::kLate);
+    return;
+  }
+  heap_.push_back(Item{s.t, static_cast<std::uint8_t>(s.kind), static_cast<std::uint32_t>(i), seq_++, s});
+  std::push_heap(heap_.begin(), heap_.end(), later);
+  max_seen_ = std::max(max_seen_, heap_.size());
+}
+
+namespace {
+TimeUs dist(TimeUs a, TimeUs b) { return a > b ? a - b : b - a; }
+}  // namespace
+
+void EpochAssembler::admit(std::size_t i, const Sample& s) {
+  SourceState& ss = src_[i];
+  // Jumps are judged at the look-ahead, but never finer than a second (a look-ahead of microseconds
+  // must not make every sampling interval a jump) nor than three of the source's own steps (a sparse
+  // source is no sequence of jumps).
+  const TimeUs J = std::max<TimeUs>(cfg_.lookahead_us, kUsPerSecond);
+  const TimeUs W = std::max<TimeUs>(J, 3 * ss.step);
+  if (ss.n_held > 0) {
+    if (ss.have_frontier) {
+      // One held jump: real when this sample is at least as close to it as to the source's time.
+      const Sample h = ss.held[0];
+      ss.n_held = 0;
+      if (dist(s.t, h.t) <= dist(s.t, ss.frontier)) enqueue(i, h);
+      else reject(i, Reject::kTimeOutlier);
+    } else if (ss.n_held == 1) {
+      // The source's first sample: confirmed by a second one near it; otherwise both wait for a third.
+      if (dist(s.t, ss.held[0].t) > W) {
+        ss.held[ss.n_held++] = s;
+        return;
+      }
+      const Sample h = ss.held[0];
+      ss.n_held = 0;
+      enqueue(i, h);
+    } else {
+      // Two first samples far apart: a third in line with both (steps within a factor of 4) confirms
+      // both (a sparse source); otherwise the one nearer to it is confirmed and the other is an outlier.
+      const Sample a = ss.held[0], b = ss.held[1];
+      ss.n_held = 0;
+      const bool in_line = a.t < b.t && b.t < s.t && b.t - a.t <= 4 * (s.t - b.t) + J && s.t - b.t <= 4 * (b.t - a.t) + J;
+      if (in_line) {
+        enqueue(i, a);
+        enqueue(i, b);
+      } else if (dist(s.t, b.t) <= dist(s.t, a.t)) {
+        reject(i, Reject::kTimeOutlier);
+        enqueue(i, b);
+      } else {
+        enqueue(i, a);
+        reject(i, Reject::kTimeOutlier);
+      }
+    }
+  }
+  if (!ss.have_frontier) {  // the first sample: wait for the next one
+    ss.held[ss.n_held++] = s;
+    return;
+  }
+  const TimeUs W2 = std::max<TimeUs>(J, 3 * ss.step);
+  if (s.t > ss.frontier + W2) {  // a jump ahead of the source's time: wait for the next sample
+    ss.held[0] = s;
+    ss.n_held = 1;
+    return;
+  }
+  // Behind the source's time by more than the look-ahead: late, whatever was handed out.
+  if (s.t < ss.frontier - J) {
+    reject(i, Reject::kLate);
+    return;
+  }
+  enqueue(i, s);
+}
+
+void EpochAssembler::settle(std::size_t i) {
+  SourceState& ss = src_[i];
+  if (!ss.have_frontier) {
+    for (int k = 0; k < ss.n_held; ++k) enqueue(i, ss.held[k]);  // nothing contradicts them
+  } else {
+    for (int k = 0; k < ss.n_held; ++k) reject(i, Reject::kTimeOutlier);  // a jump nothing confirmed
+  }
+  ss.n_held = 0;
+}
+
 bool EpochAssembler::pull(std::size_t i, Out& out) {
   SourceState& ss = src_[i];
   Sample s;
   Reject why = Reject::kMalformed;
   switch (ss.s->next(s, why)) {
-    case Source::Next::kSample: {
+    case Source::Next::kSample:
       ++ss.c.read;
       ++total_.read;
-      ss.frontier = std::max(ss.frontier, s.t);
-      // Late: something after it was handed out already. A head sample at the tag of the last
-      // hand-out is late too (its epoch, or an accelerometer sample that sorts after it, is gone), and
-      // so is a star vector at the tag of a star epoch already handed out.
-      if (emitted_ && (s.t < last_t_ || (s.t == last_t_ && (s.kind == Sample::Kind::kHead ||
-                                                             (s.kind == Sample::Kind::kStar &&
-                                                              last_kind_ == Sample::Kind::kStar))))) {
-        reject(i, Reject::kLate);
-        return true;
-      }
-      heap_.push_back(Item{s.t, static_cast<std::uint8_t>(s.kind), static_cast<std::uint32_t>(i), seq_++, s});
-      std::push_heap(heap_.begin(), heap_.end(), later);
-      max_seen_ = std::max(max_seen_, heap_.size());
+      admit(i, s);
       return true;
-    }
     case Source::Next::kRejected:
       ++ss.c.read;
       ++total_.read;
       reject(i, why);
       return true;
     case Source::Next::kEnd:
+      settle(i);
       ss.done = true;
       return true;
     case Source::Next::kPending:
@@ -80,6 +167,19 @@ void EpochAssembler::pop(Item& it) {
 }
 
 bool EpochAssembler::fill(Out& out) {
+  if (restart_) {
+    if (!heap_.empty()) return true;  // hand out what is buffered first
+    restart_ = false;
+    emitted_ = false;
+    for (std::size_t i = 0; i < src_.size(); ++i) {
+      SourceState& ss = src_[i];
+      for (int k = 0; k < ss.n_held; ++k) reject(i, Reject::kTimeOutlier);
+      ss.n_held = 0;
+      ss.have_frontier = false;
+      ss.step = 0;
+      ss.frontier = std::numeric_limits<TimeUs>::min();
+    }
+  }
   // Read from the source that is furthest behind until every unfinished source is past the
   // earliest buffered tag plus the look-ahead (or the buffer is full).
   for (;;) {
@@ -159,7 +259,11 @@ EpochAssembler::Out EpochAssembler::next(core::HeadEpoch& epoch, TimeUs& t, Vec3
   epoch.t = it.t;
   epoch.n = 0;
   for (;;) {
-    if (epoch.n < core::kMaxHeads) {
+    bool dup = false;
+    for (int k = 0; k < epoch.n && !dup; ++k) dup = epoch.sample[static_cast<std::size_t>(k)].head_id == it.s.head_id;
+    if (dup) {
+      reject(it.src, Reject::kDuplicate);
+    } else if (epoch.n < core::kMaxHeads) {
       auto& h = epoch.sample[static_cast<std::size_t>(epoch.n++)];
       h = core::HeadSample{};
       h.head_id = it.s.head_id;

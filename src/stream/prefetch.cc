@@ -4,6 +4,7 @@
 #include <condition_variable>
 #include <deque>
 #include <mutex>
+#include <exception>
 #include <thread>
 
 namespace boresight::stream {
@@ -21,6 +22,7 @@ struct PrefetchSource::Impl {
   std::deque<Batch> queue;
   std::vector<Batch> spare;  // consumed batches, reused by the worker
   bool stop = false, finished = false;
+  std::string thrown;  ///< what the inner source threw (the worker then ends with kError)
   Batch current;
   std::size_t pos = 0;
   std::thread worker;
@@ -40,7 +42,12 @@ struct PrefetchSource::Impl {
       bool terminal = false;
       while (b.size() < batch_size) {
         Entry e{Next::kEnd, Reject::kMalformed, Sample{}};
-        e.n = src->next(e.s, e.why);
+        try {
+          e.n = src->next(e.s, e.why);
+        } catch (const std::exception& x) {  // never std::terminate on a worker thread: the run fails
+          thrown = src->name() + ": " + x.what();
+          e.n = Next::kError;
+        }
         b.push_back(e);
         if (e.n != Next::kSample && e.n != Next::kRejected) {
           terminal = e.n != Next::kPending;
@@ -97,7 +104,8 @@ Source::Next PrefetchSource::next(Sample& out, Reject& why) {
 }
 
 std::string PrefetchSource::error() const {
-  return impl_->worker.joinable() ? std::string() : inner_->error();
+  if (impl_->worker.joinable()) return {};
+  return impl_->thrown.empty() ? inner_->error() : impl_->thrown;
 }
 
 std::vector<std::string> PrefetchSource::issues() const {

@@ -1,6 +1,12 @@
 // Replay setup: inputs by content, configuration for them, sources.
 #include <boresight/stream/replay.h>
+#include <boresight/core/plausibility.h>
+#include <boresight/io/files.h>
 #include <boresight/stream/sources.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <map>
 
 namespace boresight::stream {
 namespace {
@@ -32,6 +38,56 @@ bool firstHeadTag(const ReplayInputs& in, const io::ReadOptions& opt, TimeUs& t)
   return found;
 }
 
+/// The median interval (s) between consecutive distinct tags of one kind (per head for heads) among
+/// the first samples of the inputs, and how many intervals it is the median of (0: none).
+struct RateScan {
+  double median_s = 0;
+  std::size_t n = 0;
+  std::string file;  ///< the first input scanned
+};
+RateScan scanRate(const ReplayInputs& in, const io::ReadOptions& opt, Sample::Kind kind) {
+  RateScan r;
+  std::vector<double> dt;
+  constexpr int kSamples = 4000;
+  auto take = [&](Source& s, const std::string& f) {
+    std::map<int, TimeUs> last;  // per head id (0 for the accelerometer)
+    Sample x;
+    Reject why;
+    int got = 0;
+    for (int k = 0; k < 200000 && got < kSamples; ++k) {
+      const auto n = s.next(x, why);
+      if (n == Source::Next::kRejected) continue;
+      if (n != Source::Next::kSample) break;
+      if (x.kind != kind) continue;
+      ++got;
+      const int key = kind == Sample::Kind::kHead ? x.head_id : 0;
+      auto it = last.find(key);
+      if (it != last.end() && x.t > it->second) dt.push_back(toSeconds(x.t - it->second));
+      last[key] = x.t;
+    }
+    if (r.file.empty() && got > 0) r.file = f;
+  };
+  if (kind == Sample::Kind::kHead)
+    for (const auto& f : in.sca) {
+      Sca1aSource s;
+      if (s.open(f, opt, nullptr)) take(s, f);
+    }
+  if (kind == Sample::Kind::kAccel)
+    for (const auto& f : in.acc) {
+      Acc1aSource s;
+      if (s.open(f, opt, nullptr)) take(s, f);
+    }
+  for (const auto& f : in.lcm) {
+    LcmLogSource s;
+    if (s.open(f, nullptr)) take(s, f);
+  }
+  if (dt.empty()) return r;
+  std::nth_element(dt.begin(), dt.begin() + static_cast<std::ptrdiff_t>(dt.size() / 2), dt.end());
+  r.median_s = dt[dt.size() / 2];
+  r.n = dt.size();
+  return r;
+}
+
 /// Whether an LCM log carries accelerometer messages (looked for in its first 100 000 events).
 bool lcmHasAccel(const std::string& f) {
   LcmLogSource s;
@@ -50,7 +106,15 @@ bool lcmHasAccel(const std::string& f) {
 
 bool classifyInputs(const std::vector<std::string>& files, ReplayInputs& in, std::string* error) {
   in = ReplayInputs{};
+  std::vector<std::string> seen;
   for (const auto& f : files) {
+    const std::string real = io::resolvedPath(f);
+    for (std::size_t k = 0; k < seen.size(); ++k)
+      if (seen[k] == real) {
+        if (error) *error = f + ": given twice (as " + files[k] + " too): every sample would be counted twice";
+        return false;
+      }
+    seen.push_back(real);
     FileKind k = identifyFile(f);
     if (k.type == FileKind::Type::kUnknown) {
       if (error) *error = k.reason;
@@ -90,34 +154,95 @@ bool classifyInputs(const std::vector<std::string>& files, ReplayInputs& in, std
       return false;
     }
     in.qsa_records.insert(in.qsa_records.end(), p.records.begin(), p.records.end());
+    if (p.rejected_count > 0) {
+      // The mountings must not come from a file with damaged lines: one bad alignment is a rotated head.
+      if (error)
+        *error = (p.rejected.empty() ? f + ": a rejected line" : p.rejected.front().str()) + " (" +
+                 std::to_string(p.rejected_count) + " of the QSA1B lines rejected): the mountings cannot be taken from it";
+      return false;
+    }
+    if (p.records.empty()) {
+      if (error) *error = f + ":" + std::to_string(p.header.line_count + 1) + ": a QSA1B file without alignment records";
+      return false;
+    }
   }
   return true;
 }
 
 bool prepareConfig(const ReplayInputs& in, const io::ReadOptions& opt, io::PlatformConfig& pc, std::string* error) {
   if (in.sca.empty() && in.lcm.empty()) {
-    if (error) *error = "no star sensor input (SCA1A file or LCM log) among the inputs";
+    std::string names;
+    for (const auto* v : {&in.acc, &in.qsa, &in.scv})
+      for (const auto& f : *v) names += (names.empty() ? "" : ", ") + f;
+    for (const auto& [f, p] : in.ignored) names += (names.empty() ? "" : ", ") + f + " (" + p + ")";
+    if (error) *error = "no star sensor input (SCA1A file or LCM log) among the inputs (" + names + ")";
     return false;
   }
   if (pc.mounting_from_qsa1b) {
     if (in.qsa_records.empty()) {
-      if (error) *error = "the platform takes the mountings from QSA1B (heads.mounting: qsa1b): give a QSA1B file";
+      std::string names;
+      for (const auto& [f, p] : in.ignored) names += (names.empty() ? "" : ", ") + f + " (" + p + ")";
+      for (const auto& f : in.lcm) names += (names.empty() ? "" : ", ") + f + " (LCM log)";
+      if (error)
+        *error = "the platform takes the mountings from QSA1B (heads.mounting: qsa1b): give a QSA1B file (none among " +
+                 (names.empty() ? std::string("the inputs") : names) + ")";
       return false;
     }
     TimeUs t0 = 0;
     if (!firstHeadTag(in, opt, t0)) {
-      if (error) *error = "no star sensor samples in the inputs";
+      std::string names;
+      for (const auto* v : {&in.sca, &in.lcm})
+        for (const auto& f : *v) names += (names.empty() ? "" : ", ") + f;
+      if (error) *error = "no star sensor samples in " + names + " (every record rejected, or none there)";
       return false;
     }
-    if (!io::applyQsa1bMounting(pc, in.qsa_records, t0, error)) return false;
+    if (!io::applyQsa1bMounting(pc, in.qsa_records, t0, error)) {
+      std::string names;
+      for (const auto& f : in.qsa) names += (names.empty() ? "" : ", ") + f;
+      if (error) *error = names + ": " + *error;
+      return false;
+    }
   }
   bool have_acc = !in.acc.empty();
   for (const auto& f : in.lcm) have_acc = have_acc || lcmHasAccel(f);
   if (!have_acc) pc.pipeline.use_accelerometer = false;
+  return checkSampleRates(in, opt, pc.pipeline, error);
+}
+
+bool checkSampleRates(const ReplayInputs& in, const io::ReadOptions& opt, const core::PipelineConfig& cfg,
+                      std::string* error) {
+  struct Stream {
+    Sample::Kind kind;
+    const char* key;
+    double fs_hz;
+    const char* what;
+  };
+  const Stream streams[] = {
+      {Sample::Kind::kHead, "crn_attitude.fs_hz", cfg.crn_attitude.fs_hz, "each head"},
+      {Sample::Kind::kAccel, "crn_acc.fs_hz", cfg.crn_acc.fs_hz, "the accelerometer"}};
+  for (const Stream& st : streams) {
+    if (st.kind == Sample::Kind::kAccel && !cfg.use_accelerometer) continue;
+    const RateScan r = scanRate(in, opt, st.kind);
+    if (r.n < 3 || plausibility::rateMatches(r.median_s, st.fs_hz)) continue;
+    if (error) {
+      char b[640];
+      std::snprintf(b, sizeof b,
+                    "%s: %s is sampled every %.4g s (%.4g Hz, the median of %zu intervals) but the platform's %s is "
+                    "%.4g Hz: the CRN filters are designed for the configured rate, so the rates, angular "
+                    "accelerations and their sigmas would be off by the ratio (set %s: %.4g, or give data at %.4g Hz)",
+                    r.file.c_str(), st.what, r.median_s, 1.0 / r.median_s, r.n, st.key, st.fs_hz, st.key,
+                    1.0 / r.median_s, st.fs_hz);
+      *error = b;
+    }
+    return false;
+  }
   return true;
 }
 
-bool addSources(const ReplayInputs& in, const io::ReadOptions& opt, bool prefetch, Engine& engine, std::string* error) {
+bool addSources(const ReplayInputs& in, const io::ReadOptions& opt_in, bool prefetch, Engine& engine, std::string* error) {
+  // The readers gate the heads' quaternions with the core's tolerance: a record is refused once, there.
+  io::ReadOptions opt = opt_in;
+  opt.quat_norm_tolerance = engine.pipeline().config().heads.unit_norm_tolerance;
   auto add = [&](std::unique_ptr<Source> s) {
     if (prefetch) s = std::make_unique<PrefetchSource>(std::move(s));
     engine.addSource(std::move(s));
@@ -140,6 +265,7 @@ bool addSources(const ReplayInputs& in, const io::ReadOptions& opt, bool prefetc
   for (const auto& f : in.lcm) {
     auto s = std::make_unique<LcmLogSource>();
     if (!s->open(f, error)) return false;
+    s->setQuatTolerance(opt.quat_norm_tolerance);
     add(std::move(s));
   }
   return true;

@@ -32,16 +32,11 @@ void putInt(std::string& b, long long v, int min_digits = 0) {
 
 }  // namespace
 
-CsvRowSink::~CsvRowSink() {
-  if (f_) std::fclose(f_);
-}
+CsvRowSink::~CsvRowSink() = default;  // an uncommitted temporary file is removed (io::AtomicFile)
 
 bool CsvRowSink::begin(const core::PipelineConfig& cfg) {
-  f_ = std::fopen(path_.c_str(), "w");
-  if (!f_) {
-    error_ = path_ + ": cannot write: " + std::strerror(errno);
-    return false;
-  }
+  if (!file_.open(path_, &error_)) return false;
+  f_ = file_.file();
   const auto& hs = cfg.heads;
   n_heads_ = hs.n_heads;
   buf_.reserve(kFlushBytes + 4096);
@@ -95,13 +90,14 @@ bool CsvRowSink::flushBuffer() {
 
 bool CsvRowSink::end() {
   if (!f_) return false;
-  bool ok = flushBuffer();
-  if (std::fclose(f_) != 0 && ok) {
-    error_ = path_ + ": write failed";
-    ok = false;
-  }
+  if (!flushBuffer()) return false;
+  return defer_ || commit(&error_);
+}
+
+bool CsvRowSink::commit(std::string* error) {
+  if (!f_) return true;
   f_ = nullptr;
-  return ok;
+  return file_.commit(error);
 }
 
 BatchBufferSink::BatchBufferSink(std::size_t capacity) : ring_(capacity < 1 ? 1 : capacity) {}
@@ -123,16 +119,11 @@ bool BatchBufferSink::write(const core::PipelineRow& row) {
 
 namespace boresight::stream {
 
-CsvStarSink::~CsvStarSink() {
-  if (f_) std::fclose(f_);
-}
+CsvStarSink::~CsvStarSink() = default;
 
 bool CsvStarSink::begin(const core::PipelineConfig&) {
-  f_ = std::fopen(path_.c_str(), "w");
-  if (!f_) {
-    error_ = path_ + ": cannot write";
-    return false;
-  }
+  if (!file_.open(path_, &error_)) return false;
+  f_ = file_.file();
   std::fputs("time_s,q0,q1,q2,q3,sigma_x_arcsec,sigma_y_arcsec,sigma_z_arcsec,stars_in,stars_used,"
              "residual_rms_arcsec,d_fused_x_arcsec,d_fused_y_arcsec,d_fused_z_arcsec\n",
              f_);
@@ -165,10 +156,13 @@ bool CsvStarSink::writeStars(const StarSolution& s) {
 
 bool CsvStarSink::end() {
   if (!f_) return true;
-  const bool ok = std::fclose(f_) == 0;
+  return defer_ || commit(&error_);
+}
+
+bool CsvStarSink::commit(std::string* error) {
+  if (!f_) return true;
   f_ = nullptr;
-  if (!ok) error_ = path_ + ": write failed";
-  return ok;
+  return file_.commit(error);
 }
 
 }  // namespace boresight::stream

@@ -3,9 +3,11 @@
 #include <boresight/stream/sources.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <sys/stat.h>
 
 namespace boresight::stream {
 
@@ -19,6 +21,9 @@ const char* rejectName(Reject r) {
     case Reject::kTooManyHeads: return "more heads than kMaxHeads";
     case Reject::kTooManyStars: return "more star vectors than kMaxStarInputs";
     case Reject::kNoStarConsumer: return "star vector (not used here)";
+    case Reject::kImplausible: return "implausible value";
+    case Reject::kTimeOutlier: return "time tag far from its neighbours";
+    case Reject::kDuplicate: return "duplicate (same head, same tag)";
     case Reject::kCount: break;
   }
   return "?";
@@ -35,6 +40,11 @@ bool hasLcmMagic(const std::string& path) {
 
 FileKind identifyFile(const std::string& path) {
   FileKind k;
+  struct stat st {};
+  if (::stat(path.c_str(), &st) == 0 && S_ISDIR(st.st_mode)) {
+    k.reason = path + ":0: is a directory, not an input file";
+    return k;
+  }
   if (std::FILE* f = std::fopen(path.c_str(), "rb")) {
     std::fclose(f);
   } else {
@@ -128,6 +138,11 @@ Source::Next LcmLogSource::next(Sample& out, Reject& why) {
   if (star_next_ < star_n_) {  // the rest of a STAR_VECTORS message, one star per sample
     const io::StarVectors& m = r_->stars();
     const auto k = static_cast<std::size_t>(star_next_++);
+    if (!plausibility::directionPlausible(m.s_head[k]) || !plausibility::directionPlausible(m.r_inertial[k]) ||
+        !(m.sigma_rad[k] >= 0) || !std::isfinite(m.sigma_rad[k])) {
+      why = Reject::kImplausible;
+      return Next::kRejected;
+    }
     out = starSample(m.utime, m.head_id, m.s_head[k], m.r_inertial[k], m.sigma_rad[k]);
     return Next::kSample;
   }
@@ -140,6 +155,10 @@ Source::Next LcmLogSource::next(Sample& out, Reject& why) {
         why = Reject::kInvalid;
         return Next::kRejected;
       }
+      if (plausibility::checkQuaternion(h.q, quat_tol_) != plausibility::Quaternion::kOk) {
+        why = Reject::kImplausible;
+        return Next::kRejected;
+      }
       out.kind = Sample::Kind::kHead;
       out.t = h.utime;
       out.head_id = h.head_id;
@@ -150,6 +169,10 @@ Source::Next LcmLogSource::next(Sample& out, Reject& why) {
     case io::LcmLogReader::Kind::Accel:
       if (!(a.flags & 1)) {
         why = Reject::kNoAngular;
+        return Next::kRejected;
+      }
+      if (!plausibility::angularAccelPlausible(a.ang_accel)) {
+        why = Reject::kImplausible;
         return Next::kRejected;
       }
       out.kind = Sample::Kind::kAccel;

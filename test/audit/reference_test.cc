@@ -84,10 +84,10 @@ TEST(ReferenceFeed, ReceiverTimeInterleavedWithTheHeadsBadSamplesDropped) {
   };
   for (int i = 0; i < 10; ++i) add(2000.0 + i, attitudeAt(2000.0 + i, 1e-3));
   add(2005.5, attitudeAt(2005.5, 1e-3));              // out of time order: dropped
-  add(2010.0, Quat(0.0, 0.0, 0.0, 0.0));              // not a rotation: dropped
+  add(2010.0, Quat(0.0, 0.0, 0.0, 0.0));              // not a rotation: dropped (by the reader's gate)
   add(2011.0, attitudeAt(2011.0, 1e-3));
   std::string err;
-  const std::string path = dir + "/SCA1B_2023-06-01_C_04.txt";
+  const std::string path = dir + "/SCA1B_test.txt";  // no date in the name: the tags are seconds past the epoch
   ASSERT_TRUE(io::writeProduct(path, f, &err)) << err;
 
   ClockMap clock;

@@ -204,5 +204,5 @@ TEST(AuditReport, AnUnwritableDirectoryIsAClearError) {
   EXPECT_NE(err.find(base + "/file/report: cannot create the report directory"), std::string::npos) << err;
   err.clear();
   EXPECT_FALSE(writeAuditJson(handMade(false), base + "/file/audit.json", &err));
-  EXPECT_NE(err.find("cannot write " + base + "/file/audit.json"), std::string::npos) << err;
+  EXPECT_NE(err.find(base + "/file/audit.json: cannot create"), std::string::npos) << err;
 }

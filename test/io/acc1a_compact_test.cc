@@ -38,7 +38,7 @@ TEST(Acc1aCompact, RejectsFieldsOutsideItsLayoutWithAReason) {
   auto f = makeProduct<Acc1aRecord>(Product::ACC1A, 'C');
   std::string text = formatProduct(f);
   // bit 6 (bias_vol) set: seven values follow
-  text += "738849600 7739 R C 00000000 00000000000000000000000001111111 1 2 3 4 5 6 7\n";
+  text += "738849600 7739 R C 00000000 00000000000000000000000001111111 1e-6 2e-6 3e-6 4e-6 5e-6 6e-6 7\n";
   text += "738849600 107733 R C 00000000 00000100000000000000000000111111 1e-5 2e-7 3e-7 1e-5 1e-4 -7e-4 0\n";
   auto r = parseProduct<Acc1aRecord>(text, "ACC1A_x.txt");
   ASSERT_TRUE(r.ok);

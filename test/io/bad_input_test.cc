@@ -70,13 +70,13 @@ TEST(BadInput, MalformedLinesGiveFileLineReason) {
   for (const auto& c : cases) {
     SCOPED_TRACE(c.line);
     const std::string text = replaceRecord(good, hl, 3, c.line);
-    auto f = parseProduct<Sca1bRecord>(text, "SCA1B_2023-06-01_C_04.txt");
+    auto f = parseProduct<Sca1bRecord>(text, "SCA1B_2022-03-08_C_04.txt");
     ASSERT_TRUE(f.ok) << f.error;  // default: skip and count
     EXPECT_EQ(f.records.size(), 4u);
     ASSERT_EQ(f.rejected_count, 1u);
     ASSERT_EQ(f.rejected.size(), 1u);
     EXPECT_EQ(f.rejected[0].line, hl + 3);
-    EXPECT_EQ(f.rejected[0].str().rfind("SCA1B_2023-06-01_C_04.txt:" + std::to_string(hl + 3) + ": ", 0), 0u)
+    EXPECT_EQ(f.rejected[0].str().rfind("SCA1B_2022-03-08_C_04.txt:" + std::to_string(hl + 3) + ": ", 0), 0u)
         << f.rejected[0].str();
     EXPECT_NE(f.rejected[0].reason.find(c.reason_part), std::string::npos) << f.rejected[0].reason;
   }
@@ -87,7 +87,7 @@ TEST(BadInput, SkipCountsAndStopStopsAtTheFirstBadLine) {
   std::string text = sca1bText('A', 6, &hl);
   text = replaceRecord(text, hl, 2, "garbage");
   text = replaceRecord(text, hl, 5, "700000004 A 23 0.5");
-  auto skip = parseProduct<Sca1bRecord>(text, "SCA1B_2003-09-14_A_00.asc");
+  auto skip = parseProduct<Sca1bRecord>(text, "SCA1B_2022-03-08_A_00.asc");
   ASSERT_TRUE(skip.ok);
   EXPECT_EQ(skip.records.size(), 4u);
   EXPECT_EQ(skip.rejected_count, 2u);
@@ -97,20 +97,20 @@ TEST(BadInput, SkipCountsAndStopStopsAtTheFirstBadLine) {
 
   ReadOptions keep_one;
   keep_one.max_issues_kept = 1;
-  auto capped = parseProduct<Sca1bRecord>(text, "SCA1B_2003-09-14_A_00.asc", keep_one);
+  auto capped = parseProduct<Sca1bRecord>(text, "SCA1B_2022-03-08_A_00.asc", keep_one);
   EXPECT_EQ(capped.rejected_count, 2u);
   EXPECT_EQ(capped.rejected.size(), 1u);
 
   ReadOptions stop;
   stop.on_error = OnError::Stop;
-  auto st = parseProduct<Sca1bRecord>(text, "SCA1B_2003-09-14_A_00.asc", stop);
+  auto st = parseProduct<Sca1bRecord>(text, "SCA1B_2022-03-08_A_00.asc", stop);
   EXPECT_FALSE(st.ok);
   EXPECT_EQ(st.records.size(), 1u);
   EXPECT_EQ(st.rejected_count, 1u);
   EXPECT_EQ(st.error, st.rejected[0].str());
-  EXPECT_EQ(st.error.rfind("SCA1B_2003-09-14_A_00.asc:" + std::to_string(hl + 2) + ": ", 0), 0u) << st.error;
+  EXPECT_EQ(st.error.rfind("SCA1B_2022-03-08_A_00.asc:" + std::to_string(hl + 2) + ": ", 0), 0u) << st.error;
 
-  ProductSummary s = summarizeText(text, "SCA1B_2003-09-14_A_00.asc", stop);
+  ProductSummary s = summarizeText(text, "SCA1B_2022-03-08_A_00.asc", stop);
   EXPECT_FALSE(s.ok);
   EXPECT_EQ(s.error, st.error);
 }
@@ -157,11 +157,11 @@ TEST(BadInput, WholeFileErrors) {
 
 TEST(BadInput, ZeroRecordFileIsValid) {
   const std::string text = sca1bText('C', 0, nullptr);
-  auto f = parseProduct<Sca1bRecord>(text, "SCA1B_2023-06-01_C_04.txt");
+  auto f = parseProduct<Sca1bRecord>(text, "SCA1B_2022-03-08_C_04.txt");
   ASSERT_TRUE(f.ok) << f.error;
   EXPECT_TRUE(f.records.empty());
   EXPECT_EQ(f.rejected_count, 0u);
-  ProductSummary s = summarizeText(text, "SCA1B_2023-06-01_C_04.txt");
+  ProductSummary s = summarizeText(text, "SCA1B_2022-03-08_C_04.txt");
   EXPECT_TRUE(s.ok);
   EXPECT_EQ(s.records, 0u);
   EXPECT_FALSE(s.has_time);

@@ -14,7 +14,7 @@ TEST(BinaryHeader, RepeatedHeaderBlockDoesNotHideTheFormatOrCount) {
       "FILE FORMAT 0=BINARY 1=ASCII  : 1\n"        // a second block: kept as header lines
       "NUMBER OF DATA RECORDS        : 7\n"
       "END OF HEADER\n"
-      "116769600 A 1 2 3 4 5 6 7 8 9 00000000\n";
+      "116769600 A 1e-6 2e-6 3e-6 4e-6 5e-6 6e-6 7 8 9 00000000\n";
   auto f = parseProduct<Acc1bRecord>(text, "ACC1B_2003-09-14_A_00.asc");
   ASSERT_TRUE(f.ok) << f.error;
   ASSERT_EQ(f.records.size(), 1u);

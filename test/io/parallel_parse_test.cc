@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <random>
 #include <string>
 
@@ -20,6 +21,8 @@ std::string makeSca1a(int records, std::mt19937_64& rng, std::vector<std::size_t
     r.t = 738849600LL * kUsPerSecond + k * 500000LL / 3;
     r.head = static_cast<std::uint8_t>(1 + k % 3);
     for (double& q : r.q) q = n01(rng);
+    const double n = std::sqrt(r.q[0] * r.q[0] + r.q[1] * r.q[1] + r.q[2] * r.q[2] + r.q[3] * r.q[3]);
+    for (double& q : r.q) q /= n;  // unit: only the corrupted lines are rejected
     r.nstars = k % 50;
     f.records.push_back(r);
   }

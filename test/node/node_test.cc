@@ -16,13 +16,19 @@
 #include "boresight_lcm/calibration_t.hpp"
 #include "boresight_lcm/fused_attitude_t.hpp"
 #include "boresight_lcm/node_health_t.hpp"
+#include "boresight_lcm/orbit_sample_t.hpp"
 #include "boresight_lcm/star_head_sample_t.hpp"
+#include "boresight_lcm/star_vectors_t.hpp"
 
 #include "test_files.h"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <atomic>
+#include <chrono>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
@@ -30,7 +36,13 @@
 #include <map>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <vector>
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 namespace boresight {
 namespace {
@@ -668,7 +680,7 @@ TEST(Boresightd, ReplayWritesSummaryWithTheLastCalibrationAndACsvPerAttitude) {
   const auto bad = testutil::runProgram(BORESIGHTD, "--config " + dir + "/node.yaml --replay " + log + " --csv " + dir +
                                                         "/no/such/dir/n.csv");
   EXPECT_EQ(bad.status, 1);
-  EXPECT_NE(bad.out.find("cannot write the CSV"), std::string::npos) << bad.out;
+  EXPECT_NE(bad.out.find("n.csv: cannot create"), std::string::npos) << bad.out;
 }
 #endif
 
@@ -738,16 +750,366 @@ TEST(NodeConfig, ClearErrors) {
   node::NodeConfig cfg;
   std::string err;
   EXPECT_FALSE(node::loadNodeConfig(write("lookahed_s: 2\n"), cfg, &err));
-  EXPECT_NE(err.find("lookahed_s: unknown key"), std::string::npos) << err;
+  EXPECT_NE(err.find(dir + "/n.yaml:2: key 'lookahed_s': unknown key; did you mean 'lookahead_s'?"), std::string::npos)
+      << err;
   EXPECT_FALSE(node::loadNodeConfig(write("ring_capacity: 1000\n"), cfg, &err));
-  EXPECT_NE(err.find("ring_capacity: must be a power of two"), std::string::npos) << err;
+  EXPECT_NE(err.find(dir + "/n.yaml:2: key 'ring_capacity': must be a power of two"), std::string::npos) << err;
   EXPECT_FALSE(node::loadNodeConfig(write("mountings: config\n"), cfg, &err));
-  EXPECT_NE(err.find("mountings:"), std::string::npos) << err;
+  EXPECT_NE(err.find(dir + "/n.yaml:2: key 'mountings'"), std::string::npos) << err;
   EXPECT_FALSE(node::loadNodeConfig(write("channels: {accel: STAR_HEAD}\n"), cfg, &err));
   EXPECT_NE(err.find("own name"), std::string::npos) << err;
   EXPECT_TRUE(node::loadNodeConfig(write("health_period_s: 5\n"), cfg, &err)) << err;
   EXPECT_EQ(cfg.health_period_s, 5);
+  // Every error names the file, the line and the key; NaN, duplicated keys and a directory too.
+  EXPECT_FALSE(node::loadNodeConfig(write("lookahead_s: 2\nhealth_period_s: .nan\n"), cfg, &err));
+  EXPECT_NE(err.find(dir + "/n.yaml:3: key 'health_period_s': must be within"), std::string::npos) << err;
+  EXPECT_FALSE(node::loadNodeConfig(write("lookahead_s: 2\nlookahead_s: 3\n"), cfg, &err));
+  EXPECT_NE(err.find(dir + "/n.yaml:3: key 'lookahead_s': given twice in this mapping (first at line 2)"), std::string::npos) << err;
+  {
+    const std::string p = dir + "/d.yaml";
+    std::ofstream(p) << "platform: " << dir << "\n";
+    EXPECT_FALSE(node::loadNodeConfig(p, cfg, &err));
+    EXPECT_NE(err.find("is a directory, not a platform configuration file"), std::string::npos) << err;
+  }
+  EXPECT_FALSE(node::loadNodeConfig(dir, cfg, &err));
+  EXPECT_NE(err.find("is a directory, not a node configuration file"), std::string::npos) << err;
+  EXPECT_FALSE(node::loadNodeConfig(write("calibration: {decimation_s: 0.2}\n"), cfg, &err));
+  EXPECT_NE(err.find("key 'calibration.decimation_s'"), std::string::npos) << err;
 }
+
+// ---- bad input (issue 18): the node's cases ------------------------------------------------------
+
+/// A copy of `clean` with every event passed through `edit(index, channel, bytes)`: it returns the
+/// events to write (none drops it) as (channel, event time, bytes).
+struct Event {
+  std::string ch;
+  TimeUs t;
+  std::vector<std::uint8_t> bytes;
+};
+template <typename Edit>
+std::string editLog(const std::string& clean, const std::string& name, Edit edit) {
+  const std::string path = makeTempDir("node_edit") + "/" + name;
+  io::LcmLogReader r;
+  io::LcmLogWriter w;
+  std::string err;
+  EXPECT_TRUE(r.open(clean, &err)) << err;
+  EXPECT_TRUE(w.open(path, &err)) << err;
+  io::LcmLogReader::RawEvent ev;
+  std::size_t k = 0;
+  while (r.nextRaw(ev)) {
+    if (ev.size < 0) continue;
+    const auto* p = static_cast<const std::uint8_t*>(ev.data);
+    Event in{*ev.channel, ev.timestamp, std::vector<std::uint8_t>(p, p + ev.size)};
+    for (const Event& o : edit(k++, in)) w.writeRaw(o.ch, o.t, o.bytes.data(), static_cast<int>(o.bytes.size()));
+  }
+  EXPECT_TRUE(w.close(&err)) << err;
+  return path;
+}
+
+template <typename M>
+M decodeAs(const Event& e) {
+  M m;
+  EXPECT_EQ(m.decode(e.bytes.data(), 0, static_cast<int>(e.bytes.size())), static_cast<int>(e.bytes.size()));
+  return m;
+}
+template <typename M>
+Event encodeAs(const std::string& ch, TimeUs t, const M& m) {
+  Event e{ch, t, std::vector<std::uint8_t>(static_cast<std::size_t>(m.getEncodedSize()))};
+  m.encode(e.bytes.data(), 0, static_cast<int>(e.bytes.size()));
+  return e;
+}
+
+/// Moves the sensor time of a STAR_HEAD, ACCEL, STAR_VECTORS or ORBIT message by dt (a sender clock).
+Event shifted(const Event& e, TimeUs dt) {
+  if (e.ch == "STAR_HEAD") {
+    auto m = decodeAs<boresight_lcm::star_head_sample_t>(e);
+    m.utime += dt;
+    return encodeAs(e.ch, m.utime, m);
+  }
+  if (e.ch == "ACCEL") {
+    auto m = decodeAs<boresight_lcm::accel_sample_t>(e);
+    m.utime += dt;
+    return encodeAs(e.ch, m.utime, m);
+  }
+  if (e.ch == "STAR_VECTORS") {
+    auto m = decodeAs<boresight_lcm::star_vectors_t>(e);
+    m.utime += dt;
+    return encodeAs(e.ch, m.utime, m);
+  }
+  if (e.ch == "ORBIT") {
+    auto m = decodeAs<boresight_lcm::orbit_sample_t>(e);
+    m.utime += dt;
+    return encodeAs(e.ch, m.utime, m);
+  }
+  return e;
+}
+
+/// Runs fn on a thread; a run that has not finished after `seconds` is a hang: the test program ends
+/// with a failure (a dead-locked thread cannot be joined).
+template <typename Fn>
+void withinSeconds(double seconds, const char* what, Fn fn) {
+  std::atomic<bool> done{false};
+  std::thread t([&] {
+    fn();
+    done = true;
+  });
+  const auto t0 = std::chrono::steady_clock::now();
+  while (!done && std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() < seconds)
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  if (!done) {
+    std::fprintf(stderr, "FAILED: %s did not finish in %.0f s (a hang)\n", what, seconds);
+    std::fflush(stderr);
+    std::_Exit(1);
+  }
+  t.join();
+}
+
+TEST(NodeBadInput, AOneDayJumpWithCalibrationOnFinishesInsteadOfHanging) {
+  // Tags one day ahead from the middle of the log on: the cadences the jump skips used to queue one
+  // solve per epoch, and the real-time thread, the worker and the solver waited on each other.
+  const std::string clean = simulate("jump", 7200, {}, nullptr, "config/sim_gracefo_calibration.yaml");
+  std::size_t n = 0;
+  {
+    io::LcmLogReader r;
+    std::string err;
+    EXPECT_TRUE(r.open(clean, &err));
+    io::LcmLogReader::RawEvent ev;
+    while (r.nextRaw(ev)) ++n;
+  }
+  const std::string log = editLog(clean, "jump.lcm", [&](std::size_t k, const Event& e) {
+    return std::vector<Event>{k > n / 2 ? shifted(e, 86400 * kUsPerSecond) : e};
+  });
+  auto cfg = nodeConfig(1800, 1800);
+  cfg.calibration.apply_lag_epochs = 2400;  // the demo's lag: the ring fills long before a result is due
+  std::unique_ptr<Replay> r;
+  withinSeconds(240, "the replay with a one-day jump", [&] { r = replay(log, cfg); });
+  const node::Counters& c = r->c;
+  EXPECT_EQ(c.received, c.used + c.rejectedTotal());
+  EXPECT_GE(c.time_resyncs, 1u);
+  EXPECT_LE(rejected(c, node::Reason::kTimeJump), 12u);  // the votes that confirmed the jump
+  EXPECT_GE(c.calibrations_published, 2u);
+  EXPECT_LE(c.calibrations_published, 4u);  // one for the whole skipped day, not one per skipped cadence
+}
+
+TEST(NodeBadInput, AStopRequestEndsTheReplayWithItsSummary) {
+  const std::string log = simulate("stop", 1200, {});
+  struct StopAfter : node::Output {
+    std::atomic<bool>* flag;
+    int n = 0;
+    void publish(const std::string& ch, TimeUs, const void*, int) override {
+      if (ch == "BORESIGHT_ATTITUDE" && ++n == 300) flag->store(true);
+    }
+  } out;
+  std::atomic<bool> stop{false};
+  out.flag = &stop;
+  node::Node nd;
+  std::string err;
+  ASSERT_TRUE(nd.configure(nodeConfig(), node::Node::Mode::kReplay, &out, &err)) << err;
+  ASSERT_TRUE(node::replayLog(nd, log, &err, &stop)) << err;
+  const node::Counters& c = nd.counters();
+  std::uint64_t events = 0;
+  {
+    io::LcmLogReader rd;
+    ASSERT_TRUE(rd.open(log, &err));
+    io::LcmLogReader::RawEvent ev;
+    while (rd.nextRaw(ev)) ++events;
+  }
+  EXPECT_TRUE(stop.load());
+  EXPECT_GT(c.received, 1000u);
+  EXPECT_LT(c.received, events / 2) << "the replay did not stop: " << events << " events";  // 300 of 1200 s
+  EXPECT_EQ(c.received, c.used + c.rejectedTotal());
+}
+
+TEST(NodeBadInput, OneCorruptSequenceNumberIsOneBadMessageNotAMillionLost) {
+  const std::string clean = simulate("seq", 1200, {});
+  int acc = 0;
+  const std::string corrupt = editLog(clean, "seq.lcm", [&](std::size_t, const Event& e) {
+    if (e.ch != "ACCEL" || ++acc != 1000) return std::vector<Event>{e};
+    auto m = decodeAs<boresight_lcm::accel_sample_t>(e);
+    m.seq += 1000000;
+    return std::vector<Event>{encodeAs(e.ch, e.t, m)};
+  });
+  const auto r = replay(corrupt, nodeConfig());
+  EXPECT_EQ(r->c.lost, 0u);
+  EXPECT_EQ(r->c.received, r->c.used + r->c.rejectedTotal());
+  // A real loss of 100 messages beyond the reorder window is still counted (confirmed by the next one).
+  acc = 0;
+  const std::string lossy = editLog(clean, "loss.lcm", [&](std::size_t, const Event& e) {
+    if (e.ch == "ACCEL" && ++acc > 2000 && acc <= 2100) return std::vector<Event>{};
+    return std::vector<Event>{e};
+  });
+  EXPECT_EQ(replay(lossy, nodeConfig())->c.lost, 100u);
+}
+
+TEST(NodeBadInput, AClockStepped700sBackIsResynchronisedNotHalfTheMessagesLost) {
+  const std::string clean = simulate("back", 2400, {});
+  std::size_t n = 0;
+  {
+    io::LcmLogReader r;
+    std::string err;
+    EXPECT_TRUE(r.open(clean, &err));
+    io::LcmLogReader::RawEvent ev;
+    while (r.nextRaw(ev)) ++n;
+  }
+  const std::string log = editLog(clean, "back.lcm", [&](std::size_t k, const Event& e) {
+    return std::vector<Event>{k > n / 2 ? shifted(e, -700 * kUsPerSecond) : e};
+  });
+  const auto ref = replay(clean, nodeConfig());
+  const auto r = replay(log, nodeConfig());
+  const node::Counters& c = r->c;
+  EXPECT_EQ(c.received, c.used + c.rejectedTotal());
+  EXPECT_GE(c.time_resyncs, 1u);
+  EXPECT_LE(rejected(c, node::Reason::kTimeJump), 12u) << "before: about half the messages";
+  EXPECT_LE(c.rejectedTotal(), 20u);
+  EXPECT_GE(c.head_epochs, ref->c.head_epochs * 98 / 100);
+  EXPECT_GE(c.rows, ref->c.rows * 9 / 10);  // the filters restart at the step (about 70 s of rows)
+}
+
+TEST(NodeBadInput, AWrongFirstTagIsOutVotedWithoutAssemblerRejects) {
+  const std::string clean = simulate("first", 1200, {});
+  bool first = true;
+  const std::string log = editLog(clean, "first.lcm", [&](std::size_t, const Event& e) {
+    if ((e.ch != "STAR_HEAD" && e.ch != "ACCEL") || !first) return std::vector<Event>{e};
+    first = false;
+    return std::vector<Event>{shifted(e, 86400 * kUsPerSecond)};
+  });
+  const auto r = replay(log, nodeConfig());
+  const node::Counters& c = r->c;
+  EXPECT_EQ(rejected(c, node::Reason::kAssembler), 0u) << "before: 840";
+  EXPECT_EQ(c.received, c.used + c.rejectedTotal());
+  EXPECT_LE(c.rejectedTotal(), 12u);
+}
+
+#ifdef BORESIGHTD
+namespace {
+std::string nodeYaml(const std::string& dir, const std::vector<std::pair<std::string, std::string>>& set) {
+  std::ifstream in(src("config/boresightd.yaml"));
+  std::ostringstream o;
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.rfind("platform:", 0) == 0) line = "platform: " + src("config/gracefo.yaml");
+    for (const auto& [k, v] : set)
+      if (line.find(k + ":") != std::string::npos) line = v;
+    o << line << "\n";
+  }
+  const std::string p = dir + "/node.yaml";
+  EXPECT_TRUE(testutil::writeFile(p, o.str()));
+  return p;
+}
+}  // namespace
+
+TEST(Boresightd, OutputsNeverDestroyTheLogAndEmptyLogsSaySo) {
+  const std::string log = simulate("cli_bad", 300, {});
+  const std::string dir = makeTempDir("node_cli_bad");
+  const std::string cfg = nodeYaml(dir, {});
+  const std::string before = testutil::slurp(log);
+  // --record over --replay truncated the log and exited 0.
+  auto r = testutil::runProgram(BORESIGHTD, "--config " + cfg + " --replay " + log + " --record " + log);
+  EXPECT_EQ(r.status, 1) << r.out;
+  EXPECT_NE(r.out.find("is also an input"), std::string::npos) << r.out;
+  EXPECT_EQ(testutil::slurp(log), before);
+  // An empty log exited 0 without a word; a log without head messages too.
+  ASSERT_TRUE(testutil::writeFile(dir + "/empty.lcm", ""));
+  r = testutil::runProgram(BORESIGHTD, "--config " + cfg + " --replay " + dir + "/empty.lcm --summary-json " + dir +
+                                           "/s.json");
+  EXPECT_EQ(r.status, 1) << r.out;
+  EXPECT_NE(r.out.find("an empty LCM log"), std::string::npos) << r.out;
+  EXPECT_NE(::access((dir + "/s.json").c_str(), F_OK), 0);
+  const std::string other = editLog(log, "other.lcm", [](std::size_t, const Event& e) {
+    return std::vector<Event>{Event{"SOMEONE_ELSE", e.t, e.bytes}};
+  });
+  r = testutil::runProgram(BORESIGHTD, "--config " + cfg + " --replay " + other);
+  EXPECT_EQ(r.status, 1) << r.out;
+  EXPECT_NE(r.out.find("no STAR_HEAD message the node could use"), std::string::npos) << r.out;
+  // A directory as the platform file: an error, not an uncaught std::ios_base::failure.
+  const std::string bad = dir + "/bad.yaml";
+  ASSERT_TRUE(testutil::writeFile(bad, "platform: " + dir + "\n"));
+  r = testutil::runProgram(BORESIGHTD, "--config " + bad + " --replay " + log);
+  EXPECT_EQ(r.status, 1) << r.out;
+  EXPECT_NE(r.out.find("is a directory"), std::string::npos) << r.out;
+  // The platform's head rate against the data's: both rates, before anything runs.
+  std::string plat = testutil::slurp(src("config/gracefo.yaml"));
+  plat.replace(plat.find("fs_hz: 2.0"), 10, "fs_hz: 10.0");
+  ASSERT_TRUE(testutil::writeFile(dir + "/gracefo10.yaml", plat));
+  const std::string cfg10 = nodeYaml(dir, {{"platform", "platform: " + dir + "/gracefo10.yaml"}});
+  r = testutil::runProgram(BORESIGHTD, "--config " + cfg10 + " --replay " + log);
+  EXPECT_EQ(r.status, 1) << r.out;
+  EXPECT_NE(r.out.find("crn_attitude.fs_hz is 10 Hz"), std::string::npos) << r.out;
+}
+
+TEST(Boresightd, ARefusedCalibrationSaysWhyAndDecimationHalfASecondWorks) {
+  const std::string log = simulate("cli_cal", 1500, {}, nullptr, "config/sim_gracefo_node_demo.yaml");
+  const std::string quiet = simulate("cli_cal_quiet", 1500, {});
+  const std::string dir = makeTempDir("node_cli_cal");
+  // A span too quiet to calibrate: "refused" with no reason before.
+  const std::string cfg = nodeYaml(dir, {{"cadence_s", "  cadence_s: 600"},
+                                         {"min_span_s", "  min_span_s: 600"},
+                                         {"apply_lag_epochs", "  apply_lag_epochs: 20"}});
+  auto r = testutil::runProgram(BORESIGHTD, "--config " + cfg + " --replay " + quiet + " --summary-json " + dir + "/s.json");
+  ASSERT_EQ(r.status, 0) << r.out;
+  const std::string j = testutil::slurp(dir + "/s.json");
+  EXPECT_NE(r.out.find("calibration at data time"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("refused:"), std::string::npos) << r.out;
+  EXPECT_NE(j.find("\"reason\": \"too"), std::string::npos) << j;
+  // decimation_s 0.5 (the head interval): a calibration as at 10 s, not a refusal.
+  const std::string cfg05 = nodeYaml(dir, {{"cadence_s", "  cadence_s: 1200"},
+                                           {"min_span_s", "  min_span_s: 1200"},
+                                           {"apply_lag_epochs", "  apply_lag_epochs: 20"},
+                                           {"decimation_s", "  decimation_s: 0.5"}});
+  r = testutil::runProgram(BORESIGHTD, "--config " + cfg05 + " --replay " + log + " --summary-json " + dir + "/s05.json");
+  ASSERT_EQ(r.status, 0) << r.out;
+  EXPECT_NE(testutil::slurp(dir + "/s05.json").find("\"status\": \"ok\""), std::string::npos)
+      << testutil::slurp(dir + "/s05.json") << r.out;
+}
+
+TEST(Boresightd, SigtermStopsAReplayWithCompleteOutputsAndTheSummary) {
+  // The CSV goes to a FIFO the test does not read at first: the replay blocks on it, so the signal
+  // surely arrives while it runs; then the test reads, the replay notices the signal at the next event.
+  const std::string log = simulate("cli_term", 3600, {});
+  const std::string dir = makeTempDir("node_cli_term");
+  const std::string cfg = nodeYaml(dir, {});
+  const std::string fifo = dir + "/rows.csv";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  const pid_t pid = ::fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    const int devnull = ::open("/dev/null", O_WRONLY);
+    ::dup2(devnull, 1);
+    ::dup2(devnull, 2);
+    const std::string sj = dir + "/s.json";
+    ::execl(BORESIGHTD, BORESIGHTD, "--config", cfg.c_str(), "--replay", log.c_str(), "--csv", fifo.c_str(),
+            "--summary-json", sj.c_str(), static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  const int fd = ::open(fifo.c_str(), O_RDONLY);  // returns once boresightd opened it for writing
+  ASSERT_GE(fd, 0);
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));  // the pipe is full: the replay waits
+  ASSERT_EQ(::kill(pid, SIGTERM), 0);
+  std::string csv;
+  char buf[65536];
+  ssize_t got;
+  while ((got = ::read(fd, buf, sizeof buf)) > 0) csv.append(buf, static_cast<std::size_t>(got));
+  ::close(fd);
+  int status = 0;
+  ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+  ASSERT_TRUE(WIFEXITED(status)) << "killed by signal " << (WIFSIGNALED(status) ? WTERMSIG(status) : 0);
+  EXPECT_EQ(WEXITSTATUS(status), 1);  // interrupted: not a complete run
+  const std::string j = testutil::slurp(dir + "/s.json");
+  EXPECT_NE(j.find("\"interrupted\": true"), std::string::npos) << j;
+  EXPECT_NE(j.find("\"accounted\": true"), std::string::npos) << j;
+  ASSERT_FALSE(csv.empty());
+  EXPECT_EQ(csv.back(), '\n') << "the CSV was cut mid-line";
+  std::istringstream in(csv);
+  std::string line;
+  int rows = 0;
+  while (std::getline(in, line)) {
+    EXPECT_EQ(std::count(line.begin(), line.end(), ','), 8) << line;
+    ++rows;
+  }
+  EXPECT_GT(rows, 100);
+  EXPECT_LT(rows, 3600) << "the replay ran to the end: the signal was ignored";
+}
+#endif
 
 TEST(NodeConfig, OverlayKeyLaysItsNoiseAndMountingsOverThePlatform) {
   const std::string dir = makeTempDir("node_overlay");
@@ -762,7 +1124,7 @@ TEST(NodeConfig, OverlayKeyLaysItsNoiseAndMountingsOverThePlatform) {
   // refused with the overlay's file and line: an unknown version, an unknown key
   write("ov.yaml", "boresight_overlay: 7\nwritten_by: test\n");
   EXPECT_FALSE(node::loadNodeConfig(write("n.yaml", node_yaml), cfg, &err));
-  EXPECT_NE(err.find("n.yaml: overlay: " + dir + "/ov.yaml:1: key 'boresight_overlay': unsupported version 7"), std::string::npos) << err;
+  EXPECT_NE(err.find("n.yaml:2: key 'overlay': " + dir + "/ov.yaml:1: key 'boresight_overlay': unsupported version 7"), std::string::npos) << err;
   write("ov.yaml", "boresight_overlay: 1\nwritten_by: test\nnoise:\n  head_defaults:\n    cross_z: []\n");
   EXPECT_FALSE(node::loadNodeConfig(dir + "/n.yaml", cfg, &err));
   EXPECT_NE(err.find(dir + "/ov.yaml:5: key 'noise.head_defaults.cross_z': unknown key"), std::string::npos) << err;

@@ -242,3 +242,70 @@ TEST(CsvRowSink, NumbersAreFormattedAsPrintf) {
   EXPECT_EQ(got, expect);
   EXPECT_EQ(sink.rows(), rows.size());
 }
+
+// ---- robust time base and duplicates (bad input costs what it is, not what follows it) -------------
+
+TEST(AssemblerTimeBase, OneTagFarAheadCostsThatSampleNotTheLookAheadOfTheRest) {
+  // Three heads at 2 Hz for 60 s; one head-2 tag 1e8 s ahead in the middle (a corrupt tag). Before the
+  // robust time base it became the source's time: every later sample went out alone and the other heads
+  // of each tag were late (about half the file).
+  std::vector<Step> s;
+  for (int k = 0; k < 120; ++k)
+    for (int id = 1; id <= 3; ++id) {
+      Step h = head(1000 + k * 0.5, id);
+      if (k == 60 && id == 2) h.s.t += 100000000LL * kUsPerSecond;
+      s.push_back(h);
+    }
+  ScriptSource a(s);
+  ScriptSource b({acc(1000), acc(1030), acc(1059.5)});
+  stream::EpochAssembler as;
+  as.addSource(&a);
+  as.addSource(&b);
+  const std::string out = drain(as);
+  const auto& c = as.counters();
+  EXPECT_EQ(c.rejected[std::size_t(stream::Reject::kTimeOutlier)], 1u);
+  EXPECT_EQ(c.rejected[std::size_t(stream::Reject::kLate)], 0u);
+  EXPECT_EQ(c.used_heads, 359u);
+  EXPECT_EQ(c.read, c.used() + c.rejectedTotal());
+  EXPECT_NE(out.find("H1030:13 "), std::string::npos) << out;  // the epoch of the corrupt tag keeps 1 and 3
+  EXPECT_NE(out.find("H1030.5:123 "), std::string::npos);
+  EXPECT_EQ(out.find("1e+08"), std::string::npos);
+}
+
+TEST(AssemblerTimeBase, AWrongFirstTagAndARealGapAreTold) {
+  // The first tag is corrupt (a day ahead): dropped, the source's time is the real one.
+  ScriptSource a({head(86400 + 10, 1), head(10, 1), head(10.5, 1), head(11, 1)});
+  stream::EpochAssembler as;
+  as.addSource(&a);
+  EXPECT_EQ(drain(as), "H10:1 H10.5:1 H11:1 ");
+  EXPECT_EQ(as.counters().rejected[std::size_t(stream::Reject::kTimeOutlier)], 1u);
+  // A real gap of an hour, confirmed by the next sample: nothing lost.
+  ScriptSource b({head(10, 1), head(10.5, 1), head(3610, 1), head(3610.5, 1), head(3611, 1)});
+  stream::EpochAssembler as2;
+  as2.addSource(&b);
+  EXPECT_EQ(drain(as2), "H10:1 H10.5:1 H3610:1 H3610.5:1 H3611:1 ");
+  EXPECT_EQ(as2.counters().rejectedTotal(), 0u);
+  // A tag far behind the source's time is late even before anything after it went out.
+  ScriptSource c({head(100, 1), head(100.5, 1), head(100 - 1e8, 1), head(101, 1)});
+  stream::EpochAssembler as3;
+  as3.addSource(&c);
+  EXPECT_EQ(drain(as3), "H100:1 H100.5:1 H101:1 ");
+  EXPECT_EQ(as3.counters().rejected[std::size_t(stream::Reject::kLate)], 1u);
+}
+
+TEST(AssemblerTimeBase, TheSameHeadTwiceAtOneTagIsADuplicateNotAFourthHead) {
+  // SCA1A given twice (its content, under another name): each epoch has every head twice. Before,
+  // the excess went to the core ("more heads than kMaxHeads", all counted as used).
+  std::vector<Step> s;
+  for (int k = 0; k < 10; ++k)
+    for (int id = 1; id <= 3; ++id) s.push_back(head(k * 0.5, id));
+  ScriptSource a(s), b(s);
+  stream::EpochAssembler as;
+  as.addSource(&a);
+  as.addSource(&b);
+  const std::string out = drain(as);
+  EXPECT_EQ(as.counters().used_heads, 30u);
+  EXPECT_EQ(as.counters().rejected[std::size_t(stream::Reject::kDuplicate)], 30u);
+  EXPECT_EQ(as.counters().rejected[std::size_t(stream::Reject::kTooManyHeads)], 0u);
+  EXPECT_NE(out.find("H0.5:123 "), std::string::npos) << out;
+}

@@ -69,7 +69,7 @@ TEST(AuditCli, BadInputsAreExitOneWithFileLineAndReason) {
   // An output folder that cannot be made is said before the replay.
   CliRun c = run("audit" + kConfig + dir + "/garbage.txt --out " + dir + "/garbage.txt/out");
   EXPECT_EQ(c.status, 1) << c.out;
-  EXPECT_NE(c.out.find(dir + "/garbage.txt/out: cannot create the output directory"), std::string::npos) << c.out;
+  EXPECT_NE(c.out.find(dir + "/garbage.txt/out: cannot create the folder"), std::string::npos) << c.out;
   // A truth file that is not one.
   const std::string& sim = simulated();
   ASSERT_TRUE(testutil::writeFile(dir + "/truth.yaml", "seed: 1\nheads: [\n"));

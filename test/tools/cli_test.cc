@@ -53,7 +53,7 @@ TEST(Cli, InspectReportsRejectedLinesWithFileAndLine) {
   {
     std::ofstream f(path);
     f << "header:\n  dimensions:\n    num_records: 5\n# End of YAML header\n";
-    f << "738849600 29992 C 1 P -0.28 -0.58 0.69 0.31 0 47 1 0 0 11000001 11000000\n";
+    f << "738849600 29992 C 1 P 0.5 -0.5 0.5 -0.5 0 47 1 0 0 11000001 11000000\n";
     f << "738849600 29992 C 2 P 0.46 0.88 nan 0.068 0 52 2 0 0 11000001 11000000\n";
     f << "738849600 29992 C 3 P 0.12 0.18\n";
   }

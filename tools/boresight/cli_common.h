@@ -10,7 +10,9 @@
 
 #include <CLI/CLI.hpp>
 
+#include <cmath>
 #include <cstdio>
+#include <exception>
 #include <string>
 
 namespace boresight::cli {
@@ -26,6 +28,33 @@ inline CLI::Validator notAnOption() {
       },
       "VALUE", "not an option");
 }
+
+/// A number in [lo, hi]: unlike CLI::Range, NaN and infinities are refused ("nan" compares false with
+/// both bounds and would pass a range check).
+inline CLI::Validator finiteRange(double lo, double hi) {
+  return CLI::Validator(
+      [lo, hi](std::string& v) -> std::string {
+        double x = 0;
+        try {
+          std::size_t used = 0;
+          x = std::stod(v, &used);
+          if (used != v.size()) return "'" + v + "' is not a number";
+        } catch (const std::exception&) {
+          return "'" + v + "' is not a number";
+        }
+        if (!std::isfinite(x)) return "'" + v + "' is not a finite number";
+        if (x < lo || x > hi) {
+          char b[160];
+          std::snprintf(b, sizeof b, "%s is outside %g .. %g", v.c_str(), lo, hi);
+          return b;
+        }
+        return {};
+      },
+      "[" + std::to_string(lo) + " - " + std::to_string(hi) + "]", "finite range");
+}
+
+/// Any finite number (NaN and infinities refused).
+inline CLI::Validator finiteNumber() { return finiteRange(-1e308, 1e308); }
 
 /// Parses argv (argv[0] is the command name). Returns -1 to go on, else the exit status to return
 /// (0 after --help with `usage` on stdout, 2 on a usage error with the reason on stderr).

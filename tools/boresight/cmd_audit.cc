@@ -2,6 +2,7 @@
 // printing only: audit::runAudit() replays the inputs into the audit's collector and analyses them,
 // audit::writeAuditJson / writeAuditReport write the result.
 #include <boresight/audit/report.h>
+#include <boresight/io/files.h>
 #include <boresight/audit/run.h>
 #include <boresight/stream/source.h>
 
@@ -58,7 +59,7 @@ const char* kUsage =
     "  --max-harmonic N       largest orbit harmonic tested, cycles per revolution (default 2)\n"
     "  --lookahead S          out-of-order tolerance of the inputs, seconds (default 2)\n"
     "  --strict               stop at the first malformed input line\n"
-    "  --quiet                print the findings only (no progress, no input summary)\n"
+    "  --quiet                print the findings and the rejected inputs only (no progress, no input summary)\n"
     "\n"
     "Exit status: 0 audited (whatever was found); 1 bad input (file:line: reason) or an output that\n"
     "cannot be written; 2 usage error.\n";
@@ -144,23 +145,30 @@ int runAudit(int argc, char** argv) {
   app.add_option("--out", out_dir)->required();
   app.add_option("--truth", req.truth);
   app.add_option("--overlay", req.overlay);
-  app.add_option("--false-alarm", req.options.false_alarm)->check(CLI::Range(1e-12, 0.5));
-  app.add_option("--holdout-blocks", req.options.holdout_blocks)->check(CLI::Range(1, 1000));
-  app.add_option("--max-harmonic", req.options.max_harmonic)->check(CLI::Range(0, 20));
-  app.add_option("--lookahead", req.lookahead_s)->check(CLI::Range(0.0, 3600.0));
+  app.add_option("--false-alarm", req.options.false_alarm)->check(finiteRange(1e-12, 0.5));
+  app.add_option("--holdout-blocks", req.options.holdout_blocks)->check(finiteRange(1, 1000));
+  app.add_option("--max-harmonic", req.options.max_harmonic)->check(finiteRange(0, 20));
+  app.add_option("--lookahead", req.lookahead_s)->check(finiteRange(0.0, 3600.0));
   app.add_flag("--strict", req.strict);
   app.add_flag("--quiet", quiet);
   app.add_option("inputs", req.inputs)->required();
   if (int st = parseCommandLine(app, argc, argv, "audit", kUsage); st >= 0) return st;
 
-  // The output directory first: a run of hours must not end on an unwritable folder.
-  std::error_code ec;
-  std::filesystem::create_directories(out_dir, ec);
-  if (ec) return fail(out_dir + ": cannot create the output directory: " + ec.message());
+  // Outputs never destroy inputs; the output folder first (a run of hours must not end on an
+  // unwritable folder), removed again when the run fails (OutputDir).
+  std::string err;
+  {
+    std::vector<std::string> ins = req.inputs;
+    ins.push_back(req.config);
+    if (!req.truth.empty()) ins.push_back(req.truth);
+    if (!req.overlay.empty()) ins.push_back(req.overlay);
+    if (!io::checkOutputs(ins, {{"--out", out_dir, true}}, &err)) return fail(err);
+  }
+  io::OutputDir dir;
+  if (!dir.open(out_dir, &err)) return fail(err);
   if (!quiet) req.progress = [](const std::string& s) { std::fprintf(stderr, "%s\n", s.c_str()); };
 
   audit::RunOutput out;
-  std::string err;
   if (!audit::runAudit(req, out, &err)) return fail(err);
 
   if (!quiet) {
@@ -173,8 +181,11 @@ int runAudit(int argc, char** argv) {
                 static_cast<unsigned long long>(c.used_heads), static_cast<unsigned long long>(out.epochs),
                 static_cast<unsigned long long>(c.used_accel), static_cast<unsigned long long>(c.rejectedTotal()),
                 out.span_s);
-  } else if (!out.reference_time_base.empty()) {
-    std::printf("outside reference SCA1B: %s\n", out.reference_time_base.c_str());
+  } else {
+    // Quiet, but never silent about bad input: the rejected records with their place.
+    for (const auto& s : out.notes)
+      if (s.find(" rejected") != std::string::npos || s.find(" read, ") != std::string::npos) std::printf("%s\n", s.c_str());
+    if (!out.reference_time_base.empty()) std::printf("outside reference SCA1B: %s\n", out.reference_time_base.c_str());
   }
   for (const auto& s : out.model_in_use) std::printf("%s\n", s.c_str());
   printResult(out.result);
@@ -192,10 +203,10 @@ int runAudit(int argc, char** argv) {
   {  // the audit's keys, then the model it ran with
     nlohmann::ordered_json j = nlohmann::ordered_json::parse(audit::auditJsonText(out.result));
     j["model_in_use"] = modelInUseJson(out.platform, out.overlay);
-    std::ofstream f(json);
-    if (!(f << j.dump(2) << "\n")) return fail("cannot write " + json);
+    if (!io::writeFileAtomic(json, j.dump(2) + "\n", &err)) return fail(err);
   }
   if (!audit::writeAuditReport(out.result, out_dir, &err, &ctx)) return fail(err);
+  dir.keep();
   std::printf("-> %s/report.md, %s", out_dir.c_str(), json.c_str());
   for (const auto& f : audit::auditPlotFiles(out.result)) std::printf(", %s", f.c_str());
   std::printf("\n");

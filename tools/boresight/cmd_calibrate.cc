@@ -8,6 +8,7 @@
 #include <boresight/core/rotation.h>
 #include <boresight/io/product_stream.h>
 #include <boresight/io/core_config.h>
+#include <boresight/io/files.h>
 #include <boresight/io/overlay_apply.h>
 #include <boresight/io/overlay_yaml.h>
 #include <boresight/io/time_format.h>
@@ -136,6 +137,15 @@ bool pushOrbitFiles(const std::vector<std::string>& files, const io::ReadOptions
       *error = st.error();
       return false;
     }
+    // Every record read is used or rejected with its reason, orbit files too.
+    std::printf("%s: %zu read, %zu used", f.c_str(), st.records() + st.rejectedCount(), st.records());
+    if (st.rejectedCount() > st.implausibleCount())
+      std::printf(", %zu %s", st.rejectedCount() - st.implausibleCount(), stream::rejectName(stream::Reject::kMalformed));
+    if (st.implausibleCount())
+      std::printf(", %zu %s", st.implausibleCount(), stream::rejectName(stream::Reject::kImplausible));
+    std::printf("\n");
+    for (std::size_t k = 0; k < st.rejected().size() && k < 5; ++k)
+      std::printf("    rejected %s\n", st.rejected()[k].str().c_str());
   }
   return true;
 }
@@ -146,12 +156,7 @@ int fail(const std::string& msg) {
 }
 
 bool writeText(const std::string& path, const std::string& text, std::string* error) {
-  std::ofstream f(path);
-  if (!(f << text)) {
-    *error = "cannot write " + path;
-    return false;
-  }
-  return true;
+  return io::writeFileAtomic(path, text, error);  // whole or not at all
 }
 
 /// Wall time since `t0` in seconds, and the peak resident memory so far in MB (the stage summary).
@@ -295,15 +300,15 @@ int runCalibrate(int argc, char** argv) {
   app.add_flag("--time-offset", time_offset);
   app.add_flag("--no-whiten", no_whiten);
   app.add_flag("--moments", moments);
-  app.add_option("--huber", huber)->check(CLI::Range(0.0, 1e6));
-  app.add_option("--decimation", decimation)->check(CLI::Range(0.1, 3600.0));
+  app.add_option("--huber", huber)->check(finiteRange(0.0, 1e6));
+  app.add_option("--decimation", decimation)->check(finiteRange(0.1, 3600.0));
   app.add_option("--max-observations", max_obs);
-  app.add_option("--crn-bandwidth", crn_bw)->check(CLI::Range(1e-4, 10.0));
-  app.add_option("--crn-length", crn_len)->check(CLI::Range(1.0, 1e4));
-  app.add_option("--unobservable-sigma", unobs)->check(CLI::Range(1e-6, 1e9));
-  app.add_option("--plan-excitation", plan_exc)->check(CLI::Range(1e-12, 1.0));
-  app.add_option("--plan-sigma", plan_sigma)->check(CLI::Range(1e-6, 1e9));
-  app.add_option("--lookahead", lookahead_s)->check(CLI::Range(0.0, 3600.0));
+  app.add_option("--crn-bandwidth", crn_bw)->check(finiteRange(1e-4, 10.0));
+  app.add_option("--crn-length", crn_len)->check(finiteRange(1.0, 1e4));
+  app.add_option("--unobservable-sigma", unobs)->check(finiteRange(1e-6, 1e9));
+  app.add_option("--plan-excitation", plan_exc)->check(finiteRange(1e-12, 1.0));
+  app.add_option("--plan-sigma", plan_sigma)->check(finiteRange(1e-6, 1e9));
+  app.add_option("--lookahead", lookahead_s)->check(finiteRange(0.0, 3600.0));
   app.add_flag("--strict", strict);
   app.add_option("inputs", files)->required();
   if (int st = parseCommandLine(app, argc, argv, "calibrate", kUsage); st >= 0) return st;
@@ -322,6 +327,15 @@ int runCalibrate(int argc, char** argv) {
   Stages stages;
   io::PlatformConfig pc;
   std::string err;
+  {  // outputs never destroy inputs, checked before anything is read or written
+    std::vector<std::string> ins = files;
+    ins.push_back(config);
+    if (!overlay.empty()) ins.push_back(overlay);
+    if (!io::checkOutputs(ins, {{"--json", json_path}, {"--yaml", yaml_path}, {"--report", report_dir, true},
+                                {"--write-model", write_model}},
+                          &err))
+      return fail(err);
+  }
   if (!io::loadPlatformConfig(config, pc, &err)) return fail(err);
   io::OverlayUse ovu;
   if (!overlay.empty() && !io::applyOverlay(overlay, "boresight calibrate", {}, pc, ovu, &err)) return fail(err);
@@ -382,7 +396,7 @@ int runCalibrate(int argc, char** argv) {
 
   // Bad input the replay survived but a calibration must not.
   const auto& tot = engine.counters();
-  if (tot.used_heads == 0) return fail("no star sensor samples in the inputs");
+  if (tot.used_heads == 0) return fail("no star sensor samples in the inputs (every record rejected: see above)");
   if (tot.used_accel == 0) return fail("no accelerometer samples in the inputs (every record rejected?)");
   const auto unknown = h.by_status[std::size_t(core::Status::kUnknownHead)];
   if (unknown > 0) {
@@ -484,8 +498,12 @@ int runCalibrate(int argc, char** argv) {
     if (!report::writeCalibrationReport(report_dir, span, r, j, &err)) return fail(err);
     std::string text = "\n## Model in use\n\n```\n";
     for (const auto& l : io::modelInUseLines(pc, ovu)) text += l + "\n";
-    std::ofstream md(report_dir + "/report.md", std::ios::app);
-    if (!(md << text << "```\n")) return fail("cannot write " + report_dir + "/report.md");
+    // Appended by rewriting the whole file (whole or not at all, as every output).
+    const std::string md_path = report_dir + "/report.md";
+    std::string md;
+    if (!io::readBounded(md_path, io::kMaxTableBytes, "report", md, &err) ||
+        !io::writeFileAtomic(md_path, md + text + "```\n", &err))
+      return fail(err);
   }
   if (!write_model.empty()) {
     const model::Overlay m = resultOverlay(r, pc, with_thermal ? &thermal_fit : nullptr, span.t_first, span.t_last, config);

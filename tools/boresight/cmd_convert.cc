@@ -1,5 +1,6 @@
 // boresight convert: Level-1 SCA1A / ACC1A files -> LCM log ordered by sensor time, and back.
 #include <boresight/io/any_product.h>
+#include <boresight/io/files.h>
 #include <boresight/io/lcm_log.h>
 #include <boresight/io/level1.h>
 #include <boresight/io/time_format.h>
@@ -107,12 +108,23 @@ int toLcm(const Options& a) {
         std::fprintf(stderr, "boresight convert: %s: %s\n", f.c_str(), pf.ok ? "no QSA1B record" : pf.error.c_str());
         return 1;
       }
+      if (pf.rejected_count > 0) {  // as process and calibrate: no mountings from a damaged file
+        std::fprintf(stderr, "boresight convert: %s (%zu of the QSA1B lines rejected): the mountings cannot be taken from it\n",
+                     pf.rejected.empty() ? f.c_str() : pf.rejected.front().str().c_str(), pf.rejected_count);
+        return 1;
+      }
       for (const auto& r : pf.records) qsa.push_back(r);
     } else if (kind.product == io::Product::GNV1B || kind.product == io::Product::GNI1B) {
       auto pf = io::readProduct<io::GnvRecord>(f, opt);
       if (!pf.ok) {
         std::fprintf(stderr, "boresight convert: %s: %s\n", f.c_str(), pf.error.c_str());
         return 1;
+      }
+      if (pf.rejected_count > 0) {  // every record read is written or rejected with its reason
+        std::printf("%s: %zu records read, %zu written, %zu rejected\n", f.c_str(), pf.records.size() + pf.rejected_count,
+                    pf.records.size(), pf.rejected_count);
+        for (std::size_t k = 0; k < pf.rejected.size() && k < 5; ++k)
+          std::printf("    rejected %s\n", pf.rejected[k].str().c_str());
       }
       for (const auto& r : pf.records) orbit.push_back(r);
     } else {
@@ -229,7 +241,14 @@ int toLcm(const Options& a) {
   }
   flush();
   if (!writeOrbitUpTo(std::numeric_limits<TimeUs>::max())) write_failed = true;
-  w.close();
+  if (!write_failed && n_heads + n_accel == 0) {
+    std::fprintf(stderr, "boresight convert: no star head or accelerometer sample in the inputs: nothing to write\n");
+    return 1;  // the writer removes its temporary file
+  }
+  if (!write_failed && !w.close(&err)) {
+    std::fprintf(stderr, "boresight convert: %s\n", err.c_str());
+    return 1;
+  }
   if (write_failed) {
     std::fprintf(stderr, "boresight convert: %s: write failed\n", out.c_str());
     return 1;
@@ -285,11 +304,20 @@ int toLevel1(const Options& a) {
   sim::ChunkedProductWriter<io::FlaggedRecord> acc;
   std::string sca_path, acc_path;
   std::uint64_t invalid_heads = 0, invalid_accel = 0;
-  bool dir_made = false;
+  io::OutputDir out_dir;  // created when missing, removed again when the conversion fails
+  if (!out_dir.open(dir, &err)) {
+    std::fprintf(stderr, "boresight convert: %s\n", err.c_str());
+    return 1;
+  }
   auto pathFor = [&](const char* name, TimeUs t) {
-    if (!dir_made) ::mkdir(dir.c_str(), 0777);
-    dir_made = true;
     return dir + "/" + name + "_" + io::formatDate(t) + "_" + sat + "_04.txt";
+  };
+  // The file names are known once the first tag is: none of them may be the log being read.
+  auto refuseOverInput = [&](const std::string& path) {
+    std::string e;
+    if (io::checkOutputs({log}, {{"--to-level1", path}}, &e)) return false;
+    std::fprintf(stderr, "boresight convert: %s\n", e.c_str());
+    return true;
   };
   io::HeadSample h;
   io::AccelSample m;
@@ -300,6 +328,7 @@ int toLevel1(const Options& a) {
       invalid_heads += (h.flags & 1) ? 0 : 1;
       if (sca_path.empty()) {
         sca_path = pathFor("SCA1A", h.utime);
+        if (refuseOverInput(sca_path)) return 1;
         if (!sca.open(sca_path, io::makeProduct<io::Sca1aRecord>(io::Product::SCA1A, sat), &err)) {
           std::fprintf(stderr, "boresight convert: %s\n", err.c_str());
           return 1;
@@ -310,6 +339,7 @@ int toLevel1(const Options& a) {
       invalid_accel += (m.flags & 1) ? 0 : 1;
       if (acc_path.empty()) {
         acc_path = pathFor("ACC1A", m.utime);
+        if (refuseOverInput(acc_path)) return 1;
         if (!acc.open(acc_path, io::makeProduct<io::FlaggedRecord>(io::Product::ACC1A, sat), &err)) {
           std::fprintf(stderr, "boresight convert: %s\n", err.c_str());
           return 1;
@@ -340,6 +370,7 @@ int toLevel1(const Options& a) {
   };
   finish(sca, sca_path);
   finish(acc, acc_path);
+  if (status == 0) out_dir.keep();
   if (reader.unknownChannel() || reader.decodeFailures())
     std::printf("%s: %llu events on other channels and %llu undecodable messages skipped\n", log.c_str(),
                 static_cast<unsigned long long>(reader.unknownChannel()),
@@ -363,11 +394,16 @@ int runConvert(int argc, char** argv) {
   out->excludes(back);
   app.add_option("--satellite", o.satellite);
   app.add_flag("--strict", o.strict);
-  app.add_option("--lookahead", o.lookahead_s)->check(CLI::Range(0.0, 3600.0));
+  app.add_option("--lookahead", o.lookahead_s)->check(finiteRange(0.0, 3600.0));
   if (int st = parseCommandLine(app, argc, argv, "convert", kUsage); st >= 0) return st;
   if (o.out.empty() == o.to_level1.empty()) {
     std::fprintf(stderr, "boresight convert: give exactly one of --out and --to-level1\n\n%s", kUsage);
     return 2;
+  }
+  std::string err;
+  if (!io::checkOutputs(o.inputs, {{"--out", o.out}, {"--to-level1", o.to_level1, true}}, &err)) {
+    std::fprintf(stderr, "boresight convert: %s\n", err.c_str());
+    return 1;
   }
   return !o.out.empty() ? toLcm(o) : toLevel1(o);
 }

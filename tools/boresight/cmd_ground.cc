@@ -1,5 +1,6 @@
 // boresight ground: method C - the star sensor to IMU mounting from a ground measurement file.
 #include "cli_common.h"
+#include <boresight/io/files.h>
 #include "commands.h"
 
 #include <boresight/ground/measurement.h>
@@ -11,6 +12,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <string>
 
 namespace boresight::cli {
@@ -93,11 +95,9 @@ bool writeReport(const std::string& dir, const std::string& input, const ground:
     *err = dir + ": " + ec.message();
     return false;
   }
-  std::FILE* f = std::fopen((dir + "/report.txt").c_str(), "w");
-  if (!f) {
-    *err = dir + "/report.txt: cannot write";
-    return false;
-  }
+  io::AtomicFile report_file;  // whole or not at all
+  if (!report_file.open(dir + "/report.txt", err)) return false;
+  std::FILE* f = report_file.file();
   const double as = kArcsecPerRad;
   std::fprintf(f, "boresight ground report for %s\n\n", std::filesystem::path(input).filename().c_str());
   std::fprintf(f, "Conventions: C_s_t maps IMU axes to sensor axes; error angles r in sensor axes with\n"
@@ -144,9 +144,9 @@ bool writeReport(const std::string& dir, const std::string& input, const ground:
                  p.accel_sample_sigma_mps2.x() / ug, p.accel_sample_sigma_mps2.y() / ug,
                  p.accel_sample_sigma_mps2.z() / ug);
   std::fprintf(f, "  all targets: rms %.4f px (per axis)\n", r.residual_rms_px);
-  std::fclose(f);
+  if (!report_file.commit(err)) return false;
   // per-target residuals
-  std::ofstream csv(dir + "/targets.csv");
+  std::ostringstream csv;
   csv << "position,line,u_px,v_px,du_px,dv_px\n";
   for (std::size_t k = 0; k < m.positions.size(); ++k) {
     const Mat3 C_s_m = r.C_s_t * r.positions[k].C_t_m;
@@ -159,11 +159,7 @@ bool writeReport(const std::string& dir, const std::string& input, const ground:
       csv << buf;
     }
   }
-  if (!csv) {
-    *err = dir + "/targets.csv: write failed";
-    return false;
-  }
-  return true;
+  return io::writeFileAtomic(dir + "/targets.csv", csv.str(), err);
 }
 
 }  // namespace
@@ -181,7 +177,7 @@ int runGround(int argc, char** argv) {
   app.add_option("--report", report, "folder for report.txt and targets.csv (created)")->type_name("DIR");
   app.add_option("--assumed-bias-ug", assumed_bias_ug,
                  "accelerometer bias assumed where the set-up cannot separate it from the tilt (default 100)")
-      ->check(CLI::PositiveNumber)
+      ->check(finiteRange(1e-300, 1e300))
       ->type_name("UG");
   app.add_flag("--quiet", quiet, "no summary on stdout");
   app.footer(kFooter);
@@ -192,6 +188,10 @@ int runGround(int argc, char** argv) {
   }
   ground::Measurement m;
   std::string err;
+  if (!io::checkOutputs({input}, {{"--json", json_out}, {"--report", report, true}}, &err)) {
+    std::fprintf(stderr, "boresight ground: %s\n", err.c_str());
+    return 1;
+  }
   if (!ground::loadMeasurement(input, m, &err)) {
     std::fprintf(stderr, "boresight ground: %s\n", err.c_str());
     return 1;
@@ -201,13 +201,12 @@ int runGround(int argc, char** argv) {
   opt.source_name = input;
   ground::GroundResult r;
   if (!ground::solveGround(m, opt, r, &err)) {
+    if (err.rfind(input, 0) != 0) err = input + ": " + err;  // the place of a solver refusal: the file
     std::fprintf(stderr, "boresight ground: %s\n", err.c_str());
     return 1;
   }
-  std::ofstream js(json_out);
-  js << toJson(r).dump(2) << "\n";
-  if (!js) {
-    std::fprintf(stderr, "boresight ground: %s: write failed\n", json_out.c_str());
+  if (!io::writeFileAtomic(json_out, toJson(r).dump(2) + "\n", &err)) {
+    std::fprintf(stderr, "boresight ground: %s\n", err.c_str());
     return 1;
   }
   if (!report.empty() && !writeReport(report, input, m, r, &err)) {

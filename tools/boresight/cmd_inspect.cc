@@ -1,5 +1,6 @@
 // boresight inspect PATH... [--json FILE]: what is in a set of Level-1 files.
 #include <boresight/io/any_product.h>
+#include <boresight/io/files.h>
 #include <boresight/io/level1.h>
 #include <boresight/io/product_stream.h>
 #include <boresight/io/sca_geometry.h>
@@ -48,11 +49,21 @@ bool isDir(const std::string& p) {
   return ::stat(p.c_str(), &st) == 0 && S_ISDIR(st.st_mode);
 }
 
-void listFiles(const std::string& path, std::vector<std::string>& out) {
+/// The files under `path` (itself when it is no directory), sorted; each directory once (a link that
+/// points back up is not followed again) and at most 64 levels deep.
+void listFiles(const std::string& path, std::vector<std::string>& out,
+               std::vector<std::pair<dev_t, ino_t>>* seen_dirs = nullptr, int depth = 0) {
   if (!isDir(path)) {
     out.push_back(path);
     return;
   }
+  std::vector<std::pair<dev_t, ino_t>> own;
+  if (!seen_dirs) seen_dirs = &own;
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0 || depth > 64) return;
+  const std::pair<dev_t, ino_t> id{st.st_dev, st.st_ino};
+  if (std::find(seen_dirs->begin(), seen_dirs->end(), id) != seen_dirs->end()) return;
+  seen_dirs->push_back(id);
   DIR* d = ::opendir(path.c_str());
   if (!d) {
     out.push_back(path);
@@ -66,7 +77,7 @@ void listFiles(const std::string& path, std::vector<std::string>& out) {
   }
   ::closedir(d);
   std::sort(names.begin(), names.end());
-  for (const auto& n : names) listFiles(path + "/" + n, out);
+  for (const auto& n : names) listFiles(path + "/" + n, out, seen_dirs, depth + 1);
 }
 
 double seconds(TimeUs t) { return toSeconds(t); }
@@ -116,7 +127,7 @@ int runInspect(int argc, char** argv) {
   app.add_option("--json", json_path);
   app.add_option("--boresight", boresight_s);
   app.add_option("--max-rejected", max_rej);
-  app.add_option("--threads", threads)->check(CLI::Range(0, 64));
+  app.add_option("--threads", threads)->check(finiteRange(0, 64));
   if (int st = parseCommandLine(app, argc, argv, "inspect", kUsage); st >= 0) return st;
   if (max_rej < 0) {
     std::fprintf(stderr, "boresight inspect: --max-rejected wants a count >= 0, not %d\n", max_rej);
@@ -135,9 +146,20 @@ int runInspect(int argc, char** argv) {
   }
   io::ReadOptions ropt;
   ropt.threads = threads;
+  {
+    std::string err;
+    if (!io::checkOutputs(paths, {{"--json", json_path}}, &err)) {
+      std::fprintf(stderr, "boresight inspect: %s\n", err.c_str());
+      return 1;
+    }
+  }
 
   std::vector<std::string> files;
-  for (const auto& p : paths) listFiles(p, files);
+  for (const auto& p : paths) {
+    const std::size_t before = files.size();
+    listFiles(p, files);
+    if (files.size() == before) std::printf("%s: a folder without files: nothing to inspect there (ignored)\n", p.c_str());
+  }
 
   nlohmann::json js_files = nlohmann::json::array();
   int status = 0;
@@ -256,15 +278,12 @@ int runInspect(int argc, char** argv) {
 
   if (!json_path.empty()) {
     nlohmann::json js = {{"files", std::move(js_files)}, {"pairs", std::move(js_pairs)}};
-    std::FILE* out = std::fopen(json_path.c_str(), "w");
-    if (!out) {
-      std::fprintf(stderr, "boresight inspect: cannot write %s\n", json_path.c_str());
+    const std::string text = js.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n";
+    std::string err;
+    if (!io::writeFileAtomic(json_path, text, &err)) {
+      std::fprintf(stderr, "boresight inspect: %s\n", err.c_str());
       return 1;
     }
-    const std::string text = js.dump(2, ' ', false, nlohmann::json::error_handler_t::replace);
-    std::fputs(text.c_str(), out);
-    std::fputc('\n', out);
-    std::fclose(out);
     std::printf("\nJSON written to %s\n", json_path.c_str());
   }
   return status;

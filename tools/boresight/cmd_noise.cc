@@ -1,6 +1,7 @@
 // boresight noise --config FILE INPUT... --out DIR: the noise of every head axis and accelerometer axis
 // from the data, a model fitted per axis. Option parsing and printing only: noise::runNoise() replays
 // the inputs and fits, noise::writeNoise* write the results.
+#include <boresight/io/files.h>
 #include <boresight/noise/run.h>
 
 #include "cli_common.h"
@@ -83,8 +84,8 @@ int runNoise(int argc, char** argv) {
   app.add_option("--overlay", req.overlay);
   app.add_option("--models", models);
   app.add_option("--max-samples", req.options.max_samples)->check(CLI::Range(std::size_t{64}, std::size_t{1} << 24));
-  app.add_option("--acc-block", req.options.acc_block_s)->check(CLI::Range(2.0, 86400.0));
-  app.add_option("--lookahead", req.lookahead_s)->check(CLI::Range(0.0, 3600.0));
+  app.add_option("--acc-block", req.options.acc_block_s)->check(finiteRange(2.0, 86400.0));
+  app.add_option("--lookahead", req.lookahead_s)->check(finiteRange(0.0, 3600.0));
   std::string likelihood = "auto";
   app.add_option("--likelihood", likelihood)->check(CLI::IsMember({"exact", "whittle", "auto"}));
   app.add_flag("--strict", req.strict);
@@ -112,14 +113,32 @@ int runNoise(int argc, char** argv) {
   req.options.likelihood = likelihood == "exact" ? model::NoiseLikelihood::Exact
                            : likelihood == "whittle" ? model::NoiseLikelihood::Whittle
                                                      : model::NoiseLikelihood::Auto;
-  std::error_code ec;
-  std::filesystem::create_directories(out_dir, ec);
-  if (ec) return fail(out_dir + ": cannot create the output directory: " + ec.message());
+  const std::string json = out_dir + "/noise.json", yaml = out_dir + "/noise.yaml", ovl = out_dir + "/overlay.yaml";
+  // Outputs never destroy inputs; the output folder first, removed again when the run fails (OutputDir).
+  std::string err;
+  {
+    std::vector<std::string> ins = req.inputs;
+    ins.push_back(req.config);
+    if (!req.overlay.empty()) ins.push_back(req.overlay);
+    if (!io::checkOutputs(ins, {{"--out", out_dir, true}}, &err)) return fail(err);
+    // ... nor the files it writes into the folder (an input kept there under one of their names).
+    if (!io::checkOutputs(ins, {{"--out", json}, {"--out", yaml}, {"--out", ovl}, {"--out", out_dir + "/report.md"}}, &err))
+      return fail(err);
+  }
+  io::OutputDir dir;
+  if (!dir.open(out_dir, &err)) return fail(err);
   if (!quiet) req.progress = [](const std::string& s) { std::fprintf(stderr, "%s\n", s.c_str()); };
 
   noise::NoiseOutput out;
-  std::string err;
   if (!noise::runNoise(req, out, &err)) return fail(err);
+  // Every record used or rejected, per source; under --quiet still the sources with rejected records
+  // (quiet, but never silent about bad input).
+  for (std::size_t i = 0; i < out.sources.size(); ++i) {
+    const bool rejected_line = out.sources[i].rfind("    rejected ", 0) == 0;
+    const std::size_t used = out.sources[i].find(" used");
+    const bool has_rejects = used != std::string::npos && used + 5 < out.sources[i].size();  // ", K REASON" follows
+    if (!quiet || rejected_line || has_rejects) std::printf("%s\n", out.sources[i].c_str());
+  }
   if (!quiet) {
     for (const auto& s : out.inputs) std::printf("%s\n", s.c_str());
     const auto& c = out.counters;
@@ -148,11 +167,11 @@ int runNoise(int argc, char** argv) {
     }
     std::printf("%-22s %s [%s]\n", model::noiseStructureName(f.structure), p.c_str(), a.unit.c_str());
   }
-  const std::string json = out_dir + "/noise.json", yaml = out_dir + "/noise.yaml", ovl = out_dir + "/overlay.yaml";
   if (!noise::writeNoiseJson(json, out, &err) || !noise::writeNoiseYaml(yaml, out, &err) ||
       !noise::writeNoiseOverlay(ovl, out, std::string("boresight noise ") + BORESIGHT_VERSION, &err) ||
       !noise::writeNoiseReport(out_dir, out, &err))
     return fail(err);
+  dir.keep();
   std::printf("-> %s/report.md, %s, %s, %s\n", out_dir.c_str(), json.c_str(), yaml.c_str(), ovl.c_str());
   return 0;
 }

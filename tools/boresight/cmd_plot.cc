@@ -1,5 +1,6 @@
 // boresight plot FILE.csv --y COL[,COL...] [--x COL] --out PLOT.svg: line plots of CSV columns as SVG.
 #include <boresight/report/svg_plot.h>
+#include <boresight/io/files.h>
 
 #include "cli_common.h"
 #include "commands.h"
@@ -45,14 +46,16 @@ int runPlot(int argc, char** argv) {
   app.add_option("--xlabel", xlabel, "x axis label (default: the x column)");
   app.add_flag("--relative-x", relative_x, "subtract the first x value (times in seconds since the start)");
   app.add_option("--smooth", smooth, "plot the centred running mean over N rows (gaps: the mean of what is there)")
-      ->check(CLI::PositiveNumber)
+      ->check(finiteRange(1, 1e9))
       ->type_name("N");
   if (const int rc = parseCommandLine(app, argc, argv); rc >= 0) return rc;
-  std::ifstream in(path);
-  if (!in) {
-    std::fprintf(stderr, "boresight plot: %s: cannot open\n", path.c_str());
+  std::string err, text;
+  if (!io::checkOutputs({path}, {{"--out", outpath}}, &err) ||
+      !io::readBounded(path, io::kMaxTableBytes, "CSV table", text, &err)) {
+    std::fprintf(stderr, "boresight plot: %s\n", err.c_str());
     return 1;
   }
+  std::istringstream in(text);
   std::string line;
   if (!std::getline(in, line)) {
     std::fprintf(stderr, "boresight plot: %s:1: empty file\n", path.c_str());
@@ -131,7 +134,6 @@ int runPlot(int argc, char** argv) {
     se.y = y[k];
     plot.series.push_back(std::move(se));
   }
-  std::string err;
   if (!report::writeSvgPlot(outpath, plot, &err)) {
     std::fprintf(stderr, "boresight plot: %s\n", err.c_str());
     return 1;

@@ -2,6 +2,7 @@
 #include <boresight/audit/reference.h>
 #include <boresight/core/pipeline.h>
 #include <boresight/io/core_config.h>
+#include <boresight/io/files.h>
 #include <boresight/io/lcm_log.h>
 #include <boresight/io/overlay_apply.h>
 #include <boresight/io/level1.h>
@@ -123,13 +124,21 @@ int runProcess(int argc, char** argv) {
   app.add_option("--clk1b", clk1b);
   app.add_option("--stars-out", stars_out);
   app.add_option("--overlay", overlay);
-  app.add_option("--lookahead", lookahead_s)->check(CLI::Range(0.0, 3600.0));
+  app.add_option("--lookahead", lookahead_s)->check(finiteRange(0.0, 3600.0));
   app.add_flag("--strict", strict);
   app.add_option("inputs", files)->required();
   if (int st = parseCommandLine(app, argc, argv, "process", kUsage); st >= 0) return st;
 
   io::PlatformConfig pc;
   std::string err;
+  {  // outputs never destroy inputs, checked before anything is read or written
+    std::vector<std::string> ins = files;
+    for (const auto* p : {&config, &compare, &clk1b, &overlay}) ins.push_back(*p);
+    if (!io::checkOutputs(ins, {{"--out", out}, {"--stars-out", stars_out}}, &err)) {
+      std::fprintf(stderr, "boresight process: %s\n", err.c_str());
+      return 1;
+    }
+  }
   if (!io::loadPlatformConfig(config, pc, &err)) {
     std::fprintf(stderr, "boresight process: %s\n", err.c_str());
     return 1;
@@ -175,6 +184,9 @@ int runProcess(int argc, char** argv) {
   }
   stream::CsvRowSink csv(out);
   stream::CsvStarSink stars_csv(stars_out);
+  // Both appear at their paths only when the run has succeeded (commit below).
+  csv.deferCommit();
+  stars_csv.deferCommit();
   AttitudeTrack track;
   engine.addSink(&csv);
   if (!stars_out.empty()) engine.addSink(&stars_csv);
@@ -188,7 +200,8 @@ int runProcess(int argc, char** argv) {
   printSourceCounters(engine);
   const auto& tot = engine.counters();
   if (tot.used_heads == 0) {
-    std::fprintf(stderr, "boresight process: no star sensor samples in the inputs\n");
+    std::fprintf(stderr, "boresight process: no star sensor samples in the inputs (every record rejected: see above); %s not written\n",
+                 out.c_str());
     return 1;
   }
   std::printf("\n%s: %zu rows (%zu with CRN rates, %zu with accelerometer values)\n", out.c_str(), csv.rows(),
@@ -211,6 +224,10 @@ int runProcess(int argc, char** argv) {
   }
   printCoreHealth(engine.health());
   for (const auto& w : io::validityWarnings(ovu, engine.firstEpoch(), engine.lastEpoch())) std::printf("warning: %s\n", w.c_str());
+  if (!csv.commit(&err) || (!stars_out.empty() && !stars_csv.commit(&err))) {
+    std::fprintf(stderr, "boresight process: %s\n", err.c_str());
+    return 1;
+  }
 
   if (!compare.empty()) {
     audit::ClockMap clk;

@@ -1,5 +1,6 @@
 // boresight simulate: real-format GRACE-FO Level-1 telemetry with known truth and injected effects.
 #include "cli_common.h"
+#include <boresight/io/files.h>
 #include "commands.h"
 
 #include <boresight/model/effects.h>
@@ -85,7 +86,7 @@ int runSimulate(int argc, char** argv) {
   app.add_option("--scenario", scenario, "scenario YAML (units and frames in its comments)")->type_name("FILE");
   app.add_option("--seed", seed_s, "random seed (unsigned); the same seed gives identical files")->type_name("N");
   app.add_option("--duration", duration, "simulated seconds (default: the scenario's duration_s)")
-      ->check(CLI::Range(1e-6, 366 * 86400.0))
+      ->check(finiteRange(1e-6, 366 * 86400.0))
       ->type_name("S");
   app.add_option("--out", out, "output folder (created)")->type_name("DIR");
   app.add_option("--effect", effects, "add an effect SPEC, repeatable (below)")->take_all()->expected(1)->allow_extra_args(false)->type_name("SPEC");
@@ -117,7 +118,9 @@ int runSimulate(int argc, char** argv) {
     return 1;
   }
   sim::Simulator simulator;
-  if (!makeDirs(out, &err) || !simulator.init(sc, seed, duration, &err)) {
+  io::OutputDir out_dir;  // removed again when the run fails and it is empty
+  if (!io::checkOutputs({scenario}, {{"--out", out, true}}, &err) || !out_dir.open(out, &err) ||
+      !makeDirs(out, &err) || !simulator.init(sc, seed, duration, &err)) {
     std::fprintf(stderr, "boresight simulate: %s\n", err.c_str());
     return 1;
   }
@@ -145,6 +148,7 @@ int runSimulate(int argc, char** argv) {
     std::fprintf(stderr, "boresight simulate: %s\n", err.c_str());
     return 1;
   }
+  out_dir.keep();
   if (!quiet) {
     const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     const auto& st = simulator.stats();

@@ -1,5 +1,6 @@
 // boresight simulate-ground: a simulated method C measurement file with its truth beside it.
 #include "cli_common.h"
+#include <boresight/io/files.h>
 #include "commands.h"
 
 #include <boresight/ground/simulate.h>
@@ -48,28 +49,28 @@ int runSimulateGround(int argc, char** argv) {
   app.add_option("--truth", truth_path, "truth file (default: beside --out, .truth.yaml)")->type_name("FILE");
   app.add_option("--setup", setup, std::string("named set-up: ") + ground::setupNames() + " (default single)")
       ->type_name("NAME");
-  app.add_option("--positions", cfg.positions, "number of positions")->check(CLI::Range(1, 100))->type_name("N");
-  app.add_option("--turn-deg", cfg.turn_deg, "position k turned by k*D about the vertical")->type_name("D");
+  app.add_option("--positions", cfg.positions, "number of positions")->check(finiteRange(1, 100))->type_name("N");
+  app.add_option("--turn-deg", cfg.turn_deg, "position k turned by k*D about the vertical")->type_name("D")->check(finiteNumber());
   app.add_option("--tilt-deg", cfg.tilt_deg, "positions k >= 1 tilted by T about lab x (odd k) / lab y (even k)")
-      ->type_name("T");
-  app.add_option("--prism-faces", cfg.prism_faces, "1 (+x) or 2 (+x, +y)")->check(CLI::Range(1, 2))->type_name("N");
-  app.add_option("--targets", cfg.targets, "targets per position (default 40)")->check(CLI::Range(4, 100000))->type_name("N");
+      ->type_name("T")->check(finiteNumber());
+  app.add_option("--prism-faces", cfg.prism_faces, "1 (+x) or 2 (+x, +y)")->check(finiteRange(1, 2))->type_name("N");
+  app.add_option("--targets", cfg.targets, "targets per position (default 40)")->check(finiteRange(4, 100000))->type_name("N");
   app.add_option("--accel-samples", cfg.accel_samples, "accelerometer samples per position (default 2000)")
-      ->check(CLI::Range(1, 10000000))
+      ->check(finiteRange(1, 10000000))
       ->type_name("N");
-  app.add_option("--centroid-sigma-px", cfg.centroid_sigma_px, "centroid noise (default 0.05 px)")->type_name("PX");
+  app.add_option("--centroid-sigma-px", cfg.centroid_sigma_px, "centroid noise (default 0.05 px)")->type_name("PX")->check(finiteNumber());
   app.add_option("--theodolite-sigma-arcsec", cfg.theodolite_sigma_arcsec, "theodolite direction noise (default 1.5)")
-      ->type_name("AS");
-  app.add_option("--accel-noise-ug", cfg.accel_noise_ug, "accelerometer noise per sample (default 50 ug)")->type_name("UG");
+      ->type_name("AS")->check(finiteNumber());
+  app.add_option("--accel-noise-ug", cfg.accel_noise_ug, "accelerometer noise per sample (default 50 ug)")->type_name("UG")->check(finiteNumber());
   app.add_option("--bias-sigma-ug", cfg.accel_bias_sigma_ug, "bias drawn per axis with this sigma (default 100 ug)")
-      ->type_name("UG");
+      ->type_name("UG")->check(finiteNumber());
   app.add_option("--bias-ug", bias_s, "fixed bias instead, IMU axes, e.g. 100,-100,100")->type_name("X,Y,Z");
   app.add_option("--mounting-sigma-arcsec", cfg.mounting_sigma_arcsec, "true mounting error per axis (default 300)")
-      ->type_name("AS");
-  app.add_option("--radial-k1", cfg.true_k1, "true radial distortion k1 (default 0)")->type_name("K1");
+      ->type_name("AS")->check(finiteNumber());
+  app.add_option("--radial-k1", cfg.true_k1, "true radial distortion k1 (default 0)")->type_name("K1")->check(finiteNumber());
   double k1_prior = 0;
   app.add_option("--k1-prior-sigma", k1_prior, "write radial_k1_sigma: the refinement estimates k1 under this prior")
-      ->type_name("S");
+      ->type_name("S")->check(finiteNumber());
   app.footer(kFooter);
   if (const int rc = parseCommandLine(app, argc, argv); rc >= 0) return rc;
   if (!app.count("--seed") || out.empty()) {
@@ -116,7 +117,8 @@ int runSimulateGround(int argc, char** argv) {
   ground::Measurement m;
   ground::SimTruth truth;
   std::string err;
-  if (!ground::simulateGround(cfg, m, truth, &err) || !ground::writeMeasurement(out, m, &err) ||
+  if (!io::checkOutputs({}, {{"--out", out}, {"--truth", truth_path}}, &err) ||
+      !ground::simulateGround(cfg, m, truth, &err) || !ground::writeMeasurement(out, m, &err) ||
       !ground::writeTruth(truth_path, cfg, truth, &err)) {
     std::fprintf(stderr, "boresight simulate-ground: %s\n", err.c_str());
     return 1;

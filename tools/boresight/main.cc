@@ -3,6 +3,8 @@
 
 #include <cstdio>
 #include <cstring>
+#include <exception>
+#include <new>
 
 namespace {
 
@@ -62,7 +64,19 @@ int main(int argc, char** argv) {
     return 0;
   }
   for (const auto& c : kCommands)
-    if (!std::strcmp(argv[1], c.name)) return c.run(argc - 1, argv + 1);
+    if (!std::strcmp(argv[1], c.name)) {
+      // Bad input never aborts: whatever a command lets escape ends it with exit status 1 and the reason.
+      try {
+        return c.run(argc - 1, argv + 1);
+      } catch (const std::bad_alloc&) {
+        std::fprintf(stderr, "boresight %s: out of memory (an input far larger than expected?)\n", c.name);
+      } catch (const std::exception& e) {
+        std::fprintf(stderr, "boresight %s: %s\n", c.name, e.what());
+      } catch (...) {
+        std::fprintf(stderr, "boresight %s: failed with an unknown exception\n", c.name);
+      }
+      return 1;
+    }
   std::fprintf(stderr, "boresight: unknown command '%s'\n\n", argv[1]);
   usage(stderr);
   return 2;

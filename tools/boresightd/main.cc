@@ -1,7 +1,9 @@
 // boresightd: the LCM node. Live on an LCM URL, or replaying a log as fast as possible (lockstep,
 // deterministic). Parses options, runs boresight::node::Node, prints and writes the summary.
+#include <boresight/io/files.h>
 #include <boresight/io/lcm_log.h>
 #include <boresight/node/node.h>
+#include <boresight/stream/replay.h>
 
 #include <CLI/CLI.hpp>
 #include <lcm/lcm-cpp.hpp>
@@ -16,7 +18,9 @@
 #include <csignal>
 #include <cmath>
 #include <cstdio>
+#include <exception>
 #include <fstream>
+#include <new>
 #include <memory>
 #include <string>
 #include <utility>
@@ -93,9 +97,27 @@ struct RawHandler {
   }
 };
 
+int run(int argc, char** argv);
+
 }  // namespace
 
+// Bad input never aborts: whatever escapes ends the program with exit status 1 and the reason.
 int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::bad_alloc&) {
+    std::fprintf(stderr, "boresightd: out of memory\n");
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "boresightd: %s\n", e.what());
+  } catch (...) {
+    std::fprintf(stderr, "boresightd: failed with an unknown exception\n");
+  }
+  return 1;
+}
+
+namespace {
+
+int run(int argc, char** argv) {
   CLI::App app{kHelp, "boresightd"};
   std::string config, replay, record, summary_json, csv;
   app.add_option("--config", config, "node configuration (YAML; names the platform file)")->required();
@@ -108,14 +130,38 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     return app.exit(e) == 0 ? 0 : 2;
   }
+  // From the start: a stop request during the set-up or the replay ends the run with its summary.
+  std::signal(SIGINT, onSignal);
+  std::signal(SIGTERM, onSignal);
   using namespace boresight;
   node::NodeConfig cfg;
   std::string err;
+  // Outputs never destroy inputs (--record over --replay would truncate the log being read).
+  if (!io::checkOutputs({config, replay}, {{"--record", record}, {"--csv", csv}, {"--summary-json", summary_json}},
+                        &err)) {
+    std::fprintf(stderr, "boresightd: %s\n", err.c_str());
+    return 1;
+  }
   if (!node::loadNodeConfig(config, cfg, &err)) {
     std::fprintf(stderr, "boresightd: %s\n", err.c_str());
     return 1;
   }
+  // ... nor the files the configuration names.
+  if (!io::checkOutputs({config, replay, cfg.platform_file, cfg.overlay},
+                        {{"--record", record}, {"--csv", csv}, {"--summary-json", summary_json}}, &err)) {
+    std::fprintf(stderr, "boresightd: %s\n", err.c_str());
+    return 1;
+  }
   for (const auto& l : cfg.model_in_use) std::printf("%s\n", l.c_str());
+  if (!replay.empty()) {  // the data's rates against the platform's, before anything is computed
+    stream::ReplayInputs in;
+    in.lcm.push_back(replay);
+    if (!io::checkInputFile(replay, io::kMaxLcmLogBytes, "LCM log", &err) ||
+        !stream::checkSampleRates(in, {}, cfg.pipeline, &err)) {
+      std::fprintf(stderr, "boresightd: %s\n", err.c_str());
+      return 1;
+    }
+  }
   LcmOutput out;
   std::unique_ptr<lcm::LCM> lcm;
   if (replay.empty()) {
@@ -134,12 +180,13 @@ int main(int argc, char** argv) {
     }
   }
   out.channels = &cfg.channels;
+  io::AtomicFile csv_file;  // the CSV, the record and the summary appear whole, or not at all
   if (!csv.empty()) {
-    out.csv = std::fopen(csv.c_str(), "w");
-    if (!out.csv) {
-      std::fprintf(stderr, "boresightd: %s: cannot write the CSV\n", csv.c_str());
+    if (!csv_file.open(csv, &err)) {
+      std::fprintf(stderr, "boresightd: %s\n", err.c_str());
       return 1;
     }
+    out.csv = csv_file.file();
     std::fprintf(out.csv, "time_s,mounting_version,heads_used,iba_12_dev_arcsec,iba_13_dev_arcsec,iba_23_dev_arcsec,"
                           "corr_1_arcsec,corr_2_arcsec,corr_3_arcsec\n");
   }
@@ -148,11 +195,9 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "boresightd: %s\n", err.c_str());
     return 1;
   }
-  std::signal(SIGINT, onSignal);
-  std::signal(SIGTERM, onSignal);
   const auto t0 = std::chrono::steady_clock::now();
   if (!replay.empty()) {
-    if (!node::replayLog(n, replay, &err)) {
+    if (!node::replayLog(n, replay, &err, &g_stop)) {
       std::fprintf(stderr, "boresightd: %s\n", err.c_str());
       return 1;
     }
@@ -166,9 +211,32 @@ int main(int argc, char** argv) {
     n.finish();
   }
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  if (out.rec) out.rec->close();
-  if (out.csv && std::fclose(out.csv) != 0) {
-    std::fprintf(stderr, "boresightd: %s: cannot write the CSV\n", csv.c_str());
+  const bool interrupted = !replay.empty() && g_stop.load();
+  const node::Counters& c0 = n.counters();
+  if (!replay.empty() && !interrupted && c0.received == 0) {
+    std::fprintf(stderr, "boresightd: %s: an empty LCM log (no event): nothing to replay\n", replay.c_str());
+    return 1;
+  }
+  if (!replay.empty() && !interrupted && c0.head_epochs == 0) {
+    std::string why;
+    for (int r = 0; r < node::kReasonCount; ++r)
+      if (c0.rejected[std::size_t(r)])
+        why += (why.empty() ? "" : ", ") + std::to_string(c0.rejected[std::size_t(r)]) + " " +
+               node::reasonName(node::Reason(r));
+    std::fprintf(stderr,
+                 "boresightd: %s: no %s message the node could use (%llu messages received%s%s): nothing was "
+                 "computed\n",
+                 replay.c_str(), cfg.channels.star_head.c_str(), static_cast<unsigned long long>(c0.received),
+                 why.empty() ? "" : ", rejected: ", why.c_str());
+    return 1;
+  }
+  if (out.rec && !out.rec->close(&err)) {
+    std::fprintf(stderr, "boresightd: %s\n", err.c_str());
+    return 1;
+  }
+  out.csv = nullptr;
+  if (!csv.empty() && !csv_file.commit(&err)) {
+    std::fprintf(stderr, "boresightd: %s\n", err.c_str());
     return 1;
   }
 
@@ -191,6 +259,7 @@ int main(int argc, char** argv) {
     lc["span_s"] = static_cast<double>(k.span_end_utime - k.span_start_utime) * 1e-6;
     lc["epochs"] = k.epochs;
     lc["status"] = k.status == 0 ? "ok" : "refused";
+    if (k.status != 0) lc["reason"] = n.lastCalibrationReason();
     lc["applied"] = k.applied != 0;
     nlohmann::ordered_json heads = nlohmann::ordered_json::array();
     for (int h = 0; h < k.n_heads && h < 4; ++h) {
@@ -250,13 +319,17 @@ int main(int argc, char** argv) {
     if (c.rejected[std::size_t(r)])
       std::printf("  rejected %s: %llu\n", node::reasonName(node::Reason(r)),
                   static_cast<unsigned long long>(c.rejected[std::size_t(r)]));
-  if (!summary_json.empty()) {
-    std::ofstream f(summary_json);
-    f << j.dump(2) << "\n";
-    if (!f) {
-      std::fprintf(stderr, "boresightd: %s: cannot write the summary\n", summary_json.c_str());
-      return 1;
-    }
+  if (interrupted) j["interrupted"] = true;
+  if (!summary_json.empty() && !io::writeFileAtomic(summary_json, j.dump(2) + "\n", &err)) {
+    std::fprintf(stderr, "boresightd: %s\n", err.c_str());
+    return 1;
+  }
+  if (out.have_cal && out.last_cal.status != 0)
+    std::printf("  last calibration refused: %s\n", n.lastCalibrationReason().c_str());
+  if (interrupted) {
+    std::fprintf(stderr, "boresightd: %s: replay stopped by a signal; the outputs and the summary cover what was read\n",
+                 replay.c_str());
+    return 1;
   }
   if (!balanced) {
     std::fprintf(stderr, "boresightd: internal error: received != used + rejected\n");
@@ -264,3 +337,5 @@ int main(int argc, char** argv) {
   }
   return 0;
 }
+
+}  // namespace

@@ -91,9 +91,15 @@ struct CalibrationSpan {
   /// The head noise is white at the head rate, so this is sum_n g2[n] g2[n + k D fs] / sum_n g2[n]^2
   /// of the CRN second-derivative kernel. The solver whitens each head's epochs with it.
   std::vector<double> noise_correlation;
+  /// The white part added to noise_correlation so that its spectrum stays at or above 0.05 (fine
+  /// decimations, where the kernel's correlation matrix is nearly singular); 0 at 8 s and coarser.
+  double noise_white_fraction = 0.0;
   /// CRN outputs of the heads that never became observations (no accelerometer value at their tag:
   /// accelerometer gap, start or end of its data), and head epochs the validator rejected.
   std::uint64_t dropped_no_acc = 0, head_epochs_rejected = 0;
+  /// Head outputs that came after the observation of their tag had gone to the span (a head whose
+  /// CRN waited one sample longer across a missing sample): left out, one head-observation each.
+  std::uint64_t late_head_outputs = 0;
   double crn_half_length_s = 0.0;                   ///< CRN data needed each side of an epoch, s
 };
 

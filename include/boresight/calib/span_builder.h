@@ -92,6 +92,8 @@ class SpanBuilder {
   Mat3 cov_acc_ = Mat3::Zero();
   std::deque<Observation> pending_;               ///< head outputs waiting for the accelerometer
   bool have_head_ = false;
+  bool have_emitted_ = false;   ///< an observation went to the span
+  TimeUs last_emitted_t_ = 0;   ///< its tag (later head outputs of that tag are left out)
   CalibrationSpan span_{};
 };
 

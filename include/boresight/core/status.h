@@ -27,6 +27,7 @@ enum class Status : std::uint8_t {
   kNotReady,           ///< evaluateAt(): the filter has not seen enough samples after the tag yet
   kUnavailable,        ///< evaluateAt(): the tag is not covered by the filter's history
   kCapacityExceeded,   ///< more inputs than the compile-time capacity; the excess is dropped
+  kImplausible,        ///< a finite value outside its physical plausibility gate (core/plausibility.h)
   kCount_
 };
 constexpr int kStatusCount = static_cast<int>(Status::kCount_);

@@ -84,7 +84,9 @@ class LcmLogWriter {
   ~LcmLogWriter();
   LcmLogWriter(const LcmLogWriter&) = delete;
   LcmLogWriter& operator=(const LcmLogWriter&) = delete;
-  /// Opens (truncates) the log. False with *error on failure.
+  /// Opens the log: written under a temporary name next to `path` until close() renames it over `path`
+  /// (a writer destroyed without close() removes it: a failed run leaves the previous log or none). A
+  /// device or a pipe is written in place. False with *error on failure.
   bool open(const std::string& path, std::string* error);
   bool write(const HeadSample& s);
   bool write(const AccelSample& s);
@@ -93,7 +95,10 @@ class LcmLogWriter {
   bool write(const OrbitSample& o);
   /// Any encoded message on any channel, with the event time taken from `utime` (the node's outputs).
   bool writeRaw(const std::string& channel, TimeUs utime, const void* data, int size);
-  void close();
+  /// Completes the log at its path. False with *error when it cannot be renamed there.
+  bool close(std::string* error = nullptr);
+  /// Removes the log being written (the previous file at the path stays).
+  void abandon();
   std::uint64_t written() const { return written_; }
 
  private:

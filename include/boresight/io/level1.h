@@ -12,10 +12,12 @@
 #pragma once
 
 #include <boresight/core/conventions.h>
+#include <boresight/core/plausibility.h>
 #include <boresight/io/text_scan.h>
 
 #include <array>
 #include <cstdint>
+#include <limits>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -64,6 +66,10 @@ struct Header {
   /// Fixed header "FILE FORMAT 0=BINARY 1=ASCII : 0": packed big-endian records follow END OF HEADER.
   /// formatProduct() writes binary when this is set (for record types with a binary layout).
   bool binary = false;
+  /// YAML start_time_epoch_secs / stop_time_epoch_secs (GRACE-FO RL04): the span the file covers, s
+  /// past the epoch; NaN when absent. The readers' time gate uses it (RecordGate).
+  double coverage_start_s = std::numeric_limits<double>::quiet_NaN();
+  double coverage_stop_s = std::numeric_limits<double>::quiet_NaN();
 };
 
 /// Parse a header at the start of `text`. On success returns true and sets *data_offset to the
@@ -88,7 +94,31 @@ struct ReadOptions {
   /// Threads for the record lines of an ASCII file: 0 = automatic (all hardware threads for bodies
   /// of 8 MB and more, else one), n = exactly n. OnError::Stop always parses on one thread.
   int threads = 0;
+  /// Tolerance on | |q| - 1 | of measured attitude quaternions (SCA1A, SCA1B): the platform's
+  /// heads.unit_norm_tolerance when the records go to the core, so that a record is refused once, here.
+  double quat_norm_tolerance = plausibility::kQuatNormTolerance;
+  /// false: no plausibility gate (RecordGate), only the format is checked. For tests of the codecs'
+  /// exactness with values no instrument gives; every program reads with the gates.
+  bool plausibility_gates = true;
 };
+
+/// The physical plausibility gates a reader applies to every well-formed record
+/// (boresight/core/plausibility.h): quaternion norms, accelerations, orbit radius and speed, and the
+/// time tag against the time the file covers (the header's coverage, else the date in the file name,
+/// with a margin; no time gate for static products and files named without a date). A record outside
+/// a gate is rejected like a malformed line ("file:line: implausible ...") and counted apart.
+struct RecordGate {
+  bool enabled = true;
+  double quat_norm_tolerance = plausibility::kQuatNormTolerance;
+  bool has_window = false;
+  TimeUs t_min = 0, t_max = 0;  ///< accepted tags (inclusive)
+  std::string window;           ///< where the window comes from, for messages
+};
+RecordGate makeRecordGate(const Header& h, std::string_view file, const ReadOptions& opt);
+
+/// The start of the day named in a Level-1 file name ("SCA1A_2023-06-01_C_04.txt" -> 2023-06-01
+/// 00:00:00 GPS, as a tag); false when the name has no date.
+bool dateFromFileName(std::string_view path, TimeUs& day_start);
 
 template <typename Rec>
 struct ProductFile {
@@ -97,6 +127,7 @@ struct ProductFile {
   std::vector<Rec> records;
   std::vector<ParseIssue> rejected;  ///< the first ReadOptions::max_issues_kept rejected lines
   std::size_t rejected_count = 0;    ///< all rejected lines
+  std::size_t implausible_count = 0; ///< of those: well-formed records outside a plausibility gate
   bool ok = true;                    ///< false: the file could not be read (see error)
   std::string error;                 ///< "file:line: reason" when !ok
 };
@@ -359,6 +390,11 @@ bool parseRecord(FieldScanner& s, Rec& r, Product product);
 template <typename Rec>
 bool recordAccepts(Product product);
 
+/// The plausibility gates (RecordGate) on a well-formed record: false with *reason
+/// ("implausible: ...") when it is outside one.
+template <typename Rec>
+bool checkRecord(const Rec& r, Product product, const RecordGate& gate, std::string* reason);
+
 /// Declares the specialisations a record type provides (defined in src/io by BORESIGHT_IO_INSTANTIATE).
 #define BORESIGHT_IO_DECLARE(Rec)                                                                          \
   template <>                                                                                              \
@@ -374,7 +410,9 @@ bool recordAccepts(Product product);
   template <>                                                                                              \
   bool parseRecord<Rec>(FieldScanner & s, Rec & r, Product product);                                       \
   template <>                                                                                              \
-  bool recordAccepts<Rec>(Product product);
+  bool recordAccepts<Rec>(Product product);                                                                \
+  template <>                                                                                              \
+  bool checkRecord<Rec>(const Rec& r, Product product, const RecordGate& gate, std::string* reason);
 
 BORESIGHT_IO_DECLARE(Sca1aRecord)
 BORESIGHT_IO_DECLARE(FlaggedRecord)
@@ -398,7 +436,19 @@ constexpr std::size_t kAcc1b = 78;  ///< int32 gps_time, char id, 9 x float64, u
 constexpr std::size_t kGnv1b = 103; ///< int32 gps_time, char id, char coord_ref, 12 x float64, uint8 qualflg
 }  // namespace binary_layout
 
-/// Whole file into memory. Returns false and sets *error ("file: reason") on failure.
-bool readFileToString(const std::string& path, std::string& out, std::string* error);
+/// Whole file into memory, at most max_bytes (64 MiB at most for a device or a pipe: a larger or
+/// endless input is refused with the limit).
+/// Returns false and sets *error ("file: reason") on failure.
+bool readFileToString(const std::string& path, std::string& out, std::string* error,
+                      std::uint64_t max_bytes = std::uint64_t{1} << 30);
+
+/// Size limits of Level-1 files, bytes: a month of the product at its full rate (static products
+/// 1 MiB; a file whose product is not known from its name 64 MiB). Readers refuse a larger file, or
+/// an endless input, with the limit. Record lines are at most kMaxLineBytes and headers at most
+/// kMaxHeaderBytes (real ones: under 1 kB and about 10 kB). Nothing is allocated from the count a
+/// header promises.
+std::uint64_t maxFileBytes(Product p);
+constexpr std::size_t kMaxLineBytes = 64u << 10;
+constexpr std::size_t kMaxHeaderBytes = 1u << 20;
 
 }  // namespace boresight::io

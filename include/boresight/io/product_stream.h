@@ -38,13 +38,17 @@ class LineStream {
   const Header& header() const { return header_; }
   const std::string& file() const { return file_; }
   /// The next non-blank line (without its newline) and its 1-based line number. The view is valid
-  /// until the next call. False at the end of the file or on a read error (see error()).
+  /// until the next call. False at the end of the file or on a read error (see error()); also (with
+  /// error() set) for a line longer than kMaxLineBytes or a file longer than maxFileBytes() of its
+  /// product: an endless or binary input is refused with the limit it crossed.
   bool next(std::string_view& line, std::size_t& line_no);
   /// Empty unless reading failed.
   const std::string& error() const { return error_; }
   /// Byte offset of the first data byte, and the file size (for progress and block splitting).
   std::uint64_t dataOffset() const { return data_offset_; }
   std::uint64_t fileSize() const { return file_size_; }
+  /// Most bytes read from the file before it is refused (maxFileBytes of its product).
+  std::uint64_t maxBytes() const { return max_bytes_; }
 
  private:
   bool refill();
@@ -55,7 +59,7 @@ class LineStream {
   std::size_t begin_ = 0, end_ = 0;  ///< unread bytes in buf_
   bool eof_ = false;
   std::size_t line_no_ = 0;
-  std::uint64_t data_offset_ = 0, file_size_ = 0;
+  std::uint64_t data_offset_ = 0, file_size_ = 0, read_ = 0, max_bytes_ = 0;
   std::string error_;
 };
 
@@ -69,7 +73,7 @@ class ProductStream {
     ok_ = true;
     error_.clear();
     rejected_.clear();
-    rejected_count_ = records_ = 0;
+    rejected_count_ = implausible_count_ = records_ = 0;
     if (!lines_.open(path, opt, error, chunk_bytes)) return fail(error ? *error : std::string());
     if (lines_.header().binary) {
       std::string e = path + ":" + std::to_string(lines_.header().line_count) + ": binary " +
@@ -82,6 +86,7 @@ class ProductStream {
       if (error) *error = e;
       return fail(e);
     }
+    gate_ = makeRecordGate(lines_.header(), path, opt);
     return true;
   }
   /// The next well-formed record. Malformed lines are counted (and the first
@@ -92,13 +97,17 @@ class ProductStream {
     while (ok_ && lines_.next(line, no)) {
       FieldScanner s(line);
       r = Rec{};
-      if (parseRecord<Rec>(s, r, lines_.header().product)) {
+      const bool formed = parseRecord<Rec>(s, r, lines_.header().product);
+      if (formed && checkRecord<Rec>(r, lines_.header().product, gate_, &gate_reason_)) {
         ++records_;
+        line_no_ = no;
         return true;
       }
       ++rejected_count_;
-      if (rejected_.size() < opt_.max_issues_kept) rejected_.push_back(ParseIssue{lines_.file(), no, s.reason()});
-      if (opt_.on_error == OnError::Stop) return fail(lines_.file() + ":" + std::to_string(no) + ": " + s.reason());
+      if (formed) ++implausible_count_;
+      const std::string& why = formed ? gate_reason_ : s.reason();
+      if (rejected_.size() < opt_.max_issues_kept) rejected_.push_back(ParseIssue{lines_.file(), no, why});
+      if (opt_.on_error == OnError::Stop) return fail(lines_.file() + ":" + std::to_string(no) + ": " + why);
     }
     if (ok_ && !lines_.error().empty()) fail(lines_.error());
     return false;
@@ -109,6 +118,10 @@ class ProductStream {
   const std::string& error() const { return error_; }
   std::size_t records() const { return records_; }
   std::size_t rejectedCount() const { return rejected_count_; }
+  /// Of the rejected lines: well-formed records outside a plausibility gate (RecordGate).
+  std::size_t implausibleCount() const { return implausible_count_; }
+  /// The line number of the record next() returned last.
+  std::size_t lineNumber() const { return line_no_; }
   const std::vector<ParseIssue>& rejected() const { return rejected_; }
 
  private:
@@ -122,7 +135,9 @@ class ProductStream {
   bool ok_ = true;
   std::string error_;
   std::vector<ParseIssue> rejected_;
-  std::size_t rejected_count_ = 0, records_ = 0;
+  std::size_t rejected_count_ = 0, implausible_count_ = 0, records_ = 0, line_no_ = 0;
+  RecordGate gate_;
+  std::string gate_reason_;
 };
 
 }  // namespace boresight::io

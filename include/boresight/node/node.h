@@ -26,16 +26,20 @@
 //
 // Accounting: every message received on a node channel is either used or rejected with one reason,
 // so received == used + sum(rejected). `lost` counts what the senders' sequence numbers say was sent
-// and never arrived (per head, accelerometer, star-vector and orbit channel). Time: a message whose tag
-// is more than max_time_jump_s away from the node's data time is rejected (time_jump), unless
-// time_jump_confirm messages in a row on its channel agree on the new time (a real jump: resync), so
-// one corrupt tag never turns every later message into "time backwards". The first message sets the
-// data time.
+// and never arrived (per head, accelerometer, star-vector and orbit channel); a jump of a sequence
+// number beyond the reorder window (64) counts as loss only when the next number continues from it, so
+// one corrupt number is one bad message, not a million lost. Time: a message whose tag is more than
+// max_time_jump_s away from the node's data time is rejected (time_jump), unless time_jump_confirm
+// messages in a row on its channel agree on the new time (a real jump: resync), so one corrupt tag
+// never turns every later message into "time backwards"; a confirmed step back re-synchronises the
+// assembler and the core (their filters restart, the counts go on). The first message sets the data
+// time (a wrong one is out-voted the same way, and the assembler drops it as a time outlier).
 #pragma once
 
 #include <boresight/core/pipeline.h>
 
 #include <array>
+#include <atomic>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -56,7 +60,11 @@ enum class Reason : std::uint8_t {
   kFlood,            ///< more messages per second of data time than the channel's limit
   kNoMountings,      ///< input before the nominal mountings are known (mountings: log)
   kOtherChannel,     ///< a channel the node does not read (replay: e.g. earlier outputs)
-  kAssembler,        ///< the assembler refused it (should stay 0: the handlers check first)
+  kAssembler,        ///< the assembler refused it as late or one head too many (should stay 0: the
+                     ///< handlers check first; a tag the assembler finds far from its neighbours counts
+                     ///< as kTimeJump, the same head twice at a tag as kDuplicate)
+  kImplausible,      ///< a finite value outside its physical gate (core/plausibility.h): an angular
+                     ///< acceleration beyond 0.1 rad/s^2
   kCount
 };
 constexpr int kReasonCount = static_cast<int>(Reason::kCount);
@@ -86,6 +94,7 @@ struct CalibrationConfig {
 
 struct NodeConfig {
   std::string file;                 ///< the configuration file (for messages)
+  std::string platform_file;        ///< the platform file it names (an input: outputs never go over it)
   core::PipelineConfig pipeline;    ///< platform (heads, CRNs, C_B_A), the head sigmas from its noise section
   bool mountings_from_log = false;  ///< wait for a NOMINAL_MOUNTINGS message before stepping
   /// `overlay: FILE` (io/overlay_apply.h): its noise replaces the platform file's, its mountings the
@@ -172,6 +181,8 @@ class Node {
   std::uint64_t mountingVersion() const;
   /// The rotation applied to the published attitude (q_B_Bpub: identity until a frame change).
   Quat frameRotation() const;
+  /// Why the last refused calibration was refused (the solver's message; empty when none was).
+  std::string lastCalibrationReason() const;
 
  private:
   struct Impl;
@@ -179,7 +190,9 @@ class Node {
 };
 
 /// Replay: every event of the log into the node's handlers, as fast as possible (io::LcmLogReader,
-/// not LCM's file provider), then finish(). False with *error when the log cannot be read.
-bool replayLog(Node& node, const std::string& path, std::string* error);
+/// not LCM's file provider), then finish(). False with *error when the log cannot be read. `stop`
+/// (a signal handler's flag) ends the replay early, still with finish() (the summary counts what was
+/// read).
+bool replayLog(Node& node, const std::string& path, std::string* error, const std::atomic<bool>* stop = nullptr);
 
 }  // namespace boresight::node

@@ -74,6 +74,8 @@ struct NoiseRequest {
 struct NoiseOutput {
   std::vector<AxisResult> axes;
   std::vector<std::string> inputs, notes;
+  /// Per source "NAME: N read, M used, K REASON..." and its first rejected lines ("    rejected ...").
+  std::vector<std::string> sources;
   stream::Counters counters;
   core::Health health;
   std::uint64_t epochs = 0, full_epochs = 0, acc_samples = 0;

@@ -9,6 +9,7 @@
 #pragma once
 
 #include <boresight/io/level1.h>
+#include <boresight/io/files.h>
 #include <boresight/sim/simulator.h>
 #include <boresight/sim/truth.h>
 
@@ -43,6 +44,7 @@ class ChunkedProductWriter {
   io::ProductFile<Rec> chunk_;
   std::size_t chunk_size_ = 16384, header_lines_ = 0;
   std::size_t count_offset_ = std::string::npos, count_width_ = 0;
+  io::AtomicFile file_;
   std::FILE* body_ = nullptr;
   std::uint64_t count_ = 0;
   bool io_error_ = false;

@@ -9,6 +9,18 @@
 // look-ahead (or the buffer is full), so samples up to `lookahead_us` out of order are sorted back
 // in. A sample older than what was already handed out (a head sample at or before it) is rejected as
 // Reject::kLate and counted; nothing is dropped silently. Memory: at most `max_buffered` samples.
+//
+// Robust time base: a sample more than W = max(look-ahead, 1 s, 3 typical steps of its source) ahead
+// of its source's time (the latest tag it confirmed) is held until the source's next sample: when that
+// one lies at least as close to it as to the source's time, the jump is real (a gap in the data) and
+// both go on; otherwise the held sample was one corrupt tag and is rejected as Reject::kTimeOutlier. So
+// a tag 1e8 s ahead costs that sample, not the look-ahead of every later one (it would have become the
+// source's time: every later sample handed out alone, heads of one tag split and late). A source's
+// first sample waits for the second (near it: confirmed; far: a third decides, in line with both
+// confirms both, else the nearer one is kept). An unconfirmed jump at a source's end is an outlier
+// too (one sample). A sample more than max(look-ahead, 1 s) behind its own source's time is late
+// (Reject::kLate) even before anything after it was handed out. The same head twice at one tag (a
+// file given twice, a repeated record) is rejected as Reject::kDuplicate.
 #pragma once
 
 #include <boresight/core/heads.h>
@@ -44,6 +56,11 @@ class EpochAssembler {
   /// samples are not grouped into epochs, so no kTooManyHeads. Use one of next() and nextSample().
   Out nextSample(Sample& s);
 
+  /// A re-synchronisation (the node after a confirmed clock step back): what is buffered is handed out
+  /// by the next calls as if every source had finished, then the assembler forgets its time (held
+  /// samples become time outliers) and starts again with the next sample. No allocation.
+  void restart() { restart_ = true; }
+
   /// Counters of all sources together, and of each (index = order added).
   const Counters& counters() const { return total_; }
   const Counters& counters(std::size_t source) const { return src_[source].c; }
@@ -63,9 +80,19 @@ class EpochAssembler {
   struct SourceState {
     Source* s = nullptr;
     bool done = false;
+    bool have_frontier = false;  ///< a confirmed tag exists
     TimeUs frontier = std::numeric_limits<TimeUs>::min();
     Counters c;
+    TimeUs step = 0;  ///< the source's typical step between distinct tags (0: not known yet)
+    Sample held[2];  ///< samples waiting for confirmation (oldest first)
+    int n_held = 0;
   };
+  /// A sample read from source i: held, confirmed or queued (see the robust time base above).
+  void admit(std::size_t i, const Sample& s);
+  /// Into the buffer (or rejected as late); moves the source's frontier.
+  void enqueue(std::size_t i, const Sample& s);
+  /// End of source i: held samples go (a lone first sample) or are outliers.
+  void settle(std::size_t i);
   static bool later(const Item& a, const Item& b);
   /// Reads one sample from source i into the buffer. False: pending or error (out says which).
   bool pull(std::size_t i, Out& out);
@@ -84,6 +111,7 @@ class EpochAssembler {
   Sample::Kind last_kind_ = Sample::Kind::kHead;
   int error_source_ = -1;
   std::size_t max_seen_ = 0;
+  bool restart_ = false;
 };
 
 }  // namespace boresight::stream

@@ -42,6 +42,13 @@ bool classifyInputs(const std::vector<std::string>& files, ReplayInputs& in, std
 /// where one is needed, a head without a QSA1B record).
 bool prepareConfig(const ReplayInputs& in, const io::ReadOptions& opt, io::PlatformConfig& pc, std::string* error);
 
+/// The heads' and the accelerometer's sampling intervals (median over the first few thousand samples
+/// of the inputs) against the platform's crn_attitude.fs_hz and crn_acc.fs_hz
+/// (plausibility::rateMatches): a mismatch is an error that gives both rates and the consequence.
+/// prepareConfig() calls it; the node's replay too.
+bool checkSampleRates(const ReplayInputs& in, const io::ReadOptions& opt, const core::PipelineConfig& cfg,
+                      std::string* error);
+
 /// One source per input file, in the order SCA1A files, ACC1A files, SCV1A files, LCM logs (that order also
 /// breaks ties at equal time tags). `prefetch`: each is read on its own worker thread.
 bool addSources(const ReplayInputs& in, const io::ReadOptions& opt, bool prefetch, Engine& engine, std::string* error);

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <boresight/core/pipeline.h>
+#include <boresight/io/files.h>
 
 #include <cstdio>
 #include <string>
@@ -55,9 +56,14 @@ class CsvRowSink final : public RowSink {
  public:
   explicit CsvRowSink(std::string path) : path_(std::move(path)) {}
   ~CsvRowSink() override;
+  /// The file is written under a temporary name (io::AtomicFile) and appears at its path whole: at
+  /// end(), or, after deferCommit(), only at commit() (a run that fails after the replay leaves the
+  /// previous file or nothing).
+  void deferCommit() { defer_ = true; }
   bool begin(const core::PipelineConfig& cfg) override;
   bool write(const core::PipelineRow& row) override;
   bool end() override;
+  bool commit(std::string* error);
   std::string error() const override { return error_; }
   std::size_t rows() const { return rows_; }
   std::size_t withRates() const { return with_rates_; }
@@ -66,7 +72,9 @@ class CsvRowSink final : public RowSink {
  private:
   bool flushBuffer();
   std::string path_, error_;
+  io::AtomicFile file_;
   std::FILE* f_ = nullptr;
+  bool defer_ = false;
   std::string buf_;
   int n_heads_ = 0;
   std::size_t rows_ = 0, with_rates_ = 0, with_acc_ = 0;
@@ -81,16 +89,21 @@ class CsvStarSink final : public RowSink {
  public:
   explicit CsvStarSink(std::string path) : path_(std::move(path)) {}
   ~CsvStarSink() override;
+  /// As CsvRowSink: whole at end(), or at commit() after deferCommit().
+  void deferCommit() { defer_ = true; }
   bool begin(const core::PipelineConfig& cfg) override;
   bool write(const core::PipelineRow&) override { return true; }
   bool writeStars(const StarSolution& s) override;
   bool end() override;
+  bool commit(std::string* error);
   std::string error() const override { return error_; }
   std::size_t rows() const { return rows_; }
 
  private:
   std::string path_, error_;
+  io::AtomicFile file_;
   std::FILE* f_ = nullptr;
+  bool defer_ = false;
   std::size_t rows_ = 0;
 };
 

@@ -46,6 +46,11 @@ enum class Reject : std::uint8_t {
   kTooManyHeads,    ///< more head samples in one epoch than core::kMaxHeads
   kTooManyStars,    ///< more star vectors in one epoch than core::kMaxStarInputs
   kNoStarConsumer,  ///< a star vector, and the caller of the assembler takes no star epochs
+  kImplausible,     ///< outside a physical plausibility gate (core/plausibility.h): the reader's
+                    ///< "implausible" lines, a message's impossible value
+  kTimeOutlier,     ///< a tag far from its neighbours in its source (beyond the look-ahead from the
+                    ///< source's time, not confirmed by the next sample): one corrupt tag
+  kDuplicate,       ///< the same head at the same tag again (a file given twice, a repeated record)
   kCount
 };
 constexpr int kRejectCount = static_cast<int>(Reject::kCount);

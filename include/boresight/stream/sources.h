@@ -30,8 +30,8 @@ FileKind identifyFile(const std::string& path);
 bool hasLcmMagic(const std::string& path);
 
 /// What every Level-1 file source shares: the streaming reader, the file name, the reader's rejected
-/// lines reported first (as Reject::kMalformed, in the order the stream counted them) and the
-/// issues kept for reports. A derived source turns the held record `rec_` into a sample.
+/// lines reported first (as Reject::kMalformed, or Reject::kImplausible for a well-formed record
+/// outside a plausibility gate) and the issues kept for reports. A derived source turns the held record `rec_` into a sample.
 template <typename Rec>
 class Level1FileSource : public Source {
  public:
@@ -57,8 +57,13 @@ class Level1FileSource : public Source {
       held_ = s_.next(rec_);
       done_ = !held_;
     }
-    if (reported_rejects_ < s_.rejectedCount()) {
-      ++reported_rejects_;
+    if (reported_implausible_ < s_.implausibleCount()) {
+      ++reported_implausible_;
+      why = Reject::kImplausible;
+      return Next::kRejected;
+    }
+    if (reported_malformed_ < s_.rejectedCount() - s_.implausibleCount()) {
+      ++reported_malformed_;
       why = Reject::kMalformed;
       return Next::kRejected;
     }
@@ -73,7 +78,7 @@ class Level1FileSource : public Source {
  private:
   io::ProductStream<Rec> s_;
   std::string name_;
-  std::size_t reported_rejects_ = 0;
+  std::size_t reported_malformed_ = 0, reported_implausible_ = 0;
   bool held_ = false, done_ = false;
 };
 
@@ -105,13 +110,17 @@ class ScvSource final : public Level1FileSource<io::ScvRecord> {
 /// An LCM log (channels STAR_HEAD, ACCEL and STAR_VECTORS, see io/lcm_log.h) read message by message
 /// straight into samples; a STAR_VECTORS message gives one sample per star. Head messages without the
 /// valid bit, accelerometer messages without valid angular acceleration and star messages without
-/// the valid bit or stars are rejected with their reason; other channels and undecodable messages too.
+/// the valid bit or stars are rejected with their reason; other channels and undecodable messages too;
+/// values outside the plausibility gates (a head quaternion, an angular acceleration, a star
+/// direction) as Reject::kImplausible.
 class LcmLogSource final : public Source {
  public:
   LcmLogSource();
   ~LcmLogSource() override;
   /// Refuses a file that does not start with the LCM sync word (with the file and the reason).
   bool open(const std::string& path, std::string* error);
+  /// The head quaternion gate's tolerance (core/plausibility.h; the platform's unit_norm_tolerance).
+  void setQuatTolerance(double tol) { quat_tol_ = tol; }
   Next next(Sample& out, Reject& why) override;
   const std::string& name() const override { return name_; }
   std::string error() const override { return error_; }
@@ -119,6 +128,7 @@ class LcmLogSource final : public Source {
  private:
   std::unique_ptr<io::LcmLogReader> r_;
   std::string name_, error_;
+  double quat_tol_ = plausibility::kQuatNormTolerance;
   int star_n_ = 0, star_next_ = 0;  ///< stars of the current STAR_VECTORS message, next to hand out
 };
 
