@@ -277,7 +277,7 @@ void fuzzSource(std::uint8_t mode, Product p) {
   Src src;
   std::string err;
   if (!src.open(path, opt, &err)) return;  // refusals are checked on the stream above
-  std::size_t samples = 0, malformed = 0, no_angular = 0, other = 0;
+  std::size_t samples = 0, malformed = 0, implausible = 0, no_angular = 0, other = 0;
   boresight::stream::Sample x;
   boresight::stream::Reject why = boresight::stream::Reject::kMalformed;
   boresight::stream::Source::Next n;
@@ -287,18 +287,21 @@ void fuzzSource(std::uint8_t mode, Product p) {
       ++samples;
     } else if (why == boresight::stream::Reject::kMalformed) {
       ++malformed;
+    } else if (why == boresight::stream::Reject::kImplausible) {  // the reader's gates (core/plausibility.h)
+      ++implausible;
     } else if (why == boresight::stream::Reject::kNoAngular) {
       ++no_angular;
     } else {
       ++other;
     }
-    if (samples + malformed + no_angular + other > whole.records.size() + whole.rejected_count + 1)
+    if (samples + malformed + implausible + no_angular + other > whole.records.size() + whole.rejected_count + 1)
       fail("source reports more lines than the file has");
   }
   if (n == boresight::stream::Source::Next::kPending) fail("a file source is pending");
   if ((n == boresight::stream::Source::Next::kError) == whole.ok) fail("source and whole-file reader disagree on success");
-  if (other) fail("a Level-1 source rejected with a reason other than malformed / no angular acceleration");
-  if (malformed != whole.rejected_count) fail("source counts different malformed lines");
+  if (other) fail("a Level-1 source rejected with a reason other than malformed / implausible / no angular acceleration");
+  // the whole-file reader counts a line outside a plausibility gate among its rejected lines too
+  if (malformed + implausible != whole.rejected_count) fail("source counts different rejected lines");
   if (!whole.ok) return;
   if (samples + no_angular != whole.records.size()) fail("source reports a different number of records");
   if (p == Product::SCA1A && no_angular) fail("SCA1A records rejected as without angular acceleration");
@@ -413,7 +416,12 @@ void fuzzLcmLog(std::string_view body, std::uint8_t mode) {
   if (rej(st::Reject::kNoAngular) != acc_invalid) fail("accelerometer messages without angular acceleration miscounted");
   if (rej(st::Reject::kMalformed) != r.decodeFailures()) fail("undecodable events miscounted");
   if (rej(st::Reject::kOtherChannel) != r.unknownChannel()) fail("other-channel events miscounted");
-  if (c.used() + rej(st::Reject::kLate) != heads_valid + acc_valid + star_vectors) fail("valid samples lost");
+  // A sample whose flags say valid is used, or rejected as late, outside a plausibility gate, a time
+  // outlier of its source or the same head again at one tag: nothing else.
+  if (c.used() + rej(st::Reject::kLate) + rej(st::Reject::kImplausible) + rej(st::Reject::kTimeOutlier) +
+          rej(st::Reject::kDuplicate) !=
+      heads_valid + acc_valid + star_vectors)
+    fail("valid samples lost");
 }
 
 /// A valid measurement up to its samples (the ground_yaml reader's prefix for mode kinds 1 and 2).
