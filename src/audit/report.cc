@@ -1,5 +1,6 @@
 // audit.json and report.md with plots: see include/boresight/audit/report.h.
 #include <boresight/audit/report.h>
+#include <boresight/report/text.h>
 #include <boresight/io/files.h>
 #include <boresight/report/svg_plot.h>
 
@@ -116,12 +117,7 @@ std::string slug(const std::string& s) {
   return o.empty() ? "x" : o;
 }
 
-std::string fmt(double v, const char* f = "%.3g") {
-  if (!std::isfinite(v)) return "-";
-  char b[64];
-  std::snprintf(b, sizeof b, f, v);
-  return b;
-}
+using report::fmt;  // include/boresight/report/text.h
 
 bool isIba(const Series& s) { return s.family == "relative" && s.label.rfind("iba", 0) == 0; }
 

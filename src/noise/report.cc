@@ -1,6 +1,7 @@
 // The outputs of `boresight noise`: noise.json, noise.yaml (the platform file's `noise` form) and
 // report.md with a log-log spectrum per axis (include/boresight/noise/run.h).
 #include <boresight/core/conventions.h>
+#include <boresight/report/text.h>
 #include <boresight/io/files.h>
 #include <boresight/io/overlay_yaml.h>
 #include <boresight/noise/run.h>
@@ -74,12 +75,7 @@ bool writeText(const std::string& path, const std::string& text, std::string* er
   return io::writeFileAtomic(path, text, error);  // whole or not at all
 }
 
-std::string fmt(double v, const char* f = "%.3g") {
-  if (!std::isfinite(v)) return "-";
-  char b[64];
-  std::snprintf(b, sizeof b, f, v);
-  return b;
-}
+using report::fmt;  // include/boresight/report/text.h
 
 std::string fileOf(const AxisResult& a) {
   std::string s = a.sensor + "_" + a.axis + (a.series.rfind("block", 0) == 0 ? "_slow" : "");

@@ -2,6 +2,7 @@
 // printing only: audit::runAudit() replays the inputs into the audit's collector and analyses them,
 // audit::writeAuditJson / writeAuditReport write the result.
 #include <boresight/audit/report.h>
+#include <boresight/report/text.h>
 #include <boresight/io/files.h>
 #include <boresight/audit/run.h>
 #include <boresight/stream/source.h>
@@ -69,12 +70,7 @@ int fail(const std::string& msg) {
   return 1;
 }
 
-std::string fmt(double v, const char* f = "%.3g") {
-  if (!std::isfinite(v)) return "-";
-  char b[64];
-  std::snprintf(b, sizeof b, f, v);
-  return b;
-}
+using report::fmt;  // include/boresight/report/text.h
 
 std::string paramsText(const audit::EffectTest& e) {
   std::string o;

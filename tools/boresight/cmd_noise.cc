@@ -2,6 +2,7 @@
 // from the data, a model fitted per axis. Option parsing and printing only: noise::runNoise() replays
 // the inputs and fits, noise::writeNoise* write the results.
 #include <boresight/io/files.h>
+#include <boresight/report/text.h>
 #include <boresight/noise/run.h>
 
 #include "cli_common.h"
@@ -65,12 +66,7 @@ int fail(const std::string& msg) {
   return 1;
 }
 
-std::string fmt(double v, const char* f = "%.3g") {
-  if (!std::isfinite(v)) return "-";
-  char b[64];
-  std::snprintf(b, sizeof b, f, v);
-  return b;
-}
+using report::fmt;  // include/boresight/report/text.h
 
 }  // namespace
 
