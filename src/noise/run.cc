@@ -2,6 +2,7 @@
 #include <boresight/core/rotation.h>
 #include <boresight/io/core_config.h>
 #include <boresight/io/overlay_apply.h>
+#include <boresight/noise/joint_white.h>
 #include <boresight/noise/run.h>
 #include <boresight/stream/engine.h>
 #include <boresight/stream/replay.h>
@@ -12,6 +13,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <thread>
 
 namespace boresight::noise {
@@ -56,55 +58,17 @@ class CappedSeries {
 
 const char* const kHeadAxis[3] = {"cross_x", "cross_y", "about_boresight"};
 
-/// An orthonormal basis of a head frame with the boresight last: (u, v, b). For a +z boresight it is
-/// the head's own x, y, z.
-Mat3 headAxes(const Vec3& boresight) {
-  const Vec3 b = boresight.normalized();
-  Vec3 u = std::abs(b.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY();
-  u = (u - u.dot(b) * b).normalized();
-  const Vec3 v = b.cross(u);
-  Mat3 E;
-  E.col(0) = u;
-  E.col(1) = v;
-  E.col(2) = b;
-  return E;  // columns: the axes in head coordinates
-}
-
 /// Per head axis: the head against the information-weighted fused attitude of the other heads, in the
 /// head's axes, at epochs where every configured head is present (the contamination is then fixed).
 class HeadResiduals final : public stream::InputObserver {
  public:
-  HeadResiduals(const core::HeadSetConfig& hs, std::size_t cap) : n_(hs.n_heads) {
+  HeadResiduals(const core::HeadSetConfig& hs, std::size_t cap) : n_(hs.n_heads), geo_(headSeriesGeometry(hs)) {
     for (int i = 0; i < n_; ++i) {
-      const auto& h = hs.head[static_cast<std::size_t>(i)];
-      ids_[static_cast<std::size_t>(i)] = h.id;
-      q_Si_B_[static_cast<std::size_t>(i)] = h.q_Si_B;
-      const Mat3 E = headAxes(h.boresight_Si);
-      // axes of the residual: head-frame rotation vector components along (u, v, b)
-      E_[static_cast<std::size_t>(i)] = E;
-      const Vec3 s2(h.sigma_cross_rad * h.sigma_cross_rad, h.sigma_cross_rad * h.sigma_cross_rad,
-                    h.sigma_roll_rad * h.sigma_roll_rad);
-      const Mat3 C_B_S = h.q_Si_B.toRotationMatrix().transpose();
-      // information of the head's body-frame attitude error: C_B_S E diag(1/s2) E^T C_S_B
-      W_[static_cast<std::size_t>(i)] = C_B_S * E * s2.cwiseInverse().asDiagonal() * E.transpose() * C_B_S.transpose();
+      ids_[static_cast<std::size_t>(i)] = hs.head[static_cast<std::size_t>(i)].id;
+      q_Si_B_[static_cast<std::size_t>(i)] = hs.head[static_cast<std::size_t>(i)].q_Si_B;
       for (int k = 0; k < 3; ++k) series_[static_cast<std::size_t>(i)][static_cast<std::size_t>(k)] = CappedSeries(cap);
     }
-    // Contamination: residual_i = n_i - E_i^T C_Si_B nu_o with nu_o = (sum_j W_j)^-1 sum_j W_j C_B_Sj E_j n_j
-    // (n_j: head j's noise along its axes), so residual_i[k] = n_i[k] + sum_j M_ij[k][l] n_j[l].
-    for (int i = 0; i < n_; ++i) {
-      Mat3 Wsum = Mat3::Zero();
-      for (int j = 0; j < n_; ++j)
-        if (j != i) Wsum += W_[static_cast<std::size_t>(j)];
-      const Mat3 Winv = Wsum.inverse();
-      const Mat3 C_Si_B = q_Si_B_[static_cast<std::size_t>(i)].toRotationMatrix();
-      for (int j = 0; j < n_; ++j) {
-        if (j == i) continue;
-        const Mat3 C_B_Sj = q_Si_B_[static_cast<std::size_t>(j)].toRotationMatrix().transpose();
-        M_[static_cast<std::size_t>(i)][static_cast<std::size_t>(j)] =
-            -E_[static_cast<std::size_t>(i)].transpose() * C_Si_B * Winv * W_[static_cast<std::size_t>(j)] * C_B_Sj *
-            E_[static_cast<std::size_t>(j)];
-      }
-    }
+    diff_sum_.setZero();
   }
 
   void onHeads(const core::HeadEpoch& e, core::Status) override {
@@ -126,9 +90,11 @@ class HeadResiduals final : public stream::InputObserver {
     if (mask != full) {
       for (auto& h : series_)
         for (auto& a : h) a.skip();
+      have_prev_ = false;
       return;
     }
     ++full_;
+    Eigen::Matrix<double, 3 * core::kMaxHeads, 1> cur = Eigen::Matrix<double, 3 * core::kMaxHeads, 1>::Zero();
     for (int i = 0; i < n_; ++i) {
       // the other heads' body attitudes as rotation vectors about a reference (one of them)
       const int ref = i == 0 ? 1 : 0;
@@ -138,23 +104,42 @@ class HeadResiduals final : public stream::InputObserver {
       for (int j = 0; j < n_; ++j) {
         if (j == i) continue;
         const Vec3 nu = core::quatLog(q_ref.conjugate() * q_B[static_cast<std::size_t>(j)]);
-        acc += W_[static_cast<std::size_t>(j)] * nu;
-        Wsum += W_[static_cast<std::size_t>(j)];
+        acc += geo_.W[static_cast<std::size_t>(j)] * nu;
+        Wsum += geo_.W[static_cast<std::size_t>(j)];
       }
       const Quat q_o = q_ref * core::quatExp(Wsum.inverse() * acc);
       // head i against what the others predict for it, in head i's frame, along its axes
       const Vec3 r = core::quatLog((q_o * q_Si_B_[static_cast<std::size_t>(i)].conjugate()).conjugate() *
                                    (q_B[static_cast<std::size_t>(i)] * q_Si_B_[static_cast<std::size_t>(i)].conjugate()));
-      const Vec3 ra = E_[static_cast<std::size_t>(i)].transpose() * r;
-      for (int k = 0; k < 3; ++k) series_[static_cast<std::size_t>(i)][static_cast<std::size_t>(k)].push(t, ra[k] * kArcsec);
+      const Vec3 ra = geo_.E[static_cast<std::size_t>(i)].transpose() * r * kArcsec;
+      cur.segment<3>(3 * i) = ra;
+      for (int k = 0; k < 3; ++k) series_[static_cast<std::size_t>(i)][static_cast<std::size_t>(k)].push(t, ra[k]);
     }
+    // consecutive full epochs (no epoch missing between them, the shortest interval seen): their
+    // differences hold the white parts of every series (joint_white.h)
+    if (have_prev_) {
+      const TimeUs dt = e.t - prev_t_;
+      if (dt > 0 && (min_dt_ < 0 || dt < min_dt_)) min_dt_ = dt;
+      if (dt > 0 && 2 * dt <= 3 * min_dt_) {
+        const auto d = (cur - prev_).eval();
+        diff_sum_.noalias() += d * d.transpose();
+        ++diffs_;
+      }
+    }
+    prev_ = cur;
+    prev_t_ = e.t;
+    have_prev_ = true;
   }
 
   int heads() const { return n_; }
   int id(int i) const { return ids_[static_cast<std::size_t>(i)]; }
   const CappedSeries& series(int i, int k) const { return series_[static_cast<std::size_t>(i)][static_cast<std::size_t>(k)]; }
   /// d residual_i[k] / d n_j[l]
-  double weight(int i, int k, int j, int l) const { return M_[static_cast<std::size_t>(i)][static_cast<std::size_t>(j)](k, l); }
+  double weight(int i, int k, int j, int l) const { return geo_.G(3 * i + k, 3 * j + l); }
+  const HeadSeriesGeometry& geometry() const { return geo_; }
+  /// The sum of d d^T over the differences of consecutive full epochs (3 H x 3 H, arcsec^2), and their count.
+  Eigen::MatrixXd diffSum() const { return diff_sum_.topLeftCorner(3 * n_, 3 * n_); }
+  std::uint64_t diffs() const { return diffs_; }
   std::uint64_t epochs() const { return epochs_; }
   std::uint64_t fullEpochs() const { return full_; }
 
@@ -162,11 +147,13 @@ class HeadResiduals final : public stream::InputObserver {
   int n_;
   std::array<int, core::kMaxHeads> ids_{};
   std::array<Quat, core::kMaxHeads> q_Si_B_{};
-  std::array<Mat3, core::kMaxHeads> E_{}, W_{};
-  std::array<std::array<Mat3, core::kMaxHeads>, core::kMaxHeads> M_{};
+  HeadSeriesGeometry geo_;
   std::array<std::array<CappedSeries, 3>, core::kMaxHeads> series_{};
-  std::uint64_t epochs_ = 0, full_ = 0;
-  TimeUs t0_ = -1;
+  std::uint64_t epochs_ = 0, full_ = 0, diffs_ = 0;
+  TimeUs t0_ = -1, prev_t_ = 0, min_dt_ = -1;
+  bool have_prev_ = false;
+  Eigen::Matrix<double, 3 * core::kMaxHeads, 1> prev_ = Eigen::Matrix<double, 3 * core::kMaxHeads, 1>::Zero();
+  Eigen::Matrix<double, 3 * core::kMaxHeads, 3 * core::kMaxHeads> diff_sum_;
 };
 
 /// The accelerometer: raw first differences (white level) and block means of star minus accelerometer
@@ -245,11 +232,17 @@ void band(AxisResult& a, const model::NoiseFitOptions& o) {
   a.f_det_hi = a.interval_s > 0 ? 1.0 / (a.interval_s * o.band_hi) : 0;
 }
 
-/// `short_from_differences`: when the series cannot show a coloured part, its white level comes from
-/// the differences of consecutive samples (content slower than one interval, which a whole-variance fit
+/// A head axis's white level from the joint fit of every head axis (joint_white.h).
+struct JointAxis {
+  double level = 0, sigma = 0;
+  bool determined = false, converged = false;
+};
+
+/// `joint`: when the series cannot show a coloured part, its white level is the joint fit's (from the
+/// differences of consecutive samples: content slower than one interval, which a whole-variance fit
 /// would put into the white level, cancels), with the whole-variance fit kept as the second candidate.
 void fitAxis(AxisResult& a, const model::NoiseSeries& s, const NoiseOptions& opt, const model::NoiseModel& fixed,
-             bool short_from_differences = false) {
+             const JointAxis* joint = nullptr) {
   a.samples = s.size();
   a.span_s = s.span();
   a.interval_s = s.medianInterval();
@@ -280,38 +273,37 @@ void fitAxis(AxisResult& a, const model::NoiseSeries& s, const NoiseOptions& opt
     a.f_det_lo = a.selection.chosen().f_det_lo;
     a.f_det_hi = a.selection.chosen().f_det_hi;
   }
-  if (white_only && short_from_differences) {
-    // The differences see the white parts only (the slow content cancels): the series' white variance,
-    // minus the white part the other heads add (their slow part cancels too).
+  if (white_only && joint != nullptr) {
+    // The differences see the white parts only (the slow content cancels); the levels of all head
+    // axes come from them at once (joint_white.h), so what the other heads add is not subtracted
+    // axis by axis.
     const model::NoiseFit d = model::fitWhiteFromDifferences(s);
     if (d.converged && a.fitted()) {
-      const double v = d.model.terms.front().sigma * d.model.terms.front().sigma;
-      const double own = v - fixed.whiteVariance();
-      const double se_v = v * std::sqrt(2.0 / static_cast<double>(d.n));
       model::NoiseFit f = d;
       model::NoiseParam& p = f.params.front();
-      if (own > 0) {
-        p.value = std::sqrt(own);
-        p.sigma = se_v / (2 * p.value);
-        p.log_sigma = p.sigma / p.value;
-      } else {
-        p.value = 0;
-        p.sigma = std::sqrt(se_v);
-        p.determined = false;
-        p.note = "below what the other heads add to the series";
-      }
+      p.value = joint->level;
+      p.sigma = joint->sigma;
+      p.log_sigma = p.value > 0 ? p.sigma / p.value : std::numeric_limits<double>::infinity();
+      p.determined = joint->determined;
+      if (!joint->determined) p.note = "the heads' geometry cannot separate this axis's white level from another head's";
       f.model = model::NoiseModel::white(p.value);
       f.cov = Eigen::MatrixXd::Constant(1, 1, p.log_sigma * p.log_sigma);
       const double whole = a.selection.chosen().model.terms.front().sigma;
-      char b[320];
+      char b[360];
       std::snprintf(b, sizeof b,
-                    "white level from the differences of consecutive samples %.3g +- %.2g (a fit of the whole variance "
-                    "gives %.3g: the rest is content slower than one interval that a %.0f s span cannot resolve)",
+                    "white level from the differences of consecutive samples of every head axis at once %.3g +- %.2g (a "
+                    "fit of this series' whole variance gives %.3g with the other heads' part: the rest is content slower "
+                    "than one interval that a %.0f s span cannot resolve)",
                     p.value, p.sigma, whole, a.span_s);
       a.notes.push_back(b);
       a.selection.fits.insert(a.selection.fits.begin(), f);
       a.selection.best = 0;
     }
+  } else if (joint != nullptr && joint->converged) {
+    char b[200];
+    std::snprintf(b, sizeof b, "white level from the differences of every head axis at once: %.3g +- %.2g%s", joint->level,
+                  joint->sigma, joint->determined ? "" : " (not determined by the heads' geometry)");
+    a.notes.push_back(b);
   }
   if (s.size() >= 64) {
     std::size_t seg = 32;
@@ -436,6 +428,56 @@ bool runNoise(const NoiseRequest& req, NoiseOutput& out, std::string* error) {
     out.notes.push_back("one head: its noise cannot be told from the attitude (a second head is needed)");
   if (n >= 2 && heads.fullEpochs() == 0)
     out.notes.push_back("no epoch with every configured head present: no head noise series");
+  // The white levels of every head axis at once, from the differences of consecutive epochs: they set
+  // the white part of what the other heads add to each series (joint_white.h).
+  std::vector<JointAxis> joint(static_cast<std::size_t>(3 * n));
+  bool have_joint = false;
+  if (n >= 2 && heads.diffs() >= 2) {
+    Eigen::VectorXd start(3 * n);
+    for (int a = 0; a < 3 * n; ++a) {
+      const double w = current[static_cast<std::size_t>(a)].whiteVariance();
+      start[a] = w > 0 ? w : current[static_cast<std::size_t>(a)].variance();
+    }
+    const JointWhite jw = fitJointWhite(heads.diffSum(), static_cast<double>(heads.diffs()), heads.geometry().G, start);
+    have_joint = jw.converged;
+    for (int a = 0; a < 3 * n; ++a) {
+      auto& j = joint[static_cast<std::size_t>(a)];
+      j.level = jw.level(a);
+      j.sigma = jw.levelSigma(a);
+      j.determined = jw.determined[static_cast<std::size_t>(a)];
+      j.converged = jw.converged;
+    }
+    char b[240];
+    std::snprintf(b, sizeof b,
+                  "head white levels: one fit of all %d axes from %llu differences of consecutive epochs (%s after %d "
+                  "iterations%s%s)",
+                  3 * n, static_cast<unsigned long long>(heads.diffs()), jw.converged ? "converged" : "not converged",
+                  jw.iterations, jw.message.empty() ? "" : ": ", jw.message.c_str());
+    out.notes.push_back(b);
+  }
+  // What the other heads add to series (i, k): their coloured terms as the last pass fitted them, and
+  // one white term from the joint levels (when the joint fit converged).
+  auto contaminationOf = [&](int i, int k) {
+    model::NoiseModel fixed;
+    if (!req.options.model_other_heads) return fixed;
+    double white = 0;
+    for (int j = 0; j < n; ++j) {
+      if (j == i) continue;
+      for (int l = 0; l < 3; ++l) {
+        const double w = heads.weight(i, k, j, l);
+        const auto& m = current[static_cast<std::size_t>(3 * j + l)];
+        for (const auto& t : m.terms) {
+          if (have_joint && t.kind == model::NoiseKind::White) continue;
+          model::NoiseTerm x = t;
+          x.sigma *= std::abs(w);
+          fixed.terms.push_back(x);
+        }
+        if (have_joint) white += w * w * joint[static_cast<std::size_t>(3 * j + l)].level * joint[static_cast<std::size_t>(3 * j + l)].level;
+      }
+    }
+    if (white > 0) fixed.terms.insert(fixed.terms.begin(), model::NoiseTerm::white(std::sqrt(white)));
+    return fixed;
+  };
   const int passes = n >= 2 ? 1 + std::max(0, req.options.contamination_passes) : 0;
   for (int pass = 0; pass < passes && heads.fullEpochs() > 0; ++pass) {
     // The passes before the last only supply the other heads' models for the next one: they use the
@@ -445,14 +487,7 @@ bool runNoise(const NoiseRequest& req, NoiseOutput& out, std::string* error) {
     if (pass + 1 < passes) pass_opt.likelihood = model::NoiseLikelihood::Whittle;
     parallelFor(static_cast<std::size_t>(3 * n), [&](std::size_t idx) {
       const int i = static_cast<int>(idx) / 3, k = static_cast<int>(idx) % 3;
-      model::NoiseModel fixed;
-      for (int j = 0; j < n && req.options.model_other_heads; ++j) {
-        if (j == i) continue;
-        for (int l = 0; l < 3; ++l) {
-          const auto add = scaled(current[static_cast<std::size_t>(3 * j + l)], heads.weight(i, k, j, l));
-          fixed.terms.insert(fixed.terms.end(), add.terms.begin(), add.terms.end());
-        }
-      }
+      const model::NoiseModel fixed = contaminationOf(i, k);
       AxisResult a;
       a.sensor = "head " + std::to_string(heads.id(i));
       a.axis = kHeadAxis[k];
@@ -460,7 +495,7 @@ bool runNoise(const NoiseRequest& req, NoiseOutput& out, std::string* error) {
       a.series = "the head against the fused attitude of the other heads, head axes";
       a.decimation = heads.series(i, k).stride();
       a.configured = configuredOf(i, k);
-      fitAxis(a, heads.series(i, k).series(), pass_opt, fixed, /*short_from_differences=*/true);
+      fitAxis(a, heads.series(i, k).series(), pass_opt, fixed, have_joint ? &joint[idx] : nullptr);
       head_axes[idx] = std::move(a);
     });
     for (std::size_t idx = 0; idx < head_axes.size(); ++idx)
