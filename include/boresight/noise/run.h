@@ -5,7 +5,9 @@
 //         -> HeadResiduals (InputObserver): per head axis, the head against the fused attitude of the
 //            OTHER heads, in the head's own axes (cross-boresight x, y and about the boresight): the
 //            attitude cancels; what the other heads add is known (their fusion weights) and is
-//            carried into the fit as a fixed part of the model (its "contamination")
+//            carried into the fit as a fixed part of the model (its "contamination"); the first
+//            differences of consecutive epochs of all head series give the white levels of every
+//            head axis at once (noise/joint_white.h), which set the white part of it
 //         -> AccSeries (InputObserver + RowSink): the accelerometer's white level from first
 //            differences of the raw samples (robust: thruster pulses do not count), and its
 //            low-frequency part from block means of star-minus-accelerometer angular acceleration
@@ -34,7 +36,7 @@ struct NoiseOptions {
   std::vector<model::NoiseStructure> structures = model::defaultNoiseStructures();
   std::size_t max_samples = std::size_t{1} << 16;  ///< per axis; more are decimated by 2 until they fit
   double acc_block_s = 100;  ///< block of the star-minus-accelerometer series, s (longer than the CRN)
-  int contamination_passes = 2;  ///< fits of the head axes with the other heads' fitted models
+  int contamination_passes = 2;  ///< fits of the head axes with the other heads' fitted coloured parts
   /// Auto: the Whittle likelihood on series with few, long gaps (a day's fits in milliseconds), the
   /// exact one otherwise (model/noise.h: NoiseLikelihood)
   model::NoiseLikelihood likelihood = model::NoiseLikelihood::Auto;
