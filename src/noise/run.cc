@@ -237,6 +237,9 @@ void band(AxisResult& a, const model::NoiseFitOptions& o) {
 struct JointAxis {
   double level = 0, sigma = 0;
   bool determined = false, converged = false;
+  /// standard error of the white variance the other heads add to this axis's series (from the joint
+  /// covariance): the fitted level's own standard error takes it in (the fit holds that part fixed)
+  double contamination_var_se = 0;
 };
 
 /// `joint`: when the series cannot show a coloured part, its white level is the joint fit's (from the
@@ -301,6 +304,17 @@ void fitAxis(AxisResult& a, const model::NoiseSeries& s, const NoiseOptions& opt
       a.selection.best = 0;
     }
   } else if (joint != nullptr && joint->converged) {
+    // own variance = series white variance - the other heads' (fixed in the fit, but estimated): its
+    // uncertainty adds to the level's by the delta method
+    if (a.fitted() && std::isfinite(joint->contamination_var_se) && joint->contamination_var_se > 0) {
+      for (auto& f : a.selection.fits)
+        for (auto& p : f.params)
+          if (p.name == "white.sigma" && p.value > 0 && std::isfinite(p.sigma)) {
+            const double add = joint->contamination_var_se / (2 * p.value);
+            p.sigma = std::hypot(p.sigma, add);
+            p.log_sigma = p.sigma / p.value;
+          }
+    }
     char b[200];
     std::snprintf(b, sizeof b, "white level from the differences of every head axis at once: %.3g +- %.2g%s", joint->level,
                   joint->sigma, joint->determined ? "" : " (not determined by the heads' geometry)");
@@ -447,6 +461,15 @@ bool runNoise(const NoiseRequest& req, NoiseOutput& out, std::string* error) {
       j.sigma = jw.levelSigma(a);
       j.determined = jw.determined[static_cast<std::size_t>(a)];
       j.converged = jw.converged;
+      // the other heads' white variance in series a: sum_b G(a, b)^2 s_b over the other heads' axes
+      Eigen::VectorXd g = Eigen::VectorXd::Zero(3 * n);
+      for (int b = 0; b < 3 * n; ++b)
+        if (b / 3 != a / 3) g[b] = heads.geometry().G(a, b) * heads.geometry().G(a, b);
+      double v = 0;
+      for (int b = 0; b < 3 * n; ++b)
+        for (int c = 0; c < 3 * n; ++c)
+          if (g[b] != 0 && g[c] != 0) v += g[b] * jw.cov(b, c) * g[c];
+      j.contamination_var_se = v > 0 ? std::sqrt(v) : (std::isfinite(v) ? 0.0 : v);
     }
     char b[240];
     std::snprintf(b, sizeof b,
