@@ -30,6 +30,7 @@
 
 #include <Eigen/Dense>
 
+#include <array>
 #include <string>
 #include <vector>
 
