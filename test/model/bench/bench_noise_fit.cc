@@ -42,7 +42,7 @@ void wilson(int k, int n, double& lo, double& hi) {
 void usage() {
   std::puts(
       "bench_noise_fit [--runs N] [--span S] [--dt T] [--gaps F] [--gap-length L] [--seed S0] [--jobs J]\n"
-      "                [--models a,b] [--likelihood exact|whittle|auto] [--select]\n"
+      "                [--models a,b] [--likelihood exact|whittle|auto] [--select] [--verbose]\n"
       "  Monte Carlo of the noise-model fits against the simulated truth (defaults: 200 runs of one day at\n"
       "  1 Hz with 5 % gaps of 40 samples on average, seeds 1000.., two threads, every model, the exact\n"
       "  likelihood; --select also runs the BIC choice).");
@@ -54,7 +54,7 @@ int main(int argc, char** argv) {
   int runs = 200, jobs = 2;
   double span = 86400, dt = 1, gaps = 0.05;
   std::uint64_t seed0 = 1000;
-  bool select = false;
+  bool select = false, verbose = false;
   McSetup setup;
   std::vector<std::string> models = {"white", "gauss_markov", "power_law", "sum"};
   for (int i = 1; i < argc; ++i) {
@@ -87,6 +87,7 @@ int main(int argc, char** argv) {
     else if (a == "--seed") seed0 = std::strtoull(next(), nullptr, 10);
     else if (a == "--jobs") jobs = std::max(1, std::atoi(next()));
     else if (a == "--select") select = true;
+    else if (a == "--verbose") verbose = true;
     else if (a == "--models") {
       models.clear();
       std::stringstream ss(next());
@@ -109,6 +110,26 @@ int main(int argc, char** argv) {
               static_cast<unsigned long long>(seed0 + static_cast<std::uint64_t>(runs) - 1));
   for (const FitCase& c : fitCases(span, dt)) {
     if (std::find(models.begin(), models.end(), c.name) == models.end()) continue;
+    if (verbose) {  // one line per run and parameter: what a run got wrong (one thread)
+      NoiseFitOptions opt;
+      opt.likelihood = setup.likelihood;
+      for (int k = 0; k < runs; ++k) {
+        const NoiseSeries s = gappedSeries(c.truth, slots, dt, gaps, seed0 + static_cast<std::uint64_t>(k), 0.0, setup.gap_mean_len);
+        const NoiseFit f = fitNoise(s, c.structure, Eigen::MatrixXd::Ones(static_cast<Eigen::Index>(s.size()), 1), opt);
+        const double m2ll_truth = minusTwoLogLikelihood(c.truth, s, Eigen::MatrixXd::Ones(static_cast<Eigen::Index>(s.size()), 1));
+        std::printf("%s seed %llu: %s, %d evaluations, -2 log L %.2f (at the truth %.2f)%s%s\n", c.name.c_str(),
+                    static_cast<unsigned long long>(seed0 + static_cast<std::uint64_t>(k)), f.converged ? "converged" : "NOT converged",
+                    f.evaluations, f.m2ll, m2ll_truth, f.message.empty() ? "" : ": ", f.message.c_str());
+        for (const NoiseParam& p : f.params) {
+          const double t = c.values.at(p.name);
+          const double e = p.log_scale ? std::log(p.value) - std::log(t) : p.value - t;
+          const double se = p.log_scale ? p.log_sigma : p.sigma;
+          std::printf("    %-12s truth %-10.4g fit %-10.4g sigma %-10.3g z %7.2f%s\n", p.name.c_str(), t, p.value, se, e / se,
+                      p.determined ? "" : " (not determined)");
+        }
+      }
+      continue;
+    }
     std::printf("\n%s: truth %s, fitted as %s\n", c.name.c_str(), c.truth.describe().c_str(), noiseStructureName(c.structure));
     // Split the runs over the threads by seed; each thread sums its own result.
     std::vector<FitMcResult> part(static_cast<std::size_t>(jobs));
