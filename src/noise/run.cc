@@ -308,12 +308,15 @@ void fitAxis(AxisResult& a, const model::NoiseSeries& s, const NoiseOptions& opt
     // uncertainty adds to the level's by the delta method
     if (a.fitted() && std::isfinite(joint->contamination_var_se) && joint->contamination_var_se > 0) {
       for (auto& f : a.selection.fits)
-        for (auto& p : f.params)
-          if (p.name == "white.sigma" && p.value > 0 && std::isfinite(p.sigma)) {
-            const double add = joint->contamination_var_se / (2 * p.value);
-            p.sigma = std::hypot(p.sigma, add);
-            p.log_sigma = p.sigma / p.value;
-          }
+        for (std::size_t i = 0; i < f.params.size(); ++i) {
+          auto& p = f.params[i];
+          if (p.name != "white.sigma" || !(p.value > 0) || !std::isfinite(p.sigma)) continue;
+          p.sigma = std::hypot(p.sigma, joint->contamination_var_se / (2 * p.value));
+          p.log_sigma = p.sigma / p.value;
+          // the fit's covariance (log scale) says the same as the parameter
+          const auto k = static_cast<Eigen::Index>(i);
+          if (k < f.cov.rows() && k < f.cov.cols()) f.cov(k, k) = p.log_sigma * p.log_sigma;
+        }
     }
     char b[200];
     std::snprintf(b, sizeof b, "white level from the differences of every head axis at once: %.3g +- %.2g%s", joint->level,

@@ -55,6 +55,18 @@ const noise::AxisResult* axis(const noise::NoiseOutput& o, const std::string& se
   return nullptr;
 }
 
+/// Head h's axis `ax` and the white level of its chosen model; nullptr (with a failure) when the axis is
+/// missing, not fitted, or its chosen model has no white level.
+const noise::AxisResult* fittedHeadAxis(const noise::NoiseOutput& o, int h, const std::string& ax, const model::NoiseParam** white) {
+  const noise::AxisResult* a = axis(o, "head " + std::to_string(h), ax);
+  *white = a != nullptr && a->fitted() ? a->selection.chosen().find("white.sigma") : nullptr;
+  if (*white == nullptr) {
+    ADD_FAILURE() << "head " << h << " " << ax << ": missing, not fitted, or no white level";
+    return nullptr;
+  }
+  return a;
+}
+
 }  // namespace
 
 TEST(NoiseRun, WhiteHeadNoiseIsChosenAndItsLevelRecovered) {
@@ -65,14 +77,11 @@ TEST(NoiseRun, WhiteHeadNoiseIsChosenAndItsLevelRecovered) {
   ASSERT_GT(out.full_epochs, 1000u);
   for (int h = 1; h <= 3; ++h)
     for (const char* ax : {"cross_x", "cross_y", "about_boresight"}) {
-      const noise::AxisResult* a = axis(out, "head " + std::to_string(h), ax);
+      const model::NoiseParam* w = nullptr;
+      const noise::AxisResult* a = fittedHeadAxis(out, h, ax, &w);
       ASSERT_NE(a, nullptr);
-      ASSERT_TRUE(a->fitted());
       const auto& f = a->selection.chosen();
       EXPECT_EQ(f.structure, model::NoiseStructure::White) << a->sensor << " " << ax << ": " << f.model.describe();
-      // the white level of the white+GM candidate too (the chosen one is white)
-      const model::NoiseParam* w = f.find("white.sigma");
-      ASSERT_NE(w, nullptr);
       const double truth = std::string(ax) == "about_boresight" ? 48.0 : 6.0;
       EXPECT_NEAR(w->value, truth, 3 * w->sigma) << a->sensor << " " << ax;
     }
@@ -127,11 +136,8 @@ TEST(NoiseRun, RealExcerptWhiteLevelsAgreeWithTheAudit) {
   int compared = 0;
   for (int h = 1; h <= 3; ++h)
     for (const char* ax : {"cross_x", "cross_y", "about_boresight"}) {
-      const noise::AxisResult* a = axis(out, "head " + std::to_string(h), ax);
-      ASSERT_NE(a, nullptr);
-      ASSERT_TRUE(a->fitted());
-      const model::NoiseParam* w = a->selection.chosen().find("white.sigma");
-      ASSERT_NE(w, nullptr);
+      const model::NoiseParam* w = nullptr;
+      ASSERT_NE(fittedHeadAxis(out, h, ax, &w), nullptr);
       const std::string key = std::to_string(h) + (std::string(ax) == "about_boresight" ? " about" : " cross");
       auto it = audit_level.find(key);
       if (it == audit_level.end()) it = audit_level.find(std::string("all") + (std::string(ax) == "about_boresight" ? " about" : " cross"));
@@ -167,12 +173,10 @@ TEST(NoiseRun, RealisticPresetWhiteLevelsRecoveredWhateverThePlatformFileSays) {
     int coloured = 0;
     for (int h = 1; h <= 3; ++h)
       for (const char* ax : {"cross_x", "cross_y", "about_boresight"}) {
-        const noise::AxisResult* a = axis(out, "head " + std::to_string(h), ax);
+        const model::NoiseParam* w = nullptr;
+        const noise::AxisResult* a = fittedHeadAxis(out, h, ax, &w);
         ASSERT_NE(a, nullptr);
-        ASSERT_TRUE(a->fitted());
         const auto& f = a->selection.chosen();
-        const model::NoiseParam* w = f.find("white.sigma");
-        ASSERT_NE(w, nullptr);
         std::printf("  head %d %-15s white %6.3f +- %5.3f (%s)\n", h, ax, w->value, w->sigma, f.model.describe().c_str());
         const bool is_about = std::string(ax) == "about_boresight";
         EXPECT_NEAR(w->value, is_about ? about[h - 1] : cross[h - 1], 3 * w->sigma) << config << " head " << h << " " << ax;
