@@ -27,6 +27,8 @@ KalmanWhitener::KalmanWhitener(const NoiseModel& m) : white_var_(m.whiteVariance
   q_.assign(k, 0.0);
   K_.assign(k, 0.0);
   s_.assign(k, 0.0);
+  s_next_.assign(k, 0.0);
+  pp_.assign(k * k, 0.0);
   reset();
 }
 
@@ -49,6 +51,8 @@ void KalmanWhitener::reset() {
   m2ll_ = 0;
   started_ = false;
   frozen_ = false;
+  pending_ = false;
+  sums_ = false;
   steps_ = 0;
   settle_ = 0;
 }
@@ -75,42 +79,59 @@ void KalmanWhitener::predict(double t_s) {
       phi_[j] = std::exp(-dt / gm_[j].tau_s);
       q_[j] = gm_[j].var * std::max(0.0, 1.0 - phi_[j] * phi_[j]);
     }
+    for (std::size_t a = 0; a < k; ++a)
+      for (std::size_t b = 0; b < k; ++b) pp_[a * k + b] = phi_[a] * phi_[b];
   }
   for (std::size_t c = 0; c < static_cast<std::size_t>(columns_); ++c) {
     double* x = X_.data() + c * k;
     for (std::size_t j = 0; j < k; ++j) x[j] *= phi_[j];
   }
-  if (!frozen_) {
-    for (std::size_t a = 0; a < k; ++a) {
-      double* row = P_.data() + a * k;
-      for (std::size_t b = 0; b < k; ++b) row[b] *= phi_[a] * phi_[b];
-      row[a] += q_[a];
+  if (frozen_) return;
+  // One pass over P: the last update's pending subtraction (P - K s^T, the posterior), the propagation
+  // (elementwise phi_a phi_b, plus Q), and the row sums P h that the next gain needs.
+  for (std::size_t a = 0; a < k; ++a) {
+    double* row = P_.data() + a * k;
+    const double* pp = pp_.data() + a * k;
+    const double ka = pending_ ? K_[a] : 0.0;
+    double sum = 0;
+    for (std::size_t b = 0; b < k; ++b) {
+      const double v = (row[b] - ka * s_[b]) * pp[b];
+      row[b] = v;
+      sum += v;
     }
+    row[a] += q_[a];
+    s_next_[a] = sum + q_[a];
   }
+  s_.swap(s_next_);
+  pending_ = false;
+  sums_ = true;
 }
 
 void KalmanWhitener::gainStep() {
   if (frozen_) return;
   const auto k = static_cast<std::size_t>(k_);
-  double F = white_var_;
-  for (std::size_t a = 0; a < k; ++a) {
-    const double* row = P_.data() + a * k;
-    double v = 0;
-    for (std::size_t b = 0; b < k; ++b) v += row[b];
-    s_[a] = v;  // P h (P symmetric)
-    F += v;
+  if (!sums_) {  // the first step (the stationary prior)
+    for (std::size_t a = 0; a < k; ++a) {
+      const double* row = P_.data() + a * k;
+      double v = 0;
+      for (std::size_t b = 0; b < k; ++b) v += row[b];
+      s_[a] = v;
+    }
   }
+  double F = white_var_;
+  for (std::size_t a = 0; a < k; ++a) F += s_[a];
   if (!(F > 1e-300)) F = 1e-300;
   const double F_old = F_;
   F_ = F;
   logF_ = std::log(F);
   inv_sqrt_F_ = 1.0 / std::sqrt(F);
-  for (std::size_t a = 0; a < k; ++a) {
-    K_[a] = s_[a] / F;
-    double* row = P_.data() + a * k;
-    for (std::size_t b = 0; b < k; ++b) row[b] -= K_[a] * s_[b];
-  }
-  // On a regular grid the covariance settles: freeze the gain once F stops changing.
+  for (std::size_t a = 0; a < k; ++a) K_[a] = s_[a] / F;
+  // The update P -= K s^T waits for the next predict(), which makes it in the same pass.
+  pending_ = true;
+  sums_ = false;
+  // On a regular grid the covariance settles: freeze the gain once F stops changing. While frozen, P_,
+  // K_ and s_ stay as they are, so the update still pending is made by the pass of the next irregular
+  // step (which propagates the posterior from there).
   if (k > 0 && std::abs(F - F_old) <= 1e-12 * F) {
     if (++settle_ >= 3) frozen_ = true;
   } else {

@@ -33,9 +33,10 @@
 // interpolated samples; the Kalman filter's innovations are the whitened series (their prediction-
 // error decomposition is the exact Gaussian likelihood), and running the same filter backwards from
 // innovations re-colours a white series (the inverse). An AR form needs a regular grid. Cost: O(K^2)
-// per sample while the filter's covariance changes, O(K) once it has settled on a regular grid (the
-// gain is frozen when the covariance stops changing by more than 1e-12 relative and thawed at the
-// next irregular step).
+// per sample while the filter's covariance changes (one pass over P makes the last step's update, the
+// propagation and the next gain's P h), O(K) once it has settled on a regular grid (the gain is frozen
+// when the covariance stops changing by more than 1e-12 relative and thawed at the next irregular
+// step).
 //
 // Banded whitening (BandedWhitener): for noise that is a moving average of white noise (the CRN
 // filter's output), the correlation is zero beyond a finite lag; there the banded Cholesky factor of
@@ -181,11 +182,14 @@ class KalmanWhitener {
   std::vector<MarkovTerm> gm_;
   int k_ = 0;
   // Small dense arrays (k_ is a few to a dozen): row-major P, per-term transition and gain.
-  std::vector<double> phi_, q_, K_, s_, P_;
+  std::vector<double> phi_, q_, K_, s_, s_next_, P_;
+  std::vector<double> pp_;  ///< phi_a phi_b of the current step (row-major k_ x k_)
   std::vector<double> X_;  ///< filter states, column-major k_ x columns_ (column 0 serves whiten()/colour())
   int columns_ = 0;
   double F_ = 1, logF_ = 0, inv_sqrt_F_ = 1, t_prev_ = 0, dt_prev_ = -1, m2ll_ = 0;
   bool started_ = false, frozen_ = false;
+  bool pending_ = false;  ///< P_ is the prior of the last step; its update K_ s_^T is still to be made
+  bool sums_ = false;     ///< s_ holds the row sums of P_ (made by predict's pass)
   std::size_t steps_ = 0;
   int settle_ = 0;
 };
