@@ -81,8 +81,37 @@ struct FitMcResult {
   int whittle = 0;  ///< fits that used the Whittle likelihood
   double nees_sum = 0;
   int nees_dof = 0;
+  /// Exact likelihood: the likelihood-ratio statistic at the truth, -2 log L(truth) + 2 log L(fit),
+  /// summed over the runs, and the fitted parameters summed (chi-square with that many degrees of
+  /// freedom when the fits are the maxima; unlike NEES it does not depend on the parameterisation).
+  double lr_sum = 0;
+  int lr_dof = 0;
   double seconds_per_fit = 0;
 };
+
+/// A fit's normalised error squared over its determined parameters, with their joint covariance (the
+/// errors on the fitting scale: log for log-scale parameters); *dof receives their number.
+inline double jointNees(const NoiseFit& f, const std::map<std::string, double>& truth, int* dof) {
+  std::vector<Eigen::Index> idx;
+  std::vector<double> err;
+  for (std::size_t i = 0; i < f.params.size(); ++i) {
+    const NoiseParam& p = f.params[i];
+    if (!p.determined) continue;
+    const double t = truth.at(p.name);
+    idx.push_back(static_cast<Eigen::Index>(i));
+    err.push_back(p.log_scale ? std::log(p.value) - std::log(t) : p.value - t);
+  }
+  *dof = static_cast<int>(idx.size());
+  if (idx.empty()) return 0.0;
+  const auto n = static_cast<Eigen::Index>(idx.size());
+  Eigen::MatrixXd C(n, n);
+  Eigen::VectorXd e(n);
+  for (Eigen::Index a = 0; a < n; ++a) {
+    e[a] = err[static_cast<std::size_t>(a)];
+    for (Eigen::Index b = 0; b < n; ++b) C(a, b) = f.cov(idx[static_cast<std::size_t>(a)], idx[static_cast<std::size_t>(b)]);
+  }
+  return e.dot(C.ldlt().solve(e));
+}
 
 /// The series of the Monte Carlo runs: how many gaps and how long, and the likelihood fitted.
 struct McSetup {
@@ -110,28 +139,21 @@ inline FitMcResult runFitMc(const FitCase& c, int runs, std::size_t slots, doubl
     ++r.runs;
     r.whittle += f.likelihood == NoiseLikelihood::Whittle;
     r.converged += f.converged;
-    std::vector<int> idx;
-    std::vector<double> err;
-    for (std::size_t i = 0; i < f.params.size(); ++i) {
-      const NoiseParam& p = f.params[i];
+    for (const NoiseParam& p : f.params) {
       if (!p.determined) continue;
-      const double t = c.values.at(p.name);
-      const double e = p.log_scale ? std::log(p.value) - std::log(t) : p.value - t;
-      const double se = p.log_scale ? p.log_sigma : p.sigma;
+      const double e = p.log_scale ? std::log(p.value) - std::log(c.values.at(p.name)) : p.value - c.values.at(p.name);
       ++r.determined[p.name];
-      r.within3[p.name] += std::abs(e) <= 3 * se;
-      idx.push_back(static_cast<int>(i));
-      err.push_back(e);
+      r.within3[p.name] += std::abs(e) <= 3 * (p.log_scale ? p.log_sigma : p.sigma);
     }
-    if (!idx.empty()) {
-      Eigen::MatrixXd C(static_cast<Eigen::Index>(idx.size()), static_cast<Eigen::Index>(idx.size()));
-      Eigen::VectorXd e(static_cast<Eigen::Index>(idx.size()));
-      for (std::size_t a = 0; a < idx.size(); ++a) {
-        e[static_cast<Eigen::Index>(a)] = err[a];
-        for (std::size_t b = 0; b < idx.size(); ++b) C(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(b)) = f.cov(idx[a], idx[b]);
-      }
-      r.nees_sum += e.dot(C.ldlt().solve(e));
-      r.nees_dof += static_cast<int>(idx.size());
+    int dof = 0;
+    const double nees = jointNees(f, c.values, &dof);
+    if (dof > 0) {
+      r.nees_sum += nees;
+      r.nees_dof += dof;
+    }
+    if (f.likelihood == NoiseLikelihood::Exact && !f.model.empty()) {
+      r.lr_sum += minusTwoLogLikelihood(c.truth, s, X, opt.reml) - f.m2ll;
+      r.lr_dof += static_cast<int>(f.params.size());
     }
     if (also_select) {
       r.chosen_right += sel.best >= 0 && sel.chosen().structure == c.structure;

@@ -117,9 +117,11 @@ int main(int argc, char** argv) {
         const NoiseSeries s = gappedSeries(c.truth, slots, dt, gaps, seed0 + static_cast<std::uint64_t>(k), 0.0, setup.gap_mean_len);
         const NoiseFit f = fitNoise(s, c.structure, Eigen::MatrixXd::Ones(static_cast<Eigen::Index>(s.size()), 1), opt);
         const double m2ll_truth = minusTwoLogLikelihood(c.truth, s, Eigen::MatrixXd::Ones(static_cast<Eigen::Index>(s.size()), 1));
-        std::printf("%s seed %llu: %s, %d evaluations, -2 log L %.2f (at the truth %.2f)%s%s\n", c.name.c_str(),
+        int dof = 0;
+        const double nees = jointNees(f, c.values, &dof);
+        std::printf("%s seed %llu: %s, %d evaluations, -2 log L %.2f (at the truth %.2f), NEES %.2f for %d%s%s\n", c.name.c_str(),
                     static_cast<unsigned long long>(seed0 + static_cast<std::uint64_t>(k)), f.converged ? "converged" : "NOT converged",
-                    f.evaluations, f.m2ll, m2ll_truth, f.message.empty() ? "" : ": ", f.message.c_str());
+                    f.evaluations, f.m2ll, m2ll_truth, nees, dof, f.message.empty() ? "" : ": ", f.message.c_str());
         for (const NoiseParam& p : f.params) {
           const double t = c.values.at(p.name);
           const double e = p.log_scale ? std::log(p.value) - std::log(t) : p.value - t;
@@ -147,6 +149,8 @@ int main(int argc, char** argv) {
           r.truth_not_rejected += one.truth_not_rejected;
           r.nees_sum += one.nees_sum;
           r.nees_dof += one.nees_dof;
+          r.lr_sum += one.lr_sum;
+          r.lr_dof += one.lr_dof;
           for (const auto& [n, v] : one.determined) r.determined[n] += v;
           for (const auto& [n, v] : one.within3) r.within3[n] += v;
         }
@@ -162,6 +166,8 @@ int main(int argc, char** argv) {
       r.truth_not_rejected += p.truth_not_rejected;
       r.nees_sum += p.nees_sum;
       r.nees_dof += p.nees_dof;
+      r.lr_sum += p.lr_sum;
+      r.lr_dof += p.lr_dof;
       for (const auto& [n, v] : p.determined) r.determined[n] += v;
       for (const auto& [n, v] : p.within3) r.within3[n] += v;
     }
@@ -180,6 +186,12 @@ int main(int argc, char** argv) {
     neesBounds(r.nees_dof, lo, hi);
     std::printf("  NEES per degree of freedom %.3f (%d dof; 95 %% bounds %.3f-%.3f)%s\n", r.nees_sum / std::max(1, r.nees_dof),
                 r.nees_dof, lo, hi, (r.nees_sum / r.nees_dof >= lo && r.nees_sum / r.nees_dof <= hi) ? "" : "  OUTSIDE");
+    if (r.lr_dof > 0) {  // the same question without the quadratic approximation (exact likelihood only)
+      neesBounds(r.lr_dof, lo, hi);
+      const double lr = r.lr_sum / r.lr_dof;
+      std::printf("  likelihood ratio at the truth per fitted parameter %.3f (%d; 95 %% bounds %.3f-%.3f)%s\n", lr, r.lr_dof, lo, hi,
+                  (lr >= lo && lr <= hi) ? "" : "  OUTSIDE");
+    }
     if (select)
       std::printf("  BIC chose %s in %d/%d runs; the simulated structure within 10 of the best in %d/%d\n",
                   noiseStructureName(c.structure), r.chosen_right, r.runs, r.truth_not_rejected, r.runs);
