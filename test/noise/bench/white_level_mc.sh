@@ -36,11 +36,13 @@ for line in open(sys.argv[1]):
 for a in json.load(open(sys.argv[2]))["axes"]:
     if not a["sensor"].startswith("head "):
         continue
-    p = next((p for p in a["chosen"]["params"] if p["name"] == "white.sigma"), None)
-    if p is None or not p.get("determined", True) or not p.get("sigma"):
-        continue
     h = int(a["sensor"].split()[1])
     kind = "about" if a["axis"] == "about_boresight" else "cross"
+    p = next((p for p in a["chosen"]["params"] if p["name"] == "white.sigma"), None)
+    if p is None or not p.get("determined", True) or not p.get("sigma"):
+        why = (p or {}).get("note") or "no white level in the chosen model " + a["chosen"]["structure"]
+        print("missing", h, a["axis"], sys.argv[3], why.replace(" ", "_"))
+        continue
     t = truth.get((h, kind))
     if t is not None:
         print(kind, h, a["axis"], sys.argv[3], (p["value"] - t) / p["sigma"])
@@ -52,7 +54,11 @@ python3 - "$work/z.txt" "$seeds" "$duration" "$(basename "$scenario")" <<'PY'
 import collections, math, sys
 rows = [l.split() for l in open(sys.argv[1])]
 groups = collections.defaultdict(list)
+missing = []
 for kind, head, axis, seed, z in rows:
+    if kind == "missing":
+        missing.append(f"seed {seed} head {head} {axis}: {z.replace('_', ' ')}")
+        continue
     groups[kind].append(float(z))
     groups["all"].append(float(z))
 print(f"head white levels of `boresight noise` on {sys.argv[2]} simulated spans of {sys.argv[3]} s ({sys.argv[4]})")
@@ -71,4 +77,6 @@ for k in ("cross", "about", "all"):
     flag = "" if lo <= m2 <= hi else "  OUTSIDE"
     print(f"  {k:5s}: {n} levels, z mean {mean:+.3f} sd {sd:.3f}; mean z^2 {m2:.3f} (95 % bounds {lo:.3f}-{hi:.3f}){flag}; "
           f"within 3 sigma {inside}/{n}")
+for m in missing:
+    print("  no determined white level:", m)
 PY
