@@ -769,13 +769,37 @@ NoiseFit fitNoise(const NoiseSeries& s, NoiseStructure structure, const Eigen::M
     // Newton's last Hessian when it was taken at this point with every parameter free.
     const bool reuse = !whittle && fit.converged && free.size() == static_cast<std::size_t>(np) && H_final.rows() == np;
     const Eigen::MatrixXd H = whittle ? whittleHessian(free) : reuse ? H_final : hessian(sub, z, 2e-3);
-    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(0.5 * (H + H.transpose()));
-    if (es.info() == Eigen::Success && es.eigenvalues().minCoeff() > 1e-9 * std::max(1.0, es.eigenvalues().maxCoeff())) {
-      const Eigen::MatrixXd C = 2.0 * es.eigenvectors() * es.eigenvalues().cwiseInverse().asDiagonal() * es.eigenvectors().transpose();
-      for (std::size_t a = 0; a < free.size(); ++a)
-        for (std::size_t b = 0; b < free.size(); ++b)
-          fit.cov(free[a], free[b]) = C(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(b));
-      info_ok = true;
+    // Where the information is singular (a second Gauss-Markov term much slower than the span: only
+    // sigma^2 / tau shows), the parameters that move along the flat direction are not determined; the
+    // others' covariance comes from the rest of the Hessian (given the flat ones), so a white level
+    // keeps its uncertainty. Repeated while a direction stays flat.
+    std::vector<std::size_t> keep(free.size());
+    for (std::size_t k = 0; k < keep.size(); ++k) keep[k] = k;
+    while (!keep.empty()) {
+      const auto nk = static_cast<Eigen::Index>(keep.size());
+      Eigen::MatrixXd Hk(nk, nk);
+      for (Eigen::Index a = 0; a < nk; ++a)
+        for (Eigen::Index b = 0; b < nk; ++b)
+          Hk(a, b) = 0.5 * (H(static_cast<Eigen::Index>(keep[static_cast<std::size_t>(a)]), static_cast<Eigen::Index>(keep[static_cast<std::size_t>(b)])) +
+                            H(static_cast<Eigen::Index>(keep[static_cast<std::size_t>(b)]), static_cast<Eigen::Index>(keep[static_cast<std::size_t>(a)])));
+      const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(Hk);
+      if (es.info() != Eigen::Success) break;
+      if (es.eigenvalues().minCoeff() > 1e-9 * std::max(1.0, es.eigenvalues().maxCoeff())) {
+        const Eigen::MatrixXd C = 2.0 * es.eigenvectors() * es.eigenvalues().cwiseInverse().asDiagonal() * es.eigenvectors().transpose();
+        for (Eigen::Index a = 0; a < nk; ++a)
+          for (Eigen::Index b = 0; b < nk; ++b)
+            fit.cov(free[keep[static_cast<std::size_t>(a)]], free[keep[static_cast<std::size_t>(b)]]) = C(a, b);
+        info_ok = true;
+        break;
+      }
+      // the flattest direction: every parameter with a share of it leaves (the largest one at least)
+      const Eigen::VectorXd v = es.eigenvectors().col(0);
+      Eigen::Index big = 0;
+      v.cwiseAbs().maxCoeff(&big);
+      std::vector<std::size_t> rest;
+      for (Eigen::Index a = 0; a < nk; ++a)
+        if (a != big && std::abs(v[a]) < 0.2) rest.push_back(keep[static_cast<std::size_t>(a)]);
+      keep.swap(rest);
     }
   }
 
@@ -798,7 +822,8 @@ NoiseFit fitNoise(const NoiseSeries& s, NoiseStructure structure, const Eigen::M
       p.note = "at the bound of its range (the data do not pull it inside)";
     } else if (!info_ok || !std::isfinite(se)) {
       p.determined = false;
-      p.note = "the likelihood is flat in this parameter (no finite uncertainty)";
+      p.note = info_ok ? "the likelihood is flat along a direction in which this parameter moves (no finite uncertainty)"
+                       : "the likelihood is flat in this parameter (no finite uncertainty)";
     }
     double fc = 0;
     if (p.name.find("tau_s") != std::string::npos) fc = 1.0 / (kTwoPi * p.value);

@@ -170,3 +170,23 @@ TEST(NoiseSelect, SkipsTheTwoScaleStructuresWhenOneTermFindsNoColour) {
   EXPECT_FALSE(sc.fits[2].model.empty());
   EXPECT_FALSE(sc.fits[3].model.empty());
 }
+
+TEST(NoiseFit, ASingularInformationLeavesTheParametersOffItsFlatDirectionDetermined) {
+  // Two Gauss-Markov terms fitted where the data show one (a second, far slower term barely moves in
+  // 6 h): on this seed both terms settle at the same time (about 65 s), so only the sum of their
+  // variances is determined and the information is singular along their split. The white level is
+  // off that direction and keeps its uncertainty (before, every parameter was reported flat, so a
+  // head axis of `boresight noise` on a realistic seed had no white sigma at all).
+  const NoiseModel m = NoiseModel::white(1.65).add(NoiseTerm::gaussMarkov(0.85, 61.0)).add(NoiseTerm::gaussMarkov(30.0, 2e7));
+  const NoiseSeries s = gappedSeries(m, 21600, kT, 0.05, 5, 0.0);
+  const NoiseFit f = fitNoise(s, NoiseStructure::WhiteTwoGaussMarkov, Eigen::MatrixXd::Ones(static_cast<Eigen::Index>(s.size()), 1));
+  int flat = 0;
+  for (const auto& p : f.params) flat += !p.determined && p.note.find("the likelihood is flat") != std::string::npos;
+  ASSERT_GE(flat, 1) << "the case this test is about (a singular information) did not occur";
+  const NoiseParam* w = f.find("white.sigma");
+  ASSERT_NE(w, nullptr);
+  EXPECT_TRUE(w->determined) << w->note;
+  ASSERT_TRUE(std::isfinite(w->sigma) && w->sigma > 0);
+  EXPECT_NEAR(w->value, 1.65, 3 * w->sigma);
+  EXPECT_TRUE(std::isfinite(f.cov(0, 0)));
+}
