@@ -62,6 +62,8 @@ NoiseModel modelOf(NoiseStructure s, const Eigen::VectorXd& x, int pl_terms, con
 struct Box {
   Eigen::VectorXd lo, hi;
   Eigen::VectorXd clamp(const Eigen::VectorXd& x) const { return x.cwiseMax(lo).cwiseMin(hi); }
+  /// Parameter i of x on (within 1e-3 of) a bound: the data do not pull it inside.
+  bool atBound(const Eigen::VectorXd& x, Eigen::Index i) const { return x[i] <= lo[i] + 1e-3 || x[i] >= hi[i] - 1e-3; }
 };
 
 Box boxOf(NoiseStructure s, double sd, double T, double span) {
@@ -793,7 +795,7 @@ NoiseFit fitNoise(const NoiseSeries& s, NoiseStructure structure, const Eigen::M
   {
     auto onBound = [&](const Eigen::VectorXd& v) {
       for (Eigen::Index i = 0; i < np; ++i)
-        if (v[i] <= box.lo[i] + 1e-3 || v[i] >= box.hi[i] - 1e-3) return true;
+        if (box.atBound(v, i)) return true;
       return false;
     };
     // A coloured term with a negligible level (its variance below 1e-4 of the white part's) is a
@@ -864,8 +866,7 @@ NoiseFit fitNoise(const NoiseSeries& s, NoiseStructure structure, const Eigen::M
   std::vector<Eigen::Index> free;
   std::vector<bool> at_bound(static_cast<std::size_t>(np), false);
   for (Eigen::Index i = 0; i < np; ++i) {
-    const double tol = 1e-3;
-    at_bound[static_cast<std::size_t>(i)] = x[i] <= box.lo[i] + tol || x[i] >= box.hi[i] - tol;
+    at_bound[static_cast<std::size_t>(i)] = box.atBound(x, i);
     if (!at_bound[static_cast<std::size_t>(i)]) free.push_back(i);
   }
   fit.cov = Eigen::MatrixXd::Constant(np, np, std::numeric_limits<double>::quiet_NaN());
