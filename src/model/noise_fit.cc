@@ -229,12 +229,13 @@ Eigen::VectorXd bfgs(const Objective& f, Eigen::VectorXd x, int max_iter, bool* 
 }
 
 /// Central finite-difference Hessian of f at x; g (optional) receives the central-difference gradient
-/// from the same stencil.
-Eigen::MatrixXd hessian(const Objective& f, const Eigen::VectorXd& x, double h, Eigen::VectorXd* g = nullptr) {
+/// from the same stencil; fx: f(x) when the caller has it (else evaluated here).
+Eigen::MatrixXd hessian(const Objective& f, const Eigen::VectorXd& x, double h, Eigen::VectorXd* g = nullptr,
+                        double fx = std::numeric_limits<double>::quiet_NaN()) {
   const auto n = x.size();
   Eigen::MatrixXd H(n, n);
   if (g) g->resize(n);
-  const double f0 = f(x);
+  const double f0 = std::isnan(fx) ? f(x) : fx;
   for (Eigen::Index i = 0; i < n; ++i) {
     Eigen::VectorXd a = x, b = x;
     a[i] += h;
@@ -272,6 +273,7 @@ Eigen::VectorXd newton(const Objective& f, Eigen::VectorXd x, int max_iter, bool
   Eigen::MatrixXd B;                 // the quasi-Newton matrix
   Eigen::VectorXd g_prev, x_prev;    // the last step's start, for the BFGS update
   constexpr double kSettled = 1e-2;  // a hundredth of the unit of -2 log L that one standard error spans
+  double fx = f(x);                  // f at the current point (each evaluation is a pass over the data)
   for (int it = 0; it < max_iter; ++it) {
     Eigen::VectorXd g, d;
     Eigen::MatrixXd H;
@@ -285,7 +287,7 @@ Eigen::VectorXd newton(const Objective& f, Eigen::VectorXd x, int max_iter, bool
     };
     bool exact = false;  // H is the finite-difference Hessian at x
     auto full = [&]() {
-      H = hessian(f, x, 2e-3, &g);
+      H = hessian(f, x, 2e-3, &g, fx);
       if (H_out) *H_out = H;
       B = H;
       exact = true;
@@ -322,7 +324,7 @@ Eigen::VectorXd newton(const Objective& f, Eigen::VectorXd x, int max_iter, bool
     }
     const double dmax = d.cwiseAbs().maxCoeff();
     if (dmax > 1.0) d /= dmax;
-    const double f0 = f(x);
+    const double f0 = fx;
     double t = 1.0;
     bool moved = false;
     for (int k = 0; k < 20 && !moved; ++k, t *= 0.5) {
@@ -337,6 +339,7 @@ Eigen::VectorXd newton(const Objective& f, Eigen::VectorXd x, int max_iter, bool
         x_prev = x;
         g_prev = g;
         x = xn;
+        fx = fn;
         moved = true;
       }
     }
@@ -812,8 +815,7 @@ NoiseFit fitNoise(const NoiseSeries& s, NoiseStructure structure, const Eigen::M
     };
     const bool edge = !whittle && (onBound(x) || !fit.converged);
     // Such a fit is refined again by either likelihood (on white data, where the level vanishes rightly,
-    // the second refinement ends there too: the ideal day's fits cost 2559 evaluations against 2084
-    // without it).
+    // the second refinement ends there too, at the cost of its evaluations: src/noise/DESIGN.md).
     if (edge || (std::string(defs.front().name) == "white.sigma" && negligible(x))) {
       double f_alt = kInf;
       Eigen::VectorXd alt;
