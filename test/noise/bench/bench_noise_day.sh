@@ -7,15 +7,9 @@
 # Usage: test/noise/bench/bench_noise_day.sh BUILD_DIR [RUNS=3] [DURATION_S=86400] [SCENARIO] [CONFIG]
 #   SCENARIO defaults to config/sim_gracefo.yaml (the ideal preset) with CONFIG config/gracefo_ideal.yaml.
 set -euo pipefail
-build=${1:?usage: bench_noise_day.sh BUILD_DIR [RUNS] [DURATION_S] [SCENARIO] [CONFIG]}
-runs=${2:-3}
-duration=${3:-86400}
-here=$(cd "$(dirname "$0")/../../.." && pwd)
-scenario=${4:-$here/config/sim_gracefo.yaml}
-config=${5:-$here/config/gracefo_ideal.yaml}
-cli=$build/tools/boresight
-work=$(mktemp -d "${TMPDIR:-/tmp}/boresight-bench-noise.XXXXXX")
-trap 'rm -rf "$work"' EXIT
+. "$(dirname "$0")/args.sh"
+bench_args bench_noise_day 3 86400 "$@"
+runs=$count
 
 /usr/bin/time -f "%e %M" -o "$work/sim_time" "$cli" simulate --scenario "$scenario" --seed 1 \
   --duration "$duration" --out "$work/day" --no-lcm --quiet

@@ -10,15 +10,9 @@
 #   config/gracefo_ideal.yaml; the realistic preset is config/sim_gracefo_realistic.yaml with
 #   config/gracefo.yaml (minutes per day: the exact fits of the coloured parts).
 set -euo pipefail
-build=${1:?usage: white_level_mc.sh BUILD_DIR [SEEDS] [DURATION_S] [SCENARIO] [CONFIG]}
-seeds=${2:-20}
-duration=${3:-21600}
-here=$(cd "$(dirname "$0")/../../.." && pwd)
-scenario=${4:-$here/config/sim_gracefo.yaml}
-config=${5:-$here/config/gracefo_ideal.yaml}
-cli=$build/tools/boresight
-work=$(mktemp -d "${TMPDIR:-/tmp}/boresight-white-mc.XXXXXX")
-trap 'rm -rf "$work"' EXIT
+. "$(dirname "$0")/args.sh"
+bench_args white_level_mc 20 21600 "$@"
+seeds=$count
 for s in $(seq 1 "$seeds"); do
   d=$work/s$s
   "$cli" simulate --scenario "$scenario" --seed "$s" --duration "$duration" --out "$d" --quiet --no-lcm
