@@ -272,6 +272,8 @@ struct NoiseFitOptions {
   /// selectNoise: when white+gauss_markov does not lower BIC below white's, white+2gauss_markov and
   /// white+power_law are not fitted (listed with a message, model empty). Needs both fitted first
   /// (converged or not: the Gauss-Markov structure holds white, so a fit worse than white found no colour).
+  /// Likewise white+power_law is not fitted when white+2gauss_markov does not lower BIC below
+  /// white+gauss_markov's (one scale shows; needs both fitted first).
   bool skip_when_no_colour = true;
 };
 
