@@ -1018,41 +1018,38 @@ NoiseFit fitWhiteFromDifferences(const NoiseSeries& s) {
 NoiseSelection selectNoise(const NoiseSeries& s, const std::vector<NoiseStructure>& structures, const Eigen::MatrixXd& X,
                            const NoiseFitOptions& opt) {
   NoiseSelection sel;
-  // Nested shortcut: when one Gauss-Markov term on top of white does not lower BIC, the structures with
-  // more coloured terms (two terms, a power law) are not fitted: the series shows no colour that one
-  // term could take up, and each of them costs a full fit.
   auto fitOf = [&](NoiseStructure st) -> const NoiseFit* {
     for (const auto& f : sel.fits)
       if (f.structure == st && !f.model.empty()) return &f;
     return nullptr;
   };
+  // Nested shortcuts (opt.skip_when_no_colour): a structure with more coloured terms is not fitted when
+  // the simpler pair below it shows nothing for them to take up; it is listed with the reason.
+  // - When one Gauss-Markov term on top of white does not lower BIC, the two-term and power-law
+  //   structures: the series shows no colour that one term could take up, and each costs a full fit.
+  // - The same one level up: a power law only where two Gauss-Markov terms lower BIC below one. A power
+  //   law that the data can tell from one term spreads its power over more than one scale, and two free
+  //   terms then take up more of it than one; where they do not, the series shows one scale. (It is the
+  //   costliest candidate, a dozen states; on the realistic seed-1 day two terms lost to one on 7 of the
+  //   9 head axes, and the power law lost there too, by 19.5-22.)
+  auto skipReason = [&](NoiseStructure st) -> const char* {
+    if (!opt.skip_when_no_colour) return nullptr;
+    const NoiseFit *w = fitOf(NoiseStructure::White), *g = fitOf(NoiseStructure::WhiteGaussMarkov),
+                   *g2 = fitOf(NoiseStructure::WhiteTwoGaussMarkov);
+    if ((st == NoiseStructure::WhiteTwoGaussMarkov || st == NoiseStructure::WhitePowerLaw) && w && g && !(g->bic < w->bic))
+      return "not fitted: white+gauss_markov does not improve BIC on white (no colour to take up)";
+    if (st == NoiseStructure::WhitePowerLaw && g && g2 && !(g2->bic < g->bic))
+      return "not fitted: white+2gauss_markov does not improve BIC on white+gauss_markov (one scale shows)";
+    return nullptr;
+  };
   for (NoiseStructure st : structures) {
-    if (opt.skip_when_no_colour && (st == NoiseStructure::WhiteTwoGaussMarkov || st == NoiseStructure::WhitePowerLaw)) {
-      const NoiseFit *w = fitOf(NoiseStructure::White), *g = fitOf(NoiseStructure::WhiteGaussMarkov);
-      if (w && g && !(g->bic < w->bic)) {
-        NoiseFit skipped;
-        skipped.structure = st;
-        skipped.n = s.size();
-        skipped.message = "not fitted: white+gauss_markov does not improve BIC on white (no colour to take up)";
-        sel.fits.push_back(skipped);
-        continue;
-      }
-    }
-    // The same one level up: a power law only where two Gauss-Markov terms improve BIC on one. A power
-    // law that the data can tell from one term spreads its power over more than one scale, and two free
-    // terms then take up more of it than one; where they do not, the series shows one scale. (It was
-    // the costliest candidate, a dozen states; on the realistic seed-1 day two terms lost to one on 7 of
-    // the 9 head axes, and the power law lost there too, by 19.5-22.)
-    if (opt.skip_when_no_colour && st == NoiseStructure::WhitePowerLaw) {
-      const NoiseFit *g = fitOf(NoiseStructure::WhiteGaussMarkov), *g2 = fitOf(NoiseStructure::WhiteTwoGaussMarkov);
-      if (g && g2 && !(g2->bic < g->bic)) {
-        NoiseFit skipped;
-        skipped.structure = st;
-        skipped.n = s.size();
-        skipped.message = "not fitted: white+2gauss_markov does not improve BIC on white+gauss_markov (one scale shows)";
-        sel.fits.push_back(skipped);
-        continue;
-      }
+    if (const char* why = skipReason(st)) {
+      NoiseFit skipped;
+      skipped.structure = st;
+      skipped.n = s.size();
+      skipped.message = why;
+      sel.fits.push_back(skipped);
+      continue;
     }
     sel.fits.push_back(fitNoise(s, st, X, opt));
     const auto i = static_cast<int>(sel.fits.size()) - 1;
