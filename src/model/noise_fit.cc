@@ -609,6 +609,73 @@ bool constantColumns(const Eigen::MatrixXd& X) {
   return X.cols() <= 1;
 }
 
+/// The power law's level on the reporting scale: params[1] (the total sigma, fitted) becomes the
+/// amplitude spectral density of the power law at the pivot, the frequency between its corners where
+/// that density's variance is least (the level the data determine; its error is uncorrelated with the
+/// slope's there), and the covariance follows by the delta method (exact for the Hessian at a
+/// stationary point). The total sigma stays as a derived parameter with its own delta-method sigma.
+/// Parameters that the fit left undetermined (on a bound, along a flat direction) are held where they
+/// are: their covariance entries stay undefined and the level's is conditional on them.
+void reportAtThePivot(NoiseFit& fit, const Eigen::VectorXd& x, int pl_terms, double T) {
+  const Eigen::Index np = x.size();
+  if (np != 5 || fit.params.size() != 5 || fit.cov.rows() != np) return;
+  auto logAsd = [&](const Eigen::VectorXd& v, double f) {
+    NoiseModel m;
+    m.add(NoiseTerm::powerLaw(std::exp(v[1]), v[2], std::exp(v[3]), std::exp(v[4]), pl_terms));
+    return 0.5 * std::log(m.psdContinuous(f, T));
+  };
+  auto rowAt = [&](double f) {
+    Eigen::RowVectorXd r(np);
+    for (Eigen::Index j = 0; j < np; ++j) {
+      Eigen::VectorXd a = x, b = x;
+      a[j] += 1e-5;
+      b[j] -= 1e-5;
+      r[j] = (logAsd(a, f) - logAsd(b, f)) / 2e-5;
+    }
+    return r;
+  };
+  const Eigen::MatrixXd C = fit.cov.unaryExpr([](double v) { return std::isfinite(v) ? v : 0.0; });
+  double f_p = std::exp(0.5 * (x[3] + x[4])), v_p = kInf;
+  constexpr int kGrid = 60;
+  for (int q = 0; q <= kGrid; ++q) {
+    const double f = std::exp(x[3] + (x[4] - x[3]) * q / kGrid);
+    const Eigen::RowVectorXd r = rowAt(f);
+    const double v = (r * C * r.transpose())(0, 0);
+    if (std::isfinite(v) && v < v_p) {
+      v_p = v;
+      f_p = f;
+    }
+  }
+  Eigen::MatrixXd J = Eigen::MatrixXd::Identity(np, np);
+  J.row(1) = rowAt(f_p);
+  Eigen::MatrixXd C1 = J * C * J.transpose();
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  for (Eigen::Index i = 0; i < np; ++i)
+    for (Eigen::Index j = 0; j < np; ++j) {
+      const bool undefined = (i == 1 || j == 1) ? !std::isfinite(fit.cov(1, 1)) || !std::isfinite(fit.cov(i == 1 ? j : i, i == 1 ? j : i))
+                                                : !std::isfinite(fit.cov(i, j));
+      if (undefined) C1(i, j) = nan;
+    }
+  NoiseParam total = fit.params[1];
+  total.derived = true;
+  NoiseParam& level = fit.params[1];
+  level.name = "pl.asd_pivot";
+  level.log_scale = true;
+  level.value = std::exp(logAsd(x, f_p));
+  level.log_sigma = std::isfinite(C1(1, 1)) && C1(1, 1) >= 0 ? std::sqrt(C1(1, 1)) : nan;
+  level.sigma = level.value * level.log_sigma;
+  level.at_hz = f_p;
+  if (level.note.empty()) {
+    std::ostringstream o;
+    o.precision(3);
+    o << "amplitude spectral density of the power law at " << f_p
+      << " Hz (the pivot: where the data determine its level best), per sqrt(Hz)";
+    level.note = o.str();
+  }
+  fit.params.push_back(total);
+  fit.cov = C1;
+}
+
 }  // namespace
 
 const char* noiseLikelihoodName(NoiseLikelihood l) {
@@ -967,6 +1034,7 @@ NoiseFit fitNoise(const NoiseSeries& s, NoiseStructure structure, const Eigen::M
       p.note = "its term's level is not significant";
     }
   }
+  if (structure == NoiseStructure::WhitePowerLaw) reportAtThePivot(fit, x, pl_terms, d.T);
   const auto k = static_cast<double>(np + X.cols());
   fit.aic = fit.m2ll + 2 * k;
   fit.bic = fit.m2ll + k * std::log(static_cast<double>(whittle ? wd.samples : s.size()));

@@ -61,6 +61,8 @@ Json fitJson(const model::NoiseFit& f) {
     q["sigma"] = num(p.sigma);
     q["determined"] = p.determined;
     if (!p.note.empty()) q["note"] = p.note;
+    if (p.at_hz > 0) q["at_hz"] = num(p.at_hz);
+    if (p.derived) q["derived"] = true;  // from the other parameters, outside their joint covariance
     ps.push_back(q);
   }
   j["params"] = ps;
@@ -144,6 +146,7 @@ model::AxisNoise axisNoiseOf(const model::NoiseFit& f, double to_model) {
   a.model = f.model;
   for (auto& t : a.model.terms) t.sigma *= to_model;
   for (model::NoiseParam p : f.params) {
+    if (p.at_hz > 0) continue;  // a spectral level at a frequency: not a field of the model's terms
     if (p.name.size() > 6 && p.name.compare(p.name.size() - 6, 6, ".sigma") == 0) {
       p.value *= to_model;
       p.sigma *= to_model;

@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <limits>
 
 namespace boresight::model::noisetest {
 
@@ -65,7 +66,8 @@ inline std::vector<FitCase> fitCases(double span_s, double T) {
   // the fit's own term count (the truth is a member of the family fitted)
   const int K = powerLawFitTerms(span_s, T);
   c.push_back({"power_law", NoiseModel::white(1.0).add(NoiseTerm::powerLaw(3.0, 1.0, pl_lo, pl_hi, K)), NoiseStructure::WhitePowerLaw,
-               {{"white.sigma", 1.0}, {"pl.sigma", 3.0}, {"pl.alpha", 1.0}, {"pl.f_lo_hz", pl_lo}, {"pl.f_hi_hz", pl_hi}}});
+               {{"white.sigma", 1.0}, {"pl.asd_pivot", std::numeric_limits<double>::quiet_NaN()}, {"pl.sigma", 3.0},
+                {"pl.alpha", 1.0}, {"pl.f_lo_hz", pl_lo}, {"pl.f_hi_hz", pl_hi}}});  // the level at the fit's pivot: truthOf
   c.push_back({"sum", NoiseModel::white(1.0).add(NoiseTerm::gaussMarkov(1.5, tau1)).add(NoiseTerm::gaussMarkov(2.0, tau2)),
                NoiseStructure::WhiteTwoGaussMarkov,
                {{"white.sigma", 1.0}, {"gm1.sigma", 1.5}, {"gm1.tau_s", tau1}, {"gm2.sigma", 2.0}, {"gm2.tau_s", tau2}}});
@@ -89,15 +91,28 @@ struct FitMcResult {
   double seconds_per_fit = 0;
 };
 
-/// A fit's normalised error squared over its determined parameters, with their joint covariance (the
-/// errors on the fitting scale: log for log-scale parameters); *dof receives their number.
-inline double jointNees(const NoiseFit& f, const std::map<std::string, double>& truth, int* dof) {
+/// The truth's value of a fitted parameter: from the case's table, or for a spectral level at a
+/// frequency (the power law's "pl.asd_pivot", at the fit's pivot) from the true model's power law.
+inline double truthOf(const FitCase& c, const NoiseParam& p) {
+  if (p.at_hz > 0) {
+    NoiseModel pl;
+    for (const NoiseTerm& t : c.truth.terms)
+      if (t.kind == NoiseKind::PowerLaw) pl.add(t);
+    return std::sqrt(pl.psdContinuous(p.at_hz, 1.0));  // no white part: the interval does not enter
+  }
+  return c.values.at(p.name);
+}
+
+/// A fit's normalised error squared over its determined parameters that are not derived, with their
+/// joint covariance (the errors on the reporting scale: log for log-scale parameters); *dof receives
+/// their number.
+inline double jointNees(const NoiseFit& f, const FitCase& c, int* dof) {
   std::vector<Eigen::Index> idx;
   std::vector<double> err;
   for (std::size_t i = 0; i < f.params.size(); ++i) {
     const NoiseParam& p = f.params[i];
-    if (!p.determined) continue;
-    const double t = truth.at(p.name);
+    if (!p.determined || p.derived) continue;
+    const double t = truthOf(c, p);
     idx.push_back(static_cast<Eigen::Index>(i));
     err.push_back(p.log_scale ? std::log(p.value) - std::log(t) : p.value - t);
   }
@@ -141,19 +156,20 @@ inline FitMcResult runFitMc(const FitCase& c, int runs, std::size_t slots, doubl
     r.converged += f.converged;
     for (const NoiseParam& p : f.params) {
       if (!p.determined) continue;
-      const double e = p.log_scale ? std::log(p.value) - std::log(c.values.at(p.name)) : p.value - c.values.at(p.name);
+      const double t = truthOf(c, p);
+      const double e = p.log_scale ? std::log(p.value) - std::log(t) : p.value - t;
       ++r.determined[p.name];
       r.within3[p.name] += std::abs(e) <= 3 * (p.log_scale ? p.log_sigma : p.sigma);
     }
     int dof = 0;
-    const double nees = jointNees(f, c.values, &dof);
+    const double nees = jointNees(f, c, &dof);
     if (dof > 0) {
       r.nees_sum += nees;
       r.nees_dof += dof;
     }
     if (f.likelihood == NoiseLikelihood::Exact && !f.model.empty()) {
       r.lr_sum += minusTwoLogLikelihood(c.truth, s, X, opt.reml) - f.m2ll;
-      r.lr_dof += static_cast<int>(f.params.size());
+      for (const NoiseParam& p : f.params) r.lr_dof += p.derived ? 0 : 1;  // the parameters fitted
     }
     if (also_select) {
       r.chosen_right += sel.best >= 0 && sel.chosen().structure == c.structure;

@@ -5,6 +5,8 @@
 //  - the real GRACE-FO C excerpt: the white levels per head axis agree with the audit's noise family
 //    (pairs' first differences, weighted least squares: another estimator of the same quantity).
 #include <boresight/audit/run.h>
+#include <boresight/io/overlay_yaml.h>
+#include <boresight/model/noise.h>
 #include <boresight/noise/run.h>
 
 #include "real_data.h"
@@ -184,4 +186,62 @@ TEST(NoiseRun, RealisticPresetWhiteLevelsRecoveredWhateverThePlatformFileSays) {
       }
     EXPECT_GE(coloured, 4) << "a coloured part chosen on " << coloured << " of 6 cross axes";
   }
+}
+
+TEST(NoiseRun, AChosenPowerLawWritesItsPivotLevelToJsonAndAValidOverlay) {
+  // The power law's level is reported at its pivot (pl.asd_pivot, a spectral density at at_hz) with the
+  // total sigma as a derived parameter; the pivot level is not a field of the model's terms, so the
+  // overlay (which holds the terms' fields and their uncertainties) must leave it out and still validate
+  // and read back; noise.json must carry the pivot's frequency and mark the derived parameter.
+  const model::NoiseModel truth =
+      model::NoiseModel::white(1.0).add(model::NoiseTerm::powerLaw(3.0, 1.0, 1e-3, 2.5e-2, model::powerLawFitTerms(21600, 1.0)));
+  model::NoiseSeries s;
+  model::NoiseSimulator sim(truth, model::CounterRng(11, model::Stream::HeadNoise, 1));
+  for (int k = 0; k < 21600; ++k) {
+    s.t_s.push_back(k);
+    s.y.push_back(sim.next(k));
+  }
+  noise::AxisResult a;
+  a.sensor = "head 1";
+  a.axis = "cross_x";
+  a.unit = "arcsec";
+  a.series = "a power law";
+  a.samples = s.size();
+  a.span_s = 21599;
+  a.interval_s = 1;
+  a.selection.fits.push_back(model::fitNoise(s, model::NoiseStructure::WhitePowerLaw, Eigen::MatrixXd::Ones(21600, 1)));
+  a.selection.best = 0;
+  const model::NoiseFit& f = a.selection.chosen();
+  ASSERT_EQ(f.params.size(), 6u);
+  const model::NoiseParam* level = f.find("pl.asd_pivot");
+  const model::NoiseParam* total = f.find("pl.sigma");
+  ASSERT_TRUE(level != nullptr && total != nullptr);
+  EXPECT_GT(level->at_hz, 0.0);
+  EXPECT_TRUE(total->derived);
+  EXPECT_FALSE(level->derived);
+  EXPECT_EQ(f.cov.rows(), 5);
+  EXPECT_NEAR(total->value, 3.0, 3 * total->sigma);
+
+  noise::NoiseOutput out;
+  out.platform = "GRACE-FO";
+  out.span_s = 21599;
+  out.t1 = 21599 * 1000000LL;
+  out.axes.push_back(a);
+  const std::string d = testutil::makeTempDir("noise_run_pivot");
+  std::string err;
+  ASSERT_TRUE(noise::writeNoiseOverlay(d + "/overlay.yaml", out, "test", &err)) << err;
+  model::Overlay back;
+  ASSERT_TRUE(io::readOverlay(d + "/overlay.yaml", back, &err)) << err;
+  ASSERT_EQ(back.noise.heads.size(), 1u);
+  bool has_total = false;
+  ASSERT_TRUE(back.noise.heads[0].axis[0].has_value());
+  for (const auto& p : back.noise.heads[0].axis[0]->params) {
+    EXPECT_NE(p.name, "pl.asd_pivot");
+    has_total = has_total || p.name == "pl.sigma";
+  }
+  EXPECT_TRUE(has_total);
+  ASSERT_TRUE(noise::writeNoiseJson(d + "/noise.json", out, &err)) << err;
+  const std::string json = testutil::slurp(d + "/noise.json");
+  EXPECT_NE(json.find("\"at_hz\""), std::string::npos);
+  EXPECT_NE(json.find("\"derived\": true"), std::string::npos);
 }

@@ -118,12 +118,12 @@ int main(int argc, char** argv) {
         const NoiseFit f = fitNoise(s, c.structure, Eigen::MatrixXd::Ones(static_cast<Eigen::Index>(s.size()), 1), opt);
         const double m2ll_truth = minusTwoLogLikelihood(c.truth, s, Eigen::MatrixXd::Ones(static_cast<Eigen::Index>(s.size()), 1));
         int dof = 0;
-        const double nees = jointNees(f, c.values, &dof);
+        const double nees = jointNees(f, c, &dof);
         std::printf("%s seed %llu: %s, %d evaluations, -2 log L %.2f (at the truth %.2f), NEES %.2f for %d%s%s\n", c.name.c_str(),
                     static_cast<unsigned long long>(seed0 + static_cast<std::uint64_t>(k)), f.converged ? "converged" : "NOT converged",
                     f.evaluations, f.m2ll, m2ll_truth, nees, dof, f.message.empty() ? "" : ": ", f.message.c_str());
         for (const NoiseParam& p : f.params) {
-          const double t = c.values.at(p.name);
+          const double t = truthOf(c, p);
           const double e = p.log_scale ? std::log(p.value) - std::log(t) : p.value - t;
           const double se = p.log_scale ? p.log_sigma : p.sigma;
           std::printf("    %-12s truth %-10.4g fit %-10.4g sigma %-10.3g z %7.2f%s\n", p.name.c_str(), t, p.value, se, e / se,
@@ -179,7 +179,10 @@ int main(int argc, char** argv) {
       const int in = r.within3.count(name) ? r.within3.at(name) : 0;
       double lo, hi;
       wilson(in, det, lo, hi);
-      std::printf("  %-14s %10.4g %8d/%-3d %10d (%5.1f %%) %6.1f-%5.1f %%\n", name.c_str(), v, det, r.runs, in,
+      char truth[32];
+      if (std::isnan(v)) std::snprintf(truth, sizeof truth, "at pivot");  // a level at each fit's pivot
+      else std::snprintf(truth, sizeof truth, "%.4g", v);
+      std::printf("  %-14s %10s %8d/%-3d %10d (%5.1f %%) %6.1f-%5.1f %%\n", name.c_str(), truth, det, r.runs, in,
                   det ? 100.0 * in / det : 0.0, 100 * lo, 100 * hi);
     }
     double lo, hi;
