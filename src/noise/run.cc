@@ -482,6 +482,28 @@ bool runNoise(const NoiseRequest& req, NoiseOutput& out, std::string* error) {
                   jw.iterations, jw.message.empty() ? "" : ": ", jw.message.c_str());
     out.notes.push_back(b);
   }
+  // The other heads' coloured parts in each series, relaxed between passes. A series' coloured PSD is
+  // its own axis's plus sum_b G(a, b)^2 times the other heads' axes' (W: that matrix over other heads),
+  // so fitting each axis with the others' last models is the iteration own' = P - W own, whose error
+  // is multiplied by -W every pass: with W's spectral radius near 1 (three heads: 1.0-1.1) it does not
+  // settle but swings - all colour in the own model in one pass, none in the next (found by
+  // ACatalogueGaussMarkovHeadErrorIsRecoveredAxisByAxis: cross-boresight levels 1.3-1.5" for a true
+  // 1", contamination 0.03-0.05"). Relaxed: the input of the next pass is (1 - w) times the last
+  // input plus w times the pass's own fits (terms with their variances scaled: the PSDs mix
+  // linearly), w = 1 / (1 + spectral radius of W), which puts the first relaxed input on the fixed
+  // point of the mode that swings and damps the others.
+  std::vector<std::vector<model::MarkovTerm>> coloured(static_cast<std::size_t>(3 * n));
+  for (std::size_t a = 0; a < coloured.size(); ++a) coloured[a] = current[a].markovTerms();
+  double relax = 1.0;
+  if (n >= 2) {
+    Eigen::MatrixXd W = Eigen::MatrixXd::Zero(3 * n, 3 * n);
+    for (int a = 0; a < 3 * n; ++a)
+      for (int b = 0; b < 3 * n; ++b)
+        if (b / 3 != a / 3) W(a, b) = heads.geometry().G(a, b) * heads.geometry().G(a, b);
+    const Eigen::VectorXcd ev = Eigen::EigenSolver<Eigen::MatrixXd>(W, false).eigenvalues();
+    const double rho = ev.size() > 0 ? ev.cwiseAbs().maxCoeff() : 0.0;
+    if (std::isfinite(rho)) relax = 1.0 / (1.0 + rho);
+  }
   // What the other heads add to series (i, k): their coloured terms as the last pass fitted them, and
   // one white term from the joint levels (when the joint fit converged). The coloured terms (power laws
   // expanded) are merged into one Gauss-Markov term per half decade of correlation time (variances
@@ -506,7 +528,7 @@ bool runNoise(const NoiseRequest& req, NoiseOutput& out, std::string* error) {
         } else {
           white += w * w * m.whiteVariance();
         }
-        for (const auto& t : m.markovTerms()) {
+        for (const auto& t : coloured[static_cast<std::size_t>(3 * j + l)]) {
           const double v = w * w * t.var;
           if (!(v > 0) || !(t.tau_s > 0)) continue;
           auto& b = bins[static_cast<int>(std::floor(2 * std::log10(t.tau_s)))];
@@ -539,8 +561,16 @@ bool runNoise(const NoiseRequest& req, NoiseOutput& out, std::string* error) {
       fitAxis(a, heads.series(i, k).series(), pass_opt, fixed, have_joint ? &joint[idx] : nullptr);
       head_axes[idx] = std::move(a);
     });
-    for (std::size_t idx = 0; idx < head_axes.size(); ++idx)
-      if (head_axes[idx].fitted()) current[idx] = head_axes[idx].selection.chosen().model;
+    for (std::size_t idx = 0; idx < head_axes.size(); ++idx) {
+      if (!head_axes[idx].fitted()) continue;
+      current[idx] = head_axes[idx].selection.chosen().model;
+      auto& c = coloured[idx];
+      for (auto& t : c) t.var *= 1.0 - relax;
+      for (auto t : current[idx].markovTerms()) {
+        t.var *= relax;
+        c.push_back(t);
+      }
+    }
     if (req.progress) {
       char b[160];
       std::snprintf(b, sizeof b, "noise: heads, pass %d of %d (%s likelihood) done at %.1f s", pass + 1, passes,
