@@ -652,9 +652,9 @@ void reportAtThePivot(NoiseFit& fit, const Eigen::VectorXd& x, int pl_terms, dou
   const double nan = std::numeric_limits<double>::quiet_NaN();
   for (Eigen::Index i = 0; i < np; ++i)
     for (Eigen::Index j = 0; j < np; ++j) {
-      const bool undefined = (i == 1 || j == 1) ? !std::isfinite(fit.cov(1, 1)) || !std::isfinite(fit.cov(i == 1 ? j : i, i == 1 ? j : i))
-                                                : !std::isfinite(fit.cov(i, j));
-      if (undefined) C1(i, j) = nan;
+      // undefined where either parameter is (the level's entries are defined through the total sigma's)
+      if (!std::isfinite(fit.cov(i, i)) || !std::isfinite(fit.cov(j, j)) || (i != 1 && j != 1 && !std::isfinite(fit.cov(i, j))))
+        C1(i, j) = nan;
     }
   NoiseParam total = fit.params[1];
   total.derived = true;

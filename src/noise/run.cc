@@ -448,6 +448,12 @@ bool runNoise(const NoiseRequest& req, NoiseOutput& out, std::string* error) {
     out.notes.push_back("no epoch with every configured head present: no head noise series");
   // The white levels of every head axis at once, from the differences of consecutive epochs: they set
   // the white part of what the other heads add to each series (joint_white.h).
+  // W(a, b): the squared weight of the other heads' axis b in series a (0 within a head): what their
+  // variances (white or coloured, per frequency) add to series a.
+  Eigen::MatrixXd W = Eigen::MatrixXd::Zero(3 * n, 3 * n);
+  for (int a = 0; a < 3 * n; ++a)
+    for (int b = 0; b < 3 * n; ++b)
+      if (b / 3 != a / 3) W(a, b) = heads.geometry().G(a, b) * heads.geometry().G(a, b);
   std::vector<JointAxis> joint(static_cast<std::size_t>(3 * n));
   bool have_joint = false;
   if (n >= 2 && heads.diffs() >= 2) {
@@ -465,9 +471,7 @@ bool runNoise(const NoiseRequest& req, NoiseOutput& out, std::string* error) {
       j.determined = jw.determined[static_cast<std::size_t>(a)];
       j.converged = jw.converged;
       // the other heads' white variance in series a: sum_b G(a, b)^2 s_b over the other heads' axes
-      Eigen::VectorXd g = Eigen::VectorXd::Zero(3 * n);
-      for (int b = 0; b < 3 * n; ++b)
-        if (b / 3 != a / 3) g[b] = heads.geometry().G(a, b) * heads.geometry().G(a, b);
+      const Eigen::VectorXd g = W.row(a).transpose();
       double v = 0;
       for (int b = 0; b < 3 * n; ++b)
         for (int c = 0; c < 3 * n; ++c)
@@ -496,15 +500,11 @@ bool runNoise(const NoiseRequest& req, NoiseOutput& out, std::string* error) {
   for (std::size_t a = 0; a < coloured.size(); ++a) coloured[a] = current[a].markovTerms();
   double relax = 1.0;
   if (n >= 2) {
-    Eigen::MatrixXd W = Eigen::MatrixXd::Zero(3 * n, 3 * n);
-    for (int a = 0; a < 3 * n; ++a)
-      for (int b = 0; b < 3 * n; ++b)
-        if (b / 3 != a / 3) W(a, b) = heads.geometry().G(a, b) * heads.geometry().G(a, b);
     const Eigen::VectorXcd ev = Eigen::EigenSolver<Eigen::MatrixXd>(W, false).eigenvalues();
     const double rho = ev.size() > 0 ? ev.cwiseAbs().maxCoeff() : 0.0;
     if (std::isfinite(rho)) relax = 1.0 / (1.0 + rho);
   }
-  // What the other heads add to series (i, k): their coloured terms as the last pass fitted them, and
+  // What the other heads add to series (i, k): their coloured terms as relaxed over the passes, and
   // one white term from the joint levels (when the joint fit converged). The coloured terms (power laws
   // expanded) are merged into one Gauss-Markov term per half decade of correlation time (variances
   // summed, the time their variance-weighted geometric mean): the fit's state then holds a few terms for
