@@ -1034,11 +1034,42 @@ NoiseFit fitNoise(const NoiseSeries& s, NoiseStructure structure, const Eigen::M
       p.note = "its term's level is not significant";
     }
   }
+  fit.x_fit = x;
+  fit.cov_fit = fit.cov;
+  fit.on_bound = at_bound;
+  fit.pl_terms = pl_terms;
   if (structure == NoiseStructure::WhitePowerLaw) reportAtThePivot(fit, x, pl_terms, d.T);
   const auto k = static_cast<double>(np + X.cols());
   fit.aic = fit.m2ll + 2 * k;
   fit.bic = fit.m2ll + k * std::log(static_cast<double>(whittle ? wd.samples : s.size()));
   return fit;
+}
+
+std::pair<double, double> NoiseFit::logPsd(double f_hz, double T_s) const {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const Eigen::Index np = x_fit.size();
+  if (np == 0 || cov_fit.rows() != np) return {nan, nan};
+  auto logS = [&](const Eigen::VectorXd& v) { return std::log(modelOf(structure, v, pl_terms).psdSampled(f_hz, T_s)); };
+  Eigen::RowVectorXd g = Eigen::RowVectorXd::Zero(np);
+  bool undetermined = false;
+  for (Eigen::Index j = 0; j < np; ++j) {
+    Eigen::VectorXd a = x_fit, b = x_fit;
+    a[j] += 1e-5;
+    b[j] -= 1e-5;
+    const double gj = (logS(a) - logS(b)) / 2e-5;
+    // A parameter on a bound is held (the covariance of the others is the one given it); one without a
+    // variance for another reason (a flat direction) leaves the PSD at f undetermined where the PSD
+    // depends on it (a hundredth per unit of its fitting scale or more), else it is held too.
+    const bool bound = static_cast<std::size_t>(j) < on_bound.size() && on_bound[static_cast<std::size_t>(j)];
+    if (std::isfinite(cov_fit(j, j)))
+      g[j] = gj;
+    else if (!bound && std::abs(gj) >= 1e-2)
+      undetermined = true;
+  }
+  if (undetermined) return {logS(x_fit), std::numeric_limits<double>::infinity()};
+  const Eigen::MatrixXd C = cov_fit.unaryExpr([](double v) { return std::isfinite(v) ? v : 0.0; });
+  const double var = (g * C * g.transpose())(0, 0);
+  return {logS(x_fit), var >= 0 ? std::sqrt(var) : nan};
 }
 
 NoiseFit fitWhiteFromDifferences(const NoiseSeries& s) {

@@ -253,6 +253,7 @@ void fitAxis(AxisResult& a, const model::NoiseSeries& s, const NoiseOptions& opt
   model::NoiseFitOptions fo;
   fo.fixed = fixed;
   fo.likelihood = opt.likelihood;
+  fo.skip_when_no_colour = !opt.every_structure;
   band(a, fo);
   a.contamination = fixed;
   if (s.size() < 16) {

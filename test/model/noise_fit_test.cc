@@ -7,7 +7,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdio>
+#include <limits>
 
 using namespace boresight::model;
 using namespace boresight::model::noisetest;
@@ -65,6 +67,33 @@ TEST(NoiseFit, CorrelationTimesOutsideTheSpanAreNotDetermined) {
   ASSERT_NE(w, nullptr);
   EXPECT_TRUE(w->determined);
   EXPECT_NEAR(w->value, 1.0, 3 * w->sigma);
+}
+
+TEST(NoiseFit, TheFittedSpectrumCarriesTheFitsUncertainty) {
+  // NoiseFit::logPsd: the fitted model's log PSD and its delta-method standard error. Near Nyquist the
+  // white level is all of the PSD, so the standard error of log S is twice the white level's relative
+  // one; where the Gauss-Markov term dominates, the truth is within 3 standard errors; a parameter
+  // without a variance leaves the PSD undetermined only where the PSD depends on it.
+  const NoiseModel m = NoiseModel::white(1.0).add(NoiseTerm::gaussMarkov(0.8, 60.0));
+  const NoiseSeries s = gappedSeries(m, 7200, kT, 0.05, 5, 0.0);
+  const NoiseFit f = fitNoise(s, NoiseStructure::WhiteGaussMarkov, Eigen::MatrixXd::Ones(static_cast<Eigen::Index>(s.size()), 1));
+  ASSERT_TRUE(f.converged) << f.message;
+  const NoiseParam* w = f.find("white.sigma");
+  ASSERT_NE(w, nullptr);
+  const auto [ls_hi, se_hi] = f.logPsd(0.45, kT);
+  EXPECT_NEAR(ls_hi, std::log(f.model.psdSampled(0.45, kT)), 1e-9);
+  EXPECT_NEAR(se_hi, 2 * w->log_sigma, 0.1 * 2 * w->log_sigma);
+  for (double fq : {2e-3, 5e-3, 2e-2}) {
+    const auto [ls, se] = f.logPsd(fq, kT);
+    ASSERT_TRUE(std::isfinite(se) && se > 0) << fq;
+    EXPECT_GT(se, se_hi) << fq << " Hz: the coloured part's uncertainty is missing";
+    EXPECT_LE(std::abs(ls - std::log(m.psdSampled(fq, kT))) / se, 3.0) << fq << " Hz";
+  }
+  NoiseFit g = f;  // the term's time without a variance: it matters below the corner, not near Nyquist
+  g.cov_fit.row(2).setConstant(std::numeric_limits<double>::quiet_NaN());
+  g.cov_fit.col(2).setConstant(std::numeric_limits<double>::quiet_NaN());
+  EXPECT_TRUE(std::isinf(g.logPsd(2e-3, kT).second));
+  EXPECT_TRUE(std::isfinite(g.logPsd(0.45, kT).second));
 }
 
 // --- the Whittle likelihood --------------------------------------------------------------------

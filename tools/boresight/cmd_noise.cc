@@ -20,8 +20,8 @@ namespace {
 
 const char* kUsage =
     "usage: boresight noise --config FILE INPUT... --out DIR [--overlay FILE] [--models LIST]\n"
-    "                       [--max-samples N] [--acc-block S] [--likelihood L] [--lookahead S] [--strict]\n"
-    "                       [--quiet]\n"
+    "                       [--max-samples N] [--acc-block S] [--likelihood L] [--every-structure]\n"
+    "                       [--lookahead S] [--strict] [--quiet]\n"
     "\n"
     "Noise as the data has it: for every head axis (cross-boresight x, y and about the boresight, head\n"
     "axes) and every accelerometer axis (A frame), a noise model fitted to the data by maximum\n"
@@ -50,6 +50,10 @@ const char* kUsage =
     "                       the data are compared with, and the other heads' part at the first fit)\n"
     "  --models LIST        candidate structures, comma-separated, of white, white+gauss_markov,\n"
     "                       white+2gauss_markov, white+power_law (default: all four)\n"
+    "  --every-structure    fit every candidate on every axis (by default a richer structure is not\n"
+    "                       fitted where the simpler pair below it shows nothing for it to take up:\n"
+    "                       two terms or a power law where one term does not beat white, a power law\n"
+    "                       where two terms do not beat one); slower, for comparing the candidates\n"
     "  --max-samples N      samples kept per axis; longer series keep every 2nd, 4th, ... (default 65536)\n"
     "  --acc-block S        block of the star-minus-accelerometer series, s (default 100)\n"
     "  --likelihood L       exact (state space: every sample, any gaps; seconds per axis on a day),\n"
@@ -86,6 +90,7 @@ int runNoise(int argc, char** argv) {
   app.add_option("--lookahead", req.lookahead_s)->check(finiteRange(0.0, 3600.0));
   std::string likelihood = "auto";
   app.add_option("--likelihood", likelihood)->check(CLI::IsMember({"exact", "whittle", "auto"}));
+  app.add_flag("--every-structure", req.options.every_structure);
   app.add_flag("--strict", req.strict);
   app.add_flag("--quiet", quiet);
   app.add_option("inputs", req.inputs)->required();

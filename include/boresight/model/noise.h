@@ -52,6 +52,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace boresight::model {
@@ -307,6 +308,19 @@ struct NoiseFit {
   double f_det_lo = 0, f_det_hi = 0;  ///< the band in which its times and corners count as determined, Hz
   std::string message;            ///< why not converged, or ""
   const NoiseParam* find(const std::string& name) const;
+  /// The fitted model's one-sided PSD at f (Hz; sampled every T_s: NoiseModel::psdSampled) as its natural log, with the
+  /// standard error of that log from the fit's covariance (delta method on the fitting coordinates).
+  /// Parameters on a bound of their range are held at it (the others' covariance is the one given
+  /// them); a parameter without a variance for another reason (a flat direction of the likelihood) is
+  /// held where the PSD at f hardly depends on it (under 0.01 per unit of its fitting scale) and
+  /// makes the standard error infinite where it does (not determined at f). The model only, not a
+  /// fixed part the fit held (fit.model). {NaN, NaN} for a fit without parameters.
+  std::pair<double, double> logPsd(double f_hz, double T_s) const;
+  // the fitting coordinates and their covariance (logPsd)
+  Eigen::VectorXd x_fit;
+  Eigen::MatrixXd cov_fit;
+  std::vector<bool> on_bound;
+  int pl_terms = 0;
 };
 
 /// Maximum-likelihood fit of one structure to a series (gaps allowed: the exact likelihood). The

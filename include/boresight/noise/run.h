@@ -43,6 +43,9 @@ struct NoiseOptions {
   /// false: the other heads' part of a head's series is not modelled (its whole noise is put on the
   /// head: a diagnostic, the levels come out too high)
   bool model_other_heads = true;
+  /// true: every candidate structure is fitted on every axis (model/noise.h:
+  /// NoiseFitOptions::skip_when_no_colour off; slower, for comparing the candidates)
+  bool every_structure = false;
 };
 
 /// One axis's result.
