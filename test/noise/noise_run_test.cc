@@ -9,6 +9,7 @@
 #include <boresight/model/noise.h>
 #include <boresight/noise/run.h>
 
+#include "excerpt_scenario.h"
 #include "real_data.h"
 #include "test_files.h"
 
@@ -253,25 +254,11 @@ TEST(NoiseRun, ACatalogueGaussMarkovHeadErrorIsRecoveredAxisByAxis) {
   // candidate structure must choose white + Gauss-Markov on most axes and, per axis, recover the white
   // level and the term's level and time within 3 sigma of the truth (the truth is in the family; the
   // other heads' part of each series is modelled, not subtracted).
-  const std::string d = testutil::makeTempDir("noise_run_gm");
-  ASSERT_TRUE(testutil::writeFile(d + "/scenario.yaml",
-                                  "base: " BORESIGHT_SOURCE_DIR "/config/sim_gracefo.yaml\n"
-                                  "head_overrides:\n"
-                                  "  - {id: 1, noise_cross_arcsec: 2.29, noise_about_arcsec: 21.1}\n"
-                                  "  - {id: 2, noise_cross_arcsec: 1.69, noise_about_arcsec: 30.8}\n"
-                                  "  - {id: 3, noise_cross_arcsec: 2.32, noise_about_arcsec: 29.9}\n"
-                                  "add_effects:\n"
-                                  "  - {name: coloured_noise, sensor: all, cross_arcsec: 1, about_arcsec: 6, tau_s: 100}\n"));
-  const testutil::CliRun s = testutil::runProgram(
-      BORESIGHT_CLI, "simulate --scenario " + d + "/scenario.yaml --seed 7 --duration 21600 --out " + d + " --quiet --no-lcm");
-  ASSERT_EQ(s.status, 0) << s.out;
-  noise::NoiseRequest req;
-  req.config = BORESIGHT_SOURCE_DIR "/config/gracefo.yaml";
-  req.inputs = {d + "/SCA1A_2023-06-01_C_04.txt", d + "/ACC1A_2023-06-01_C_04.txt", d + "/QSA1B_2023-06-01_C_04.txt"};
   noise::NoiseOutput out;
-  std::string err;
-  ASSERT_TRUE(noise::runNoise(req, out, &err)) << err;
-  const double cross[3] = {2.29, 1.69, 2.32}, about[3] = {21.1, 30.8, 29.9};
+  ASSERT_TRUE(testutil::simulateExcerptScenarioAndFitNoise(
+      "noise_run_gm", "  - {name: coloured_noise, sensor: all, cross_arcsec: 1, about_arcsec: 6, tau_s: 100}\n", 7, 21600, {}, out));
+  const double* cross = testutil::kExcerptCross;
+  const double* about = testutil::kExcerptAbout;
   int chosen_gm = 0, checked = 0;
   for (int h = 1; h <= 3; ++h)
     for (const char* ax : {"cross_x", "cross_y", "about_boresight"}) {

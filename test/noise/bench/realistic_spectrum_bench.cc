@@ -18,7 +18,7 @@
 #include <boresight/model/noise.h>
 #include <boresight/noise/run.h>
 
-#include "test_files.h"
+#include "../excerpt_scenario.h"
 
 #include <gtest/gtest.h>
 
@@ -55,29 +55,16 @@ double worstZ(const noise::AxisResult& a, const model::NoiseFit& f, const model:
 }  // namespace
 
 TEST(NoiseRealisticSpectrum, TheChosenModelsSpectrumIsTheTruthsInTheDeterminableBand) {
-  const std::string d = testutil::makeTempDir("noise_realistic_spectrum");
-  ASSERT_TRUE(testutil::writeFile(d + "/scenario.yaml",
-                                  "base: " BORESIGHT_SOURCE_DIR "/config/sim_gracefo.yaml\n"
-                                  "head_overrides:\n"
-                                  "  - {id: 1, noise_cross_arcsec: 2.29, noise_about_arcsec: 21.1}\n"
-                                  "  - {id: 2, noise_cross_arcsec: 1.69, noise_about_arcsec: 30.8}\n"
-                                  "  - {id: 3, noise_cross_arcsec: 2.32, noise_about_arcsec: 29.9}\n"
-                                  "add_effects:\n"
-                                  "  - {name: coloured_noise, sensor: all, cross_arcsec: 0.4, about_arcsec: 3, alpha: 1, "
-                                  "f_lo_hz: 1.0e-4, f_hi_hz: 2.0e-2}\n"
-                                  "  - {name: thermal_wander, sensor: all, cross_arcsec: 1, about_arcsec: 2, alpha: 1.5, "
-                                  "f_lo_hz: 2.0e-5, f_hi_hz: 2.0e-3}\n"));
-  const testutil::CliRun s = testutil::runProgram(
-      BORESIGHT_CLI, "simulate --scenario " + d + "/scenario.yaml --seed 11 --duration 43200 --out " + d + " --quiet --no-lcm");
-  ASSERT_EQ(s.status, 0) << s.out;
-  noise::NoiseRequest req;
-  req.config = BORESIGHT_SOURCE_DIR "/config/gracefo.yaml";
-  req.inputs = {d + "/SCA1A_2023-06-01_C_04.txt", d + "/ACC1A_2023-06-01_C_04.txt", d + "/QSA1B_2023-06-01_C_04.txt"};
-  req.options.every_structure = true;
+  noise::NoiseOptions options;
+  options.every_structure = true;
   noise::NoiseOutput out;
-  std::string err;
-  ASSERT_TRUE(noise::runNoise(req, out, &err)) << err;
-  const double cross[3] = {2.29, 1.69, 2.32}, about[3] = {21.1, 30.8, 29.9};
+  ASSERT_TRUE(testutil::simulateExcerptScenarioAndFitNoise(
+      "noise_realistic_spectrum",
+      "  - {name: coloured_noise, sensor: all, cross_arcsec: 0.4, about_arcsec: 3, alpha: 1, f_lo_hz: 1.0e-4, f_hi_hz: 2.0e-2}\n"
+      "  - {name: thermal_wander, sensor: all, cross_arcsec: 1, about_arcsec: 2, alpha: 1.5, f_lo_hz: 2.0e-5, f_hi_hz: 2.0e-3}\n",
+      11, 43200, options, out));
+  const double* cross = testutil::kExcerptCross;
+  const double* about = testutil::kExcerptAbout;
   int axes = 0, wrong_rejected = 0;
   for (int h = 1; h <= 3; ++h)
     for (const char* ax : {"cross_x", "cross_y", "about_boresight"}) {
