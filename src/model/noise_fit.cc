@@ -1037,7 +1037,6 @@ NoiseFit fitNoise(const NoiseSeries& s, NoiseStructure structure, const Eigen::M
   fit.x_fit = x;
   fit.cov_fit = fit.cov;
   fit.on_bound = at_bound;
-  fit.pl_terms = pl_terms;
   if (structure == NoiseStructure::WhitePowerLaw) reportAtThePivot(fit, x, pl_terms, d.T);
   const auto k = static_cast<double>(np + X.cols());
   fit.aic = fit.m2ll + 2 * k;
@@ -1049,7 +1048,11 @@ std::pair<double, double> NoiseFit::logPsd(double f_hz, double T_s) const {
   const double nan = std::numeric_limits<double>::quiet_NaN();
   const Eigen::Index np = x_fit.size();
   if (np == 0 || cov_fit.rows() != np) return {nan, nan};
+  int pl_terms = 0;  // the power law's term count, as the fit fixed it
+  for (const auto& t : model.terms)
+    if (t.kind == NoiseKind::PowerLaw) pl_terms = t.powerLawTermCount();
   auto logS = [&](const Eigen::VectorXd& v) { return std::log(modelOf(structure, v, pl_terms).psdSampled(f_hz, T_s)); };
+  const double at = logS(x_fit);
   Eigen::RowVectorXd g = Eigen::RowVectorXd::Zero(np);
   bool undetermined = false;
   for (Eigen::Index j = 0; j < np; ++j) {
@@ -1066,10 +1069,10 @@ std::pair<double, double> NoiseFit::logPsd(double f_hz, double T_s) const {
     else if (!bound && std::abs(gj) >= 1e-2)
       undetermined = true;
   }
-  if (undetermined) return {logS(x_fit), std::numeric_limits<double>::infinity()};
+  if (undetermined) return {at, std::numeric_limits<double>::infinity()};
   const Eigen::MatrixXd C = cov_fit.unaryExpr([](double v) { return std::isfinite(v) ? v : 0.0; });
   const double var = (g * C * g.transpose())(0, 0);
-  return {logS(x_fit), var >= 0 ? std::sqrt(var) : nan};
+  return {at, var >= 0 ? std::sqrt(var) : nan};
 }
 
 NoiseFit fitWhiteFromDifferences(const NoiseSeries& s) {

@@ -94,6 +94,16 @@ TEST(NoiseFit, TheFittedSpectrumCarriesTheFitsUncertainty) {
   g.cov_fit.col(2).setConstant(std::numeric_limits<double>::quiet_NaN());
   EXPECT_TRUE(std::isinf(g.logPsd(2e-3, kT).second));
   EXPECT_TRUE(std::isfinite(g.logPsd(0.45, kT).second));
+  g.on_bound.assign(3, false);  // the same time on a bound of its range: held, the PSD determined
+  g.on_bound[2] = true;
+  EXPECT_TRUE(std::isfinite(g.logPsd(2e-3, kT).second));
+  // a power law's spectrum from its fitting coordinates (its cov is on the reporting scale)
+  const NoiseModel pl = NoiseModel::white(1.0).add(NoiseTerm::powerLaw(1.5, 1.0, 1e-3, 5e-2));
+  const NoiseSeries sp = gappedSeries(pl, 7200, kT, 0.05, 6, 0.0);
+  const NoiseFit fp = fitNoise(sp, NoiseStructure::WhitePowerLaw, Eigen::MatrixXd::Ones(static_cast<Eigen::Index>(sp.size()), 1));
+  const auto [lp, sep] = fp.logPsd(1e-2, kT);
+  EXPECT_NEAR(lp, std::log(fp.model.psdSampled(1e-2, kT)), 1e-9);
+  ASSERT_TRUE(std::isfinite(sep) && sep > 0);
 }
 
 // --- the Whittle likelihood --------------------------------------------------------------------

@@ -24,8 +24,7 @@ inline bool simulateExcerptScenarioAndFitNoise(const std::string& tag, const std
                                                const boresight::noise::NoiseOptions& options,
                                                boresight::noise::NoiseOutput& out) {
   const std::string d = makeTempDir(tag);
-  const std::string scenario = std::string("base: ") + BORESIGHT_SOURCE_DIR + "/config/sim_gracefo.yaml\nhead_overrides:\n";
-  std::string yaml = scenario;
+  std::string yaml = std::string("base: ") + BORESIGHT_SOURCE_DIR + "/config/sim_gracefo.yaml\nhead_overrides:\n";
   for (int h = 0; h < 3; ++h)
     yaml += "  - {id: " + std::to_string(h + 1) + ", noise_cross_arcsec: " + std::to_string(kExcerptCross[h]) +
             ", noise_about_arcsec: " + std::to_string(kExcerptAbout[h]) + "}\n";

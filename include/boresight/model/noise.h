@@ -316,11 +316,11 @@ struct NoiseFit {
   /// makes the standard error infinite where it does (not determined at f). The model only, not a
   /// fixed part the fit held (fit.model). {NaN, NaN} for a fit without parameters.
   std::pair<double, double> logPsd(double f_hz, double T_s) const;
-  // the fitting coordinates and their covariance (logPsd)
+  // logPsd's inputs: the fitting coordinates, their covariance (the same as cov except for the power
+  // law, whose cov is on the reporting scale) and which of them sit on a bound of their range
   Eigen::VectorXd x_fit;
   Eigen::MatrixXd cov_fit;
   std::vector<bool> on_bound;
-  int pl_terms = 0;
 };
 
 /// Maximum-likelihood fit of one structure to a series (gaps allowed: the exact likelihood). The
