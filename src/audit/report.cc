@@ -167,9 +167,9 @@ std::vector<NamedPlot> plotsOf(const AuditResult& r) {
     for (const auto& s : r.series) {
       if (s.family != fam || isIba(s)) continue;
       np.plot.ylabel = s.unit.empty() ? "residual" : "residual [" + s.unit + "]";
-      np.plot.series.push_back({s.label + " before", s.t_s, s.before, {}, report::Series::Style::kLine, 0.0});
+      np.plot.series.push_back({s.label + " before", s.t_s, s.before, {}, report::Series::Style::kLine, 0.0, {}});
       if (s.after.size() == s.t_s.size())
-        np.plot.series.push_back({s.label + " after", s.t_s, s.after, {}, report::Series::Style::kLine, 0.0});
+        np.plot.series.push_back({s.label + " after", s.t_s, s.after, {}, report::Series::Style::kLine, 0.0, {}});
     }
     out.push_back(std::move(np));
   }
@@ -183,9 +183,9 @@ std::vector<NamedPlot> plotsOf(const AuditResult& r) {
     for (const auto& s : r.series) {
       if (!isIba(s)) continue;
       np.plot.ylabel = s.unit.empty() ? "deviation" : "deviation [" + s.unit + "]";
-      np.plot.series.push_back({s.label + " before", s.t_s, s.before, {}, report::Series::Style::kLine, 0.0});
+      np.plot.series.push_back({s.label + " before", s.t_s, s.before, {}, report::Series::Style::kLine, 0.0, {}});
       if (s.after.size() == s.t_s.size())
-        np.plot.series.push_back({s.label + " after", s.t_s, s.after, {}, report::Series::Style::kLine, 0.0});
+        np.plot.series.push_back({s.label + " after", s.t_s, s.after, {}, report::Series::Style::kLine, 0.0, {}});
     }
     if (!np.plot.series.empty()) out.push_back(std::move(np));
   }
@@ -201,9 +201,9 @@ std::vector<NamedPlot> plotsOf(const AuditResult& r) {
       np.plot.xlabel = "frequency [" + s.unit + "]";
       for (const auto& se : r.series)
         if (se.family == s.family && se.label == s.label && !se.unit.empty()) np.plot.ylabel = "amplitude [" + se.unit + "]";
-      np.plot.series.push_back({s.label + " before", s.freq, s.before, {}, report::Series::Style::kLine, 0.0});
+      np.plot.series.push_back({s.label + " before", s.freq, s.before, {}, report::Series::Style::kLine, 0.0, {}});
       if (s.after.size() == s.freq.size())
-        np.plot.series.push_back({s.label + " after", s.freq, s.after, {}, report::Series::Style::kLine, 0.0});
+        np.plot.series.push_back({s.label + " after", s.freq, s.after, {}, report::Series::Style::kLine, 0.0, {}});
     }
     out.push_back(std::move(np));
   }

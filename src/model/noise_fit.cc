@@ -1075,6 +1075,37 @@ std::pair<double, double> NoiseFit::logPsd(double f_hz, double T_s) const {
   return {at, var >= 0 ? std::sqrt(var) : nan};
 }
 
+std::pair<double, double> NoiseSelection::averagedLogPsd(double f_hz, double T_s) const {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  double aic_min = std::numeric_limits<double>::infinity();
+  for (const auto& f : fits)
+    if (f.converged && !f.model.empty() && std::isfinite(f.aic)) aic_min = std::min(aic_min, f.aic);
+  if (!std::isfinite(aic_min)) return {nan, nan};
+  double wsum = 0;
+  std::vector<std::pair<double, std::pair<double, double>>> kept;  // weight, {log PSD, se}
+  for (const auto& f : fits) {
+    if (!(f.converged && !f.model.empty() && std::isfinite(f.aic))) continue;
+    kept.push_back({std::exp(-0.5 * (f.aic - aic_min)), f.logPsd(f_hz, T_s)});
+    wsum += kept.back().first;
+  }
+  double mean = 0, wkept = 0;
+  for (auto& k : kept) {
+    k.first /= wsum;
+    if (k.first < 1e-3) continue;
+    if (!std::isfinite(k.second.first)) return {nan, nan};
+    mean += k.first * k.second.first;
+    wkept += k.first;
+  }
+  mean /= wkept;
+  double se = 0;
+  for (const auto& [w, p] : kept) {
+    if (w < 1e-3) continue;
+    if (!std::isfinite(p.second)) return {mean, std::numeric_limits<double>::infinity()};
+    se += w / wkept * std::sqrt(p.second * p.second + (p.first - mean) * (p.first - mean));
+  }
+  return {mean, se};
+}
+
 NoiseFit fitWhiteFromDifferences(const NoiseSeries& s) {
   NoiseFit fit;
   fit.structure = NoiseStructure::White;

@@ -127,6 +127,18 @@ bool writeNoiseJson(const std::string& path, const NoiseOutput& out, std::string
       Json c = Json::array();
       for (const auto& f : a.selection.fits) c.push_back(fitJson(f));
       x["candidates"] = c;
+      // natural log of the PSD (unit^2/Hz, without the other heads' part); null: not determined
+      Json bs = Json::array();
+      for (const BandPoint& q : bandSpectrum(a)) {
+        Json o;
+        o["f_hz"] = num(q.f_hz);
+        o["chosen_log_psd"] = num(q.chosen_log_psd);
+        o["chosen_se"] = num(q.chosen_se);
+        o["averaged_log_psd"] = num(q.averaged_log_psd);
+        o["averaged_se"] = num(q.averaged_se);
+        bs.push_back(o);
+      }
+      x["band_spectrum"] = bs;
     } else {
       x["chosen"] = nullptr;
     }
@@ -268,8 +280,11 @@ bool writeNoiseReport(const std::string& dir, const NoiseOutput& out, std::strin
         "determined only between 20 / span and 1 / (20 interval) (Whittle: 20 / the longest gap-free run);\n"
         "outside, a parameter says \"not determined\". Likelihood: exact (state space, every sample) or\n"
         "whittle (the periodograms of the long gap-free runs; in brackets the samples they hold).\n";
-  md << "\n## Spectra\n\nThe data's Welch spectrum against the chosen model (log-log), the configured model, and for the\n"
-        "heads what the other heads add (the contamination the fit carries).\n\n";
+  md << "\n## Spectra\n\nThe data's Welch spectrum against the chosen model (log-log), the configured model, for the\n"
+        "heads what the other heads add (the contamination the fit carries), and across the determinable band\n"
+        "the fitted candidates averaged with Akaike weights (points, +-2 standard errors that hold the choice\n"
+        "between the candidates as well as each one's own; where they are much wider than the chosen model's\n"
+        "own, the axis's notes say so).\n\n";
   for (const auto& a : out.axes) {
     if (a.spectrum.f_hz.empty()) continue;
     report::Plot p;
@@ -294,6 +309,23 @@ bool writeNoiseReport(const std::string& dir, const NoiseOutput& out, std::strin
     };
     if (a.fitted()) curve("chosen model + contamination", a.selection.chosen().model, &a.contamination);
     if (!a.contamination.empty()) curve("contamination (other heads)", a.contamination, nullptr);
+    {
+      // the candidates averaged with Akaike weights, +- 2 unconditional standard errors (the choice
+      // between them included), plus the other heads' part as the chosen curve has it
+      report::Series avg;
+      avg.name = "candidates averaged (Akaike), +-2 se";
+      avg.style = report::Series::Style::kPoints;
+      for (const BandPoint& q : bandSpectrum(a)) {
+        if (!(std::isfinite(q.averaged_log_psd) && std::isfinite(q.averaged_se))) continue;
+        const double c = a.contamination.empty() ? 0.0 : a.contamination.psdSampled(q.f_hz, T);
+        const double mid = std::exp(q.averaged_log_psd) + c;
+        avg.x.push_back(q.f_hz);
+        avg.y.push_back(mid);
+        avg.yerr.push_back(std::exp(q.averaged_log_psd + 2 * q.averaged_se) + c - mid);
+        avg.yerr_lo.push_back(mid - (std::exp(q.averaged_log_psd - 2 * q.averaged_se) + c));
+      }
+      if (!avg.x.empty()) p.series.push_back(avg);
+    }
     if (!a.configured.empty() && !isSlow(a)) {
       // the accelerometer's difference series carries only its white part
       model::NoiseModel conf = a.configured;

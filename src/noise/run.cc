@@ -15,6 +15,7 @@
 #include <cstdio>
 #include <limits>
 #include <map>
+#include <tuple>
 #include <thread>
 
 namespace boresight::noise {
@@ -317,12 +318,32 @@ void fitAxis(AxisResult& a, const model::NoiseSeries& s, const NoiseOptions& opt
           // the fit's covariance (log scale) says the same as the parameter
           const auto k = static_cast<Eigen::Index>(i);
           if (k < f.cov.rows() && k < f.cov.cols()) f.cov(k, k) = p.log_sigma * p.log_sigma;
+          if (k < f.cov_fit.rows() && k < f.cov_fit.cols()) f.cov_fit(k, k) = p.log_sigma * p.log_sigma;  // logPsd's
         }
     }
     char b[200];
     std::snprintf(b, sizeof b, "white level from the differences of every head axis at once: %.3g +- %.2g%s", joint->level,
                   joint->sigma, joint->determined ? "" : " (not determined by the heads' geometry)");
     a.notes.push_back(b);
+  }
+  // Where the candidates disagree, the chosen model's own standard errors understate what the data say
+  // of the spectrum (a simpler model is stiffer): say where and by how much.
+  {
+    double worst = 0, at = 0;
+    for (const BandPoint& q : bandSpectrum(a))
+      if (std::isfinite(q.averaged_se) && q.chosen_se > 0 && q.averaged_se / q.chosen_se > worst) {
+        worst = q.averaged_se / q.chosen_se;
+        at = q.f_hz;
+      }
+    if (worst > 2) {
+      char b[400];
+      std::snprintf(b, sizeof b,
+                    "the choice between the candidates is uncertain: at %.2g Hz the spectrum's standard error with it (the "
+                    "fitted candidates averaged with Akaike weights) is %.1f times the chosen model's own (noise.json "
+                    "band_spectrum)",
+                    at, worst);
+      a.notes.push_back(b);
+    }
   }
   if (s.size() >= 64) {
     std::size_t seg = 32;
@@ -357,6 +378,20 @@ void parallelFor(std::size_t n, F f) {
 }
 
 }  // namespace
+
+std::vector<BandPoint> bandSpectrum(const AxisResult& a) {
+  std::vector<BandPoint> out;
+  if (!a.fitted() || !(a.f_det_lo > 0 && a.f_det_hi > a.f_det_lo) || !(a.interval_s > 0)) return out;
+  constexpr int kPoints = 12;
+  for (int q = 0; q < kPoints; ++q) {
+    BandPoint p;
+    p.f_hz = a.f_det_lo * std::pow(a.f_det_hi / a.f_det_lo, q / double(kPoints - 1));
+    std::tie(p.chosen_log_psd, p.chosen_se) = a.selection.chosen().logPsd(p.f_hz, a.interval_s);
+    std::tie(p.averaged_log_psd, p.averaged_se) = a.selection.averagedLogPsd(p.f_hz, a.interval_s);
+    out.push_back(p);
+  }
+  return out;
+}
 
 bool runNoise(const NoiseRequest& req, NoiseOutput& out, std::string* error) {
   out = NoiseOutput{};

@@ -45,7 +45,8 @@ std::string svgPlot(const Plot& p) {
       xmin = std::min(xmin, x), xmax = std::max(xmax, x);
       if (!std::isfinite(ty(s.y[i]))) continue;
       const double e = i < s.yerr.size() && std::isfinite(s.yerr[i]) ? std::abs(s.yerr[i]) : 0.0;
-      const double lo = ty(s.y[i] - e), hi = ty(s.y[i] + e);
+      const double el = i < s.yerr_lo.size() && std::isfinite(s.yerr_lo[i]) ? std::abs(s.yerr_lo[i]) : e;
+      const double lo = ty(s.y[i] - el), hi = ty(s.y[i] + e);
       ymin = std::min(ymin, std::isfinite(lo) ? lo : ty(s.y[i])), ymax = std::max(ymax, hi);
     }
   if (!p.xcategories.empty()) {
@@ -162,7 +163,8 @@ std::string svgPlot(const Plot& p) {
         if (!ok(i)) continue;
         const double x = px(s.x[i] + s.dx);
         if (i < s.yerr.size() && std::isfinite(s.yerr[i])) {
-          const double lo = ty(s.y[i] - std::abs(s.yerr[i]));
+          const double el = i < s.yerr_lo.size() && std::isfinite(s.yerr_lo[i]) ? s.yerr_lo[i] : s.yerr[i];
+          const double lo = ty(s.y[i] - std::abs(el));
           svg << "<line x1='" << x << "' y1='" << (std::isfinite(lo) ? pyt(lo) : H - B) << "' x2='" << x << "' y2='"
               << py(s.y[i] + std::abs(s.yerr[i])) << "' stroke='" << c << "' stroke-width='2'/>";
         }

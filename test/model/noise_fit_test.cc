@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <tuple>
 
 using namespace boresight::model;
 using namespace boresight::model::noisetest;
@@ -104,6 +105,53 @@ TEST(NoiseFit, TheFittedSpectrumCarriesTheFitsUncertainty) {
   const auto [lp, sep] = fp.logPsd(1e-2, kT);
   EXPECT_NEAR(lp, std::log(fp.model.psdSampled(1e-2, kT)), 1e-9);
   ASSERT_TRUE(std::isfinite(sep) && sep > 0);
+}
+
+TEST(NoiseFit, TheAveragedSpectrumCarriesTheChoiceOfModel) {
+  // NoiseSelection::averagedLogPsd: Akaike-weighted mean of the converged candidates' log PSDs, and
+  // the unconditional standard error sum_k w_k sqrt(se_k^2 + (logS_k - mean)^2).
+  const NoiseModel m = NoiseModel::white(1.0).add(NoiseTerm::gaussMarkov(0.8, 60.0));
+  const NoiseSeries s = gappedSeries(m, 7200, kT, 0.05, 5, 0.0);
+  const NoiseFit f = fitNoise(s, NoiseStructure::WhiteGaussMarkov, Eigen::MatrixXd::Ones(static_cast<Eigen::Index>(s.size()), 1));
+  ASSERT_TRUE(f.converged) << f.message;
+  NoiseFit g = f;  // a second candidate with another spectrum (a higher term level)
+  g.x_fit[1] += 0.3;
+  const double fq = 5e-3;
+  const auto pf = f.logPsd(fq, kT), pg = g.logPsd(fq, kT);
+  ASSERT_GT(std::abs(pf.first - pg.first), 3 * pf.second) << "the two candidates must differ for the check to tell";
+  NoiseSelection sel;
+  sel.fits = {f, g};
+  sel.best = 0;
+  // equal AIC: equal weights; the spread between the candidates enters the error
+  auto [mean, se] = sel.averagedLogPsd(fq, kT);
+  const double mid = 0.5 * (pf.first + pg.first), half = 0.5 * std::abs(pf.first - pg.first);
+  EXPECT_NEAR(mean, mid, 1e-12);
+  EXPECT_NEAR(se, 0.5 * (std::hypot(pf.second, half) + std::hypot(pg.second, half)), 1e-12);
+  EXPECT_GT(se, std::max(pf.second, pg.second));
+  // AIC 2 higher: weight e^-1 relative
+  sel.fits[1].aic = f.aic + 2;
+  const double w = std::exp(-1.0) / (1 + std::exp(-1.0));
+  std::tie(mean, se) = sel.averagedLogPsd(fq, kT);
+  EXPECT_NEAR(mean, (1 - w) * pf.first + w * pg.first, 1e-12);
+  // a candidate with a weight under 1e-3 is left out: the best one alone
+  sel.fits[1].aic = f.aic + 20;
+  std::tie(mean, se) = sel.averagedLogPsd(fq, kT);
+  EXPECT_NEAR(mean, pf.first, 1e-12);
+  EXPECT_NEAR(se, pf.second, 1e-12);
+  // a fit that did not converge is not a candidate, however low its AIC
+  sel.fits[1].aic = f.aic - 50;
+  sel.fits[1].converged = false;
+  std::tie(mean, se) = sel.averagedLogPsd(fq, kT);
+  EXPECT_NEAR(mean, pf.first, 1e-12);
+  // a kept candidate whose spectrum is not determined at f makes the average not determined there
+  sel.fits[1].converged = true;
+  sel.fits[1].aic = f.aic;
+  sel.fits[1].cov_fit.row(2).setConstant(std::numeric_limits<double>::quiet_NaN());
+  sel.fits[1].cov_fit.col(2).setConstant(std::numeric_limits<double>::quiet_NaN());
+  EXPECT_TRUE(std::isinf(sel.averagedLogPsd(2e-3, kT).second));
+  // nothing converged: no average
+  sel.fits[0].converged = sel.fits[1].converged = false;
+  EXPECT_TRUE(std::isnan(sel.averagedLogPsd(fq, kT).first));
 }
 
 // --- the Whittle likelihood --------------------------------------------------------------------

@@ -245,6 +245,28 @@ TEST(NoiseRun, AChosenPowerLawWritesItsPivotLevelToJsonAndAValidOverlay) {
   const std::string json = testutil::slurp(d + "/noise.json");
   EXPECT_NE(json.find("\"at_hz\""), std::string::npos);
   EXPECT_NE(json.find("\"derived\": true"), std::string::npos);
+  // the spectrum across the band: none without a band; with one candidate the average is that candidate
+  EXPECT_TRUE(noise::bandSpectrum(a).empty());
+  EXPECT_NE(json.find("\"band_spectrum\""), std::string::npos);
+  EXPECT_EQ(json.find("\"averaged_se\""), std::string::npos);
+  a.f_det_lo = f.f_det_lo;
+  a.f_det_hi = f.f_det_hi;
+  const auto band = noise::bandSpectrum(a);
+  ASSERT_EQ(band.size(), 12u);
+  EXPECT_NEAR(band.front().f_hz, f.f_det_lo, 1e-12 * f.f_det_lo);
+  EXPECT_NEAR(band.back().f_hz, f.f_det_hi, 1e-9 * f.f_det_hi);
+  for (const auto& q : band) {
+    ASSERT_TRUE(std::isfinite(q.chosen_se) && q.chosen_se > 0) << q.f_hz;
+    EXPECT_EQ(q.averaged_log_psd, q.chosen_log_psd);
+    EXPECT_EQ(q.averaged_se, q.chosen_se);
+    EXPECT_LE(std::abs(q.chosen_log_psd - std::log(truth.psdSampled(q.f_hz, 1.0))), 3.5 * q.chosen_se) << q.f_hz;
+  }
+  out.axes[0] = a;
+  ASSERT_TRUE(noise::writeNoiseJson(d + "/noise.json", out, &err)) << err;
+  const std::string json2 = testutil::slurp(d + "/noise.json");
+  std::size_t points = 0;
+  for (std::size_t at = json2.find("\"averaged_se\""); at != std::string::npos; at = json2.find("\"averaged_se\"", at + 1)) ++points;
+  EXPECT_EQ(points, 12u);
 }
 
 TEST(NoiseRun, ACatalogueGaussMarkovHeadErrorIsRecoveredAxisByAxis) {

@@ -10,6 +10,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <random>
 
 namespace bc = boresight::calib;
@@ -245,6 +246,29 @@ TEST(SvgPlot, GapsBreakTheLineAndEmptyDataGivesAFrame) {
   for (std::size_t q = svg.find(" M"); q != std::string::npos; q = svg.find(" M", q + 1)) ++moves;
   EXPECT_EQ(moves, 2u);
   EXPECT_NE(br::svgPlot(br::Plot{}).find("</svg>"), std::string::npos);
+}
+
+TEST(SvgPlot, AnAsymmetricErrorBarReachesEachEnd) {
+  // yerr above the point, yerr_lo below it: the bar's two halves in the ratio of the two lengths.
+  br::Plot p;
+  br::Series s;
+  s.name = "points";
+  s.style = br::Series::Style::kPoints;
+  s.x = {1};
+  s.y = {10};
+  s.yerr = {10};
+  s.yerr_lo = {5};
+  p.series.push_back(s);
+  const std::string svg = br::svgPlot(p);
+  // the bar is the line drawn 2 wide; the point its circle
+  const std::size_t bar = svg.rfind("<line", svg.find("stroke-width='2'")), dot = svg.find("<circle");
+  ASSERT_TRUE(bar != std::string::npos && dot != std::string::npos);
+  auto attr = [&](std::size_t at, const std::string& name) { return std::atof(svg.c_str() + svg.find(" " + name + "='", at) + name.size() + 3); };
+  const double y1 = attr(bar, "y1"), y2 = attr(bar, "y2"), cy = attr(dot, "cy");
+  // SVG y grows downwards: y1 (the lower end, value 5) below the point, y2 (value 20) above it
+  EXPECT_GT(y1, cy);
+  EXPECT_LT(y2, cy);
+  EXPECT_NEAR((cy - y2) / (y1 - cy), 2.0, 1e-4);  // coordinates are printed to 6 digits
 }
 
 TEST(SpanNeed, CrnNoiseAndTheBoundsScaling) {

@@ -66,6 +66,19 @@ struct AxisResult {
   bool fitted() const { return selection.best >= 0; }
 };
 
+/// An axis's spectrum at one frequency of its determinable band: the chosen model's log PSD (natural
+/// log of unit^2/Hz, the axis's own model without the other heads' part) with its own standard error
+/// (model::NoiseFit::logPsd), and the fitted candidates averaged with Akaike weights with the
+/// unconditional standard error, which holds the uncertainty of the choice between them
+/// (model::NoiseSelection::averagedLogPsd). Infinite: not determined there.
+struct BandPoint {
+  double f_hz = 0, chosen_log_psd = 0, chosen_se = 0, averaged_log_psd = 0, averaged_se = 0;
+};
+
+/// The axis's spectrum at 12 log-spaced frequencies across its determinable band (f_det_lo to
+/// f_det_hi); empty when it has no fit or no band.
+std::vector<BandPoint> bandSpectrum(const AxisResult& a);
+
 struct NoiseRequest {
   std::string config;               ///< platform file
   std::string overlay;              ///< a model overlay whose noise replaces the platform's (empty: none)

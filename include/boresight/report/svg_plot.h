@@ -19,6 +19,7 @@ struct Series {
   std::vector<double> yerr;         ///< empty, or the half-length of an error bar at each point
   enum class Style { kLine, kPoints } style = Style::kLine;
   double dx = 0.0;                  ///< shift of the points in x units (side by side error bars)
+  std::vector<double> yerr_lo;      ///< empty, or the bar's length below the point (yerr then the length above)
 };
 
 struct Plot {
