@@ -1078,13 +1078,15 @@ std::pair<double, double> NoiseFit::logPsd(double f_hz, double T_s) const {
 std::pair<double, double> NoiseSelection::averagedLogPsd(double f_hz, double T_s) const {
   const double nan = std::numeric_limits<double>::quiet_NaN();
   double aic_min = std::numeric_limits<double>::infinity();
+  // every fit with a model is a candidate, as in the choice (a fit that did not settle counts with the
+  // likelihood it reached); skipped structures have none
   for (const auto& f : fits)
-    if (f.converged && !f.model.empty() && std::isfinite(f.aic)) aic_min = std::min(aic_min, f.aic);
+    if (!f.model.empty() && std::isfinite(f.aic)) aic_min = std::min(aic_min, f.aic);
   if (!std::isfinite(aic_min)) return {nan, nan};
   double wsum = 0;
   std::vector<std::pair<double, std::pair<double, double>>> kept;  // weight, {log PSD, se}
   for (const auto& f : fits) {
-    if (!(f.converged && !f.model.empty() && std::isfinite(f.aic))) continue;
+    if (f.model.empty() || !std::isfinite(f.aic)) continue;
     kept.push_back({std::exp(-0.5 * (f.aic - aic_min)), f.logPsd(f_hz, T_s)});
     wsum += kept.back().first;
   }

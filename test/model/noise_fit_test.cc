@@ -138,19 +138,27 @@ TEST(NoiseFit, TheAveragedSpectrumCarriesTheChoiceOfModel) {
   std::tie(mean, se) = sel.averagedLogPsd(fq, kT);
   EXPECT_NEAR(mean, pf.first, 1e-12);
   EXPECT_NEAR(se, pf.second, 1e-12);
-  // a fit that did not converge is not a candidate, however low its AIC
+  // a fit that did not settle counts with the likelihood it reached (as in the choice); a structure
+  // that was skipped (no model) is not a candidate, however low its AIC
   sel.fits[1].aic = f.aic - 50;
   sel.fits[1].converged = false;
   std::tie(mean, se) = sel.averagedLogPsd(fq, kT);
-  EXPECT_NEAR(mean, pf.first, 1e-12);
+  EXPECT_NEAR(mean, pg.first, 1e-12);
+  NoiseFit skipped;
+  skipped.structure = NoiseStructure::WhiteTwoGaussMarkov;
+  skipped.aic = f.aic - 100;
+  sel.fits.push_back(skipped);
+  std::tie(mean, se) = sel.averagedLogPsd(fq, kT);
+  EXPECT_NEAR(mean, pg.first, 1e-12);
+  sel.fits.pop_back();
   // a kept candidate whose spectrum is not determined at f makes the average not determined there
   sel.fits[1].converged = true;
   sel.fits[1].aic = f.aic;
   sel.fits[1].cov_fit.row(2).setConstant(std::numeric_limits<double>::quiet_NaN());
   sel.fits[1].cov_fit.col(2).setConstant(std::numeric_limits<double>::quiet_NaN());
   EXPECT_TRUE(std::isinf(sel.averagedLogPsd(2e-3, kT).second));
-  // nothing converged: no average
-  sel.fits[0].converged = sel.fits[1].converged = false;
+  // no fit with a model: no average
+  sel.fits = {skipped};
   EXPECT_TRUE(std::isnan(sel.averagedLogPsd(fq, kT).first));
 }
 

@@ -340,14 +340,14 @@ NoiseFit fitWhiteFromDifferences(const NoiseSeries& s);
 
 struct NoiseSelection {
   std::vector<NoiseFit> fits;  ///< every candidate, in the order given
-  int best = -1;               ///< index of the smallest BIC among converged fits
+  int best = -1;               ///< index of the smallest BIC among the fits with a model (one that did not settle counts with the likelihood it reached)
   const NoiseFit& chosen() const { return fits[static_cast<std::size_t>(best)]; }
   /// The candidates' log PSD at f averaged with Akaike weights (w_k proportional to exp(-AIC_k / 2)
-  /// over the converged fits) and its unconditional standard error, sum_k w_k sqrt(se_k^2 +
+  /// over the fits with a model, as in the choice) and its unconditional standard error, sum_k w_k sqrt(se_k^2 +
   /// (logS_k - mean)^2) (Burnham and Anderson: the spread between the candidates is added to each
   /// one's own, so the choice of model is part of the uncertainty). Candidates with a weight under
   /// 1e-3 are left out; the error is infinite when a kept candidate's spectrum is not determined at
-  /// f (NoiseFit::logPsd); {NaN, NaN} when no fit converged.
+  /// f (NoiseFit::logPsd); {NaN, NaN} when no fit has a model.
   std::pair<double, double> averagedLogPsd(double f_hz, double T_s) const;
 };
 

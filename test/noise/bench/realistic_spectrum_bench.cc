@@ -103,7 +103,7 @@ void compareWithTheTruth(const std::string& tag, bool wander) {
       const model::NoiseFit& chosen = a->selection.chosen();
       const model::NoiseFit* by_aic = nullptr;
       for (const auto& f : a->selection.fits)
-        if (f.converged && !f.model.empty() && (!by_aic || f.aic < by_aic->aic)) by_aic = &f;
+        if (f.converged && !f.model.empty() && (!by_aic || f.aic < by_aic->aic)) by_aic = &f;  // among the fits that settled
       std::printf("head %d %s: chosen %s (AIC: %s); z of log PSD against the truth at 12 frequencies %.2g..%.2g Hz\n", h, ax,
                   model::noiseStructureName(chosen.structure), by_aic ? model::noiseStructureName(by_aic->structure) : "none",
                   a->f_det_lo, a->f_det_hi);
