@@ -334,6 +334,8 @@ bool writeNoiseReport(const std::string& dir, const NoiseOutput& out, std::strin
     }
     if (!report::writeSvgPlot(dir + "/" + fileOf(a), p, error)) return false;
     md << "![" << p.title << "](" << fileOf(a) << ")\n\n";
+    for (const auto& n : a.notes) md << "- " << n << "\n";
+    if (!a.notes.empty()) md << "\n";
   }
   return writeText(dir + "/report.md", md.str(), error);
 }
