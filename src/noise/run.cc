@@ -326,25 +326,8 @@ void fitAxis(AxisResult& a, const model::NoiseSeries& s, const NoiseOptions& opt
                   joint->sigma, joint->determined ? "" : " (not determined by the heads' geometry)");
     a.notes.push_back(b);
   }
-  // Where the candidates disagree, the chosen model's own standard errors understate what the data say
-  // of the spectrum (a simpler model is stiffer): say where and by how much.
-  {
-    double worst = 0, at = 0;
-    for (const BandPoint& q : bandSpectrum(a))
-      if (std::isfinite(q.averaged_se) && q.chosen_se > 0 && q.averaged_se / q.chosen_se > worst) {
-        worst = q.averaged_se / q.chosen_se;
-        at = q.f_hz;
-      }
-    if (worst > 2) {
-      char b[400];
-      std::snprintf(b, sizeof b,
-                    "the choice between the candidates is uncertain: at %.2g Hz the spectrum's standard error with it (the "
-                    "fitted candidates averaged with Akaike weights) is %.1f times the chosen model's own (noise.json "
-                    "band_spectrum)",
-                    at, worst);
-      a.notes.push_back(b);
-    }
-  }
+  const std::string choice = uncertainChoiceNote(bandSpectrum(a));
+  if (!choice.empty()) a.notes.push_back(choice);
   if (s.size() >= 64) {
     std::size_t seg = 32;
     std::size_t longest = 0, run = 1;
@@ -391,6 +374,25 @@ std::vector<BandPoint> bandSpectrum(const AxisResult& a) {
     out.push_back(p);
   }
   return out;
+}
+
+std::string uncertainChoiceNote(const std::vector<BandPoint>& band) {
+  // Where the candidates disagree, the chosen model's own standard errors understate what the data say
+  // of the spectrum (a simpler model is stiffer): say where and by how much.
+  double worst = 0, at = 0;
+  for (const BandPoint& q : band)
+    if (std::isfinite(q.averaged_se) && q.chosen_se > 0 && q.averaged_se / q.chosen_se > worst) {
+      worst = q.averaged_se / q.chosen_se;
+      at = q.f_hz;
+    }
+  if (!(worst > 2)) return {};
+  char b[400];
+  std::snprintf(b, sizeof b,
+                "the choice between the candidates is uncertain: at %.2g Hz the spectrum's standard error with it (the "
+                "fitted candidates averaged with Akaike weights) is %.1f times the chosen model's own (noise.json "
+                "band_spectrum)",
+                at, worst);
+  return b;
 }
 
 bool runNoise(const NoiseRequest& req, NoiseOutput& out, std::string* error) {

@@ -16,8 +16,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <map>
 #include <string>
+#include <vector>
 
 using namespace boresight;
 
@@ -253,6 +255,7 @@ TEST(NoiseRun, AChosenPowerLawWritesItsPivotLevelToJsonAndAValidOverlay) {
   a.f_det_hi = f.f_det_hi;
   const auto band = noise::bandSpectrum(a);
   ASSERT_EQ(band.size(), 12u);
+  EXPECT_TRUE(noise::uncertainChoiceNote(band).empty()) << "one candidate: nothing to choose between";
   EXPECT_NEAR(band.front().f_hz, f.f_det_lo, 1e-12 * f.f_det_lo);
   EXPECT_NEAR(band.back().f_hz, f.f_det_hi, 1e-9 * f.f_det_hi);
   for (const auto& q : band) {
@@ -267,6 +270,27 @@ TEST(NoiseRun, AChosenPowerLawWritesItsPivotLevelToJsonAndAValidOverlay) {
   std::size_t points = 0;
   for (std::size_t at = json2.find("\"averaged_se\""); at != std::string::npos; at = json2.find("\"averaged_se\"", at + 1)) ++points;
   EXPECT_EQ(points, 12u);
+}
+
+TEST(NoiseRun, AnUncertainChoiceIsNotedWhereTheAverageIsOverTwiceAsWide) {
+  // uncertainChoiceNote: the worst ratio of the averaged to the chosen standard error across the band,
+  // noted when over 2; undetermined points (infinite averaged, no chosen error) do not count.
+  std::vector<noise::BandPoint> band(3);
+  band[0] = {1e-3, 0, 0.10, 0, 0.15};
+  band[1] = {1e-2, 0, 0.10, 0, 0.31};
+  band[2] = {1e-1, 0, 0.10, 0, 0.12};
+  const std::string n = noise::uncertainChoiceNote(band);
+  EXPECT_NE(n.find("at 0.01 Hz"), std::string::npos) << n;
+  EXPECT_NE(n.find("3.1 times"), std::string::npos) << n;
+  band[1].averaged_se = 0.19;  // 1.9 times: no note
+  EXPECT_TRUE(noise::uncertainChoiceNote(band).empty());
+  band[1].averaged_se = std::numeric_limits<double>::infinity();  // not determined there: not a ratio
+  EXPECT_TRUE(noise::uncertainChoiceNote(band).empty());
+  band[1] = {1e-2, 0, 0.0, 0, 0.5};  // no chosen error (a fit without one)
+  EXPECT_TRUE(noise::uncertainChoiceNote(band).empty());
+  band[1].chosen_se = 0.2;  // 2.5 times
+  EXPECT_NE(noise::uncertainChoiceNote(band).find("2.5 times"), std::string::npos);
+  EXPECT_TRUE(noise::uncertainChoiceNote({}).empty());
 }
 
 TEST(NoiseRun, ACatalogueGaussMarkovHeadErrorIsRecoveredAxisByAxis) {

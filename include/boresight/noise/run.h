@@ -79,6 +79,11 @@ struct BandPoint {
 /// f_det_hi); empty when it has no fit or no band.
 std::vector<BandPoint> bandSpectrum(const AxisResult& a);
 
+/// The axis note `boresight noise` writes where the candidates disagree: the frequency at which the
+/// averaged standard error is largest against the chosen model's own, and the ratio, when it is over
+/// 2 (points without a finite average or a chosen error are skipped); empty otherwise.
+std::string uncertainChoiceNote(const std::vector<BandPoint>& band);
+
 struct NoiseRequest {
   std::string config;               ///< platform file
   std::string overlay;              ///< a model overlay whose noise replaces the platform's (empty: none)

@@ -45,16 +45,14 @@ const noise::AxisResult* headAxis(const noise::NoiseOutput& o, int h, const std:
   return nullptr;
 }
 
-/// Frequency q of 12, log-spaced across the axis's determinable band.
-double bandFrequency(const noise::AxisResult& a, int q) { return a.f_det_lo * std::pow(a.f_det_hi / a.f_det_lo, q / 11.0); }
-
-/// The largest |z| of a fit's log PSD against `truth` at 12 log-spaced frequencies of the axis's band
-/// (printed when `print`); NaN when a standard error is missing.
+/// The largest |z| of a fit's log PSD against `truth` at the frequencies of the axis's band that
+/// `boresight noise` reports (noise::bandSpectrum: 12, log-spaced), printed when `print`; NaN when a
+/// standard error is missing.
 template <class LogPsd>
 double worstZ(const noise::AxisResult& a, const LogPsd& logPsd, const model::NoiseModel& truth, bool print) {
   double worst = 0;
-  for (int q = 0; q < 12; ++q) {
-    const double fq = bandFrequency(a, q);
+  for (const noise::BandPoint& b : noise::bandSpectrum(a)) {
+    const double fq = b.f_hz;
     const auto [ls, se] = logPsd(fq, a.interval_s);
     if (!(std::isfinite(ls) && std::isfinite(se) && se > 0)) return std::numeric_limits<double>::quiet_NaN();
     const double z = (ls - std::log(truth.psdSampled(fq, a.interval_s))) / se;
