@@ -152,13 +152,15 @@ bool loadTop(const YAML::Node& top, const std::string& path, Reader& r, NodeConf
   double v = 0;
   if (!r.num(top, "lookahead_s", "lookahead_s", out.lookahead_s, 0.001, 600)) return done(false);
   if (!r.num(top, "health_period_s", "health_period_s", out.health_period_s, 0.01, 86400)) return done(false);
-  if (!r.num(top, "max_time_jump_s", "max_time_jump_s", out.max_time_jump_s, 1, 1e7)) return done(false);
+  if (top["max_time_jump_s"])
+    return done(r.fail("max_time_jump_s",
+                       "no longer read: every tag further than lookahead_s from the data time needs time_jump_confirm "
+                       "messages in a row to agree; remove the key",
+                       top["max_time_jump_s"]));
   v = out.time_jump_confirm;
-  if (!r.num(top, "time_jump_confirm", "time_jump_confirm", v, 1, 1000)) return done(false);
+  if (!r.num(top, "time_jump_confirm", "time_jump_confirm", v, 1, 16)) return done(false);
   if (v != std::floor(v)) return done(r.fail("time_jump_confirm", "expected a whole number", top["time_jump_confirm"]));
   out.time_jump_confirm = static_cast<int>(v);
-  if (out.max_time_jump_s < 2 * out.lookahead_s)
-    return done(r.fail("max_time_jump_s", "must be at least twice lookahead_s", top["max_time_jump_s"]));
   if (top["max_rate_hz"]) {
     const YAML::Node c = top["max_rate_hz"];
     if (!r.keys(c, "max_rate_hz", {"star_head", "accel", "star_vectors"})) return done(false);

@@ -1,5 +1,6 @@
 // boresight::node::Node - handlers, assembler, core, worker (see include/boresight/node/node.h).
 #include <boresight/node/node.h>
+#include <boresight/node/channel_gate.h>
 
 #include <boresight/calib/solver.h>
 #include <boresight/calib/span_builder.h>
@@ -160,18 +161,24 @@ class PushSource final : public stream::Source {
 
 /// Per channel (a head, the accelerometer, star vectors of a head, the orbit): sequence and time state.
 struct ChannelState {
-  bool have_seq = false;
-  std::int32_t last_seq = 0;
-  std::uint64_t seen = 0;          ///< bit i: number last_seq - i arrived
+  SequenceGate seq;
   std::array<TimeUs, 8> recent{};  ///< tags accepted lately (duplicates)
   int n_recent = 0, recent_next = 0;
   TimeUs bucket = std::numeric_limits<TimeUs>::min();  ///< data second of the flood count
   int in_bucket = 0;
-  int jump_votes = 0;
-  TimeUs jump_last = 0;
-  bool have_cand = false;   ///< a sequence jump beyond the reorder window, waiting for the next number
-  std::int32_t cand_seq = 0;
+  TimeUs last_pass_t = std::numeric_limits<TimeUs>::min();  ///< the last tag that passed the time gate
 };
+
+/// A message whose tag jumped beyond the look-ahead, held until the jump is confirmed or refuted: its
+/// samples as they will be pushed (a star-vector message has up to 16).
+struct HeldMessage {
+  ChannelState* ch = nullptr;
+  TimeUs t = 0;
+  stream::Sample::Kind kind = stream::Sample::Kind::kHead;
+  int n = 0;
+  std::array<stream::Sample, 16> xs{};
+};
+constexpr int kMaxHeld = 32;  ///< messages held at one jump (time_jump_confirm is at most 16: config.cc)
 
 struct Mailbox {
   std::atomic<int> state{0};  ///< 0 empty, 1 being written, 2 ready
@@ -265,95 +272,130 @@ struct Node::Impl {
   // ---------------------------------------------------------------------------------------------
   void reject(Reason r) { ++c.rejected[static_cast<std::size_t>(r)]; }
 
-  /// Sequence gaps are lost messages. A message that arrives late (out of order, within 64 numbers)
-  /// takes back the loss counted for it; a repeat of a number already seen is no loss and no gain.
-  /// A forward jump of the sequence number beyond the reorder window (kSeqWindow) is a loss only when
-  /// the next message continues from it; otherwise it was one corrupt number (that message is no loss
-  /// and moves nothing), so a single bad number never counts a million lost.
-  static constexpr std::int32_t kSeqWindow = 64;
+  SequenceCounts seqc;  ///< lost and restarts over every channel (channel_gate.h)
   void seqCheck(ChannelState& s, std::int32_t seq) {
-    if (!s.have_seq) {
-      s.have_seq = true;
-      s.last_seq = seq;
-      s.seen = 1;
-      return;
-    }
-    bool credit = false;  // an unconfirmed jump: that message stood for the next missing number
-    if (s.have_cand) {
-      s.have_cand = false;
-      credit = true;
-      const auto dc = static_cast<std::int32_t>(static_cast<std::uint32_t>(seq) - static_cast<std::uint32_t>(s.cand_seq));
-      if (dc > 0 && dc < kSeqWindow) {  // confirmed: the numbers between were lost
-        const auto jump = static_cast<std::int32_t>(static_cast<std::uint32_t>(s.cand_seq) - static_cast<std::uint32_t>(s.last_seq));
-        c.lost += static_cast<std::uint64_t>(jump - 1) + static_cast<std::uint64_t>(dc - 1);
-        s.last_seq = seq;
-        s.seen = 1u | (std::uint64_t{1} << static_cast<unsigned>(dc));
-        return;
-      }
-    }
-    const auto d = static_cast<std::int32_t>(static_cast<std::uint32_t>(seq) - static_cast<std::uint32_t>(s.last_seq));
-    if (d >= kSeqWindow && d < (1 << 24)) {  // far ahead: wait for the next number to confirm it
-      s.have_cand = true;
-      s.cand_seq = seq;
-      return;
-    }
-    if (d > 0 && d < (1 << 24)) {  // forward: d - 1 numbers have not arrived (yet)
-      c.lost += static_cast<std::uint64_t>(d - 1);
-      s.seen = d < 64 ? (s.seen << d) | 1u : 1u;
-      s.last_seq = seq;
-      if (credit && d >= 2 && c.lost > 0) {  // the corrupt-numbered message was the one before this
-        --c.lost;
-        s.seen |= 2u;
-      }
-    } else if (d >= (1 << 24) || d <= -(1 << 24)) {  // a counter reset (sender restart): a new start
-      s.last_seq = seq;
-      s.seen = 1;
-    } else if (d < 0 && d > -64) {  // back: a late arrival of a number counted lost, or a repeat
-      const std::uint64_t bit = std::uint64_t{1} << static_cast<unsigned>(-d);
-      if (!(s.seen & bit)) {
-        s.seen |= bit;
-        if (c.lost > 0) --c.lost;
-      }
-    }
+    s.seq.check(seq, seqc);
+    c.lost = seqc.lost;
+    c.seq_restarts = seqc.restarts;
   }
 
-  /// The time checks every input shares. True: accept (the caller goes on).
-  bool timeCheck(ChannelState& s, TimeUs t, bool head_like) {
+  /// Time: every input goes through admit(). A tag within the look-ahead of the data time (the latest
+  /// accepted tag) passes on to the duplicate, late and flood checks. A tag beyond it, either way, is a
+  /// jump: the message is held until time_jump_confirm messages in a row (on any channel) agree on the
+  /// new time - then the data time moves (a step back re-synchronises the assembler and the core), and
+  /// the held messages pass in their order - or until a message within the look-ahead arrives: then a
+  /// held one still that far from the data time is rejected (time_jump, or late when the assembler has
+  /// handed out its time), and one the data time has come to meanwhile passes. Votes are counted over
+  /// all channels, and where more than one channel passed messages in the last kActiveUs of data time
+  /// the votes must come from two channels or more: a whole link that stops and resumes, or a
+  /// spacecraft clock set back, moves every channel, while one sender whose clock is off is refuted by
+  /// the others' messages (without that rule a 10 Hz accelerometer 10 s ahead confirmed its jump between
+  /// two head epochs, and the heads then confirmed the way back: a re-synchronisation every half
+  /// second). One corrupt tag therefore never moves the assembler's frontier; the first message sets
+  /// the data time and a wrong one is out-voted the same way.
+  void admit(ChannelState& s, const stream::Sample* xs, int n, TimeUs t, stream::Sample::Kind kind) {
     if (!have_time) {
       have_time = true;
       now = t;
     }
-    if (t > now + jump_us || t < now - jump_us) {
-      // A jump: confirmed when time_jump_confirm messages in a row on this channel agree.
-      if (s.jump_votes > 0 && std::abs(t - s.jump_last) <= jump_us) ++s.jump_votes;
-      else s.jump_votes = 1;
-      s.jump_last = t;
-      if (s.jump_votes < cfg.time_jump_confirm) {
-        reject(Reason::kTimeJump);
-        return false;
-      }
-      ++c.time_resyncs;
-      now = t;
-      // A confirmed step back (a sender clock set back): what is buffered goes to the core, then the
-      // assembler and the core start again at the new time (the filters restart, the counts stay).
-      if (emitted && t <= last_emit_t) resyncBack();
+    if (t <= now + jump_us && t >= now - jump_us) {
+      jump_votes = 0;
+      if (n_held > 0) settleHeld();
+      pass(s, xs, n, t, kind);
+      return;
     }
-    s.jump_votes = 0;
+    if (jump_votes > 0 && std::abs(t - jump_last) <= jump_us) {
+      ++jump_votes;
+      if (&s != jump_first_ch) jump_channels = 2;
+    } else {
+      dropHeld();  // an earlier jump that nothing confirmed
+      jump_votes = 1;
+      jump_first_ch = &s;
+      jump_channels = 1;
+      int active = 0;
+      for (const ChannelState* ch : all_channels)
+        if (ch->last_pass_t != std::numeric_limits<TimeUs>::min() && ch->last_pass_t >= now - kActiveUs) ++active;
+      jump_need_channels = active >= 2 ? 2 : 1;
+    }
+    jump_last = t;
+    if (jump_votes < cfg.time_jump_confirm || jump_channels < jump_need_channels) {
+      hold(s, xs, n, t, kind);
+      return;
+    }
+    // Confirmed: the data time moves to the first message of the jump.
+    ++c.time_resyncs;
+    jump_votes = 0;
+    TimeUs t0 = t;
+    for (int i = 0; i < n_held; ++i) t0 = std::min(t0, held[static_cast<std::size_t>(i)].t);
+    now = t0;
+    // A step back (a sender clock set back): what is buffered goes to the core, then the assembler and
+    // the core start again at the new time (the filters restart, the counts stay).
+    if (emitted && t0 <= last_emit_t) resyncBack();
+    const int nh = n_held;
+    n_held = 0;
+    for (int i = 0; i < nh; ++i) {
+      HeldMessage& h = held[static_cast<std::size_t>(i)];
+      pass(*h.ch, h.xs.data(), h.n, h.t, h.kind);
+    }
+    pass(s, xs, n, t, kind);
+  }
+  void hold(ChannelState& s, const stream::Sample* xs, int n, TimeUs t, stream::Sample::Kind kind) {
+    if (n_held >= kMaxHeld || n > 16) return reject(Reason::kTimeJump);
+    HeldMessage& h = held[static_cast<std::size_t>(n_held++)];
+    h.ch = &s;
+    h.t = t;
+    h.kind = kind;
+    h.n = n;
+    for (int i = 0; i < n; ++i) h.xs[static_cast<std::size_t>(i)] = xs[i];
+    ++c.held;
+  }
+  /// A message within the look-ahead arrived: each held one passes if the data time has come to it,
+  /// else it is rejected.
+  void settleHeld() {
+    const int nh = n_held;
+    n_held = 0;
+    for (int i = 0; i < nh; ++i) {
+      HeldMessage& h = held[static_cast<std::size_t>(i)];
+      if (h.t <= now + jump_us && h.t >= now - jump_us) pass(*h.ch, h.xs.data(), h.n, h.t, h.kind);
+      else reject(emitted && h.t < last_emit_t ? Reason::kLate : Reason::kTimeJump);
+    }
+  }
+  void dropHeld() {
+    for (int i = 0; i < n_held; ++i) reject(Reason::kTimeJump);
+    n_held = 0;
+  }
+  int jump_votes = 0, jump_channels = 0, jump_need_channels = 1;
+  const ChannelState* jump_first_ch = nullptr;
+  TimeUs jump_last = 0;
+  static constexpr TimeUs kActiveUs = 10 * kUsPerSecond;  ///< a channel is active: it passed a message this recently
+  std::vector<const ChannelState*> all_channels;            ///< set at configure
+  std::array<HeldMessage, kMaxHeld> held{};
+  int n_held = 0;
+
+  /// The checks after the time gate (duplicate, late, flood), then the samples to the assembler.
+  void pass(ChannelState& s, const stream::Sample* xs, int n, TimeUs t, stream::Sample::Kind kind) {
     for (int i = 0; i < s.n_recent; ++i)
-      if (s.recent[static_cast<std::size_t>(i)] == t) {
-        reject(Reason::kDuplicate);
-        return false;
+      if (s.recent[static_cast<std::size_t>(i)] == t) return reject(Reason::kDuplicate);
+    // A head epoch at the last handed-out tag is late (its epoch is gone); an accelerometer sample may
+    // share it, a star epoch only after a head or accelerometer step.
+    const bool head_like = kind == stream::Sample::Kind::kHead ||
+                           (kind == stream::Sample::Kind::kStar && last_emit_kind == stream::Sample::Kind::kStar);
+    if (emitted && (t < last_emit_t || (t == last_emit_t && head_like))) return reject(Reason::kLate);
+    const double max_hz = kind == stream::Sample::Kind::kHead    ? cfg.max_head_rate_hz
+                          : kind == stream::Sample::Kind::kAccel ? cfg.max_accel_rate_hz
+                                                                 : cfg.max_star_rate_hz;
+    if (!floodCheck(s, t, max_hz)) return;
+    for (int i = 0; i < n; ++i) {
+      if (!src.push(xs[i])) {
+        if (kind != stream::Sample::Kind::kStar) return reject(Reason::kAssembler);
+        ++stars_dropped_push;
+        continue;
       }
-    if (emitted && (t < last_emit_t || (t == last_emit_t && head_like))) {
-      reject(Reason::kLate);
-      return false;
+      drain();
     }
-    const TimeUs sec = t >= 0 ? t / kUsPerSecond : (t - kUsPerSecond + 1) / kUsPerSecond;
-    if (sec != s.bucket) {
-      s.bucket = sec;
-      s.in_bucket = 0;
-    }
-    return true;
+    remember(s, t);
+    s.last_pass_t = t;
+    ++c.used;
   }
   void resyncBack() {
     asm_->restart();
@@ -369,7 +411,12 @@ struct Node::Impl {
   core::Health core_base{};  ///< core counts before the last re-synchronisation (reset() clears them)
   std::array<Quat, kMaxHeads> handed_q{};  ///< the mountings last handed to the core
 
-  bool floodCheck(ChannelState& s, double max_hz) {
+  bool floodCheck(ChannelState& s, TimeUs t, double max_hz) {
+    const TimeUs sec = t >= 0 ? t / kUsPerSecond : (t - kUsPerSecond + 1) / kUsPerSecond;
+    if (sec != s.bucket) {
+      s.bucket = sec;
+      s.in_bucket = 0;
+    }
     if (++s.in_bucket > static_cast<int>(std::ceil(max_hz))) {
       reject(Reason::kFlood);
       return false;
@@ -401,16 +448,12 @@ struct Node::Impl {
     const Quat q(m.q[0], m.q[1], m.q[2], m.q[3]);
     if (!q.coeffs().allFinite()) return reject(Reason::kNonFinite);
     if (std::abs(q.norm() - 1.0) > pcfg.heads.unit_norm_tolerance) return reject(Reason::kNonUnit);
-    if (!timeCheck(s, m.utime, true) || !floodCheck(s, cfg.max_head_rate_hz)) return;
     stream::Sample x;
     x.kind = stream::Sample::Kind::kHead;
     x.t = m.utime;
     x.head_id = m.head_id;
     x.q_I_S = q;
-    if (!src.push(x)) return reject(Reason::kAssembler);
-    remember(s, m.utime);
-    ++c.used;
-    drain();
+    admit(s, &x, 1, m.utime, x.kind);
   }
 
   void onAccel(const void* data, int size) {
@@ -422,15 +465,11 @@ struct Node::Impl {
     const Vec3 a(m.ang_accel[0], m.ang_accel[1], m.ang_accel[2]);
     if (!a.allFinite()) return reject(Reason::kNonFinite);
     if (!plausibility::angularAccelPlausible(a)) return reject(Reason::kImplausible);
-    if (!timeCheck(ch_acc, m.utime, false) || !floodCheck(ch_acc, cfg.max_accel_rate_hz)) return;
     stream::Sample x;
     x.kind = stream::Sample::Kind::kAccel;
     x.t = m.utime;
     x.a_A = a;
-    if (!src.push(x)) return reject(Reason::kAssembler);
-    remember(ch_acc, m.utime);
-    ++c.used;
-    drain();
+    admit(ch_acc, &x, 1, m.utime, x.kind);
   }
 
   void onStars(const void* data, int size) {
@@ -446,24 +485,17 @@ struct Node::Impl {
       if (!sv.allFinite() || !r.allFinite() || !std::isfinite(m.sigma_rad[i])) return reject(Reason::kNonFinite);
       if (std::abs(sv.norm() - 1) > 1e-6 || std::abs(r.norm() - 1) > 1e-6) return reject(Reason::kNonUnit);
     }
-    ChannelState& s = ch_stars[static_cast<std::size_t>(slot)];
-    if (!timeCheck(s, m.utime, last_emit_kind == stream::Sample::Kind::kStar) || !floodCheck(s, cfg.max_star_rate_hz)) return;
+    std::array<stream::Sample, 16> xs;
     for (int i = 0; i < m.n_stars; ++i) {
-      stream::Sample x;
+      stream::Sample& x = xs[static_cast<std::size_t>(i)];
       x.kind = stream::Sample::Kind::kStar;
       x.t = m.utime;
       x.star.head_id = m.head_id;
       x.star.s_Sk = Vec3(m.s_head[i][0], m.s_head[i][1], m.s_head[i][2]);
       x.star.r_I = Vec3(m.r_inertial[i][0], m.r_inertial[i][1], m.r_inertial[i][2]);
       x.star.sigma_rad = m.sigma_rad[i];
-      if (!src.push(x)) {
-        ++stars_dropped_push;
-        continue;
-      }
-      drain();
     }
-    remember(s, m.utime);
-    ++c.used;
+    admit(ch_stars[static_cast<std::size_t>(slot)], xs.data(), m.n_stars, m.utime, stream::Sample::Kind::kStar);
   }
 
   void onMountings(const void* data, int size) {
@@ -940,7 +972,11 @@ bool Node::configure(const NodeConfig& cfg, Mode mode, Output* out, std::string*
   m.pcfg = cfg.pipeline;
   stream::AssemblerConfig ac;
   m.lookahead_us = static_cast<TimeUs>(std::llround(cfg.lookahead_s * 1e6));
-  m.jump_us = static_cast<TimeUs>(std::llround(cfg.max_time_jump_s * 1e6));
+  m.jump_us = m.lookahead_us;
+  m.all_channels.clear();
+  for (auto& ch : m.ch_head) m.all_channels.push_back(&ch);
+  for (auto& ch : m.ch_stars) m.all_channels.push_back(&ch);
+  m.all_channels.push_back(&m.ch_acc);
   ac.lookahead_us = m.lookahead_us;
   ac.max_buffered = 4096;  // the heap's reserve: no allocation while stepping
   m.asm_ = std::make_unique<stream::EpochAssembler>(ac);
@@ -982,6 +1018,7 @@ void Node::finish() {
   Impl& m = *impl_;
   if (!m.configured || m.finished) return;
   m.finished = true;
+  m.dropHeld();  // a jump that the end of the data left unconfirmed
   m.src.close();
   if (m.core_ready) {
     m.drain();

@@ -980,6 +980,110 @@ TEST(NodeBadInput, AWrongFirstTagIsOutVotedWithoutAssemblerRejects) {
   EXPECT_LE(c.rejectedTotal(), 12u);
 }
 
+// ---- link faults (issue 17): each injected into a simulated log ----------------------------------
+
+TEST(NodeFaults, ASenderRestartIsOneRestartAndTheLossesAfterItAreCounted) {
+  // The accelerometer's counter starts again at 0 a third of the way in; 20 messages are lost after
+  // that. Before, every number below the old one was taken for a late arrival: no loss was seen until
+  // the counter passed its old value.
+  const std::string clean = simulate("restart", 1200, {});
+  const auto ref = replay(clean, nodeConfig());
+  int acc = 0;
+  std::int32_t base = 0;
+  const std::string log = editLog(clean, "restart.lcm", [&](std::size_t, const Event& e) {
+    if (e.ch != "ACCEL") return std::vector<Event>{e};
+    ++acc;
+    auto m = decodeAs<boresight_lcm::accel_sample_t>(e);
+    if (acc == 4000) base = m.seq;
+    if (acc < 4000) return std::vector<Event>{e};
+    if (acc >= 5000 && acc < 5020) return std::vector<Event>{};
+    m.seq -= base;
+    return std::vector<Event>{encodeAs(e.ch, e.t, m)};
+  });
+  ASSERT_GT(base, 1000);
+  const auto r = replay(log, nodeConfig());
+  const node::Counters& c = r->c;
+  EXPECT_EQ(c.seq_restarts, 1u);
+  EXPECT_EQ(c.lost, ref->c.lost + 20u);
+  EXPECT_EQ(c.received, c.used + c.rejectedTotal());
+  EXPECT_EQ(c.rejectedTotal(), ref->c.rejectedTotal());
+  EXPECT_EQ(ref->c.seq_restarts, 0u);
+}
+
+namespace {
+/// Events whose log time lies in [from_s, to_s) of the log's first time are passed through `edit`.
+template <typename Edit>
+std::string editSpan(const std::string& clean, const std::string& name, double from_s, double to_s, Edit edit) {
+  TimeUs t0 = -1;
+  return editLog(clean, name, [&](std::size_t, const Event& e) {
+    if (t0 < 0) t0 = e.t;
+    const double s = static_cast<double>(e.t - t0) * 1e-6;
+    return s >= from_s && s < to_s ? edit(e) : std::vector<Event>{e};
+  });
+}
+}  // namespace
+
+TEST(NodeFaults, AForwardJumpOfOneTagIsHeldAndRefutedNotTaken) {
+  // One accelerometer tag 300 s ahead. Before, any jump under max_time_jump_s (600 s) was taken without
+  // confirmation: the data time moved 300 s ahead.
+  const std::string clean = simulate("fwd", 1200, {});
+  const auto ref = replay(clean, nodeConfig());
+  bool done = false;
+  const std::string log = editSpan(clean, "fwd.lcm", 500, 1200, [&](const Event& e) {
+    if (e.ch != "ACCEL" || done) return std::vector<Event>{e};
+    done = true;
+    return std::vector<Event>{shifted(e, 300 * kUsPerSecond)};
+  });
+  const auto r = replay(log, nodeConfig());
+  const node::Counters& c = r->c;
+  EXPECT_EQ(rejected(c, node::Reason::kTimeJump), 1u);
+  EXPECT_EQ(c.rejectedTotal(), ref->c.rejectedTotal() + 1u);
+  EXPECT_EQ(c.time_resyncs, 0u);
+  EXPECT_EQ(c.held, 1u);
+  EXPECT_EQ(c.head_epochs, ref->c.head_epochs);
+  EXPECT_EQ(c.rows, ref->c.rows);
+  EXPECT_EQ(c.accel_steps + 1, ref->c.accel_steps);
+  EXPECT_EQ(c.received, c.used + c.rejectedTotal());
+}
+
+TEST(NodeFaults, AWholeLinkOutageIsAConfirmedJumpAndNothingAfterItIsLost) {
+  // Every message of 30 s dropped: the first ones after the outage are a jump beyond the look-ahead,
+  // held until three (from two channels) agree, then used - none rejected.
+  const std::string clean = simulate("outage", 1200, {});
+  const auto ref = replay(clean, nodeConfig());
+  const std::string log = editSpan(clean, "outage.lcm", 600, 630, [](const Event&) { return std::vector<Event>{}; });
+  const auto r = replay(log, nodeConfig());
+  const node::Counters& c = r->c;
+  EXPECT_EQ(c.rejectedTotal(), ref->c.rejectedTotal());
+  EXPECT_EQ(c.time_resyncs, 1u);
+  EXPECT_GE(c.held, 2u);  // the votes before the confirming one
+  EXPECT_EQ(c.received, c.used + c.rejectedTotal());
+  EXPECT_LT(c.head_epochs, ref->c.head_epochs);
+  EXPECT_GE(c.head_epochs + 61, ref->c.head_epochs);  // 30 s at 2 Hz
+}
+
+TEST(NodeFaults, OneSenderClockAheadIsRefutedByTheOthersNotFollowed) {
+  // From 600 s on the accelerometer's tags are 10 s ahead of the heads'. Before, they were taken (under
+  // max_time_jump_s) and sorted 10 s late into the heads' epochs; a vote counted on the channel alone
+  // confirms the jump between two head epochs, and the heads then confirm the way back.
+  const std::string clean = simulate("ahead", 1200, {});
+  const auto ref = replay(clean, nodeConfig());
+  std::size_t shifted_n = 0;
+  const std::string log = editSpan(clean, "ahead.lcm", 600, 1e9, [&](const Event& e) {
+    if (e.ch != "ACCEL") return std::vector<Event>{e};
+    ++shifted_n;
+    return std::vector<Event>{shifted(e, 10 * kUsPerSecond)};
+  });
+  ASSERT_GT(shifted_n, 5000u);
+  const auto r = replay(log, nodeConfig());
+  const node::Counters& c = r->c;
+  EXPECT_EQ(c.time_resyncs, 0u);
+  // every shifted sample is refused (the last few at most by the end of the data)
+  EXPECT_GE(rejected(c, node::Reason::kTimeJump) + rejected(c, node::Reason::kLate), shifted_n);
+  EXPECT_EQ(c.head_epochs, ref->c.head_epochs);
+  EXPECT_EQ(c.received, c.used + c.rejectedTotal());
+}
+
 #ifdef BORESIGHTD
 namespace {
 std::string nodeYaml(const std::string& dir, const std::vector<std::pair<std::string, std::string>>& set) {

@@ -297,6 +297,8 @@ int run(int argc, char** argv) {
   j["star_epochs"] = c.star_epochs;
   j["rows"] = c.rows;
   j["time_resyncs"] = c.time_resyncs;
+  j["held"] = c.held;
+  j["seq_restarts"] = c.seq_restarts;
   j["stars_dropped"] = c.stars_dropped;
   j["published"] = out.published;
   const core::Health h = n.coreHealth();

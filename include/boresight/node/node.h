@@ -28,10 +28,12 @@
 // so received == used + sum(rejected). `lost` counts what the senders' sequence numbers say was sent
 // and never arrived (per head, accelerometer, star-vector and orbit channel); a jump of a sequence
 // number beyond the reorder window (64) counts as loss only when the next number continues from it, so
-// one corrupt number is one bad message, not a million lost. Time: a message whose tag is more than
-// max_time_jump_s away from the node's data time is rejected (time_jump), unless time_jump_confirm
-// messages in a row on its channel agree on the new time (a real jump: resync), so one corrupt tag
-// never turns every later message into "time backwards"; a confirmed step back re-synchronises the
+// one corrupt number is one bad message, not a million lost; a jump back beyond it, confirmed the same
+// way, is a sender's restart (seq_restarts), and losses after it count from the new numbers
+// (channel_gate.h). Time: a message whose tag is more than lookahead_s away from the node's data time
+// is held, and passes once time_jump_confirm messages in a row (any channel) agree on the new time (a
+// real jump: resync), else it is rejected (time_jump): one corrupt tag never moves the assembler's
+// frontier nor turns every later message into "late"; a confirmed step back re-synchronises the
 // assembler and the core (their filters restart, the counts go on). The first message sets the data
 // time (a wrong one is out-voted the same way, and the assembler drops it as a time outlier).
 #pragma once
@@ -112,8 +114,9 @@ struct NodeConfig {
   Channels channels;
   double lookahead_s = 2.0;         ///< assembler look-ahead, s
   double health_period_s = 10.0;    ///< data time between health messages, s
-  double max_time_jump_s = 600.0;   ///< larger tag jumps need confirming, s
-  int time_jump_confirm = 3;        ///< messages in a row on a channel that confirm a jump
+  /// A tag further than lookahead_s from the data time is a jump: held until this many messages in a
+  /// row (any channel) agree on the new time (1-16).
+  int time_jump_confirm = 3;
   double max_head_rate_hz = 20.0;   ///< per head: more messages per data second are a flood
   double max_accel_rate_hz = 50.0;
   double max_star_rate_hz = 20.0;   ///< per head
@@ -144,7 +147,9 @@ struct Counters {
   std::uint64_t calibrations_published = 0, calibrations_applied = 0, calibrations_refused = 0;
   std::uint64_t ring_high_water = 0, ring_dropped = 0, ring_waits = 0;
   std::uint64_t stars_dropped = 0;  ///< star vectors (not messages) the assembler refused
-  std::uint64_t time_resyncs = 0;
+  std::uint64_t time_resyncs = 0;  ///< confirmed jumps of the data time (forward or back)
+  std::uint64_t held = 0;          ///< messages held at a jump until it was confirmed or refuted
+  std::uint64_t seq_restarts = 0;  ///< senders' counters that started again (not counted as loss)
   std::uint64_t frame_changes = 0;  ///< common rotations applied to the published attitude
   std::uint64_t rejectedTotal() const {
     std::uint64_t n = 0;
