@@ -178,13 +178,15 @@ bool loadTop(const YAML::Node& top, const std::string& path, Reader& r, NodeConf
     const YAML::Node c = top["calibration"];
     CalibrationConfig& k = out.calibration;
     if (!r.keys(c, "calibration", {"enabled", "cadence_s", "min_span_s", "apply_lag_epochs", "decimation_s",
-                                    "max_observations", "apply", "apply_common_rotation"}))
+                                    "max_observations", "apply", "apply_common_rotation",
+                                    "frame_change_min_interval_s"}))
       return done(false);
     if (!r.boolean(c, "enabled", "calibration.enabled", k.enabled) || !r.boolean(c, "apply", "calibration.apply", k.apply) ||
         !r.boolean(c, "apply_common_rotation", "calibration.apply_common_rotation", k.apply_common_rotation) ||
         !r.num(c, "cadence_s", "calibration.cadence_s", k.cadence_s, 60, 1e8) ||
         !r.num(c, "min_span_s", "calibration.min_span_s", k.min_span_s, 60, 1e8) ||
-        !r.num(c, "decimation_s", "calibration.decimation_s", k.decimation_s, 0.5, 3600))
+        !r.num(c, "decimation_s", "calibration.decimation_s", k.decimation_s, 0.5, 3600) ||
+        !r.num(c, "frame_change_min_interval_s", "calibration.frame_change_min_interval_s", k.frame_change_min_interval_s, 0, 1e8))
       return done(false);
     const double head_dt = 1.0 / out.pipeline.crn_attitude.fs_hz;
     if (k.decimation_s < head_dt * (1 - 1e-9))

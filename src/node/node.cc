@@ -187,6 +187,9 @@ struct Mailbox {
   std::array<Quat, kMaxHeads> q_Si_B{};
   boresight_lcm::calibration_t msg{};
   std::array<char, 512> reason{};  ///< why a calibration was refused (the solver's message), NUL-terminated
+  /// The common rotation is determined about every B axis (the solver's unobservable directions of a
+  /// common rotation: none).
+  bool common_determined = false;
 };
 
 int64_t toI64(std::uint64_t v) { return static_cast<int64_t>(v); }
@@ -247,10 +250,13 @@ struct Node::Impl {
   // flog; the worker thread (or finish(), after it) writes the stderr line.
   Quat q_frame = Quat::Identity(), q_frame_old = Quat::Identity();
   TimeUs frame_from_t = std::numeric_limits<TimeUs>::min();
+  enum class FrameVerdict : std::uint8_t { kOk, kNotDetermined, kTooSoon };
   struct FrameLog {
     TimeUs from_t = 0, cal_t = 0;
     Vec3 common_arcsec = Vec3::Zero();
+    FrameVerdict verdict = FrameVerdict::kOk;
   };
+  std::uint64_t frames_done = 0;  ///< frame changes printed (the numbering of the stderr lines)
   std::array<FrameLog, 16> flog{};
   std::atomic<std::uint64_t> flog_n{0};
   std::uint64_t flog_printed = 0;  ///< the worker's, then finish()'s (after the join)
@@ -259,11 +265,22 @@ struct Node::Impl {
     const std::uint64_t n = flog_n.load(std::memory_order_acquire);
     for (; flog_printed < n; ++flog_printed) {
       const FrameLog& e = flog[flog_printed % flog.size()];
+      if (e.verdict != FrameVerdict::kOk) {
+        std::fprintf(stderr,
+                     "boresightd: frame change refused (calibration of %lld us; common rotation %.2f %.2f %.2f "
+                     "arcsec): %s; the relative part is applied, the published frame stays\n",
+                     static_cast<long long>(e.cal_t), e.common_arcsec[0], e.common_arcsec[1], e.common_arcsec[2],
+                     e.verdict == FrameVerdict::kNotDetermined
+                         ? "the common rotation is not determined about every axis"
+                         : "less than calibration.frame_change_min_interval_s since the last frame change");
+        continue;
+      }
+      ++frames_done;
       std::fprintf(stderr,
                    "boresightd: frame change %llu: from data time %lld us the published attitude is in the "
                    "accelerometer-datum frame (calibration of %lld us; common rotation %.2f %.2f %.2f arcsec, "
                    "%.1f arcsec)\n",
-                   static_cast<unsigned long long>(flog_printed + 1), static_cast<long long>(e.from_t),
+                   static_cast<unsigned long long>(frames_done), static_cast<long long>(e.from_t),
                    static_cast<long long>(e.cal_t), e.common_arcsec[0], e.common_arcsec[1], e.common_arcsec[2],
                    e.common_arcsec.norm());
     }
@@ -681,7 +698,26 @@ struct Node::Impl {
         for (int k = 0; k < 3; ++k) m.common_rotation_B_arcsec[k] = common[k] / kRadPerArcsec;
         // The fused attitude now is C_I_B' Exp(common) to first order (B': the accelerometer datum
         // the solver's mountings refer to), so C_I_B' = C_I_Bpub Exp(-common).
-        if (cfg.calibration.apply_common_rotation && common.allFinite()) {
+        // A frame change needs the common rotation determined about all three axes, and at least
+        // frame_change_min_interval_s of data time since the last one; else it is refused (counted and
+        // logged) and only the relative part is applied.
+        FrameVerdict fv = FrameVerdict::kOk;
+        if (cfg.calibration.apply_common_rotation) {
+          if (!common.allFinite() || !mail.common_determined) fv = FrameVerdict::kNotDetermined;
+          else if (c.frame_changes > 0 && static_cast<double>(from_t - frame_from_t) * 1e-6 < cfg.calibration.frame_change_min_interval_s)
+            fv = FrameVerdict::kTooSoon;
+          if (fv != FrameVerdict::kOk) {
+            ++c.frame_changes_refused;
+            const std::uint64_t n = flog_n.load(std::memory_order_relaxed);
+            FrameLog& e = flog[n % flog.size()];
+            e.from_t = from_t;
+            e.cal_t = m.utime;
+            e.common_arcsec = common / kRadPerArcsec;
+            e.verdict = fv;
+            flog_n.store(n + 1, std::memory_order_release);
+          }
+        }
+        if (cfg.calibration.apply_common_rotation && fv == FrameVerdict::kOk) {
           q_frame_old = q_frame;
           q_frame = quatExp(-common).normalized();
           frame_from_t = from_t;
@@ -690,6 +726,7 @@ struct Node::Impl {
           e.from_t = from_t;
           e.cal_t = m.utime;
           e.common_arcsec = common / kRadPerArcsec;
+          e.verdict = FrameVerdict::kOk;
           flog_n.store(n + 1, std::memory_order_release);
           ++c.frame_changes;
         }
@@ -925,6 +962,7 @@ struct Node::Impl {
       for (std::size_t i = 0; i < n3; ++i)
         for (std::size_t j = 0; j < n3; ++j) m.covariance_arcsec2[i][j] = r.covariance_arcsec2[i * n3 + j];
     m.residual_rms_radps2 = r.residual_rms_radps2;
+    mail.common_determined = r.ok && r.unobservable_directions_B.empty();
   }
 
   /// Stops the worker (and its solver). publish: results that arrive meanwhile are published (finish);

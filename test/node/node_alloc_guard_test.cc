@@ -106,6 +106,7 @@ void replaySteadyState(bool record) {
   cfg.calibration.cadence_s = 300;
   cfg.calibration.apply_lag_epochs = 20;
   cfg.calibration.apply_common_rotation = true;  // ... each applied, with a frame change
+  cfg.calibration.frame_change_min_interval_s = 0;  // every determined one (the rate limit is tested in node_test)
   const std::string dir = testutil::makeTempDir("node_alloc_rec");
   io::LcmLogWriter rec;
   ASSERT_TRUE(rec.open(dir + "/out.lcmlog", &err)) << err;

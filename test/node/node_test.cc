@@ -618,6 +618,46 @@ TEST(NodeReplay, CommonRotationIsAppliedOnlyWhenConfiguredAsOneLoggedFrameChange
 
 #ifdef BORESIGHTD
 // The command line the demo uses: replay, record, summary JSON with the last calibration, CSV.
+TEST(NodeReplay, AFrameChangeNeedsEveryCommonAxisDeterminedAndIsRateLimited) {
+  // The demo's manoeuvres: about x from 60 s, y from 300 s, z from 540 s (5 deg, 40 s period).
+  const std::string path = simulate("frame_gate", 1200, {}, nullptr, "config/sim_gracefo_node_demo.yaml");
+  auto run = [&](double cadence_s, double min_span_s, double min_interval_s) {
+    auto cfg = nodeConfig(cadence_s, min_span_s);
+    cfg.calibration.apply_lag_epochs = 20;
+    cfg.calibration.apply_common_rotation = true;
+    cfg.calibration.frame_change_min_interval_s = min_interval_s;
+    testing::internal::CaptureStderr();
+    FrameRun f;
+    f.r = replay(path, cfg);
+    f.err_out = testing::internal::GetCapturedStderr();
+    return f;
+  };
+  // Solves every 120 s from 840 s: each applied; one frame change, the others too soon after it.
+  const FrameRun limited = run(120, 840, 3600);
+  const node::Counters& c = limited.r->c;
+  EXPECT_GE(c.calibrations_applied, 3u);
+  EXPECT_EQ(c.frame_changes, 1u);
+  EXPECT_EQ(c.frame_changes_refused, c.calibrations_applied - 1);
+  EXPECT_NE(limited.err_out.find("frame change refused"), std::string::npos) << limited.err_out;
+  EXPECT_NE(limited.err_out.find("frame_change_min_interval_s"), std::string::npos) << limited.err_out;
+  // Without the limit every applied calibration changes the frame.
+  const FrameRun free = run(120, 840, 0);
+  EXPECT_EQ(free.r->c.frame_changes, free.r->c.calibrations_applied);
+  EXPECT_EQ(free.r->c.frame_changes_refused, 0u);
+  // A span of the x manoeuvre alone (solved at 280 s): the rotation about x is not determined, so the
+  // frame stays (the relative part may still be applied).
+  const FrameRun x_only = run(3600, 280, 0);
+  EXPECT_EQ(x_only.r->c.frame_changes, 0u) << x_only.err_out;
+  EXPECT_GE(x_only.r->c.calibrations_published, 1u);
+  std::printf("x manoeuvre alone: %llu applied, %llu refused, frame changes refused %llu\n",
+              static_cast<unsigned long long>(x_only.r->c.calibrations_applied),
+              static_cast<unsigned long long>(x_only.r->c.calibrations_refused),
+              static_cast<unsigned long long>(x_only.r->c.frame_changes_refused));
+  ASSERT_GE(x_only.r->c.calibrations_applied, 1u) << "the relative part was determined (seed 7: 1 applied)";
+  EXPECT_EQ(x_only.r->c.frame_changes_refused, x_only.r->c.calibrations_applied);
+  EXPECT_NE(x_only.err_out.find("not determined about every axis"), std::string::npos) << x_only.err_out;
+}
+
 TEST(Boresightd, ReplayWritesSummaryWithTheLastCalibrationAndACsvPerAttitude) {
   const std::string log = simulate("cli", 1200, {}, nullptr, "config/sim_gracefo_node_demo.yaml");
   const std::string dir = makeTempDir("node_cli");

@@ -298,6 +298,7 @@ int run(int argc, char** argv) {
   j["rows"] = c.rows;
   j["time_resyncs"] = c.time_resyncs;
   j["held"] = c.held;
+  j["frame_changes_refused"] = c.frame_changes_refused;
   j["seq_restarts"] = c.seq_restarts;
   j["stars_dropped"] = c.stars_dropped;
   j["published"] = out.published;

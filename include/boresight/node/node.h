@@ -92,6 +92,10 @@ struct CalibrationConfig {
   /// head epoch at which it is applied on). Off: the published attitude keeps its frame (the heads'
   /// datum) and the common rotation is only published in calibration_t.
   bool apply_common_rotation = false;
+  /// A frame change also needs the common rotation determined about all three axes (the solver's
+  /// unobservable common directions: none) and at least this much data time since the last change, s;
+  /// else it is refused (frame_changes_refused, logged) and only the relative part is applied.
+  double frame_change_min_interval_s = 3 * 3600.0;
 };
 
 struct NodeConfig {
@@ -151,6 +155,7 @@ struct Counters {
   std::uint64_t held = 0;          ///< messages held at a jump until it was confirmed or refuted
   std::uint64_t seq_restarts = 0;  ///< senders' counters that started again (not counted as loss)
   std::uint64_t frame_changes = 0;  ///< common rotations applied to the published attitude
+  std::uint64_t frame_changes_refused = 0;  ///< not determined about every axis, or too soon after the last
   std::uint64_t rejectedTotal() const {
     std::uint64_t n = 0;
     for (auto v : rejected) n += v;
