@@ -128,6 +128,8 @@ bool applyOverlay(const model::Overlay& ov, const std::string& path, const std::
   for (const auto& t : ov.time_offsets)
     use.not_applied.push_back("time_offsets: " + program + " does not apply time offsets (" + t.sensor + " against " +
                               t.relative_to + ")");
+  if (ov.published_frame)
+    use.not_applied.push_back("published_frame: boresightd's state (its state_file); " + program + " does not read it");
   return true;
 }
 

@@ -262,7 +262,8 @@ void readOverlayRoot(const YAML::Node& root, model::Overlay& o) {
                                   std::to_string(model::kOverlayVersion) + ")",
          v);
   o.version = static_cast<int>(version);
-  checkKeys(root, "", {"boresight_overlay", "written_by", "platform", "note", "mountings", "noise", "thermal", "accelerometer", "time_offsets"});
+  checkKeys(root, "", {"boresight_overlay", "written_by", "platform", "note", "mountings", "noise", "thermal", "accelerometer", "time_offsets",
+                       "published_frame"});
   o.written_by = text(root["written_by"], "written_by");
   if (root["platform"]) o.platform = text(root["platform"], "platform");
   if (root["note"]) o.note = text(root["note"], "note");
@@ -383,7 +384,23 @@ void readOverlayRoot(const YAML::Node& root, model::Overlay& o) {
       o.time_offsets.push_back(e);
     }
   }
-  if (o.parts().empty()) fail("(top level)", "the overlay has no content (mountings, noise, thermal, accelerometer or time_offsets)", root);
+  if (const YAML::Node f = root["published_frame"]) {
+    if (!f.IsMap()) fail("published_frame", "expected a mapping {q_B_Bpub, epoch, calibration}", f);
+    checkKeys(f, "published_frame", {"q_B_Bpub", "epoch", "calibration"});
+    model::PublishedFrame pf;
+    const YAML::Node q = f["q_B_Bpub"];
+    if (!q || !q.IsSequence() || q.size() != 4) fail("published_frame.q_B_Bpub", "expected [q0, q1, q2, q3] (scalar first)", q ? q : f);
+    double qv[4];
+    for (std::size_t j = 0; j < 4; ++j) qv[j] = numberIn(q[j], "published_frame.q_B_Bpub[" + std::to_string(j) + "]", -1, 1);
+    const Quat qq = quatFromScalarFirst(qv);
+    if (std::abs(qq.norm() - 1.0) > 1e-6) fail("published_frame.q_B_Bpub", "not a unit quaternion (norm " + std::to_string(qq.norm()) + ")", q);
+    pf.q_B_Bpub = qq.normalized();
+    pf.epoch = gpsTime(f["epoch"], "published_frame.epoch");
+    pf.calibration = integerIn(f["calibration"], "published_frame.calibration", 0, 1LL << 53);
+    o.published_frame = pf;
+  }
+  if (o.parts().empty())
+    fail("(top level)", "the overlay has no content (mountings, noise, thermal, accelerometer, time_offsets or published_frame)", root);
 }
 
 }  // namespace
@@ -621,6 +638,14 @@ std::string overlayYaml(const model::Overlay& o) {
     for (const auto& t : o.time_offsets)
       s += "  - {sensor: " + t.sensor + ", relative_to: " + t.relative_to + ", offset_s: " + yamlNumber(t.offset_s) +
            ", offset_sigma_s: " + yamlNumber(t.sigma_s) + validityText(t.valid) + "}\n";
+  }
+  if (o.published_frame) {
+    const model::PublishedFrame& f = *o.published_frame;
+    const Quat& q = f.q_B_Bpub;
+    s += "published_frame:  # boresightd: its published attitude's frame from the heads' datum, and the calibration in use\n";
+    s += "  q_B_Bpub: [" + yamlNumber(q.w()) + ", " + yamlNumber(q.x()) + ", " + yamlNumber(q.y()) + ", " + yamlNumber(q.z()) + "]\n";
+    s += "  epoch: " + timeText(f.epoch) + "  # the last frame change\n";
+    s += "  calibration: " + std::to_string(f.calibration) + "\n";
   }
   return s;
 }

@@ -202,6 +202,9 @@ bool MountingEntry::operator==(const MountingEntry& o) const {
   return head == o.head && q_Si_B.coeffs() == o.q_Si_B.coeffs() && datum == o.datum && epoch == o.epoch &&
          same(sigma_rad, o.sigma_rad) && valid == o.valid;
 }
+bool PublishedFrame::operator==(const PublishedFrame& o) const {
+  return q_B_Bpub.coeffs() == o.q_B_Bpub.coeffs() && epoch == o.epoch && calibration == o.calibration;
+}
 bool ThermalHarmonicEntry::operator==(const ThermalHarmonicEntry& o) const {
   return harmonic == o.harmonic && cos_rad == o.cos_rad && sin_rad == o.sin_rad;
 }
@@ -227,6 +230,7 @@ std::vector<std::string> Overlay::parts() const {
   if (thermal) p.push_back("thermal");
   if (accelerometer) p.push_back("accelerometer");
   if (!time_offsets.empty()) p.push_back("time_offsets");
+  if (published_frame) p.push_back("published_frame");
   return p;
 }
 
@@ -329,6 +333,11 @@ std::string validate(const Overlay& o) {
     if (!std::isfinite(t.offset_s)) return k + ".offset_s: not finite";
     if (!std::isnan(t.sigma_s) && !(std::isfinite(t.sigma_s) && t.sigma_s >= 0)) return k + ".offset_sigma_s: must be >= 0";
     if (std::string e = checkValidity(t.valid); !e.empty()) return k + ": " + e;
+  }
+  if (o.published_frame) {
+    const PublishedFrame& f = *o.published_frame;
+    if (!f.q_B_Bpub.coeffs().allFinite() || std::abs(f.q_B_Bpub.norm() - 1.0) > 1e-6) return "published_frame.q_B_Bpub: not a unit quaternion";
+    if (f.calibration < 0) return "published_frame.calibration: must be >= 0";
   }
   return {};
 }
@@ -474,6 +483,14 @@ std::vector<std::string> compareOverlays(const Overlay& a, const Overlay& b, dou
     c.num(k + ".offset_s", x.offset_s, y.offset_s);
     c.num(k + ".offset_sigma_s", x.sigma_s, y.sigma_s);
     c.valid(k, x.valid, y.valid);
+  }
+  if (a.published_frame.has_value() != b.published_frame.has_value()) {
+    c.out.push_back("published_frame: present in one only");
+  } else if (a.published_frame) {
+    const PublishedFrame &x = *a.published_frame, &y = *b.published_frame;
+    for (int j = 0; j < 4; ++j) c.num("published_frame.q_B_Bpub[" + std::to_string(j) + "]", x.q_B_Bpub.coeffs()[j], y.q_B_Bpub.coeffs()[j]);
+    c.exact("published_frame.epoch", x.epoch, y.epoch);
+    c.exact("published_frame.calibration", x.calibration, y.calibration);
   }
   return c.out;
 }

@@ -97,7 +97,7 @@ bool loadNodeConfig(const std::string& path, NodeConfig& out, std::string* error
 namespace {
 bool loadTop(const YAML::Node& top, const std::string& path, Reader& r, NodeConfig& out) {
   auto done = [](bool ok) { return ok; };
-  if (!r.keys(top, "", {"platform", "overlay", "mountings", "lcm_url", "channels", "lookahead_s", "health_period_s",
+  if (!r.keys(top, "", {"platform", "overlay", "state_file", "mountings", "lcm_url", "channels", "lookahead_s", "health_period_s",
                         "max_time_jump_s", "time_jump_confirm", "max_rate_hz", "ring_capacity", "calibration"}))
     return done(false);
   if (!top["platform"]) return done(r.fail("platform", "required (the platform configuration file)", top));
@@ -119,6 +119,10 @@ bool loadTop(const YAML::Node& top, const std::string& path, Reader& r, NodeConf
     for (int s = 0; s < pc.pipeline.heads.n_heads; ++s)
       pc.mounting_source[static_cast<std::size_t>(s)] = "the first NOMINAL_MOUNTINGS message (mountings: log)";
   io::OverlayUse ovu;
+  if (top["state_file"]) {
+    if (!r.str(top, "state_file", "state_file", out.state_file)) return done(false);
+    if (!out.state_file.empty() && out.state_file[0] != '/') out.state_file = dirOf(path) + "/" + out.state_file;
+  }
   if (top["overlay"]) {
     if (!r.str(top, "overlay", "overlay", out.overlay)) return done(false);
     if (out.overlay[0] != '/') out.overlay = dirOf(path) + "/" + out.overlay;

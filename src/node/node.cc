@@ -6,6 +6,7 @@
 #include <boresight/calib/span_builder.h>
 #include <boresight/core/plausibility.h>
 #include <boresight/io/lcm_log.h>
+#include <boresight/io/overlay_yaml.h>
 #include <boresight/stream/assembler.h>
 
 #include "boresight_lcm/accel_sample_t.hpp"
@@ -17,6 +18,7 @@
 #include "boresight_lcm/star_vectors_t.hpp"
 
 #include <algorithm>
+#include <fstream>
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
@@ -552,6 +554,7 @@ struct Node::Impl {
   bool startCore() {
     if (pipe.configure(pcfg) != core::Status::kOk) return false;
     core_ready = true;
+    applyState();
     if (cfg.calibration.enabled) worker = std::thread([this] { workerLoop(); });
     return true;
   }
@@ -721,6 +724,8 @@ struct Node::Impl {
           q_frame_old = q_frame;
           q_frame = quatExp(-common).normalized();
           frame_from_t = from_t;
+          frame_active = true;
+          frame_epoch = from_t;
           const std::uint64_t n = flog_n.load(std::memory_order_relaxed);
           FrameLog& e = flog[n % flog.size()];
           e.from_t = from_t;
@@ -732,6 +737,7 @@ struct Node::Impl {
         }
       }
     }
+    if (m.applied) saveState(m);
     if (!mail.ok) {
       ++c.calibrations_refused;
       last_reason = mail.reason;
@@ -740,6 +746,125 @@ struct Node::Impl {
     publish(cfg.channels.calibration, m.utime, m);
     ++c.calibrations_published;
     mail.state.store(0, std::memory_order_release);
+  }
+
+  // ---------------------------------------------------------------------------------------------
+  // The state file (NodeConfig::state_file). The real-time thread fills a slot under a sequence lock
+  // when a calibration is applied; the worker thread (or finish(), after the join) writes it as a model
+  // overlay, atomically (io::writeOverlay: whole or not at all).
+  struct StateSlot {
+    std::array<Quat, kMaxHeads> q_Si_B{};
+    std::array<Vec3, kMaxHeads> sigma_rad{};
+    TimeUs cal_t = 0, frame_t = 0;
+    Quat q_frame = Quat::Identity();
+    std::uint64_t version = 0;
+  };
+  StateSlot state_slot;
+  std::atomic<std::uint64_t> state_seq{0};  ///< odd while the slot is written; +2 per state
+  std::uint64_t state_written = 0;          ///< the sequence last written (worker, then finish())
+  bool frame_active = false;                ///< the published attitude is rotated (a frame change or the state)
+  TimeUs frame_epoch = 0;                   ///< data time of the last frame change (the state's after a restart)
+
+  void saveState(const boresight_lcm::calibration_t& m) {
+    if (cfg.state_file.empty()) return;
+    const std::uint64_t s0 = state_seq.load(std::memory_order_relaxed);
+    state_seq.store(s0 + 1, std::memory_order_release);
+    std::atomic_thread_fence(std::memory_order_release);
+    StateSlot& st = state_slot;
+    for (int k = 0; k < kMaxHeads; ++k) {
+      st.q_Si_B[static_cast<std::size_t>(k)] = handed_q[static_cast<std::size_t>(k)];
+      for (int a = 0; a < 3; ++a) st.sigma_rad[static_cast<std::size_t>(k)][a] = m.sigma_arcsec[k][a] * kRadPerArcsec;
+    }
+    st.cal_t = m.utime;
+    st.frame_t = frame_active ? frame_epoch : 0;
+    st.q_frame = frame_active ? q_frame : Quat::Identity();
+    st.version = mounting_version;
+    state_seq.store(s0 + 2, std::memory_order_release);
+  }
+
+  /// Writes the state when the slot holds a newer one (not the real-time thread).
+  void writeStateIfNew() {
+    if (cfg.state_file.empty()) return;
+    const std::uint64_t s1 = state_seq.load(std::memory_order_acquire);
+    if (s1 == state_written || (s1 & 1u)) return;
+    const StateSlot st = state_slot;
+    std::atomic_thread_fence(std::memory_order_acquire);
+    if (state_seq.load(std::memory_order_relaxed) != s1) return;  // rewritten meanwhile: next time
+    model::Overlay o;
+    o.written_by = "boresightd (state file)";
+    o.note = "the last calibration boresightd applied and the frame it publishes in; read at its start";
+    for (int k = 0; k < pcfg.heads.n_heads; ++k) {
+      model::MountingEntry e;
+      e.head = pcfg.heads.head[static_cast<std::size_t>(k)].id;
+      e.q_Si_B = st.q_Si_B[static_cast<std::size_t>(k)].normalized();
+      e.datum = model::MountingDatum::Accelerometer;
+      e.epoch = st.cal_t;
+      e.sigma_rad = st.sigma_rad[static_cast<std::size_t>(k)];
+      o.mountings.push_back(e);
+    }
+    model::PublishedFrame f;
+    f.q_B_Bpub = st.q_frame.normalized();
+    f.epoch = st.frame_t;
+    f.calibration = static_cast<std::int64_t>(st.version);
+    o.published_frame = f;
+    std::string err;
+    if (!io::writeOverlay(cfg.state_file, o, &err))
+      std::fprintf(stderr, "boresightd: state file not written: %s\n", err.c_str());
+    state_written = s1;
+  }
+
+  /// The state read at start (configure): handed to the core when it starts.
+  bool have_state = false;
+  std::array<Quat, kMaxHeads> state_q{};
+  model::PublishedFrame state_frame;
+
+  bool readState(std::string* error) {
+    if (cfg.state_file.empty()) return true;
+    std::ifstream probe(cfg.state_file);
+    if (!probe) return true;  // none yet: the first run
+    model::Overlay o;
+    std::string err;
+    if (!io::readOverlay(cfg.state_file, o, &err)) {
+      if (error) *error = "state_file: " + err;
+      return false;
+    }
+    if (!o.published_frame) {
+      if (error) *error = "state_file: " + cfg.state_file + ": no published_frame (not a boresightd state file)";
+      return false;
+    }
+    for (int k = 0; k < pcfg.heads.n_heads; ++k) {
+      const int id = pcfg.heads.head[static_cast<std::size_t>(k)].id;
+      auto it = std::find_if(o.mountings.begin(), o.mountings.end(), [&](const model::MountingEntry& e) { return e.head == id; });
+      if (it == o.mountings.end()) {
+        if (error) *error = "state_file: " + cfg.state_file + ": no mounting for head " + std::to_string(id);
+        return false;
+      }
+      state_q[static_cast<std::size_t>(k)] = it->q_Si_B;
+    }
+    state_frame = *o.published_frame;
+    have_state = true;
+    return true;
+  }
+
+  /// At the core's start: the state's calibration and frame go on.
+  void applyState() {
+    if (!have_state) return;
+    if (state_frame.calibration > 0 && pipe.handMountings(state_q) == core::Status::kOk) {
+      handed_q = state_q;
+      mounting_version = static_cast<std::uint64_t>(state_frame.calibration);
+    }
+    const Quat qf = state_frame.q_B_Bpub.normalized();
+    if (qf.angularDistance(Quat::Identity()) > 0) {
+      q_frame = q_frame_old = qf;
+      frame_from_t = std::numeric_limits<TimeUs>::min();
+      frame_active = true;
+      frame_epoch = state_frame.epoch;
+    }
+    std::fprintf(stderr,
+                 "boresightd: state from %s: calibration %lld in use, published frame rotated %.2f arcsec from the heads' "
+                 "datum\n",
+                 cfg.state_file.c_str(), static_cast<long long>(state_frame.calibration),
+                 qf.angularDistance(Quat::Identity()) / kRadPerArcsec);
   }
 
   template <typename Msg>
@@ -757,7 +882,7 @@ struct Node::Impl {
       boresight_lcm::fused_attitude_t a{};
       a.utime = row.t;
       a.seq = seq_att++;
-      if (c.frame_changes > 0) {  // the frame change: q_I_B' = q_I_B q_B_B', vectors and P into B'
+      if (frame_active) {  // the frame change: q_I_B' = q_I_B q_B_B', vectors and P into B'
         const Quat& qf = row.t >= frame_from_t ? q_frame : q_frame_old;
         const Mat3 R = qf.conjugate().toRotationMatrix();  // C_B'_B
         row.q_I_B = (row.q_I_B * qf).normalized();
@@ -862,6 +987,7 @@ struct Node::Impl {
     for (;;) {
       if (!ring.pop(it)) {  // nothing to do: yield a while, then sleep (the worker is not real time)
         printFrameChanges();
+        writeStateIfNew();
         if (++idle < 64) std::this_thread::yield();
         else std::this_thread::sleep_for(std::chrono::microseconds(200));
         continue;
@@ -1023,6 +1149,7 @@ bool Node::configure(const NodeConfig& cfg, Mode mode, Output* out, std::string*
   m.stars = std::make_unique<core::StarEpoch>();
   m.enc.assign(8192, 0);
   m.ring.init(cfg.ring_capacity);
+  if (!m.readState(error)) return false;
   m.configured = true;
   if (!cfg.mountings_from_log && !m.startCore()) {
     if (error) *error = cfg.file + ": the core refuses the platform configuration";
@@ -1074,6 +1201,7 @@ void Node::finish() {
   }
   m.stopWorker(true);
   m.printFrameChanges();  // the worker has joined: what it has not written yet
+  m.writeStateIfNew();
   m.publishHealth(m.last_epoch_t);
 }
 

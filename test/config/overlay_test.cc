@@ -158,6 +158,11 @@ model::Overlay fullOverlay() {
   t.sigma_s = kNaN;
   t.valid.to = gps("2023-06-01 00:00:16");
   o.time_offsets.push_back(t);
+  model::PublishedFrame f;
+  f.q_B_Bpub = Quat(0.9999999, 0.0002, -0.0003, 0.0001).normalized();
+  f.epoch = gps("2023-06-01 03:20:00");
+  f.calibration = 4;
+  o.published_frame = f;
   return o;
 }
 
@@ -180,7 +185,9 @@ TEST(Overlay, FullyPopulatedOverlayRoundTrips) {
   EXPECT_TRUE(back.mountings[0].valid == o.mountings[0].valid);
   EXPECT_EQ(back.mountings[0].epoch, o.mountings[0].epoch);
   // The parts, and the file written and read through the file functions.
-  EXPECT_EQ(back.parts(), (std::vector<std::string>{"mountings", "noise", "thermal", "accelerometer", "time_offsets"}));
+  EXPECT_EQ(back.parts(), (std::vector<std::string>{"mountings", "noise", "thermal", "accelerometer", "time_offsets", "published_frame"}));
+  EXPECT_EQ(back.published_frame->epoch, o.published_frame->epoch);
+  EXPECT_EQ(back.published_frame->calibration, 4);
   const std::string path = testutil::makeTempDir("overlay_rt") + "/o.yaml";
   ASSERT_TRUE(io::writeOverlay(path, o, &err)) << err;
   model::Overlay fromFile;
@@ -203,6 +210,9 @@ TEST(Overlay, CompareFindsADifferenceInEveryPart) {
       [](model::Overlay& x) { x.thermal->heads[1].constant_rad.sigma[0] = kNaN; },
       [](model::Overlay& x) { x.accelerometer->scale->value[2] = 0.0006; },
       [](model::Overlay& x) { x.time_offsets[1].relative_to = "heads"; },
+      [](model::Overlay& x) { x.published_frame->q_B_Bpub = Quat::Identity(); },
+      [](model::Overlay& x) { x.published_frame->calibration = 5; },
+      [](model::Overlay& x) { x.published_frame.reset(); },
       [](model::Overlay& x) { x.written_by = "someone else"; },
   };
   for (std::size_t i = 0; i < changes.size(); ++i) {

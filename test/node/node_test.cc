@@ -5,6 +5,7 @@
 // Golden file: test/node/golden/replay_short.txt. Regenerate (after a change made on purpose) with
 //   BORESIGHT_UPDATE_GOLDEN=1 ./build/test/node/node_test --gtest_filter='*Golden*'
 #include <boresight/io/lcm_log.h>
+#include <boresight/io/overlay_yaml.h>
 #include <boresight/io/level1.h>
 #include <boresight/model/rotation.h>
 #include <boresight/node/node.h>
@@ -1122,6 +1123,87 @@ TEST(NodeFaults, OneSenderClockAheadIsRefutedByTheOthersNotFollowed) {
   EXPECT_GE(rejected(c, node::Reason::kTimeJump) + rejected(c, node::Reason::kLate), shifted_n);
   EXPECT_EQ(c.head_epochs, ref->c.head_epochs);
   EXPECT_EQ(c.received, c.used + c.rejectedTotal());
+}
+
+TEST(NodeReplay, AStateFileKeepsTheCalibrationAndTheFrameAcrossARestart) {
+  // The demo span with a frame change (840 s + 20 epochs), cut at 1000 s of log time: the node is
+  // restarted there. With the state file the second run publishes what the uninterrupted run does
+  // (the same calibration identifier, the same frame: the filters restart, so arc seconds apart at
+  // most); without it the attitude jumps back to the heads' datum by the whole common rotation.
+  const std::string full = simulate("state", 1200, {}, nullptr, "config/sim_gracefo_node_demo.yaml");
+  const std::string dir = makeTempDir("node_state");
+  auto part = [&](const std::string& name, bool second) {
+    TimeUs t0 = -1;
+    return editLog(full, name, [&](std::size_t, const Event& e) {
+      if (t0 < 0) t0 = e.t;
+      if (e.ch == "NOMINAL_MOUNTINGS") return std::vector<Event>{e};
+      const bool late = static_cast<double>(e.t - t0) * 1e-6 >= 1000;
+      return late == second ? std::vector<Event>{e} : std::vector<Event>{};
+    });
+  };
+  const std::string first = part("first.lcm", false), second = part("second.lcm", true);
+  auto cfgWith = [&](const std::string& state) {
+    auto cfg = nodeConfig(3600, 840);
+    cfg.calibration.apply_lag_epochs = 20;
+    cfg.calibration.apply_common_rotation = true;
+    cfg.calibration.frame_change_min_interval_s = 0;
+    cfg.state_file = state;
+    return cfg;
+  };
+  const std::string state = dir + "/state.yaml";
+  const auto whole = replay(full, cfgWith(""));
+  ASSERT_EQ(whole->c.frame_changes, 1u);
+  testing::internal::CaptureStderr();
+  const auto r1 = replay(first, cfgWith(state));
+  testing::internal::GetCapturedStderr();
+  ASSERT_EQ(r1->c.calibrations_applied, 1u);
+  model::Overlay st;
+  std::string err;
+  ASSERT_TRUE(io::readOverlay(state, st, &err)) << err;
+  ASSERT_TRUE(st.published_frame.has_value());
+  EXPECT_EQ(st.published_frame->calibration, 1);
+  EXPECT_EQ(st.mountings.size(), 3u);
+  testing::internal::CaptureStderr();
+  const auto r2 = replay(second, cfgWith(state));
+  const std::string log2 = testing::internal::GetCapturedStderr();
+  EXPECT_NE(log2.find("state from"), std::string::npos) << log2;
+  const auto r2_bare = replay(second, cfgWith(""));
+
+  auto ref = whole->out.all<boresight_lcm::fused_attitude_t>("BORESIGHT_ATTITUDE");
+  std::map<TimeUs, boresight_lcm::fused_attitude_t> by_t;
+  for (const auto& a : ref) by_t[a.utime] = a;
+  // Median angle from the uninterrupted run over the second run's rows (two heads or more in use).
+  auto median = [&](const Replay& r, std::int32_t* version) {
+    std::vector<double> d;
+    for (const auto& a : r.out.all<boresight_lcm::fused_attitude_t>("BORESIGHT_ATTITUDE")) {
+      // the uninterrupted run's rows fall on other epochs (every second one): interpolated to a.utime
+      const auto hi = by_t.lower_bound(a.utime);
+      if (hi == by_t.end() || hi == by_t.begin() || a.heads_used < 2) continue;
+      const auto lo = std::prev(hi);
+      if (hi->first - lo->first > 2 * kUsPerSecond) continue;
+      auto quat = [](const boresight_lcm::fused_attitude_t& x) { return Quat(x.q_I_B[0], x.q_I_B[1], x.q_I_B[2], x.q_I_B[3]); };
+      const double w = hi->first == lo->first ? 0.0 : static_cast<double>(a.utime - lo->first) / static_cast<double>(hi->first - lo->first);
+      const Quat q = quat(a), p = quat(lo->second).slerp(w, quat(hi->second));
+      d.push_back(q.angularDistance(p) / kRadPerArcsec);
+      *version = a.mounting_version;
+    }
+    EXPECT_GT(d.size(), 100u);
+    std::nth_element(d.begin(), d.begin() + static_cast<std::ptrdiff_t>(d.size() / 2), d.end());
+    return d[d.size() / 2];
+  };
+  std::int32_t v_state = -1, v_bare = -1;
+  const double with_state = median(*r2, &v_state), without = median(*r2_bare, &v_bare);
+  std::printf("restart at 1000 s: median %.2f arcsec from the uninterrupted run with the state file, %.1f without\n",
+              with_state, without);
+  EXPECT_LT(with_state, 5.0);
+  EXPECT_GT(without, 100.0);
+  EXPECT_EQ(v_state, 1);
+  EXPECT_EQ(v_bare, 0);
+  // A state file that is not one is refused at start with its name.
+  ASSERT_TRUE(testutil::writeFile(dir + "/bad.yaml", "boresight_overlay: 1\nwritten_by: x\nnote: y\n"));
+  node::Node n;
+  EXPECT_FALSE(n.configure(cfgWith(dir + "/bad.yaml"), node::Node::Mode::kReplay, nullptr, &err));
+  EXPECT_NE(err.find("bad.yaml"), std::string::npos) << err;
 }
 
 #ifdef BORESIGHTD

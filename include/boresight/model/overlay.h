@@ -6,6 +6,7 @@
 //   - thermal terms: orbit harmonics of each head's deformation relative to a datum head;
 //   - accelerometer terms: bias, scale, misalignment, non-orthogonality;
 //   - time offsets per sensor;
+//   - the node's published frame and calibration in use (its state file);
 // each with its uncertainty and validity span. SI units here (rad, rad/s^2, s; times TimeUs); the YAML
 // form (io/overlay_yaml.h) carries arcsec for angles of heads and GPS calendar strings for times.
 //
@@ -204,6 +205,16 @@ struct TimeOffsetEntry {
   bool operator==(const TimeOffsetEntry& o) const;
 };
 
+/// boresightd's state beyond the mountings (its state file, so a restart does not jump): the rotation
+/// of the frame its attitude is published in from the heads' datum (frame changes; identity before the
+/// first) and the calibration in use.
+struct PublishedFrame {
+  Quat q_B_Bpub = Quat::Identity();  ///< unit; identity: the heads' datum
+  TimeUs epoch = 0;                  ///< data time of the last frame change (0: none)
+  std::int64_t calibration = 0;      ///< identifier of the calibration in use (0: none), >= 0
+  bool operator==(const PublishedFrame& o) const;
+};
+
 struct Overlay {
   int version = kOverlayVersion;
   std::string written_by;  ///< the program that wrote it ("boresight calibrate 0.9.0"), or a person
@@ -214,7 +225,9 @@ struct Overlay {
   std::optional<ThermalTerms> thermal;
   std::optional<AccelerometerTerms> accelerometer;
   std::vector<TimeOffsetEntry> time_offsets;
-  /// The parts present, by key: "mountings", "noise", "thermal", "accelerometer", "time_offsets".
+  std::optional<PublishedFrame> published_frame;
+  /// The parts present, by key: "mountings", "noise", "thermal", "accelerometer", "time_offsets",
+  /// "published_frame".
   std::vector<std::string> parts() const;
 };
 

@@ -114,6 +114,11 @@ struct NodeConfig {
   /// The noise and mountings in use with their sources, and the overlay's applied / not applied parts
   /// (io::modelInUseLines): printed at start and written into the summary.
   std::vector<std::string> model_in_use;
+  /// `state_file: FILE` (relative to the node's file; empty: none): a model overlay with the last applied
+  /// calibration's mountings and the published frame, written atomically by the worker thread after
+  /// each applied calibration and at the end, and read at start (a restart goes on with the same
+  /// mountings, frame and calibration identifier instead of jumping back to the nominal ones).
+  std::string state_file;
   std::string lcm_url = "udpm://239.255.76.67:7667?ttl=0";
   Channels channels;
   double lookahead_s = 2.0;         ///< assembler look-ahead, s
