@@ -94,11 +94,12 @@ class LatencyHistogram {
 
 /// What the real-time thread hands the worker.
 struct RingItem {
-  enum Kind : std::uint8_t { kHeads, kAcc, kSolve, kStop } kind = kHeads;
+  enum Kind : std::uint8_t { kHeads, kAcc, kSolve, kStop, kMountings } kind = kHeads;
   TimeUs t = 0;
   core::HeadEpoch heads{};
   Vec3 a_A = Vec3::Zero();
-  std::uint64_t solve_id = 0;
+  std::uint64_t solve_id = 0;  ///< kSolve: the request; kMountings: the nominal generation from here on
+  std::array<Quat, kMaxHeads> q_Si_B = core::filled<Quat, kMaxHeads>(Quat::Identity());  ///< kMountings: the new nominal mountings by slot
 };
 
 /// Bounded lock-free single-producer/single-consumer ring (capacity a power of two, sized once).
@@ -192,6 +193,7 @@ struct Mailbox {
   /// The common rotation is determined about every B axis (the solver's unobservable directions of a
   /// common rotation: none).
   bool common_determined = false;
+  std::uint64_t nominal_gen = 0;  ///< the nominal mountings the span was built with (0: the first)
 };
 
 int64_t toI64(std::uint64_t v) { return static_cast<int64_t>(v); }
@@ -520,10 +522,6 @@ struct Node::Impl {
   void onMountings(const void* data, int size) {
     io::NominalMountings m;
     if (!io::decodeNominalMountings(data, size, m)) return reject(Reason::kUndecodable);
-    if (core_ready) {  // the first one configures the core; later ones are counted, not applied
-      ++c.used;
-      return;
-    }
     core::PipelineConfig p = pcfg;
     for (int k = 0; k < p.heads.n_heads; ++k) {
       auto& h = p.heads.head[static_cast<std::size_t>(k)];
@@ -536,9 +534,68 @@ struct Node::Impl {
       if (std::abs(q.norm() - 1) > 1e-6) return reject(Reason::kNonUnit);
       h.q_Si_B = q.normalized();
     }
+    if (core_ready) {
+      // A later message: the same mountings again are used and change nothing; new ones are applied at
+      // the next head-epoch boundary (applyNominal).
+      bool same = true;
+      for (int k = 0; k < p.heads.n_heads; ++k) {
+        const auto u = static_cast<std::size_t>(k);
+        if (p.heads.head[u].q_Si_B.angularDistance(pcfg.heads.head[u].q_Si_B) > 1e-12) same = false;
+      }
+      if (!same) {
+        for (int k = 0; k < kMaxHeads; ++k) pending_nominal[static_cast<std::size_t>(k)] = p.heads.head[static_cast<std::size_t>(k)].q_Si_B;
+        have_pending_nominal = true;
+      }
+      ++c.used;
+      return;
+    }
     pcfg = p;
     if (!startCore()) return reject(Reason::kInvalidFlag);
     ++c.used;
+  }
+
+  /// New nominal mountings (a later NOMINAL_MOUNTINGS message) at a head-epoch boundary: the core's rows
+  /// so far go out, the core starts again with them (its filters restart, its counts go on); they are
+  /// the mountings in use (a new calibration identifier), the frame is the heads' datum again, the
+  /// worker's span starts again, and results solved against the old ones are not applied.
+  std::array<Quat, kMaxHeads> pending_nominal = core::filled<Quat, kMaxHeads>(Quat::Identity());
+  bool have_pending_nominal = false;
+  std::uint64_t nominal_gen = 0;
+  void applyNominal(TimeUs t) {
+    have_pending_nominal = false;
+    core::PipelineConfig p = pcfg;
+    for (int k = 0; k < p.heads.n_heads; ++k) p.heads.head[static_cast<std::size_t>(k)].q_Si_B = pending_nominal[static_cast<std::size_t>(k)];
+    pipe.flush();
+    publishRows();
+    core_base.add(pipe.health());
+    if (pipe.configure(p) != core::Status::kOk) {  // cannot happen for unit quaternions; keep the old ones
+      pipe.configure(pcfg);
+      if (mounting_version > 0) pipe.handMountings(handed_q);
+      ++c.mountings_refused;
+      return;
+    }
+    pcfg = p;
+    for (int k = 0; k < kMaxHeads; ++k) handed_q[static_cast<std::size_t>(k)] = pcfg.heads.head[static_cast<std::size_t>(k)].q_Si_B;
+    ++mounting_version;
+    mounting_from_t = t;
+    frame_active = false;
+    q_frame = q_frame_old = Quat::Identity();
+    frame_from_t = t;
+    ++nominal_gen;
+    ++c.mountings_applied;
+    RingItem it;
+    it.kind = RingItem::kMountings;
+    it.t = t;
+    it.solve_id = nominal_gen;
+    it.q_Si_B = pending_nominal;
+    if (cfg.calibration.enabled) {
+      while (!ring.push(it)) std::this_thread::yield();  // rare (a ground command): the worker must see it
+    }
+    boresight_lcm::calibration_t none{};
+    for (int k = 0; k < kMaxHeads; ++k)
+      for (int a = 0; a < 3; ++a) none.sigma_arcsec[k][a] = std::numeric_limits<double>::quiet_NaN();
+    none.utime = t;
+    saveState(none);
   }
 
   void onOrbit(const void* data, int size) {
@@ -625,6 +682,7 @@ struct Node::Impl {
   std::uint64_t asm_refused = 0, asm_outliers = 0, asm_duplicates = 0, stars_dropped_push = 0;
 
   void stepHeads() {
+    if (have_pending_nominal) applyNominal(epoch.t);
     applyMailbox();
     const auto t0 = std::chrono::steady_clock::now();
     pipe.stepHeads(epoch);
@@ -687,7 +745,9 @@ struct Node::Impl {
   void takeMailbox(TimeUs from_t) {
     boresight_lcm::calibration_t& m = mail.msg;
     m.applied = 0;
-    if (mail.ok && cfg.calibration.apply) {
+    const bool stale = mail.nominal_gen != nominal_gen;  // solved against nominal mountings replaced since
+    if (stale) ++c.calibrations_superseded;
+    if (mail.ok && cfg.calibration.apply && !stale) {
       if (pipe.handMountings(mail.q_Si_B) == core::Status::kOk) {
         handed_q = mail.q_Si_B;
         m.applied = 1;
@@ -967,6 +1027,8 @@ struct Node::Impl {
   struct SolveJob {
     std::unique_ptr<calib::SpanBuilder> sb;
     RingItem req;
+    std::array<Quat, kMaxHeads> nominal = core::filled<Quat, kMaxHeads>(Quat::Identity());  ///< the mountings the span was built with
+    std::uint64_t nominal_gen = 0;
   };
   std::mutex job_m;
   std::condition_variable job_cv;
@@ -980,7 +1042,9 @@ struct Node::Impl {
     so.decimation_s = cfg.calibration.decimation_s;
     so.max_observations = cfg.calibration.max_observations;
     std::string err;
-    const bool ok = sb.configure(pcfg, so, &err);
+    core::PipelineConfig wcfg = pcfg;  // the worker's copy (the real-time thread changes pcfg)
+    std::uint64_t gen = 0;
+    bool ok = sb.configure(wcfg, so, &err);
     std::thread solver([this] { solverLoop(); });
     RingItem it;
     int idle = 0;
@@ -994,6 +1058,27 @@ struct Node::Impl {
       }
       idle = 0;
       if (it.kind == RingItem::kStop) break;
+      if (it.kind == RingItem::kMountings) {
+        // New nominal mountings: the span starts again with them (its observations were of the old
+        // ones), and the change is logged here, off the real-time thread.
+        std::string what;
+        for (int k = 0; k < wcfg.heads.n_heads; ++k) {
+          auto& h = wcfg.heads.head[static_cast<std::size_t>(k)];
+          const double d = h.q_Si_B.angularDistance(it.q_Si_B[static_cast<std::size_t>(k)]) / kRadPerArcsec;
+          char b[64];
+          std::snprintf(b, sizeof b, "%shead %d %.2f", k ? ", " : "", h.id, d);
+          what += b;
+          h.q_Si_B = it.q_Si_B[static_cast<std::size_t>(k)];
+        }
+        gen = it.solve_id;
+        sb = calib::SpanBuilder();
+        ok = sb.configure(wcfg, so, &err);
+        std::fprintf(stderr,
+                     "boresightd: new nominal mountings applied from data time %lld us (moved: %s arcsec); the "
+                     "calibration span starts again, the published frame is the heads' datum again\n",
+                     static_cast<long long>(it.t), what.c_str());
+        continue;
+      }
       if (!ok) continue;
       if (it.kind == RingItem::kHeads) {
         sb.pushHeads(it.heads);
@@ -1003,6 +1088,8 @@ struct Node::Impl {
         auto j = std::make_unique<SolveJob>();
         j->sb = std::make_unique<calib::SpanBuilder>(sb);
         j->req = it;
+        for (int k = 0; k < kMaxHeads; ++k) j->nominal[static_cast<std::size_t>(k)] = wcfg.heads.head[static_cast<std::size_t>(k)].q_Si_B;
+        j->nominal_gen = gen;
         std::unique_lock<std::mutex> lk(job_m);
         job_cv.wait(lk, [this] { return !job; });
         job = std::move(j);
@@ -1038,7 +1125,7 @@ struct Node::Impl {
         expected = 0;
         std::this_thread::sleep_for(std::chrono::microseconds(100));
       }
-      fillResult(j->sb->span(), r, j->req);
+      fillResult(j->sb->span(), r, j->req, j->nominal, j->nominal_gen);
       mail.state.store(2, std::memory_order_release);
       {
         std::lock_guard<std::mutex> lk(job_m);  // the job slot is free once this one is published
@@ -1047,10 +1134,12 @@ struct Node::Impl {
     }
   }
 
-  void fillResult(const calib::CalibrationSpan& sp, const calib::SolveResult& r, const RingItem& it) {
+  void fillResult(const calib::CalibrationSpan& sp, const calib::SolveResult& r, const RingItem& it,
+                  const std::array<Quat, kMaxHeads>& nominal, std::uint64_t gen) {
     boresight_lcm::calibration_t& m = mail.msg;
     m = boresight_lcm::calibration_t{};
     mail.solve_id = it.solve_id;
+    mail.nominal_gen = gen;
     mail.ok = r.ok;
     const std::size_t n = std::min(r.message.size(), mail.reason.size() - 1);
     std::copy(r.message.begin(), r.message.begin() + static_cast<std::ptrdiff_t>(n), mail.reason.begin());
@@ -1067,11 +1156,11 @@ struct Node::Impl {
     const double nan = std::numeric_limits<double>::quiet_NaN();
     for (int k = 0; k < kMaxHeads; ++k) {
       const auto u = static_cast<std::size_t>(k);
-      mail.q_Si_B[u] = pcfg.heads.head[u].q_Si_B;
+      mail.q_Si_B[u] = nominal[u];
       if (k >= pcfg.heads.n_heads) continue;
       m.head_id[k] = static_cast<int8_t>(pcfg.heads.head[u].id);
       if (!r.ok) continue;
-      mail.q_Si_B[u] = (quatExp(r.estimate.r_S[u]) * pcfg.heads.head[u].q_Si_B).normalized();
+      mail.q_Si_B[u] = (quatExp(r.estimate.r_S[u]) * nominal[u]).normalized();
       if (u < r.heads.size()) {
         const auto& h = r.heads[u];
         for (int a = 0; a < 3; ++a) {

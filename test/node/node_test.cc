@@ -17,6 +17,7 @@
 #include "boresight_lcm/calibration_t.hpp"
 #include "boresight_lcm/fused_attitude_t.hpp"
 #include "boresight_lcm/node_health_t.hpp"
+#include "boresight_lcm/nominal_mountings_t.hpp"
 #include "boresight_lcm/orbit_sample_t.hpp"
 #include "boresight_lcm/star_head_sample_t.hpp"
 #include "boresight_lcm/star_vectors_t.hpp"
@@ -33,6 +34,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <functional>
 #include <iomanip>
 #include <map>
 #include <sstream>
@@ -1123,6 +1125,89 @@ TEST(NodeFaults, OneSenderClockAheadIsRefutedByTheOthersNotFollowed) {
   EXPECT_GE(rejected(c, node::Reason::kTimeJump) + rejected(c, node::Reason::kLate), shifted_n);
   EXPECT_EQ(c.head_epochs, ref->c.head_epochs);
   EXPECT_EQ(c.received, c.used + c.rejectedTotal());
+}
+
+TEST(NodeFaults, ANewMountingsMessageIsValidatedAndAppliedAtAnEpochBoundary) {
+  // A second NOMINAL_MOUNTINGS message at 600 s of log time. Before, any later one was counted as used
+  // and ignored.
+  const std::string clean = simulate("newmount", 1200, {});
+  const auto ref = replay(clean, nodeConfig());
+  auto withMountings = [&](const std::string& name, const std::function<void(boresight_lcm::nominal_mountings_t&)>& change) {
+    TimeUs t0 = -1;
+    bool inserted = false;
+    Event first;
+    return editLog(clean, name, [&](std::size_t, const Event& e) {
+      if (t0 < 0) t0 = e.t;
+      if (e.ch == "NOMINAL_MOUNTINGS" && first.ch.empty()) first = e;
+      if (inserted || e.t - t0 < 600 * kUsPerSecond || e.ch != "ACCEL") return std::vector<Event>{e};
+      inserted = true;
+      auto m = decodeAs<boresight_lcm::nominal_mountings_t>(first);
+      m.utime = decodeAs<boresight_lcm::accel_sample_t>(e).utime;  // the data time there
+      change(m);
+      return std::vector<Event>{encodeAs("NOMINAL_MOUNTINGS", e.t, m), e};
+    });
+  };
+  auto attitudes = [](const Replay& r) { return r.out.all<boresight_lcm::fused_attitude_t>("BORESIGHT_ATTITUDE"); };
+  const auto ref_att = attitudes(*ref);
+  ASSERT_GT(ref_att.size(), 1000u);
+
+  // The same mountings again: used, nothing changes.
+  const auto same = replay(withMountings("same.lcm", [](boresight_lcm::nominal_mountings_t&) {}), nodeConfig());
+  EXPECT_EQ(same->c.mountings_applied, 0u);
+  EXPECT_EQ(same->c.used, ref->c.used + 1);
+  EXPECT_EQ(same->c.rows, ref->c.rows);
+
+  // Not a unit quaternion: rejected, nothing changes.
+  const auto bad = replay(withMountings("bad.lcm", [](boresight_lcm::nominal_mountings_t& m) {
+                            for (int j = 0; j < 4; ++j) m.q_Si_B[1][j] *= 1.1;
+                          }),
+                          nodeConfig());
+  EXPECT_EQ(bad->c.mountings_applied, 0u);
+  EXPECT_EQ(rejected(bad->c, node::Reason::kNonUnit), rejected(ref->c, node::Reason::kNonUnit) + 1);
+  EXPECT_EQ(bad->c.rows, ref->c.rows);
+
+  // Head 2's mounting 100" about its x axis: applied at the next head epoch, the rows before it as they
+  // were (mountings identifier 0), the rows after it with identifier 1 and moved.
+  TimeUs t_msg = 0;
+  const auto moved = replay(withMountings("moved.lcm",
+                                          [&](boresight_lcm::nominal_mountings_t& m) {
+                                            const Quat q(m.q_Si_B[1][0], m.q_Si_B[1][1], m.q_Si_B[1][2], m.q_Si_B[1][3]);
+                                            const Quat q2 = (model::quatExp(Vec3(100 * kRadPerArcsec, 0, 0)) * q).normalized();
+                                            m.q_Si_B[1][0] = q2.w();
+                                            m.q_Si_B[1][1] = q2.x();
+                                            m.q_Si_B[1][2] = q2.y();
+                                            m.q_Si_B[1][3] = q2.z();
+                                            t_msg = m.utime;
+                                          }),
+                            nodeConfig());
+  const node::Counters& c = moved->c;
+  EXPECT_EQ(c.mountings_applied, 1u);
+  EXPECT_EQ(c.received, c.used + c.rejectedTotal());
+  const auto att = attitudes(*moved);
+  std::map<TimeUs, boresight_lcm::fused_attitude_t> by_t;
+  for (const auto& a : ref_att) by_t[a.utime] = a;
+  std::size_t before_same = 0, before = 0;
+  std::vector<double> after_d;
+  for (const auto& a : att) {
+    const auto it = by_t.find(a.utime);
+    if (it == by_t.end()) continue;
+    const Quat q(a.q_I_B[0], a.q_I_B[1], a.q_I_B[2], a.q_I_B[3]);
+    const Quat p(it->second.q_I_B[0], it->second.q_I_B[1], it->second.q_I_B[2], it->second.q_I_B[3]);
+    if (a.utime < t_msg - 2 * kUsPerSecond) {
+      ++before;
+      if (q.angularDistance(p) == 0.0 && a.mounting_version == 0) ++before_same;
+    } else if (a.utime > t_msg + 5 * kUsPerSecond && a.heads_used >= 2) {
+      EXPECT_EQ(a.mounting_version, 1);
+      after_d.push_back(q.angularDistance(p) / kRadPerArcsec);
+    }
+  }
+  EXPECT_GT(before, 500u);
+  EXPECT_EQ(before_same, before);
+  ASSERT_GT(after_d.size(), 300u);
+  std::nth_element(after_d.begin(), after_d.begin() + static_cast<std::ptrdiff_t>(after_d.size() / 2), after_d.end());
+  std::printf("new mountings (head 2 moved 100 arcsec): the fused attitude after them moves by %.1f arcsec (median)\n",
+              after_d[after_d.size() / 2]);
+  EXPECT_GT(after_d[after_d.size() / 2], 10.0);
 }
 
 TEST(NodeReplay, AStateFileKeepsTheCalibrationAndTheFrameAcrossARestart) {

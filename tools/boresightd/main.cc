@@ -299,6 +299,8 @@ int run(int argc, char** argv) {
   j["time_resyncs"] = c.time_resyncs;
   j["held"] = c.held;
   j["frame_changes_refused"] = c.frame_changes_refused;
+  j["mountings_applied"] = c.mountings_applied;
+  j["calibrations_superseded"] = c.calibrations_superseded;
   j["seq_restarts"] = c.seq_restarts;
   j["stars_dropped"] = c.stars_dropped;
   j["published"] = out.published;

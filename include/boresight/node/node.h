@@ -161,6 +161,9 @@ struct Counters {
   std::uint64_t seq_restarts = 0;  ///< senders' counters that started again (not counted as loss)
   std::uint64_t frame_changes = 0;  ///< common rotations applied to the published attitude
   std::uint64_t frame_changes_refused = 0;  ///< not determined about every axis, or too soon after the last
+  std::uint64_t mountings_applied = 0;      ///< later NOMINAL_MOUNTINGS messages with new mountings, applied
+  std::uint64_t mountings_refused = 0;      ///< new mountings the core refused (kept the old ones)
+  std::uint64_t calibrations_superseded = 0;  ///< results solved against nominal mountings replaced since
   std::uint64_t rejectedTotal() const {
     std::uint64_t n = 0;
     for (auto v : rejected) n += v;
