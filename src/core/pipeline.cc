@@ -250,6 +250,13 @@ Status Pipeline::handMountings(const std::array<Quat, kMaxHeads>& q_Si_B) {
   return s;
 }
 
+void Pipeline::releaseMountings() {
+  if (!handed_) return;
+  handed_ = false;
+  align_countdown_ = 0;  // from the running means at the next head epoch
+  if (cfg_.fusion_alignment != FusionAlignment::kRunningMeans) fusion_.setRelativeAlignment(HeadAlignment{});
+}
+
 void Pipeline::flush() {
   while (n_pending_ > 0) {
     Pending& p = pending_[static_cast<std::size_t>(p_head_)];

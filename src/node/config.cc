@@ -140,18 +140,18 @@ bool loadTop(const YAML::Node& top, const std::string& path, Reader& r, NodeConf
   if (top["channels"]) {
     const YAML::Node c = top["channels"];
     if (!r.keys(c, "channels", {"star_head", "accel", "star_vectors", "mountings", "orbit", "attitude", "monitor",
-                                 "calibration", "health"}))
+                                 "calibration", "health", "command"}))
       return done(false);
     Channels& ch = out.channels;
     for (auto p : {std::make_pair("star_head", &ch.star_head), std::make_pair("accel", &ch.accel),
                    std::make_pair("star_vectors", &ch.star_vectors), std::make_pair("mountings", &ch.mountings),
                    std::make_pair("orbit", &ch.orbit), std::make_pair("attitude", &ch.attitude),
                    std::make_pair("monitor", &ch.monitor), std::make_pair("calibration", &ch.calibration),
-                   std::make_pair("health", &ch.health)})
+                   std::make_pair("health", &ch.health), std::make_pair("command", &ch.command)})
       if (!r.str(c, p.first, std::string("channels.") + p.first, *p.second)) return done(false);
     std::set<std::string> names{ch.star_head, ch.accel, ch.star_vectors, ch.mountings, ch.orbit,
-                                ch.attitude, ch.monitor, ch.calibration, ch.health};
-    if (names.size() != 9) return done(r.fail("channels", "every channel needs its own name", c));
+                                ch.attitude, ch.monitor, ch.calibration, ch.health, ch.command};
+    if (names.size() != 10) return done(r.fail("channels", "every channel needs its own name", c));
   }
   double v = 0;
   if (!r.num(top, "lookahead_s", "lookahead_s", out.lookahead_s, 0.001, 600)) return done(false);
@@ -183,10 +183,11 @@ bool loadTop(const YAML::Node& top, const std::string& path, Reader& r, NodeConf
     CalibrationConfig& k = out.calibration;
     if (!r.keys(c, "calibration", {"enabled", "cadence_s", "min_span_s", "apply_lag_epochs", "decimation_s",
                                     "max_observations", "apply", "apply_common_rotation",
-                                    "frame_change_min_interval_s"}))
+                                    "frame_change_min_interval_s", "hold_for_command"}))
       return done(false);
     if (!r.boolean(c, "enabled", "calibration.enabled", k.enabled) || !r.boolean(c, "apply", "calibration.apply", k.apply) ||
         !r.boolean(c, "apply_common_rotation", "calibration.apply_common_rotation", k.apply_common_rotation) ||
+        !r.boolean(c, "hold_for_command", "calibration.hold_for_command", k.hold_for_command) ||
         !r.num(c, "cadence_s", "calibration.cadence_s", k.cadence_s, 60, 1e8) ||
         !r.num(c, "min_span_s", "calibration.min_span_s", k.min_span_s, 60, 1e8) ||
         !r.num(c, "decimation_s", "calibration.decimation_s", k.decimation_s, 0.5, 3600) ||

@@ -13,6 +13,7 @@
 #include "boresight_lcm/boresight_monitor_t.hpp"
 #include "boresight_lcm/calibration_t.hpp"
 #include "boresight_lcm/fused_attitude_t.hpp"
+#include "boresight_lcm/node_command_t.hpp"
 #include "boresight_lcm/node_health_t.hpp"
 #include "boresight_lcm/star_head_sample_t.hpp"
 #include "boresight_lcm/star_vectors_t.hpp"
@@ -50,6 +51,7 @@ const char* reasonName(Reason r) {
     case Reason::kOtherChannel: return "other_channel";
     case Reason::kAssembler: return "assembler";
     case Reason::kImplausible: return "implausible";
+    case Reason::kCommand: return "command";
     case Reason::kCount: break;
   }
   return "?";
@@ -214,6 +216,7 @@ struct Node::Impl {
   Counters c;
   LatencyHistogram lat, lat_heads;  ///< every core step; head epochs only
   std::uint64_t mounting_version = 0;
+  std::uint64_t mounting_prev = 0;  ///< the identifier before the last change (rows the core held at it)
   /// Rows from this time on were computed with mounting_version (rows still pending in the core at a
   /// hand-over were computed with the one before).
   TimeUs mounting_from_t = std::numeric_limits<TimeUs>::min();
@@ -255,11 +258,24 @@ struct Node::Impl {
   Quat q_frame = Quat::Identity(), q_frame_old = Quat::Identity();
   TimeUs frame_from_t = std::numeric_limits<TimeUs>::min();
   enum class FrameVerdict : std::uint8_t { kOk, kNotDetermined, kTooSoon };
+  /// What the worker writes on stderr for the real-time thread (frame changes, commands).
+  enum class LogKind : std::uint8_t { kFrameChange, kFrameNotDetermined, kFrameTooSoon, kAccepted, kReverted };
   struct FrameLog {
     TimeUs from_t = 0, cal_t = 0;
     Vec3 common_arcsec = Vec3::Zero();
-    FrameVerdict verdict = FrameVerdict::kOk;
+    LogKind kind = LogKind::kFrameChange;
+    std::uint64_t id = 0;
   };
+  void logEvent(LogKind kind, TimeUs from_t, TimeUs cal_t, const Vec3& common_arcsec, std::uint64_t id) {
+    const std::uint64_t n = flog_n.load(std::memory_order_relaxed);
+    FrameLog& e = flog[n % flog.size()];
+    e.from_t = from_t;
+    e.cal_t = cal_t;
+    e.common_arcsec = common_arcsec;
+    e.kind = kind;
+    e.id = id;
+    flog_n.store(n + 1, std::memory_order_release);
+  }
   std::uint64_t frames_done = 0;  ///< frame changes printed (the numbering of the stderr lines)
   std::array<FrameLog, 16> flog{};
   std::atomic<std::uint64_t> flog_n{0};
@@ -269,24 +285,36 @@ struct Node::Impl {
     const std::uint64_t n = flog_n.load(std::memory_order_acquire);
     for (; flog_printed < n; ++flog_printed) {
       const FrameLog& e = flog[flog_printed % flog.size()];
-      if (e.verdict != FrameVerdict::kOk) {
-        std::fprintf(stderr,
-                     "boresightd: frame change refused (calibration of %lld us; common rotation %.2f %.2f %.2f "
-                     "arcsec): %s; the relative part is applied, the published frame stays\n",
-                     static_cast<long long>(e.cal_t), e.common_arcsec[0], e.common_arcsec[1], e.common_arcsec[2],
-                     e.verdict == FrameVerdict::kNotDetermined
-                         ? "the common rotation is not determined about every axis"
-                         : "less than calibration.frame_change_min_interval_s since the last frame change");
-        continue;
+      switch (e.kind) {
+        case LogKind::kFrameNotDetermined:
+        case LogKind::kFrameTooSoon:
+          std::fprintf(stderr,
+                       "boresightd: frame change refused (calibration of %lld us; common rotation %.2f %.2f %.2f "
+                       "arcsec): %s; the relative part is applied, the published frame stays\n",
+                       static_cast<long long>(e.cal_t), e.common_arcsec[0], e.common_arcsec[1], e.common_arcsec[2],
+                       e.kind == LogKind::kFrameNotDetermined
+                           ? "the common rotation is not determined about every axis"
+                           : "less than calibration.frame_change_min_interval_s since the last frame change");
+          break;
+        case LogKind::kFrameChange:
+          ++frames_done;
+          std::fprintf(stderr,
+                       "boresightd: frame change %llu: from data time %lld us the published attitude is in the "
+                       "accelerometer-datum frame (calibration of %lld us; common rotation %.2f %.2f %.2f arcsec, "
+                       "%.1f arcsec)\n",
+                       static_cast<unsigned long long>(frames_done), static_cast<long long>(e.from_t),
+                       static_cast<long long>(e.cal_t), e.common_arcsec[0], e.common_arcsec[1], e.common_arcsec[2],
+                       e.common_arcsec.norm());
+          break;
+        case LogKind::kAccepted:
+          std::fprintf(stderr, "boresightd: command accept: the calibration of %lld us is in use from data time %lld us (identifier %llu)\n",
+                       static_cast<long long>(e.cal_t), static_cast<long long>(e.from_t), static_cast<unsigned long long>(e.id));
+          break;
+        case LogKind::kReverted:
+          std::fprintf(stderr, "boresightd: command revert: calibration %llu reverted from data time %lld us; the one before it is in use\n",
+                       static_cast<unsigned long long>(e.id), static_cast<long long>(e.from_t));
+          break;
       }
-      ++frames_done;
-      std::fprintf(stderr,
-                   "boresightd: frame change %llu: from data time %lld us the published attitude is in the "
-                   "accelerometer-datum frame (calibration of %lld us; common rotation %.2f %.2f %.2f arcsec, "
-                   "%.1f arcsec)\n",
-                   static_cast<unsigned long long>(frames_done), static_cast<long long>(e.from_t),
-                   static_cast<long long>(e.cal_t), e.common_arcsec[0], e.common_arcsec[1], e.common_arcsec[2],
-                   e.common_arcsec.norm());
     }
   }
 
@@ -425,12 +453,14 @@ struct Node::Impl {
     publishRows();
     core_base.add(pipe.health());
     pipe.reset();
-    if (mounting_version > 0) pipe.handMountings(handed_q);  // the calibration in use stays in use
+    if (core_handed) pipe.handMountings(handed_q);  // the calibration in use stays in use
     emitted = false;
     last_emit_t = 0;
   }
   core::Health core_base{};  ///< core counts before the last re-synchronisation (reset() clears them)
-  std::array<Quat, kMaxHeads> handed_q{};  ///< the mountings last handed to the core
+  bool core_handed = false;  ///< mountings handed to the core (else its running means align the heads)
+  /// The mountings in use: the nominal ones until a calibration is handed to the core.
+  std::array<Quat, kMaxHeads> handed_q = core::filled<Quat, kMaxHeads>(Quat::Identity());
 
   bool floodCheck(ChannelState& s, TimeUs t, double max_hz) {
     const TimeUs sec = t >= 0 ? t / kUsPerSecond : (t - kUsPerSecond + 1) / kUsPerSecond;
@@ -570,13 +600,17 @@ struct Node::Impl {
     core_base.add(pipe.health());
     if (pipe.configure(p) != core::Status::kOk) {  // cannot happen for unit quaternions; keep the old ones
       pipe.configure(pcfg);
-      if (mounting_version > 0) pipe.handMountings(handed_q);
+      if (core_handed) pipe.handMountings(handed_q);
       ++c.mountings_refused;
       return;
     }
     pcfg = p;
     for (int k = 0; k < kMaxHeads; ++k) handed_q[static_cast<std::size_t>(k)] = pcfg.heads.head[static_cast<std::size_t>(k)].q_Si_B;
-    ++mounting_version;
+    core_handed = false;
+    mounting_prev = mounting_version;
+    mounting_version = ++max_version;
+    n_history = 0;  // nothing to revert to across new nominal mountings
+    held_cal.have = false;
     mounting_from_t = t;
     frame_active = false;
     q_frame = q_frame_old = Quat::Identity();
@@ -611,6 +645,7 @@ struct Node::Impl {
   bool startCore() {
     if (pipe.configure(pcfg) != core::Status::kOk) return false;
     core_ready = true;
+    for (int k = 0; k < kMaxHeads; ++k) handed_q[static_cast<std::size_t>(k)] = pcfg.heads.head[static_cast<std::size_t>(k)].q_Si_B;
     applyState();
     if (cfg.calibration.enabled) worker = std::thread([this] { workerLoop(); });
     return true;
@@ -683,6 +718,7 @@ struct Node::Impl {
 
   void stepHeads() {
     if (have_pending_nominal) applyNominal(epoch.t);
+    if (pending_cmd != 0) runCommand(epoch.t);
     applyMailbox();
     const auto t0 = std::chrono::steady_clock::now();
     pipe.stepHeads(epoch);
@@ -748,56 +784,16 @@ struct Node::Impl {
     const bool stale = mail.nominal_gen != nominal_gen;  // solved against nominal mountings replaced since
     if (stale) ++c.calibrations_superseded;
     if (mail.ok && cfg.calibration.apply && !stale) {
-      if (pipe.handMountings(mail.q_Si_B) == core::Status::kOk) {
-        handed_q = mail.q_Si_B;
-        m.applied = 1;
-        ++mounting_version;
-        mounting_from_t = from_t;
-        ++c.calibrations_applied;
-        // The common part the datum kept out: the handed rotation minus the correction in use (slot 0).
-        const auto& al = pipe.fusion().relativeAlignment();
-        const Vec3 raw = quatLog(mail.q_Si_B[0].conjugate() * pcfg.heads.head[0].q_Si_B);
-        const Vec3 common = raw - al.c_B[0];
-        for (int k = 0; k < 3; ++k) m.common_rotation_B_arcsec[k] = common[k] / kRadPerArcsec;
-        // The fused attitude now is C_I_B' Exp(common) to first order (B': the accelerometer datum
-        // the solver's mountings refer to), so C_I_B' = C_I_Bpub Exp(-common).
-        // A frame change needs the common rotation determined about all three axes, and at least
-        // frame_change_min_interval_s of data time since the last one; else it is refused (counted and
-        // logged) and only the relative part is applied.
-        FrameVerdict fv = FrameVerdict::kOk;
-        if (cfg.calibration.apply_common_rotation) {
-          if (!common.allFinite() || !mail.common_determined) fv = FrameVerdict::kNotDetermined;
-          else if (c.frame_changes > 0 && static_cast<double>(from_t - frame_from_t) * 1e-6 < cfg.calibration.frame_change_min_interval_s)
-            fv = FrameVerdict::kTooSoon;
-          if (fv != FrameVerdict::kOk) {
-            ++c.frame_changes_refused;
-            const std::uint64_t n = flog_n.load(std::memory_order_relaxed);
-            FrameLog& e = flog[n % flog.size()];
-            e.from_t = from_t;
-            e.cal_t = m.utime;
-            e.common_arcsec = common / kRadPerArcsec;
-            e.verdict = fv;
-            flog_n.store(n + 1, std::memory_order_release);
-          }
-        }
-        if (cfg.calibration.apply_common_rotation && fv == FrameVerdict::kOk) {
-          q_frame_old = q_frame;
-          q_frame = quatExp(-common).normalized();
-          frame_from_t = from_t;
-          frame_active = true;
-          frame_epoch = from_t;
-          const std::uint64_t n = flog_n.load(std::memory_order_relaxed);
-          FrameLog& e = flog[n % flog.size()];
-          e.from_t = from_t;
-          e.cal_t = m.utime;
-          e.common_arcsec = common / kRadPerArcsec;
-          e.verdict = FrameVerdict::kOk;
-          flog_n.store(n + 1, std::memory_order_release);
-          ++c.frame_changes;
-        }
+      if (cfg.calibration.hold_for_command) {  // until a ground command accepts it (the latest one is held)
+        held_cal.have = true;
+        held_cal.q = mail.q_Si_B;
+        held_cal.msg = m;
+        held_cal.common_determined = mail.common_determined;
+        ++c.calibrations_held;
+      } else {
+        applyResult(mail.q_Si_B, m, mail.common_determined, from_t);
       }
     }
-    if (m.applied) saveState(m);
     if (!mail.ok) {
       ++c.calibrations_refused;
       last_reason = mail.reason;
@@ -806,6 +802,139 @@ struct Node::Impl {
     publish(cfg.channels.calibration, m.utime, m);
     ++c.calibrations_published;
     mail.state.store(0, std::memory_order_release);
+  }
+
+  /// The calibration in use before each applied one (what a revert command goes back to), newest last.
+  struct InUse {
+    std::uint64_t id = 0;
+    std::array<Quat, kMaxHeads> q = core::filled<Quat, kMaxHeads>(Quat::Identity());
+    bool handed = false;  ///< false: the core's running means were in use (nothing handed yet)
+    bool frame_active = false;
+    Quat q_frame = Quat::Identity();
+    TimeUs frame_epoch = 0;
+  };
+  std::array<InUse, 8> history{};
+  int n_history = 0;
+  std::uint64_t max_version = 0;  ///< calibration identifiers are never given twice
+  /// hold_for_command: the latest result waiting for a ground command.
+  struct Held {
+    bool have = false;
+    std::array<Quat, kMaxHeads> q = core::filled<Quat, kMaxHeads>(Quat::Identity());
+    boresight_lcm::calibration_t msg{};
+    bool common_determined = false;
+  } held_cal;
+
+  /// Hands a result's mountings to the core (the datum keeps the relative part), under a new identifier,
+  /// with the frame change where configured and allowed; m.applied and its common rotation are filled.
+  void applyResult(const std::array<Quat, kMaxHeads>& q, boresight_lcm::calibration_t& m, bool common_determined, TimeUs from_t) {
+    if (pipe.handMountings(q) != core::Status::kOk) return;
+    if (n_history == static_cast<int>(history.size())) {  // the oldest goes
+      for (std::size_t i = 1; i < history.size(); ++i) history[i - 1] = history[i];
+      --n_history;
+    }
+    InUse& h = history[static_cast<std::size_t>(n_history++)];
+    h.id = mounting_version;
+    h.q = handed_q;
+    h.handed = core_handed;
+    h.frame_active = frame_active;
+    h.q_frame = q_frame;
+    h.frame_epoch = frame_epoch;
+    handed_q = q;
+    core_handed = true;
+    m.applied = 1;
+    mounting_prev = mounting_version;
+    mounting_version = ++max_version;
+    mounting_from_t = from_t;
+    ++c.calibrations_applied;
+    // The common part the datum kept out: the handed rotation minus the correction in use (slot 0).
+    const auto& al = pipe.fusion().relativeAlignment();
+    const Vec3 raw = quatLog(q[0].conjugate() * pcfg.heads.head[0].q_Si_B);
+    const Vec3 common = raw - al.c_B[0];
+    for (int k = 0; k < 3; ++k) m.common_rotation_B_arcsec[k] = common[k] / kRadPerArcsec;
+    // The fused attitude now is C_I_B' Exp(common) to first order (B': the accelerometer datum the
+    // solver's mountings refer to), so C_I_B' = C_I_Bpub Exp(-common). A frame change needs the common
+    // rotation determined about all three axes, and at least frame_change_min_interval_s of data time
+    // since the last one; else it is refused (counted and logged) and only the relative part is applied.
+    FrameVerdict fv = FrameVerdict::kOk;
+    if (cfg.calibration.apply_common_rotation) {
+      if (!common.allFinite() || !common_determined) fv = FrameVerdict::kNotDetermined;
+      else if (c.frame_changes > 0 && static_cast<double>(from_t - frame_from_t) * 1e-6 < cfg.calibration.frame_change_min_interval_s)
+        fv = FrameVerdict::kTooSoon;
+      if (fv != FrameVerdict::kOk) ++c.frame_changes_refused;
+      if (fv == FrameVerdict::kOk) {
+        q_frame_old = q_frame;
+        q_frame = quatExp(-common).normalized();
+        frame_from_t = from_t;
+        frame_active = true;
+        frame_epoch = from_t;
+        ++c.frame_changes;
+      }
+      logEvent(fv == FrameVerdict::kOk ? LogKind::kFrameChange : fv == FrameVerdict::kTooSoon ? LogKind::kFrameTooSoon : LogKind::kFrameNotDetermined,
+               from_t, m.utime, common / kRadPerArcsec, 0);
+    }
+    saveState(m);
+  }
+
+  /// Ground commands (BORESIGHT_COMMAND): checked on arrival, carried out at the next head-epoch boundary.
+  ChannelState ch_cmd{};
+  int pending_cmd = 0;  ///< 1 accept, 2 revert
+  void onCommand(const void* data, int size) {
+    boresight_lcm::node_command_t m;
+    if (m.decode(data, 0, size) != size) return reject(Reason::kUndecodable);
+    seqCheck(ch_cmd, m.seq);
+    if (!core_ready) return reject(Reason::kNoMountings);
+    if (m.command == 1) {
+      if (!held_cal.have || (m.calibration_utime != 0 && m.calibration_utime != held_cal.msg.utime)) return reject(Reason::kCommand);
+    } else if (m.command == 2) {
+      if (m.calibration_id <= 0 || static_cast<std::uint64_t>(m.calibration_id) != mounting_version || n_history == 0)
+        return reject(Reason::kCommand);
+    } else {
+      return reject(Reason::kCommand);
+    }
+    pending_cmd = m.command;
+    ++c.used;
+  }
+  void runCommand(TimeUs t) {
+    const int cmd = pending_cmd;
+    pending_cmd = 0;
+    if (cmd == 1 && held_cal.have) {
+      held_cal.have = false;
+      boresight_lcm::calibration_t m = held_cal.msg;
+      applyResult(held_cal.q, m, held_cal.common_determined, t);
+      if (!m.applied) return;
+      ++c.commands_accepted;
+      logEvent(LogKind::kAccepted, t, m.utime, Vec3::Zero(), mounting_version);
+      m.seq = seq_cal++;
+      publish(cfg.channels.calibration, m.utime, m);  // again, now applied
+      ++c.calibrations_published;
+    } else if (cmd == 2 && n_history > 0) {
+      const InUse h = history[static_cast<std::size_t>(--n_history)];
+      if (h.handed) {
+        if (pipe.handMountings(h.q) != core::Status::kOk) return;
+      } else {
+        pipe.releaseMountings();  // the running means again, as before anything was handed
+      }
+      core_handed = h.handed;
+      const std::uint64_t from = mounting_version;
+      handed_q = h.q;
+      mounting_prev = mounting_version;
+      mounting_version = h.id;
+      mounting_from_t = t;
+      if (frame_active || h.frame_active) {
+        q_frame_old = q_frame;
+        q_frame = h.q_frame;
+        frame_from_t = t;
+        frame_active = h.frame_active;
+        frame_epoch = h.frame_epoch;
+      }
+      ++c.commands_reverted;
+      logEvent(LogKind::kReverted, t, 0, Vec3::Zero(), from);
+      boresight_lcm::calibration_t none{};
+      for (int k = 0; k < kMaxHeads; ++k)
+        for (int a = 0; a < 3; ++a) none.sigma_arcsec[k][a] = std::numeric_limits<double>::quiet_NaN();
+      none.utime = t;
+      saveState(none);
+    }
   }
 
   // ---------------------------------------------------------------------------------------------
@@ -911,7 +1040,8 @@ struct Node::Impl {
     if (!have_state) return;
     if (state_frame.calibration > 0 && pipe.handMountings(state_q) == core::Status::kOk) {
       handed_q = state_q;
-      mounting_version = static_cast<std::uint64_t>(state_frame.calibration);
+      core_handed = true;
+      mounting_version = mounting_prev = max_version = static_cast<std::uint64_t>(state_frame.calibration);
     }
     const Quat qf = state_frame.q_B_Bpub.normalized();
     if (qf.angularDistance(Quat::Identity()) > 0) {
@@ -964,8 +1094,7 @@ struct Node::Impl {
         a.alpha_sc_B[k] = row.a_sc_B[k];
         a.alpha_acc_B[k] = row.a_acc_B[k];
       }
-      a.mounting_version = static_cast<int32_t>(
-          mounting_version > 0 && row.t < mounting_from_t ? mounting_version - 1 : mounting_version);
+      a.mounting_version = static_cast<int32_t>(row.t < mounting_from_t ? mounting_prev : mounting_version);
       publish(cfg.channels.attitude, row.t, a);
       boresight_lcm::boresight_monitor_t mm{};
       mm.utime = row.t;
@@ -1258,6 +1387,7 @@ void Node::onMessage(const std::string& ch, const void* data, int size) {
   else if (ch == c.star_vectors) m.onStars(data, size);
   else if (ch == c.mountings) m.onMountings(data, size);
   else if (ch == c.orbit) m.onOrbit(data, size);
+  else if (ch == c.command) m.onCommand(data, size);
   else m.reject(Reason::kOtherChannel);
 }
 

@@ -16,6 +16,7 @@
 #include "boresight_lcm/accel_sample_t.hpp"
 #include "boresight_lcm/calibration_t.hpp"
 #include "boresight_lcm/fused_attitude_t.hpp"
+#include "boresight_lcm/node_command_t.hpp"
 #include "boresight_lcm/node_health_t.hpp"
 #include "boresight_lcm/nominal_mountings_t.hpp"
 #include "boresight_lcm/orbit_sample_t.hpp"
@@ -1208,6 +1209,102 @@ TEST(NodeFaults, ANewMountingsMessageIsValidatedAndAppliedAtAnEpochBoundary) {
   std::printf("new mountings (head 2 moved 100 arcsec): the fused attitude after them moves by %.1f arcsec (median)\n",
               after_d[after_d.size() / 2]);
   EXPECT_GT(after_d[after_d.size() / 2], 10.0);
+}
+
+TEST(NodeReplay, GroundCommandsAcceptAHeldCalibrationAndRevertIt) {
+  // hold_for_command: the demo span's calibration (ready at 850 s) waits; an accept at 900 s applies
+  // it (frame change included), a revert at 1000 s goes back to the nominal mountings and frame. An
+  // accept with nothing held and a revert naming a calibration not in use are refused (reason command).
+  const std::string full = simulate("command", 1200, {}, nullptr, "config/sim_gracefo_node_demo.yaml");
+  struct Cmd {
+    double at_s;
+    int command;
+    int id;
+  };
+  const std::vector<Cmd> cmds = {{300, 1, 0}, {900, 1, 0}, {950, 2, 7}, {1000, 2, 1}};
+  std::vector<TimeUs> cmd_t(cmds.size(), 0);
+  TimeUs t0 = -1;
+  std::size_t next = 0;
+  const std::string log = editLog(full, "command.lcm", [&](std::size_t, const Event& e) {
+    if (t0 < 0) t0 = e.t;
+    if (next == cmds.size() || e.ch != "ACCEL" || static_cast<double>(e.t - t0) * 1e-6 < cmds[next].at_s) return std::vector<Event>{e};
+    boresight_lcm::node_command_t m{};
+    m.utime = decodeAs<boresight_lcm::accel_sample_t>(e).utime;
+    m.seq = static_cast<std::int32_t>(next);
+    m.command = static_cast<std::int8_t>(cmds[next].command);
+    m.calibration_id = cmds[next].id;
+    cmd_t[next++] = m.utime;
+    return std::vector<Event>{encodeAs("BORESIGHT_COMMAND", e.t, m), e};
+  });
+  ASSERT_EQ(next, cmds.size());
+  auto cfgWith = [](bool hold) {
+    auto cfg = nodeConfig(3600, 840);
+    cfg.calibration.apply_lag_epochs = 20;
+    cfg.calibration.apply_common_rotation = true;
+    cfg.calibration.frame_change_min_interval_s = 0;
+    cfg.calibration.hold_for_command = hold;
+    return cfg;
+  };
+  testing::internal::CaptureStderr();
+  const auto r = replay(log, cfgWith(true));
+  const std::string err_out = testing::internal::GetCapturedStderr();
+  const auto automatic = replay(full, cfgWith(false));
+  const node::Counters& c = r->c;
+  EXPECT_EQ(c.received, c.used + c.rejectedTotal());
+  EXPECT_EQ(c.calibrations_held, 1u);
+  EXPECT_EQ(c.commands_accepted, 1u);
+  EXPECT_EQ(c.commands_reverted, 1u);
+  EXPECT_EQ(c.calibrations_applied, 1u);
+  EXPECT_EQ(c.frame_changes, 1u);
+  EXPECT_EQ(rejected(c, node::Reason::kCommand), 2u);
+  EXPECT_NE(err_out.find("command accept"), std::string::npos) << err_out;
+  EXPECT_NE(err_out.find("command revert"), std::string::npos) << err_out;
+  EXPECT_EQ(automatic->c.calibrations_applied, 1u);
+
+  // Rows by time: identifier 0 before the accept, 1 until the revert, 0 after; between them as the run
+  // that applied the calibration by itself, after the revert as in the same data without it. (A command
+  // takes effect at the head epoch stepped next, up to the look-ahead, 2 s, before its arrival time.)
+  const auto plain = replay(full, [&] {
+    auto cfg = cfgWith(false);
+    cfg.calibration.enabled = false;
+    return cfg;
+  }());
+  auto table = [](const Replay& x) {
+    std::map<TimeUs, boresight_lcm::fused_attitude_t> m;
+    for (const auto& a : x.out.all<boresight_lcm::fused_attitude_t>("BORESIGHT_ATTITUDE")) m[a.utime] = a;
+    return m;
+  };
+  const auto auto_t = table(*automatic), plain_t = table(*plain);
+  auto angle = [](const boresight_lcm::fused_attitude_t& a, const boresight_lcm::fused_attitude_t& b) {
+    return Quat(a.q_I_B[0], a.q_I_B[1], a.q_I_B[2], a.q_I_B[3]).angularDistance(Quat(b.q_I_B[0], b.q_I_B[1], b.q_I_B[2], b.q_I_B[3])) /
+           kRadPerArcsec;
+  };
+  std::vector<double> mid, after;
+  int wrong_id = 0;
+  for (const auto& a : r->out.all<boresight_lcm::fused_attitude_t>("BORESIGHT_ATTITUDE")) {
+    if (a.utime < cmd_t[1] - 3 * kUsPerSecond) {
+      wrong_id += a.mounting_version != 0;
+    } else if (a.utime > cmd_t[1] + 2 * kUsPerSecond && a.utime < cmd_t[3] - 3 * kUsPerSecond) {
+      wrong_id += a.mounting_version != 1;
+      if (auto it = auto_t.find(a.utime); it != auto_t.end() && a.heads_used >= 2) mid.push_back(angle(a, it->second));
+    } else if (a.utime > cmd_t[3] + 2 * kUsPerSecond) {
+      wrong_id += a.mounting_version != 0;
+      if (auto it = plain_t.find(a.utime); it != plain_t.end() && a.heads_used >= 2) {
+        after.push_back(angle(a, it->second));
+      }
+    }
+  }
+  EXPECT_EQ(wrong_id, 0);
+  ASSERT_GT(mid.size(), 50u);
+  ASSERT_GT(after.size(), 100u);
+  auto median = [](std::vector<double> v) {
+    std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
+    return v[v.size() / 2];
+  };
+  std::printf("accepted: %.2f arcsec from the run that applied it itself; reverted: %.2f from the run without calibration\n",
+              median(mid), median(after));
+  EXPECT_LT(median(mid), 1.0);
+  EXPECT_LT(median(after), 1.0);
 }
 
 TEST(NodeReplay, AStateFileKeepsTheCalibrationAndTheFrameAcrossARestart) {

@@ -204,7 +204,7 @@ int run(int argc, char** argv) {
   } else {
     RawHandler handler{&n};
     for (const auto* ch : {&cfg.channels.star_head, &cfg.channels.accel, &cfg.channels.star_vectors,
-                           &cfg.channels.mountings, &cfg.channels.orbit})
+                           &cfg.channels.mountings, &cfg.channels.orbit, &cfg.channels.command})
       lcm->subscribe(*ch, &RawHandler::onMessage, &handler);
     std::fprintf(stderr, "boresightd: listening on %s (Ctrl-C stops)\n", cfg.lcm_url.c_str());
     while (!g_stop.load()) lcm->handleTimeout(100);
@@ -301,6 +301,9 @@ int run(int argc, char** argv) {
   j["frame_changes_refused"] = c.frame_changes_refused;
   j["mountings_applied"] = c.mountings_applied;
   j["calibrations_superseded"] = c.calibrations_superseded;
+  j["calibrations_held"] = c.calibrations_held;
+  j["commands_accepted"] = c.commands_accepted;
+  j["commands_reverted"] = c.commands_reverted;
   j["seq_restarts"] = c.seq_restarts;
   j["stars_dropped"] = c.stars_dropped;
   j["published"] = out.published;

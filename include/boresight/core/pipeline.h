@@ -73,6 +73,9 @@ class Pipeline {
   /// A full mounting set (e.g. the batch solver's, slots 0..n_heads-1) for the fusion from the next head
   /// epoch on, with the datum of HeadAlignment; replaces the running means until reset(). No allocation.
   Status handMountings(const std::array<Quat, kMaxHeads>& q_Si_B);
+  /// Back to the running means (with FusionAlignment::kRunningMeans), as before any handMountings: the
+  /// next alignment update sets the fusion's alignment from them. No allocation.
+  void releaseMountings();
   /// The batch thermal model (calib/thermal_fit.h: ThermalFitResult::coreModel()) after configure();
   /// from then on every head epoch that does not see a pair sets the monitor's predicted deformation
   /// of that pair (BoresightMonitor::setPredictedDeformation) from the model at the argument of

@@ -67,6 +67,7 @@ enum class Reason : std::uint8_t {
                      ///< as kTimeJump, the same head twice at a tag as kDuplicate)
   kImplausible,      ///< a finite value outside its physical gate (core/plausibility.h): an angular
                      ///< acceleration beyond 0.1 rad/s^2
+  kCommand,          ///< a command that does not apply: unknown, or naming a calibration not held / not in use
   kCount
 };
 constexpr int kReasonCount = static_cast<int>(Reason::kCount);
@@ -74,7 +75,7 @@ const char* reasonName(Reason r);
 
 struct Channels {
   std::string star_head = "STAR_HEAD", accel = "ACCEL", star_vectors = "STAR_VECTORS";
-  std::string mountings = "NOMINAL_MOUNTINGS", orbit = "ORBIT";
+  std::string mountings = "NOMINAL_MOUNTINGS", orbit = "ORBIT", command = "BORESIGHT_COMMAND";
   std::string attitude = "BORESIGHT_ATTITUDE", monitor = "BORESIGHT_MONITOR";
   std::string calibration = "BORESIGHT_CALIBRATION", health = "BORESIGHT_HEALTH";
 };
@@ -87,6 +88,9 @@ struct CalibrationConfig {
   double decimation_s = 10.0;       ///< calib::SpanOptions::decimation_s, s
   std::size_t max_observations = 0; ///< 0: the whole run (memory: ~0.5 kB per observation)
   bool apply = true;                ///< hand the relative part back to the core
+  /// Hold every result until a ground command accepts it (BORESIGHT_COMMAND, node_command_t); off: each
+  /// result is applied when it is ready (a revert command works either way).
+  bool hold_for_command = false;
   /// Frame change: the published attitude (and its covariance, rate, accelerations) is rotated into
   /// the accelerometer-datum frame with the common rotation of each applied calibration (from the
   /// head epoch at which it is applied on). Off: the published attitude keeps its frame (the heads'
@@ -164,6 +168,8 @@ struct Counters {
   std::uint64_t mountings_applied = 0;      ///< later NOMINAL_MOUNTINGS messages with new mountings, applied
   std::uint64_t mountings_refused = 0;      ///< new mountings the core refused (kept the old ones)
   std::uint64_t calibrations_superseded = 0;  ///< results solved against nominal mountings replaced since
+  std::uint64_t calibrations_held = 0;        ///< results held for a ground command (hold_for_command)
+  std::uint64_t commands_accepted = 0, commands_reverted = 0;  ///< ground commands applied
   std::uint64_t rejectedTotal() const {
     std::uint64_t n = 0;
     for (auto v : rejected) n += v;
