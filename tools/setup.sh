@@ -7,7 +7,7 @@ set -euo pipefail
 pkgs=(
   build-essential cmake ninja-build pkg-config git ca-certificates
   libeigen3-dev libceres-dev libyaml-cpp-dev
-  liblcm-dev liblcm-bin libglib2.0-dev
+  liblcm-dev liblcm-bin libglib2.0-dev liblcm-java default-jdk-headless
   libgtest-dev libgmock-dev googletest libbenchmark-dev
   libcli11-dev nlohmann-json3-dev
   python3 python3-yaml time
