@@ -3,13 +3,15 @@
 // every message is accounted for (received == used + sum(rejected)); the worker is off (one thread).
 //
 // Input: frames [channel byte][length, 2 bytes little-endian][payload]. Channel byte & 7 picks STAR_HEAD,
-// ACCEL, STAR_VECTORS, NOMINAL_MOUNTINGS, ORBIT, another channel, or bytes that are no event at all;
+// ACCEL, STAR_VECTORS, NOMINAL_MOUNTINGS, ORBIT, another channel, BORESIGHT_COMMAND, or bytes that are no
+// event at all;
 // bit 7 set prefixes the payload with the channel type's fingerprint (so mutations reach the decoders'
 // fields, not only the fingerprint check). A short input runs in microseconds.
 // BORESIGHT_FUZZ_MAKE_SEED=FILE writes a seed: a minute of valid messages of every input channel.
 #include <boresight/node/node.h>
 
 #include "boresight_lcm/accel_sample_t.hpp"
+#include "boresight_lcm/node_command_t.hpp"
 #include "boresight_lcm/nominal_mountings_t.hpp"
 #include "boresight_lcm/orbit_sample_t.hpp"
 #include "boresight_lcm/star_head_sample_t.hpp"
@@ -25,7 +27,8 @@ using namespace boresight;
 
 namespace {
 
-const char* const kChannels[6] = {"STAR_HEAD", "ACCEL", "STAR_VECTORS", "NOMINAL_MOUNTINGS", "ORBIT", "ELSEWHERE"};
+const char* const kChannels[7] = {"STAR_HEAD", "ACCEL", "STAR_VECTORS", "NOMINAL_MOUNTINGS", "ORBIT", "ELSEWHERE",
+                                  "BORESIGHT_COMMAND"};
 
 node::NodeConfig makeConfig() {
   node::NodeConfig cfg;
@@ -49,6 +52,7 @@ std::int64_t hashOf(int c) {
     case 2: return boresight_lcm::star_vectors_t::getHash();
     case 3: return boresight_lcm::nominal_mountings_t::getHash();
     case 4: return boresight_lcm::orbit_sample_t::getHash();
+    case 6: return boresight_lcm::node_command_t::getHash();
     default: return 0;
   }
 }
@@ -96,6 +100,13 @@ int writeSeed(const char* path) {
       for (int j = 0; j < 3; ++j) sv.s_head[j][j] = sv.r_inertial[j][j] = 1.0;
       sv.flags = 1;
       frame(out, 2, sv);
+    }
+    if (i == 300) {  // a ground command (refused here: nothing held, nothing handed)
+      boresight_lcm::node_command_t cmd{};
+      cmd.utime = t;
+      cmd.command = 2;
+      cmd.calibration_id = 1;
+      frame(out, 6, cmd);
     }
     boresight_lcm::accel_sample_t a{};
     a.utime = t;
@@ -148,14 +159,14 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     p += 3;
     if (len > size - p) len = size - p;
     buf.clear();
-    if (prefix && c < 5) {
+    if (prefix && (c < 5 || c == 6)) {
       const auto h = static_cast<std::uint64_t>(hashOf(c));
       for (int i = 7; i >= 0; --i) buf.push_back(static_cast<std::uint8_t>(h >> (8 * i)));
     }
     buf.insert(buf.end(), data + p, data + p + len);
     p += len;
     ++sent;
-    if (c >= 6) n.onGarbage();
+    if (c == 7) n.onGarbage();
     else n.onMessage(kChannels[c], buf.data(), static_cast<int>(buf.size()));
   }
   n.finish();
