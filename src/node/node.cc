@@ -335,13 +335,15 @@ struct Node::Impl {
   /// the held messages pass in their order - or until a message within the look-ahead arrives: then a
   /// held one still that far from the data time is rejected (time_jump, or late when the assembler has
   /// handed out its time), and one the data time has come to meanwhile passes. Votes are counted over
-  /// all channels, and where more than one channel passed messages in the last kActiveUs of data time
-  /// the votes must come from two channels or more: a whole link that stops and resumes, or a
-  /// spacecraft clock set back, moves every channel, while one sender whose clock is off is refuted by
-  /// the others' messages (without that rule a 10 Hz accelerometer 10 s ahead confirmed its jump between
-  /// two head epochs, and the heads then confirmed the way back: a re-synchronisation every half
-  /// second). One corrupt tag therefore never moves the assembler's frontier; the first message sets
-  /// the data time and a wrong one is out-voted the same way.
+  /// all channels, and where both sensors (the star cameras - heads and star vectors - and the
+  /// accelerometer) passed messages in the last kActiveUs of data time the votes must come from both: a
+  /// whole link that stops and resumes, or a spacecraft clock set back, moves every channel, while one
+  /// sensor whose clock is off is refuted by the other's messages (without that rule a 10 Hz
+  /// accelerometer 10 s ahead confirmed its jump between two head epochs, and the heads then confirmed
+  /// the way back: a re-synchronisation every half second; counted per channel instead of per sensor,
+  /// the three heads' messages of one epoch confirmed a step back of the star cameras alone). One
+  /// corrupt tag therefore never moves the assembler's frontier; the first message sets the data time
+  /// and a wrong one is out-voted the same way.
   void admit(ChannelState& s, const stream::Sample* xs, int n, TimeUs t, stream::Sample::Kind kind) {
     if (!have_time) {
       have_time = true;
@@ -353,21 +355,21 @@ struct Node::Impl {
       pass(s, xs, n, t, kind);
       return;
     }
+    const unsigned sensor = kind == stream::Sample::Kind::kAccel ? 2u : 1u;
     if (jump_votes > 0 && std::abs(t - jump_last) <= jump_us) {
       ++jump_votes;
-      if (&s != jump_first_ch) jump_channels = 2;
+      jump_sensors |= sensor;
     } else {
       dropHeld();  // an earlier jump that nothing confirmed
       jump_votes = 1;
-      jump_first_ch = &s;
-      jump_channels = 1;
-      int active = 0;
+      jump_sensors = sensor;
+      jump_need_sensors = 0;  // the sensors active lately: each must vote
       for (const ChannelState* ch : all_channels)
-        if (ch->last_pass_t != std::numeric_limits<TimeUs>::min() && ch->last_pass_t >= now - kActiveUs) ++active;
-      jump_need_channels = active >= 2 ? 2 : 1;
+        if (ch->last_pass_t != std::numeric_limits<TimeUs>::min() && ch->last_pass_t >= now - kActiveUs)
+          jump_need_sensors |= ch == &ch_acc ? 2u : 1u;
     }
     jump_last = t;
-    if (jump_votes < cfg.time_jump_confirm || jump_channels < jump_need_channels) {
+    if (jump_votes < cfg.time_jump_confirm || (jump_sensors & jump_need_sensors) != jump_need_sensors) {
       hold(s, xs, n, t, kind);
       return;
     }
@@ -413,8 +415,8 @@ struct Node::Impl {
     for (int i = 0; i < n_held; ++i) reject(Reason::kTimeJump);
     n_held = 0;
   }
-  int jump_votes = 0, jump_channels = 0, jump_need_channels = 1;
-  const ChannelState* jump_first_ch = nullptr;
+  int jump_votes = 0;
+  unsigned jump_sensors = 0, jump_need_sensors = 0;  ///< bit 0 star cameras, bit 1 accelerometer
   TimeUs jump_last = 0;
   static constexpr TimeUs kActiveUs = 10 * kUsPerSecond;  ///< a channel is active: it passed a message this recently
   std::vector<const ChannelState*> all_channels;            ///< set at configure

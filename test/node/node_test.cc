@@ -1126,6 +1126,15 @@ TEST(NodeFaults, OneSenderClockAheadIsRefutedByTheOthersNotFollowed) {
   EXPECT_GE(rejected(c, node::Reason::kTimeJump) + rejected(c, node::Reason::kLate), shifted_n);
   EXPECT_EQ(c.head_epochs, ref->c.head_epochs);
   EXPECT_EQ(c.received, c.used + c.rejectedTotal());
+  // The star cameras (every head and the star vectors) 5 s behind from 600 s on: the three heads of an
+  // epoch are three channels but one sensor; the accelerometer refutes them.
+  const std::string behind = editSpan(clean, "behind.lcm", 600, 1e9, [&](const Event& e) {
+    return std::vector<Event>{e.ch == "ACCEL" ? e : shifted(e, -5 * kUsPerSecond)};
+  });
+  const auto rb = replay(behind, nodeConfig());
+  EXPECT_EQ(rb->c.time_resyncs, 0u);
+  EXPECT_EQ(rb->c.accel_steps, ref->c.accel_steps);
+  EXPECT_EQ(rb->c.received, rb->c.used + rb->c.rejectedTotal());
 }
 
 TEST(NodeFaults, ANewMountingsMessageIsValidatedAndAppliedAtAnEpochBoundary) {
