@@ -330,7 +330,7 @@ struct Node::Impl {
 
   /// Time: every input goes through admit(). A tag within the look-ahead of the data time (the latest
   /// accepted tag) passes on to the duplicate, late and flood checks. A tag beyond it, either way, is a
-  /// jump: the message is held until time_jump_confirm messages in a row (on any channel) agree on the
+  /// jump: the message is held until time_jump_confirm messages in a row (sensors as below) agree on the
   /// new time - then the data time moves (a step back re-synchronises the assembler and the core), and
   /// the held messages pass in their order - or until a message within the look-ahead arrives: then a
   /// held one still that far from the data time is rejected (time_jump, or late when the assembler has

@@ -31,11 +31,12 @@
 // one corrupt number is one bad message, not a million lost; a jump back beyond it, confirmed the same
 // way, is a sender's restart (seq_restarts), and losses after it count from the new numbers
 // (channel_gate.h). Time: a message whose tag is more than lookahead_s away from the node's data time
-// is held, and passes once time_jump_confirm messages in a row (any channel) agree on the new time (a
-// real jump: resync), else it is rejected (time_jump): one corrupt tag never moves the assembler's
-// frontier nor turns every later message into "late"; a confirmed step back re-synchronises the
-// assembler and the core (their filters restart, the counts go on). The first message sets the data
-// time (a wrong one is out-voted the same way, and the assembler drops it as a time outlier).
+// is held, and passes once time_jump_confirm messages in a row (from both sensors where both are
+// active) agree on the new time (a real jump: resync), else it is rejected (time_jump): one corrupt
+// tag never moves the assembler's frontier nor turns every later message into "late"; a confirmed
+// step back re-synchronises the assembler and the core (their filters restart, the counts go on). The
+// first message sets the data time (a wrong one is out-voted the same way, and the assembler drops it
+// as a time outlier).
 #pragma once
 
 #include <boresight/core/pipeline.h>
@@ -128,7 +129,7 @@ struct NodeConfig {
   double lookahead_s = 2.0;         ///< assembler look-ahead, s
   double health_period_s = 10.0;    ///< data time between health messages, s
   /// A tag further than lookahead_s from the data time is a jump: held until this many messages in a
-  /// row (any channel) agree on the new time (1-16).
+  /// row (from the star cameras and the accelerometer, where both are active) agree on the new time (1-16).
   int time_jump_confirm = 3;
   double max_head_rate_hz = 20.0;   ///< per head: more messages per data second are a flood
   double max_accel_rate_hz = 50.0;
