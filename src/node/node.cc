@@ -619,19 +619,16 @@ struct Node::Impl {
     frame_from_t = t;
     ++nominal_gen;
     ++c.mountings_applied;
-    RingItem it;
-    it.kind = RingItem::kMountings;
-    it.t = t;
-    it.solve_id = nominal_gen;
-    it.q_Si_B = pending_nominal;
     if (cfg.calibration.enabled) {
-      while (!ring.push(it)) std::this_thread::yield();  // rare (a ground command): the worker must see it
+      RingItem& it = worker_mountings;
+      it.kind = RingItem::kMountings;
+      it.t = t;
+      it.solve_id = nominal_gen;
+      it.q_Si_B = pending_nominal;
+      worker_mountings_pending = true;
+      flushWorkerMountings();
     }
-    boresight_lcm::calibration_t none{};
-    for (int k = 0; k < kMaxHeads; ++k)
-      for (int a = 0; a < 3; ++a) none.sigma_arcsec[k][a] = std::numeric_limits<double>::quiet_NaN();
-    none.utime = t;
-    saveState(none);
+    saveState(t, nullptr);
   }
 
   void onOrbit(const void* data, int size) {
@@ -653,8 +650,28 @@ struct Node::Impl {
     return true;
   }
 
+  /// New nominal mountings for the worker: they must reach it, and before any later item (those belong
+  /// to the new span). Replay waits like any item; live never waits: while the ring is full the item
+  /// stays here, and the items after it are dropped (counted) until it is in.
+  RingItem worker_mountings;
+  bool worker_mountings_pending = false;
+  bool flushWorkerMountings() {
+    if (!worker_mountings_pending) return true;
+    if (!ring.push(worker_mountings)) {
+      if (mode == Mode::kLive) return false;
+      ++c.ring_waits;
+      while (!ring.push(worker_mountings)) std::this_thread::yield();
+    }
+    worker_mountings_pending = false;
+    return true;
+  }
+
   void pushRing(const RingItem& it) {
     if (!cfg.calibration.enabled) return;
+    if (!flushWorkerMountings()) {
+      ++c.ring_dropped;
+      return;
+    }
     if (!ring.push(it)) {
       if (mode == Mode::kLive) {
         ++c.ring_dropped;
@@ -874,7 +891,7 @@ struct Node::Impl {
       logEvent(fv == FrameVerdict::kOk ? LogKind::kFrameChange : fv == FrameVerdict::kTooSoon ? LogKind::kFrameTooSoon : LogKind::kFrameNotDetermined,
                from_t, m.utime, common / kRadPerArcsec, 0);
     }
-    saveState(m);
+    saveState(m.utime, &m);
   }
 
   /// Ground commands (BORESIGHT_COMMAND): checked on arrival, carried out at the next head-epoch boundary.
@@ -931,11 +948,7 @@ struct Node::Impl {
       }
       ++c.commands_reverted;
       logEvent(LogKind::kReverted, t, 0, Vec3::Zero(), from);
-      boresight_lcm::calibration_t none{};
-      for (int k = 0; k < kMaxHeads; ++k)
-        for (int a = 0; a < 3; ++a) none.sigma_arcsec[k][a] = std::numeric_limits<double>::quiet_NaN();
-      none.utime = t;
-      saveState(none);
+      saveState(t, nullptr);
     }
   }
 
@@ -956,7 +969,9 @@ struct Node::Impl {
   bool frame_active = false;                ///< the published attitude is rotated (a frame change or the state)
   TimeUs frame_epoch = 0;                   ///< data time of the last frame change (the state's after a restart)
 
-  void saveState(const boresight_lcm::calibration_t& m) {
+  /// cal: the applied calibration (its sigmas); nullptr: mountings without one (new nominal ones, a
+  /// revert), sigmas not determined.
+  void saveState(TimeUs cal_t, const boresight_lcm::calibration_t* cal) {
     if (cfg.state_file.empty()) return;
     const std::uint64_t s0 = state_seq.load(std::memory_order_relaxed);
     state_seq.store(s0 + 1, std::memory_order_release);
@@ -964,9 +979,11 @@ struct Node::Impl {
     StateSlot& st = state_slot;
     for (int k = 0; k < kMaxHeads; ++k) {
       st.q_Si_B[static_cast<std::size_t>(k)] = handed_q[static_cast<std::size_t>(k)];
-      for (int a = 0; a < 3; ++a) st.sigma_rad[static_cast<std::size_t>(k)][a] = m.sigma_arcsec[k][a] * kRadPerArcsec;
+      for (int a = 0; a < 3; ++a)
+        st.sigma_rad[static_cast<std::size_t>(k)][a] =
+            cal ? cal->sigma_arcsec[k][a] * kRadPerArcsec : std::numeric_limits<double>::quiet_NaN();
     }
-    st.cal_t = m.utime;
+    st.cal_t = cal_t;
     st.frame_t = frame_active ? frame_epoch : 0;
     st.q_frame = frame_active ? q_frame : Quat::Identity();
     st.version = mounting_version;
