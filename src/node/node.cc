@@ -877,7 +877,8 @@ struct Node::Impl {
     FrameVerdict fv = FrameVerdict::kOk;
     if (cfg.calibration.apply_common_rotation) {
       if (!common.allFinite() || !common_determined) fv = FrameVerdict::kNotDetermined;
-      else if (c.frame_changes > 0 && static_cast<double>(from_t - frame_from_t) * 1e-6 < cfg.calibration.frame_change_min_interval_s)
+      else if (frame_active && frame_epoch != 0 &&  // the last change, this run's or the state file's
+               static_cast<double>(from_t - frame_epoch) * 1e-6 < cfg.calibration.frame_change_min_interval_s)
         fv = FrameVerdict::kTooSoon;
       if (fv != FrameVerdict::kOk) ++c.frame_changes_refused;
       if (fv == FrameVerdict::kOk) {
