@@ -87,20 +87,25 @@ void KalmanWhitener::predict(double t_s) {
     for (std::size_t j = 0; j < k; ++j) x[j] *= phi_[j];
   }
   if (frozen_) return;
-  // One pass over P: the last update's pending subtraction (P - K s^T, the posterior), the propagation
-  // (elementwise phi_a phi_b, plus Q), and the row sums P h that the next gain needs.
+  // One pass over the upper triangle of P (it is symmetric; the lower triangle is not kept): the last
+  // update's pending subtraction (P - K s^T = P - s s^T / F, the posterior), the propagation
+  // (elementwise phi_a phi_b, plus Q), and the row sums P h that the next gain needs (each
+  // off-diagonal element counts in its row and in its column). Half the work of the full matrix.
+  std::fill(s_next_.begin(), s_next_.end(), 0.0);
   for (std::size_t a = 0; a < k; ++a) {
     double* row = P_.data() + a * k;
     const double* pp = pp_.data() + a * k;
     const double ka = pending_ ? K_[a] : 0.0;
-    double sum = 0;
-    for (std::size_t b = 0; b < k; ++b) {
+    const double diag = (row[a] - ka * s_[a]) * pp[a] + q_[a];
+    row[a] = diag;
+    for (std::size_t b = a + 1; b < k; ++b) {
       const double v = (row[b] - ka * s_[b]) * pp[b];
       row[b] = v;
-      sum += v;
+      s_next_[b] += v;
     }
-    row[a] += q_[a];
-    s_next_[a] = sum + q_[a];
+    double sum = diag;
+    for (std::size_t b = a + 1; b < k; ++b) sum += row[b];
+    s_next_[a] += sum;
   }
   s_.swap(s_next_);
   pending_ = false;
@@ -110,13 +115,8 @@ void KalmanWhitener::predict(double t_s) {
 void KalmanWhitener::gainStep() {
   if (frozen_) return;
   const auto k = static_cast<std::size_t>(k_);
-  if (!sums_) {  // the first step (the stationary prior)
-    for (std::size_t a = 0; a < k; ++a) {
-      const double* row = P_.data() + a * k;
-      double v = 0;
-      for (std::size_t b = 0; b < k; ++b) v += row[b];
-      s_[a] = v;
-    }
+  if (!sums_) {  // the first step (the stationary prior: P is diagonal)
+    for (std::size_t a = 0; a < k; ++a) s_[a] = P_[a * k + a];
   }
   double F = white_var_;
   for (std::size_t a = 0; a < k; ++a) F += s_[a];
@@ -217,44 +217,143 @@ double whitenAll(const NoiseModel& m, const NoiseSeries& s, const Eigen::MatrixX
 
 }  // namespace
 
+namespace {
+
+/// The sums generalised least squares needs from whitened columns (y first, then X's columns): zX^T zX,
+/// zX^T zy, zy^T zy and sum log F. No n-long buffers.
+class GlsSums {
+ public:
+  explicit GlsSums(int p) : p_(p), A_(Eigen::MatrixXd::Zero(p, p)), c_(Eigen::VectorXd::Zero(p)) {}
+  void add(const double* out, double logF) {
+    logdet_ += logF;
+    yy_ += out[0] * out[0];
+    for (int a = 0; a < p_; ++a) {
+      const double za = out[a + 1];
+      c_[a] += za * out[0];
+      for (int b = 0; b <= a; ++b) A_(a, b) += za * out[b + 1];
+    }
+    ++n_;
+  }
+  /// -2 log L with the columns profiled out (and the GLS solution, its covariance, when asked for).
+  double m2ll(bool reml, Eigen::VectorXd* beta, Eigen::MatrixXd* beta_cov) const {
+    double rss = yy_, extra = 0;
+    if (p_ > 0) {
+      const Eigen::MatrixXd A = A_.selfadjointView<Eigen::Lower>();
+      const Eigen::LDLT<Eigen::MatrixXd> ldlt(A);
+      const Eigen::VectorXd b = ldlt.solve(c_);
+      rss = std::max(0.0, yy_ - c_.dot(b));  // |zy - zX b|^2 at the GLS solution
+      if (beta) *beta = b;
+      if (beta_cov) *beta_cov = ldlt.solve(Eigen::MatrixXd::Identity(p_, p_));
+      if (reml) extra = ldlt.vectorD().array().abs().max(1e-300).log().sum();
+    } else {
+      if (beta) beta->resize(0);
+      if (beta_cov) beta_cov->resize(0, 0);
+    }
+    const double nn = reml ? static_cast<double>(n_ - p_) : static_cast<double>(n_);
+    return nn * kLog2Pi + logdet_ + rss + extra;
+  }
+
+ private:
+  int p_;
+  Eigen::MatrixXd A_;
+  Eigen::VectorXd c_;
+  double logdet_ = 0, yy_ = 0;
+  Eigen::Index n_ = 0;
+};
+
+}  // namespace
+
 double minusTwoLogLikelihood(const NoiseModel& m, const NoiseSeries& s, const Eigen::MatrixXd& X, bool reml,
                              Eigen::VectorXd* beta, Eigen::MatrixXd* beta_cov) {
-  // One pass that keeps only the sums GLS needs (zX^T zX, zX^T zy, zy^T zy): no n-long buffers.
   const int p = static_cast<int>(X.cols());
   const auto n = static_cast<Eigen::Index>(s.size());
   KalmanWhitener kf(m);
+  GlsSums gls(p);
   std::vector<double> in(static_cast<std::size_t>(p + 1)), out(static_cast<std::size_t>(p + 1));
-  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(p, p);
-  Eigen::VectorXd c = Eigen::VectorXd::Zero(p);
-  double logdet = 0, yy = 0;
   for (Eigen::Index i = 0; i < n; ++i) {
     in[0] = s.y[static_cast<std::size_t>(i)];
     for (int k = 0; k < p; ++k) in[static_cast<std::size_t>(k + 1)] = X(i, k);
     kf.whitenColumns(s.t_s[static_cast<std::size_t>(i)], in.data(), out.data(), p + 1);
-    logdet += kf.logInnovationVariance();
-    yy += out[0] * out[0];
-    for (int a = 0; a < p; ++a) {
-      const double za = out[static_cast<std::size_t>(a + 1)];
-      c[a] += za * out[0];
-      for (int b = 0; b <= a; ++b) A(a, b) += za * out[static_cast<std::size_t>(b + 1)];
+    gls.add(out.data(), kf.logInnovationVariance());
+  }
+  return gls.m2ll(reml, beta, beta_cov);
+}
+
+LikelihoodScore scoreLikelihood(const std::function<NoiseModel(const Eigen::VectorXd&)>& model, const Eigen::VectorXd& x,
+                                double h, const NoiseSeries& s, const Eigen::MatrixXd& X, bool reml, bool central) {
+  const auto np = x.size();
+  const auto P = static_cast<std::size_t>(np);
+  const int p = static_cast<int>(X.cols());
+  const auto cols = static_cast<std::size_t>(p + 1);
+  // Filter 0 at x, 2i + 1 at x + h e_i, 2i + 2 at x - h e_i (forward differences: x itself stands in
+  // for x - h e_i, and the differences are over h).
+  const std::size_t nf = central ? 2 * P + 1 : P + 1;
+  auto hi = [&](std::size_t a) { return central ? 2 * a + 1 : a + 1; };
+  auto lo = [&](std::size_t a) { return central ? 2 * a + 2 : std::size_t{0}; };
+  std::vector<KalmanWhitener> kf;
+  kf.reserve(nf);
+  kf.emplace_back(model(x));
+  for (Eigen::Index i = 0; i < np; ++i) {
+    Eigen::VectorXd a = x, b = x;
+    a[i] += h;
+    b[i] -= h;
+    kf.emplace_back(model(a));
+    if (central) kf.emplace_back(model(b));
+  }
+  std::vector<GlsSums> gls(nf, GlsSums(p));
+  std::vector<double> in(cols), out(nf * cols), e(nf * cols), logF(nf), de(P * cols), dl(P);
+  // D[(a P + b) cols^2 + c cols + d] = sum de_a[c] de_b[d] / F over the samples (b <= a): the columns'
+  // innovation derivatives, combined with the GLS coefficients at the end.
+  std::vector<double> D(P * P * cols * cols, 0.0);
+  Eigen::MatrixXd G = Eigen::MatrixXd::Zero(np, np);
+  const double inv2h = central ? 1.0 / (2 * h) : 1.0 / h;  // over the differences' step
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    in[0] = s.y[i];
+    for (int k = 0; k < p; ++k) in[static_cast<std::size_t>(k + 1)] = X(static_cast<Eigen::Index>(i), k);
+    for (std::size_t f = 0; f < nf; ++f) {
+      double* o = out.data() + f * cols;
+      kf[f].whitenColumns(s.t_s[i], in.data(), o, p + 1);
+      logF[f] = kf[f].logInnovationVariance();
+      gls[f].add(o, logF[f]);
+      const double sF = std::sqrt(kf[f].innovationVariance());
+      for (std::size_t c = 0; c < cols; ++c) e[f * cols + c] = o[c] * sF;
     }
+    const double invF = 1.0 / kf[0].innovationVariance();
+    for (std::size_t a = 0; a < P; ++a) {
+      dl[a] = (logF[hi(a)] - logF[lo(a)]) * inv2h;
+      for (std::size_t c = 0; c < cols; ++c) de[a * cols + c] = (e[hi(a) * cols + c] - e[lo(a) * cols + c]) * inv2h;
+    }
+    for (std::size_t a = 0; a < P; ++a)
+      for (std::size_t b = 0; b <= a; ++b) {
+        G(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(b)) += dl[a] * dl[b];
+        double* Dab = D.data() + (a * P + b) * cols * cols;
+        for (std::size_t c = 0; c < cols; ++c) {
+          const double u = de[a * cols + c] * invF;
+          for (std::size_t d = 0; d < cols; ++d) Dab[c * cols + d] += u * de[b * cols + d];
+        }
+      }
   }
-  double rss = yy;
-  double extra = 0;
-  if (p > 0) {
-    A = A.selfadjointView<Eigen::Lower>();
-    const Eigen::LDLT<Eigen::MatrixXd> ldlt(A);
-    const Eigen::VectorXd b = ldlt.solve(c);
-    rss = std::max(0.0, yy - c.dot(b));  // |zy - zX b|^2 at the GLS solution
-    if (beta) *beta = b;
-    if (beta_cov) *beta_cov = ldlt.solve(Eigen::MatrixXd::Identity(p, p));
-    if (reml) extra = ldlt.vectorD().array().abs().max(1e-300).log().sum();
-  } else {
-    if (beta) beta->resize(0);
-    if (beta_cov) beta_cov->resize(0, 0);
-  }
-  const double nn = reml ? static_cast<double>(n - p) : static_cast<double>(n);
-  return nn * kLog2Pi + logdet + rss + extra;
+  LikelihoodScore r;
+  Eigen::VectorXd beta;
+  r.m2ll = gls[0].m2ll(reml, &beta, nullptr);
+  r.gradient.resize(np);
+  for (std::size_t a = 0; a < P; ++a)
+    r.gradient[static_cast<Eigen::Index>(a)] = (gls[hi(a)].m2ll(reml, nullptr, nullptr) - gls[lo(a)].m2ll(reml, nullptr, nullptr)) * inv2h;
+  // The innovation of the residual y - X beta is e_y - e_X beta (beta at x: its own change with x does not
+  // enter the expected Hessian of the profile to first order).
+  std::vector<double> w(cols, 1.0);
+  for (int k = 0; k < p; ++k) w[static_cast<std::size_t>(k + 1)] = -beta[k];
+  r.information.resize(np, np);
+  for (std::size_t a = 0; a < P; ++a)
+    for (std::size_t b = 0; b <= a; ++b) {
+      const double* Dab = D.data() + (a * P + b) * cols * cols;
+      double q = 0;
+      for (std::size_t c = 0; c < cols; ++c)
+        for (std::size_t d = 0; d < cols; ++d) q += w[c] * Dab[c * cols + d] * w[d];
+      const auto A = static_cast<Eigen::Index>(a), B = static_cast<Eigen::Index>(b);
+      r.information(A, B) = r.information(B, A) = G(A, B) + 2 * q;
+    }
+  return r;
 }
 
 std::vector<double> whitenSeries(const NoiseModel& m, const NoiseSeries& s, const Eigen::MatrixXd& X) {

@@ -1,7 +1,8 @@
 // Fitting noise models to a residual series (noise.h): maximum likelihood through the exact
 // state-space likelihood (gaps and irregular sampling included), started from a least-squares fit of
 // the model's spectrum to the data's Welch spectrum; uncertainties from the observed information
-// (a finite-difference Hessian of -2 log L on the fitting scale); model choice by BIC.
+// (a finite-difference Hessian of -2 log L on the fitting scale) or, on long series fitted by the
+// scorer's steps, from the information of the data's own gaps (scoreLikelihood); model choice by BIC.
 #include <boresight/model/noise.h>
 
 #include <Eigen/Eigenvalues>
@@ -256,6 +257,7 @@ Eigen::MatrixXd hessian(const Objective& f, const Eigen::VectorXd& x, double h, 
 }
 
 using Information = std::function<Eigen::MatrixXd(const Eigen::VectorXd&)>;
+using Scorer = std::function<LikelihoodScore(const Eigen::VectorXd&, bool central)>;
 
 /// Damped Newton-type steps from a point near the minimum (eigenvalues of the step's matrix floored, so
 /// a step always descends). With `info` (the expected information of -2 log L, cheap to evaluate) the
@@ -266,14 +268,24 @@ using Information = std::function<Eigen::MatrixXd(const Eigen::VectorXd&)>;
 /// Without `info`, every step takes the finite-difference Hessian. Newton's method needs two or three
 /// steps where BFGS from the identity needs many; scoring a few more, each at a fifth of the cost.
 /// H_out: the finite-difference Hessian at the returned point when converged.
+/// With `scorer` (the exact likelihood's gradient and the information of the data's own gaps and
+/// regressors, from one lock-step pass: scoreLikelihood) every step is a scoring step under that
+/// information, and a small decrement under it settles the fit (H_out: that information, with central
+/// differences). A step that achieves less than a quarter of the decrease it predicts, or needs the
+/// line search, raises a Levenberg-Marquardt damping (H + lambda diag H) instead of calling for the
+/// finite-difference Hessian (on a realistic head axis's power law the upper corner, above the band,
+/// swung by the step cap between two values for 16 steps); a good step lowers it. Only a point from
+/// which no step descends takes the finite-difference Hessian.
 Eigen::VectorXd newton(const Objective& f, Eigen::VectorXd x, int max_iter, bool* converged, Eigen::MatrixXd* H_out,
-                       const Information& info = nullptr) {
+                       const Information& info = nullptr, const Scorer& scorer = nullptr) {
   *converged = false;
-  enum class Mode { Scoring, QuasiNewton, Full } mode = info ? Mode::Scoring : Mode::Full;
+  enum class Mode { Scoring, QuasiNewton, Full } mode = info || scorer ? Mode::Scoring : Mode::Full;
   Eigen::MatrixXd B;                 // the quasi-Newton matrix
   Eigen::VectorXd g_prev, x_prev;    // the last step's start, for the BFGS update
   constexpr double kSettled = 1e-2;  // a hundredth of the unit of -2 log L that one standard error spans
   double fx = f(x);                  // f at the current point (each evaluation is a pass over the data)
+  double lambda = 0;                 // Levenberg-Marquardt damping of the scorer's steps
+  double last_decrement = kInf;      // the decrement of the last step (the scorer's first pass is forward)
   for (int it = 0; it < max_iter; ++it) {
     Eigen::VectorXd g, d;
     Eigen::MatrixXd H;
@@ -285,7 +297,9 @@ Eigen::VectorXd newton(const Objective& f, Eigen::VectorXd x, int max_iter, bool
       d = -es.eigenvectors() * (es.eigenvectors().transpose() * g).cwiseQuotient(lam);
       return -g.dot(d);
     };
-    bool exact = false;  // H is the finite-difference Hessian at x
+    bool exact = false;   // H is the finite-difference Hessian at x, or the data's information (scorer)
+    bool scored = false;  // H is the scorer's information
+    bool central = true;  // the scorer's differences were central
     auto full = [&]() {
       H = hessian(f, x, 2e-3, &g, fx);
       if (H_out) *H_out = H;
@@ -294,7 +308,21 @@ Eigen::VectorXd newton(const Objective& f, Eigen::VectorXd x, int max_iter, bool
     };
     if (mode == Mode::Full) {
       full();
-      if (info) mode = Mode::QuasiNewton;
+      if (scorer) {
+        mode = Mode::Scoring;
+      } else if (info) {
+        mode = Mode::QuasiNewton;
+      }
+    } else if (scorer) {
+      // Forward differences (p + 1 passes instead of 2p + 1) while the last decrement says the optimum
+      // is more than a few units of -2 log L away; central ones near it, where the settling test and
+      // the information reported need them.
+      central = !(last_decrement > 4);
+      const LikelihoodScore sc = scorer(x, central);
+      g = sc.gradient;
+      H = sc.information;
+      if (H_out) *H_out = H;
+      exact = scored = true;
     } else {
       g = gradient(f, x, 1e-4);
       if (mode == Mode::Scoring) {
@@ -310,6 +338,14 @@ Eigen::VectorXd newton(const Objective& f, Eigen::VectorXd x, int max_iter, bool
       }
     }
     double decrement = decrementOf();
+    if (scored && !central && decrement <= 4) {  // near: again with central differences
+      const LikelihoodScore sc = scorer(x, true);
+      g = sc.gradient;
+      H = sc.information;
+      if (H_out) *H_out = H;
+      decrement = decrementOf();
+    }
+    if (scored) last_decrement = decrement;
     if (!std::isfinite(decrement)) return x;
     if (decrement < kSettled && !exact) {
       // settled under an approximate matrix: the finite-difference Hessian decides
@@ -321,6 +357,12 @@ Eigen::VectorXd newton(const Objective& f, Eigen::VectorXd x, int max_iter, bool
     if (decrement < kSettled) {
       *converged = true;
       return x;
+    }
+    if (scored && lambda > 0) {  // the damped step: (H + lambda diag H) d = -g
+      const Eigen::MatrixXd H0 = H;
+      H.diagonal() *= 1 + lambda;
+      decrementOf();
+      H = H0;
     }
     const double dmax = d.cwiseAbs().maxCoeff();
     if (dmax > 1.0) d /= dmax;
@@ -335,7 +377,18 @@ Eigen::VectorXd newton(const Objective& f, Eigen::VectorXd x, int max_iter, bool
         // is not the curvature here (a flat direction that scoring sees as curved): the
         // finite-difference Hessian next.
         const double predicted = -(t * g.dot(d) + 0.5 * t * t * d.dot(H * d));
-        if (!exact && f0 - fn < 0.25 * predicted) mode = Mode::Full;
+        if (scored) {
+          // The scorer's information is the data's, so a step that overshoots (a flat direction, a
+          // parameter swinging between two values) is damped rather than replaced by the
+          // finite-difference Hessian (2p^2 evaluations).
+          if (k > 0 || f0 - fn < 0.25 * predicted) {
+            lambda = lambda > 0 ? 4 * lambda : 0.1;
+          } else if (f0 - fn > 0.75 * predicted) {
+            lambda = lambda > 0.01 ? lambda / 4 : 0.0;
+          }
+        } else if (!exact && f0 - fn < 0.25 * predicted) {
+          mode = Mode::Full;
+        }
         x_prev = x;
         g_prev = g;
         x = xn;
@@ -344,7 +397,7 @@ Eigen::VectorXd newton(const Objective& f, Eigen::VectorXd x, int max_iter, bool
       }
     }
     if (!moved) {
-      if (exact) return x;
+      if (exact && !scored) return x;
       mode = Mode::Full;  // no descent along an approximate direction: the finite-difference Hessian next
     }
   }
@@ -793,6 +846,15 @@ NoiseFit fitNoise(const NoiseSeries& s, NoiseStructure structure, const Eigen::M
     return spectralInformation([&](const Eigen::VectorXd& v) { return modelOf(structure, project(structure, box, v), pl_terms, &opt.fixed); },
                                x, all, whittle ? wd : info_grid);
   };
+  // The exact likelihood's scoring steps on long series: gradient and the data's information in one
+  // lock-step pass (below 2 kCoarse samples a pass is cheap, and the finite-difference Hessian copes
+  // better with the flat directions of short series: on a 789-sample accelerometer series the
+  // information of a second, slow Gauss-Markov term was near singular and the scoring steps stalled).
+  const Scorer scorer = whittle || s.size() <= 2 * kCoarse ? Scorer() : Scorer([&](const Eigen::VectorXd& x, bool central) {
+    fit.evaluations += (central ? 2 : 1) * static_cast<int>(np) + 1;
+    return scoreLikelihood([&](const Eigen::VectorXd& v) { return modelOf(structure, project(structure, box, v), pl_terms, &opt.fixed); },
+                           x, 1e-4, s, X, opt.reml, central);
+  });
   Eigen::VectorXd best = x0s.front();
   double fbest = kInf;
   for (const auto& x : x0s) {
@@ -848,13 +910,14 @@ NoiseFit fitNoise(const NoiseSeries& s, NoiseStructure structure, const Eigen::M
     return Eigen::VectorXd(project(structure, box, bfgs(coarse, x0, opt.max_iterations, &conv, nullptr)));
   };
   if (!whittle && !started && s.size() > 2 * kCoarse) best = coarseFrom(best);
-  // 4. Newton on the whole series from there (its last Hessian is the observed information below).
+  // 4. Newton on the whole series from there (its last matrix is the information below: the
+  // finite-difference Hessian, or the scorer's information on long series).
   if (whittle || s.size() <= 2 * kCoarse) {
     bool conv = false;
     best = project(structure, box, bfgs(nll, best, opt.max_iterations, &conv, &why));
   }
   Eigen::MatrixXd H_final;
-  Eigen::VectorXd x = project(structure, box, newton(nll, best, 16, &fit.converged, &H_final, info));
+  Eigen::VectorXd x = project(structure, box, newton(nll, best, 16, &fit.converged, &H_final, info, scorer));
   // A fit that ends on a bound of its box, or where Newton's method did not settle, may sit in a local
   // optimum that every start led into once refined on the log spectrum and by Whittle on short runs
   // (seen: a power law's slope on its bound 1.98 with the lower corner 5x off, -2 log L 24 above the
@@ -898,7 +961,7 @@ NoiseFit fitNoise(const NoiseSeries& s, NoiseStructure structure, const Eigen::M
       if (alt.size() == np) {
         bool conv2 = false;
         Eigen::MatrixXd H2;
-        const Eigen::VectorXd y = project(structure, box, newton(nll, alt, 24, &conv2, &H2, info));
+        const Eigen::VectorXd y = project(structure, box, newton(nll, alt, 24, &conv2, &H2, info, scorer));
         if (nll(y) < nll(x) - 1e-6) {
           x = y;
           fit.converged = conv2;
@@ -931,7 +994,7 @@ NoiseFit fitNoise(const NoiseSeries& s, NoiseStructure structure, const Eigen::M
     return spectralInformation([&](const Eigen::VectorXd& v) { return modelOf(structure, v, pl_terms, &opt.fixed); }, x, idx, wd);
   };
 
-  // 5. Uncertainties: the observed information of the parameters that are not on a bound.
+  // 5. Uncertainties: the information of the parameters that are not on a bound.
   std::vector<Eigen::Index> free;
   std::vector<bool> at_bound(static_cast<std::size_t>(np), false);
   for (Eigen::Index i = 0; i < np; ++i) {
@@ -948,7 +1011,7 @@ NoiseFit fitNoise(const NoiseSeries& s, NoiseStructure structure, const Eigen::M
     };
     Eigen::VectorXd z(static_cast<Eigen::Index>(free.size()));
     for (std::size_t k = 0; k < free.size(); ++k) z[static_cast<Eigen::Index>(k)] = x[free[k]];
-    // Newton's last Hessian when it was taken at this point with every parameter free.
+    // Newton's last matrix when it was taken at this point with every parameter free.
     const bool reuse = !whittle && fit.converged && free.size() == static_cast<std::size_t>(np) && H_final.rows() == np;
     const Eigen::MatrixXd H = whittle ? whittleHessian(free) : reuse ? H_final : hessian(sub, z, 2e-3);
     // Where the information is singular (a second Gauss-Markov term much slower than the span: only

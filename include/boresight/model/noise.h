@@ -51,6 +51,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -182,7 +183,7 @@ class KalmanWhitener {
   double white_var_ = 0;
   std::vector<MarkovTerm> gm_;
   int k_ = 0;
-  // Small dense arrays (k_ is a few to a dozen): row-major P, per-term transition and gain.
+  // Small dense arrays (k_ is a few to a dozen): row-major P (its upper triangle), per-term transition and gain.
   std::vector<double> phi_, q_, K_, s_, s_next_, P_;
   std::vector<double> pp_;  ///< phi_a phi_b of the current step (row-major k_ x k_)
   std::vector<double> X_;  ///< filter states, column-major k_ x columns_ (column 0 serves whiten()/colour())
@@ -211,6 +212,28 @@ struct NoiseSeries {
 /// receives the GLS coefficients, beta_cov their covariance.
 double minusTwoLogLikelihood(const NoiseModel& m, const NoiseSeries& s, const Eigen::MatrixXd& X = Eigen::MatrixXd(),
                              bool reml = true, Eigen::VectorXd* beta = nullptr, Eigen::MatrixXd* beta_cov = nullptr);
+
+/// The exact likelihood at a point of a model's parameters with its first derivatives, for fitting:
+/// `model(x)` gives the model at parameters x. In one pass over the series the Kalman filters of x and
+/// of x +- h e_i run side by side (2p + 1 of them), so that
+///  - m2ll is minusTwoLogLikelihood(model(x), s, X, reml),
+///  - gradient its central difference in x (the same evaluations as 2p separate passes), and
+///  - information the expected Hessian of -2 log L given this series (its gaps, its sampling, its
+///    regressors): sum over the samples of d log F d log F^T + 2 d e d e^T / F, with e the innovation
+///    (the regressors' GLS fit taken out) and F its variance, their derivatives by the same central
+///    differences. The expectation uses only that an innovation is independent of the past it is
+///    predicted from, so it holds at any x; at the optimum it is the Fisher information of the data's
+///    own gaps, where a spectrum's information is that of a gap-free series.
+struct LikelihoodScore {
+  double m2ll = 0;
+  Eigen::VectorXd gradient;
+  Eigen::MatrixXd information;
+};
+/// central = false: forward differences from p + 1 filters (x and x + h e_i), for steps far from the
+/// optimum where the gradient's O(h) error does not matter.
+LikelihoodScore scoreLikelihood(const std::function<NoiseModel(const Eigen::VectorXd&)>& model, const Eigen::VectorXd& x,
+                                double h, const NoiseSeries& s, const Eigen::MatrixXd& X = Eigen::MatrixXd(), bool reml = true,
+                                bool central = true);
 
 /// Whitened residuals of y (X's columns profiled out as above when X is given).
 std::vector<double> whitenSeries(const NoiseModel& m, const NoiseSeries& s, const Eigen::MatrixXd& X = Eigen::MatrixXd());
