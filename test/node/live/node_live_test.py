@@ -79,7 +79,14 @@ try:
     live = os.path.join(d, "live.json")
     out = open(os.path.join(d, "live.out"), "w")
     node = subprocess.Popen([a.boresightd, "--config", cfg, "--summary-json", live], stdout=out, stderr=subprocess.STDOUT)
-    time.sleep(1.0)  # subscribed before the first message
+    # Subscribed before the first message: boresightd says "listening on" once it has subscribed (a
+    # message sent before would be missed, and one missed before the first received cannot be counted).
+    deadline = time.time() + 30
+    while time.time() < deadline and node.poll() is None:
+        if "listening on" in open(os.path.join(d, "live.out")).read():
+            break
+        time.sleep(0.1)
+    time.sleep(0.2)
     if node.poll() is not None:
         out.close()
         text = open(os.path.join(d, "live.out")).read()
