@@ -250,8 +250,9 @@ bool useMoments(const CalibrationSpan& span, const SolveOptions& opt) {
   return opt.from_moments || (span.obs.empty() && span.epochs_total > 0);
 }
 
-// Checks every input the solver relies on; an empty string when usable.
-std::string checkSpan(const CalibrationSpan& span, const SolveOptions& opt) {
+// Checks every input the solver relies on; an empty string when usable (*why: the refusal's kind).
+std::string checkSpan(const CalibrationSpan& span, const SolveOptions& opt, Refusal* why = nullptr) {
+  if (why) *why = Refusal::kInvalidSpan;
   std::ostringstream m;
   if (span.n_heads < 1 || span.n_heads > kMaxHeads) {
     m << "the span has " << span.n_heads << " heads (1.." << kMaxHeads << " are handled)";
@@ -284,6 +285,7 @@ std::string checkSpan(const CalibrationSpan& span, const SolveOptions& opt) {
   const bool moments = useMoments(span, opt);
   const std::size_t n_epochs = moments ? static_cast<std::size_t>(span.epochs_total) : span.obs.size();
   if (n_epochs < min_epochs) {
+    if (why) *why = Refusal::kTooFewEpochs;
     m << "too few epochs: " << n_epochs << " calibration epochs (one per " << span.decimation_s
       << " s with head and accelerometer data) from " << span_s << " s of head data; at least "
       << min_epochs << " are needed, i.e. "
@@ -722,6 +724,18 @@ void setParameters(Model& m, const ModelParameters& p) {
 
 }  // namespace
 
+const char* refusalName(Refusal r) {
+  switch (r) {
+    case Refusal::kNone: return "none";
+    case Refusal::kInvalidSpan: return "invalid span";
+    case Refusal::kTooFewEpochs: return "too few epochs";
+    case Refusal::kHeadsNotLinked: return "heads not linked";
+    case Refusal::kSolverFailed: return "solver failed";
+    case Refusal::kTooQuiet: return "too quiet";
+  }
+  return "?";
+}
+
 HeadCovariance cramerRao(const CalibrationSpan& span, const SolveOptions& opt, const ModelParameters& at,
                          std::string* message) {
   const std::string err = checkSpan(span, opt);
@@ -745,11 +759,12 @@ SolveResult solve(const CalibrationSpan& span, const SolveOptions& opt) {
   SolveResult res;
   res.epochs = span.obs.size();
   res.span_s = toSeconds(span.t_last - span.t_first);
-  const std::string err = checkSpan(span, opt);
+  const std::string err = checkSpan(span, opt, &res.refusal);
   if (!err.empty()) {
     res.message = err;
     return res;
   }
+  res.refusal = Refusal::kNone;
   // excitation: scatter of the accelerometer's acceleration in B about its mean
   {
     const Eigen::Matrix4d& E = span.acc_moments;
@@ -773,6 +788,7 @@ SolveResult solve(const CalibrationSpan& span, const SolveOptions& opt) {
   initModel(span, opt, m);
   std::string msg;
   if (!fitRelative(span, m, &msg)) {
+    res.refusal = Refusal::kHeadsNotLinked;
     res.message = msg;
     return res;
   }
@@ -845,6 +861,7 @@ SolveResult solve(const CalibrationSpan& span, const SolveOptions& opt) {
   }
   res.iterations = total_iterations;
   if (!sum.IsSolutionUsable()) {
+    res.refusal = Refusal::kSolverFailed;
     res.message = "the solver failed: " + sum.BriefReport();
     return res;
   }
@@ -968,6 +985,7 @@ SolveResult solve(const CalibrationSpan& span, const SolveOptions& opt) {
       << ", " << res.excitation_eigenvalues[1] << ", " << res.excitation_eigenvalues[2]
       << " rad^2/s^4; a determined axis needs angular accelerations about at least two body axes "
          "(calibration manoeuvres: e.g. 1 deg at 100 s period for 1000 s per axis)";
+    res.refusal = Refusal::kTooQuiet;
     res.message = s.str();
     return res;
   }

@@ -93,6 +93,7 @@ TEST(CalibSolver, HardConstraintRecoversErrorAnglesWithinSigma) {
   SolveOptions o;
   const SolveResult r = solve(s, o);
   ASSERT_TRUE(r.ok) << r.message;
+  EXPECT_EQ(r.refusal, Refusal::kNone);
   ASSERT_EQ(r.heads.size(), 3u);
   for (int h = 0; h < 3; ++h)
     for (int i = 0; i < 3; ++i) {
@@ -123,6 +124,7 @@ TEST(CalibSolver, RefusesTooFewEpochs) {
   const SolveResult r = solve(s, SolveOptions{});
   EXPECT_FALSE(r.ok);
   EXPECT_NE(r.message.find("too few epochs"), std::string::npos) << r.message;
+  EXPECT_EQ(r.refusal, Refusal::kTooFewEpochs) << refusalName(r.refusal);
   EXPECT_NE(r.message.find("each side"), std::string::npos) << r.message;
   SolveOptions zero;
   zero.min_epochs = 0;  // an empty span is still refused, never solved
@@ -255,6 +257,7 @@ TEST(CalibSolver, QuietSpanIsRefusedWithoutAnySmallSigma) {
   const SolveResult r = solve(s, SolveOptions{});
   EXPECT_FALSE(r.ok);
   EXPECT_NE(r.message.find("too quiet"), std::string::npos) << r.message;
+  EXPECT_EQ(r.refusal, Refusal::kTooQuiet) << refusalName(r.refusal);
   EXPECT_EQ(r.unobservable_directions_B.size(), 3u);
   for (const HeadResult& h : r.heads)
     for (const auto& sg : h.sigma_arcsec) EXPECT_FALSE(sg.has_value());
@@ -268,6 +271,7 @@ TEST(CalibSolver, RefusesNonFiniteAndInconsistentHeads) {
     const SolveResult r = solve(s, SolveOptions{});
     EXPECT_FALSE(r.ok);
     EXPECT_NE(r.message.find("non-finite"), std::string::npos) << r.message;
+    EXPECT_EQ(r.refusal, Refusal::kInvalidSpan) << refusalName(r.refusal);
     EXPECT_NE(r.message.find("observation 17"), std::string::npos) << r.message;
   }
   {
@@ -281,6 +285,7 @@ TEST(CalibSolver, RefusesNonFiniteAndInconsistentHeads) {
     const SolveResult r = solve(s, SolveOptions{});
     EXPECT_FALSE(r.ok);
     EXPECT_NE(r.message.find("head id"), std::string::npos) << r.message;
+    EXPECT_EQ(r.refusal, Refusal::kInvalidSpan) << refusalName(r.refusal);
   }
   {
     CalibrationSpan s = good;
@@ -288,6 +293,7 @@ TEST(CalibSolver, RefusesNonFiniteAndInconsistentHeads) {
     const SolveResult r = solve(s, SolveOptions{});
     EXPECT_FALSE(r.ok);
     EXPECT_NE(r.message.find("inconsistent head ids"), std::string::npos) << r.message;
+    EXPECT_EQ(r.refusal, Refusal::kInvalidSpan) << refusalName(r.refusal);
   }
   {
     CalibrationSpan s = good;
@@ -361,6 +367,7 @@ TEST(CalibSolver, HardModeRefusesAHeadNeverSeenWithTheOthers) {
   SolveResult r = solve(s, SolveOptions{});
   EXPECT_FALSE(r.ok);
   EXPECT_NE(r.message.find("never observed together"), std::string::npos) << r.message;
+  EXPECT_EQ(r.refusal, Refusal::kHeadsNotLinked) << refusalName(r.refusal);
   // the prior mode calibrates the two heads it has and says that it knows nothing of the third
   SolveOptions p;
   p.relative = RelativeMode::kPrior;

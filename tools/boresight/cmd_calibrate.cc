@@ -456,10 +456,9 @@ int runCalibrate(int argc, char** argv) {
       const Mat3 cov_B = span.C_B_A * cov_A * span.C_B_A.transpose();
       weakest = std::sqrt(std::max(0.0, cov_B.diagonal().minCoeff()));
     }
-    // What the bound needs is said for the refusals about the data's length or excitation (the solver's
-    // "too few epochs" and "too quiet"); other refusals (a head never seen with the others, ...) carry
-    // their own remedy.
-    const bool about_span = r.message.find("too few") != std::string::npos || r.message.find("too quiet") != std::string::npos;
+    // What the bound needs is said for the refusals about the data's length or excitation; other
+    // refusals (a head never seen with the others, ...) carry their own remedy.
+    const bool about_span = r.refusal == calib::Refusal::kTooFewEpochs || r.refusal == calib::Refusal::kTooQuiet;
     if (!about_span) return fail("refused: " + r.message);
     return fail("refused: " + r.message + "\nNeeded: " + plan_need + "; at this span's weakest-axis excitation " +
                 (weakest > 0 ? needText(weakest, "this span") : std::string("(none)")) + ".");

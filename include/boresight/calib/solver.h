@@ -28,6 +28,7 @@
 
 #include "boresight/calib/problem.h"
 
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
@@ -93,8 +94,21 @@ struct HeadResult {
   std::array<bool, 3> observable{};
 };
 
+/// Why solve() refused (ok = false), for callers and tests to branch on; the message says it in words
+/// with what would be needed.
+enum class Refusal : std::uint8_t {
+  kNone,           ///< solved (ok)
+  kInvalidSpan,    ///< an input the solver relies on is malformed (heads, ids, C_B_A, times, non-finite)
+  kTooFewEpochs,   ///< fewer calibration epochs than min_epochs
+  kHeadsNotLinked, ///< hard relative mode: a head never observed together with the others (singular)
+  kSolverFailed,   ///< Ceres returned no usable solution
+  kTooQuiet,       ///< solved, but no head axis is determined (too little angular acceleration)
+};
+const char* refusalName(Refusal r);
+
 struct SolveResult {
   bool ok = false;
+  Refusal refusal = Refusal::kNone;               ///< why not ok (kNone when ok)
   std::string message;                            ///< why not ok, or the solver's summary line
   std::vector<HeadResult> heads;
   std::vector<Vec3> unobservable_directions_B;    ///< unit vectors, shared by all heads
