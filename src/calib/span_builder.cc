@@ -230,7 +230,10 @@ void SpanBuilder::addHeadOutput(int slot, const core::RateOutput& o) {
   const auto s = static_cast<std::size_t>(slot);
   it->has_head[s] = true;
   it->alpha_S[s] = o.alpha_X;
+  // a window with bridged samples adds their bound (per axis, in quadrature; NaN under linear bridging:
+  // the solver then leaves the observation out)
   it->cov_alpha_S[s] = cov_head_unit_[s];
+  if (o.bridged > 0) it->cov_alpha_S[s] += o.alpha_sigma_bridge * o.alpha_sigma_bridge * Mat3::Identity();
   // fused context rate: the first head's rate rotated to B with its nominal mounting
   if (it->w_B.isZero()) it->w_B = span_.q_S_B_nominal[s].conjugate() * o.w_X;
 }

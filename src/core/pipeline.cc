@@ -3,6 +3,7 @@
 
 #include "boresight/core/clones.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -35,6 +36,8 @@ Status Pipeline::configure(const PipelineConfig& cfg) {
   if (cfg.crn_attitude.output_period_us <= 0 || cfg.alignment_update_epochs < 1) return Status::kInvalidConfig;
   cfg_ = cfg;
   head_dt_us_ = rates_.stream().samplingIntervalUs();
+  gain_w_ = rates_.noiseGain(1);
+  gain_a_ = rates_.noiseGain(2);
   configured_ = true;
   reset();
   return Status::kOk;
@@ -195,9 +198,7 @@ BORESIGHT_CLONES Status Pipeline::stepHeads(const HeadEpoch& in) {
     for (int j = 0; j < n_pending_; ++j) {
       Pending& p = pending_[static_cast<std::size_t>((p_head_ + j) % kMaxPendingRows)];
       if (p.row.t != r.t) continue;
-      p.row.w_B = r.w_X;
-      p.row.a_sc_B = r.alpha_X;
-      p.row.has_rates = true;
+      setRates(p.row, r);
       p.rate_done = true;
       break;
     }
@@ -269,13 +270,24 @@ void Pipeline::flush() {
     }
     if (!p.rate_done) {
       RateOutput r;
-      if (rates_.evaluateAt(p.row.t, r) == Status::kOk) {
-        p.row.w_B = r.w_X;
-        p.row.a_sc_B = r.alpha_X;
-        p.row.has_rates = true;
-      }
+      if (rates_.evaluateAt(p.row.t, r) == Status::kOk) setRates(p.row, r);
     }
     emitOldest();
+  }
+}
+
+void Pipeline::setRates(PipelineRow& row, const RateOutput& r) const {
+  row.w_B = r.w_X;
+  row.a_sc_B = r.alpha_X;
+  row.has_rates = true;
+  row.rate_bridged = r.bridged;
+  // (squares, not std::hypot: its overflow care costs ~25 instructions a call, and these are far
+  // from overflow)
+  const double bw2 = r.w_sigma_bridge * r.w_sigma_bridge, ba2 = r.alpha_sigma_bridge * r.alpha_sigma_bridge;
+  for (int k = 0; k < 3; ++k) {
+    const double v = std::max(row.P_B(k, k), 0.0);
+    row.w_sigma_B[k] = std::sqrt(v * gain_w_ * gain_w_ + bw2);
+    row.a_sc_sigma_B[k] = std::sqrt(v * gain_a_ * gain_a_ + ba2);
   }
 }
 

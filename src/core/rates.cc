@@ -2,6 +2,8 @@
 
 #include "boresight/core/rotation.h"
 
+#include <cmath>
+
 namespace boresight::core {
 
 namespace {
@@ -34,7 +36,27 @@ RateOutput AttitudeRates::fromFiltered(const CrnStream<4>::Output& o) {
   r.q_I_X = q.normalized();
   r.w_X = 2.0 * (q.conjugate() * qd).vec() / n2;
   r.alpha_X = (2.0 * (q.conjugate() * qdd).vec() - 2.0 * o.y[0].dot(o.y[1]) * r.w_X) / n2;
+  r.bridged = o.bridged;
+  if (o.bridged > 0) {  // first order in the bridged values' errors e0, e1, e2 (value, rate, accel.)
+    const double e0 = o.sigma_bridge[0].norm(), e1 = o.sigma_bridge[1].norm(), e2 = o.sigma_bridge[2].norm();
+    const double w = r.w_X.norm(), qn = std::sqrt(n2);
+    // w = 2 vec(q* q')/|q|^2: |d w| <= 2 (e1 + e0 |q'|) / |q|^2 + 2 |w| e0 / |q|
+    r.w_sigma_bridge = 2.0 * (e1 + e0 * o.y[1].norm()) / n2 + 2.0 * w * e0 / qn;
+    // alpha: the same for q'' and the term 2 (q . q') w / |q|^2
+    r.alpha_sigma_bridge = 2.0 * (e2 + e0 * o.y[2].norm()) / n2 + 2.0 * w * (e1 + e0 * o.y[1].norm()) / n2 +
+                           2.0 * std::abs(o.y[0].dot(o.y[1])) * r.w_sigma_bridge / n2 +
+                           2.0 * r.alpha_X.norm() * e0 / qn;
+  }
   return r;
+}
+
+double AttitudeRates::noiseGain(int order) const {
+  if (order < 0 || order > 2) return 0;
+  const CrnKernel& k = crn_.kernel();
+  double s = 0;
+  for (int j = 0; j < k.nf; ++j) s += k.g[static_cast<std::size_t>(order)][static_cast<std::size_t>(j)] *
+                                      k.g[static_cast<std::size_t>(order)][static_cast<std::size_t>(j)];
+  return std::sqrt(s);
 }
 
 Status AttitudeRates::step(TimeUs t, const Quat& q_I_X) {

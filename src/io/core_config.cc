@@ -57,7 +57,7 @@ Vec3 vec3(const YAML::Node& n, const std::string& key, const Vec3& def) {
 void crn(const YAML::Node& n, const std::string& key, core::CrnConfig& c) {
   if (!n) return;
   if (!n.IsMap()) fail(key, "expected a mapping", n);
-  checkKeys(n, key, {"fs_hz", "nc", "bandwidth_hz", "length_s", "output_period_s", "gap_policy", "max_bridge_samples"});
+  checkKeys(n, key, {"fs_hz", "nc", "bandwidth_hz", "length_s", "output_period_s", "gap_policy", "max_bridge_samples", "bridge_fit"});
   c.fs_hz = positive(n["fs_hz"], key + ".fs_hz", c.fs_hz);
   c.nc = integer(n["nc"], key + ".nc", c.nc);
   if (c.nc < 1 || c.nc > 20) fail(key + ".nc", "must be 1..20", n["nc"]);
@@ -75,6 +75,12 @@ void crn(const YAML::Node& n, const std::string& key, core::CrnConfig& c) {
     if (g == "bridge") c.gap_policy = core::GapPolicy::kBridge;
     else if (g == "restart") c.gap_policy = core::GapPolicy::kRestart;
     else fail(key + ".gap_policy", "expected bridge or restart, not '" + g + "'", n["gap_policy"]);
+  }
+  if (n["bridge_fit"]) {
+    std::string b = n["bridge_fit"].as<std::string>();
+    if (b == "local_fit") c.bridge_fit = core::BridgeFit::kLocalFit;
+    else if (b == "linear") c.bridge_fit = core::BridgeFit::kLinear;
+    else fail(key + ".bridge_fit", "expected local_fit or linear, not '" + b + "'", n["bridge_fit"]);
   }
   c.max_bridge_samples = integer(n["max_bridge_samples"], key + ".max_bridge_samples", c.max_bridge_samples);
   if (c.max_bridge_samples < 0 || c.max_bridge_samples > core::kMaxBridgeSamples)

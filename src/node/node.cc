@@ -1113,7 +1113,10 @@ struct Node::Impl {
         a.w_B[k] = row.w_B[k];
         a.alpha_sc_B[k] = row.a_sc_B[k];
         a.alpha_acc_B[k] = row.a_acc_B[k];
+        a.w_sigma_B[k] = row.w_sigma_B[k];  // per axis of B (a frame change is arcseconds: the same)
+        a.alpha_sc_sigma_B[k] = row.a_sc_sigma_B[k];
       }
+      a.rate_bridged = static_cast<int16_t>(row.rate_bridged);
       a.mounting_version = static_cast<int32_t>(row.t < mounting_from_t ? mounting_prev : mounting_version);
       publish(cfg.channels.attitude, row.t, a);
       boresight_lcm::boresight_monitor_t mm{};

@@ -87,6 +87,36 @@ TEST(CalibSpanBuilder, HeadAccelerationMatchesTruthInHeadFrame) {
   EXPECT_LT(worst, 2e-3 * peak);  // same filter, same tags: only the filters' discretisation differs
 }
 
+TEST(CalibSpanBuilder, BridgedWindowsCarryTheirBoundInTheCovariance) {
+  // head 2 blind for 6 s (12 epochs: bridged) inside a manoeuvre: the observations whose CRN window
+  // (+-35 s) holds the bridged epochs get a larger covariance for head 2, and only those
+  synth::Config c = manoeuvreCase(3);
+  c.blind.push_back({1, 1300.0, 1306.0});
+  const CalibrationSpan s = build(c);
+  const CalibrationSpan ref = build(manoeuvreCase(3));
+  ASSERT_EQ(s.obs.size(), ref.obs.size());
+  int inflated = 0, no_head = 0;
+  std::size_t first = 0, last = 0;
+  for (std::size_t k = 0; k < s.obs.size(); ++k) {
+    const Observation& o = s.obs[k];
+    ASSERT_EQ(o.t, ref.obs[k].t);
+    EXPECT_EQ(o.cov_alpha_S[0], ref.obs[k].cov_alpha_S[0]);  // the other heads untouched
+    if (!o.has_head[1]) {
+      ++no_head;
+      continue;
+    }
+    if ((o.cov_alpha_S[1] - ref.obs[k].cov_alpha_S[1]).trace() <= 0) continue;
+    if (inflated++ == 0) first = k;
+    last = k;
+  }
+  EXPECT_LE(last - first + 1, static_cast<std::size_t>(inflated + no_head));  // one run around the gap
+  EXPECT_LE(no_head, 1);  // an epoch whose head-2 tag is a bridged one (evenly spaced) may pair apart
+  std::printf("bridged head 2: %d observations with a larger covariance, %d without head 2\n", inflated, no_head);
+  // one observation per 10 s: the 6-8 whose window (71 s) holds part of the 6 s gap
+  EXPECT_GE(inflated, 5);
+  EXPECT_LE(inflated, 8);
+}
+
 TEST(CalibSolver, HardConstraintRecoversErrorAnglesWithinSigma) {
   const synth::Config c = manoeuvreCase(3);
   const CalibrationSpan s = build(c);

@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <map>
+
 #include <cmath>
 #include <cstdio>
 #include <random>
@@ -331,6 +333,7 @@ TEST(CrnStreamTest, EvaluateAtAnyTagInsideTheHistory) {
 TEST(CrnStreamTest, BridgedSamplesAreEvenlySpacedAndLinearAndFractionalStepsAreClassified) {
   CrnConfig c = grace(2.0);
   c.gap_policy = GapPolicy::kBridge;
+  c.bridge_fit = BridgeFit::kLinear;
   c.max_bridge_samples = 20;
   c.output_period_us = 500000;  // every centre sample is an output: the bridged ones show in the outputs
   const TimeUs dt = 500000;      // tolerance: a quarter interval, 125 ms
@@ -391,6 +394,74 @@ TEST(CrnStreamTest, BridgedSamplesAreEvenlySpacedAndLinearAndFractionalStepsAreC
     EXPECT_EQ(s.health().count(Status::kIrregularTime), 3u);
     EXPECT_EQ(s.health().count(Status::kGapBridged), 2u);
     EXPECT_EQ(s.health().count(Status::kGapRestarted), 1u);
+  }
+}
+
+// The local fit: a cubic in time is bridged exactly (every output equals the no-gap run's, the
+// bridged samples' sigmas vanish); a quartic is not, and the published bound holds the difference;
+// outputs are flagged with the number of bridged samples in their window, and only those.
+TEST(CrnStreamTest, LocalFitBridgesACubicExactlyAndBoundsAQuartic) {
+  CrnConfig c = grace(2.0);
+  c.gap_policy = GapPolicy::kBridge;
+  c.max_bridge_samples = 20;
+  c.output_period_us = 500000;  // an output at every sample
+  const TimeUs dt = 500000;
+  for (int degree : {3, 4}) {
+    auto x = [degree](TimeUs t) {
+      const double u = toSeconds(t) - 200.0;
+      const double cubic = 0.3 + 1e-2 * u - 2e-4 * u * u + 3e-6 * u * u * u;
+      return degree == 3 ? cubic : cubic + 4e-8 * u * u * u * u;
+    };
+    for (int missing : {1, 4, 20}) {
+      CrnStream<1> gap, ref;
+      ASSERT_EQ(gap.configure(c), Status::kOk);
+      ASSERT_EQ(ref.configure(c), Status::kOk);
+      std::map<TimeUs, CrnStream<1>::Output> ref_out;
+      int flagged = 0;
+      double worst_ratio = 0;
+      const int first_missing = 400;
+      for (int i = 1; i <= 800; ++i) {
+        const TimeUs t = i * dt;
+        const Eigen::Matrix<double, 1, 1> v(x(t));
+        ASSERT_EQ(ref.step(t, v), Status::kOk);
+        for (int o = 0; o < ref.numOutputs(); ++o) ref_out[ref.output(o).t] = ref.output(o);
+        if (i >= first_missing && i < first_missing + missing) continue;
+        const Status st = gap.step(t, v);
+        ASSERT_EQ(st, i == first_missing + missing ? Status::kGapBridged : Status::kOk);
+        for (int o = 0; o < gap.numOutputs(); ++o) {
+          const auto& out = gap.output(o);
+          const auto& r = ref_out.at(out.t);
+          // bridged samples within M = 70 taps of the centre
+          const long long centre = out.t / dt;
+          int expect = 0;
+          for (int k = first_missing; k < first_missing + missing; ++k) expect += std::llabs(k - centre) <= 70;
+          ASSERT_EQ(out.bridged, expect) << out.t;
+          for (int order = 0; order < 3; ++order) {
+            const double d = std::abs(out.y[static_cast<std::size_t>(order)][0] - r.y[static_cast<std::size_t>(order)][0]);
+            const double sb = out.sigma_bridge[static_cast<std::size_t>(order)][0];
+            const double scale = order == 0 ? 1.0 : (order == 1 ? 1e-2 : 1e-3);  // the signal's size per order
+            if (expect == 0) {
+              EXPECT_EQ(d, 0.0);
+              EXPECT_EQ(sb, 0.0);
+              continue;
+            }
+            if (degree == 3) {
+              EXPECT_LT(d, 1e-9 * scale) << missing << " order " << order;
+              EXPECT_LT(sb, 1e-9 * scale) << missing << " order " << order;
+            } else {
+              EXPECT_LE(d, sb + 1e-12 * scale) << missing << " order " << order;
+              if (d > 1e-11 * scale) worst_ratio = std::max(worst_ratio, d / sb);
+            }
+          }
+          flagged += expect > 0;
+        }
+      }
+      EXPECT_GT(flagged, 140);
+      if (degree == 4) {
+        EXPECT_GT(worst_ratio, 0.05) << missing;  // a bound, not a wild overestimate
+        std::printf("quartic, %2d missing: worst |difference| / published bound %.2f\n", missing, worst_ratio);
+      }
+    }
   }
 }
 

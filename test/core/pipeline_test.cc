@@ -213,6 +213,22 @@ TEST(Pipeline, HeadGapsOf1_2_5_20EpochsAndARestartKeepEveryRowWithinTheNoGapErro
         EXPECT_FALSE(b.has_rates);  // a restart: no rates for the rows whose window spans the gap
       }
       if (!(a.has_rates && b.has_rates)) continue;
+      // flagged with the bridged epochs inside the rate window (M = 70 epochs = 35 s), and only then;
+      // its sigmas then include the bridged values (never below the same row's without the gap)
+      int expect_bridged = 0;
+      for (int k = 0; k < gap && !restart; ++k)
+        expect_bridged += std::llabs(gap_start + k * 500000 - a.t) <= 35 * kUsPerSecond;
+      EXPECT_EQ(a.rate_bridged, 0);
+      EXPECT_EQ(b.rate_bridged, expect_bridged) << "gap " << gap << " row " << toSeconds(a.t - kT0);
+      for (int k = 0; k < 3; ++k) {
+        EXPECT_GT(a.w_sigma_B[k], 0.0);
+        EXPECT_GT(a.a_sc_sigma_B[k], 0.0);
+        EXPECT_GE(b.w_sigma_B[k], 0.999 * a.w_sigma_B[k]);
+        EXPECT_GE(b.a_sc_sigma_B[k], 0.999 * a.a_sc_sigma_B[k]);
+        if (expect_bridged > 0 && std::abs(gap_start + gap * 250000 - a.t) < 30 * kUsPerSecond) {
+          EXPECT_GT(b.w_sigma_B[k], a.w_sigma_B[k]);  // the gap is inside the window's weight
+        }
+      }
       ++compared;
       worst_w = std::max(worst_w, (b.w_B - a.w_B).norm() / ew);
       worst_a = std::max(worst_a, (b.a_sc_B - a.a_sc_B).norm() / ea);

@@ -200,6 +200,9 @@ TEST(CsvRowSink, NumbersAreFormattedAsPrintf) {
     r.w_B = Vec3(u(rng), u(rng), u(rng)) * scale;
     r.a_sc_B = Vec3(u(rng), u(rng), u(rng)) * scale;
     r.a_acc_B = Vec3(u(rng), 0.0, -0.0) * scale;
+    r.rate_bridged = i % 6;
+    r.w_sigma_B = Vec3(u(rng) + 1.5, 2.0, i % 4 == 0 ? std::nan("") : 3.0) * 1e-7 * scale;
+    r.a_sc_sigma_B = Vec3(1.0, u(rng) + 1.5, 2.5) * 1e-9 * scale;
     for (auto& v : r.iba_rad) v = i % 7 == 0 ? std::nan("") : u(rng) * 3;
     for (auto& v : r.iba_dev_rad) v = u(rng) * 1e-4 * scale;
     rows.push_back(r);
@@ -208,7 +211,8 @@ TEST(CsvRowSink, NumbersAreFormattedAsPrintf) {
   ASSERT_TRUE(sink.end());
   // The same rows through printf, as process wrote them before the engine.
   std::string expect = "time_s,q0,q1,q2,q3,w_x,w_y,w_z,a_sc_x,a_sc_y,a_sc_z,a_acc_x,a_acc_y,a_acc_z,"
-                       "iba_12_deg,iba_12_dev_arcsec,iba_13_deg,iba_13_dev_arcsec,iba_23_deg,iba_23_dev_arcsec,heads_used\n";
+                       "iba_12_deg,iba_12_dev_arcsec,iba_13_deg,iba_13_dev_arcsec,iba_23_deg,iba_23_dev_arcsec,heads_used,"
+                       "rate_bridged,w_sigma_x,w_sigma_y,w_sigma_z,a_sc_sigma_x,a_sc_sigma_y,a_sc_sigma_z\n";
   char b[128];
   auto num = [&](double v, const char* fmt) {
     if (std::isfinite(v)) {
@@ -235,8 +239,11 @@ TEST(CsvRowSink, NumbersAreFormattedAsPrintf) {
         num(r.iba_rad[p] / kRadPerDeg, ",%.9f");
         num(r.iba_dev_rad[p] * kArcsecPerRad, ",%.3f");
       }
-    std::snprintf(b, sizeof b, ",%d\n", r.heads_used);
+    std::snprintf(b, sizeof b, ",%d,%d", r.heads_used, r.rate_bridged);
     expect += b;
+    for (int k = 0; k < 3; ++k) num(r.has_rates ? r.w_sigma_B[k] : NAN, ",%.3e");
+    for (int k = 0; k < 3; ++k) num(r.has_rates ? r.a_sc_sigma_B[k] : NAN, ",%.3e");
+    expect += '\n';
   }
   std::string got = slurp(path);
   EXPECT_EQ(got, expect);

@@ -392,7 +392,8 @@ TEST(BadInputCli, ConfigurationErrorsNameFileLineAndKey) {
   // "core rejected the configuration: invalid_config" with no place before.
   for (const Case& c : {Case{"output_period_s", "  output_period_s: 1e-9", "key 'crn_attitude.output_period_s'"},
                         Case{"unit_norm_tolerance", "  unit_norm_tolerance: 10", "key 'heads.unit_norm_tolerance'"},
-                        Case{"relative_time_constant_s", "  relative_time_constant_s: .nan", "key 'heads.relative_time_constant_s'"}}) {
+                        Case{"relative_time_constant_s", "  relative_time_constant_s: .nan", "key 'heads.relative_time_constant_s'"},
+                        Case{"bridge_fit", "  bridge_fit: spline", "key 'crn_attitude.bridge_fit'"}}) {
     const std::string cfg = platformWith(dir, c.key, c.line);
     const CliRun r = process(cfg);
     EXPECT_EQ(r.status, 1) << c.key << "\n" << r.out;

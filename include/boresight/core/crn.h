@@ -24,23 +24,44 @@
 // sample is dropped (a late sample's slot is then bridged by the next one). n >= 2: a gap of n-1
 // missing samples; bridged (kGapBridged) when configured, n-1 <= max_bridge_samples and d is within
 // n tol of n intervals: the missing samples get the tags t_last + d k/n (evenly spaced between the two
-// real samples) and the values interpolated linearly between them. Otherwise the filter restarts
-// (kGapRestarted: history dropped, the new sample is the first of a new window).
+// real samples). Otherwise the filter restarts (kGapRestarted: history dropped, the new sample is the
+// first of a new window).
+// Bridged values (BridgeFit): kLinear - on the line between the two real neighbours (no uncertainty:
+// NaN sigmas). kLocalFit (default) - a least-squares cubic in time through the real samples on both
+// sides, S = max(4, missing + 1) per side (S <= kMaxBridgeSamples + 1), so that the values follow the
+// motion (a line through the neighbours misses the curvature by alpha T^2 / 8 over a gap of T). At the
+// gap only the sample after it is known: the values are then fitted from the samples before and that
+// one, and fitted again at each of the next S - 1 real samples (before any output is evaluated), so the
+// rows whose window centre is near the gap - emitted M samples later - use the two-sided fit. Each
+// bridged value carries a 1-sigma per channel: the cubic's prediction variance scaled by its residual
+// variance (noise and misfit of the span) plus the square of the quartic-minus-cubic difference (an
+// estimate of the cubic's truncation error). Fewer than 5 real points (start of a window): linear
+// values with NaN sigmas.
+// Flagged outputs: an output (grid or evaluateAt) whose window holds bridged samples reports their
+// number (Output::bridged) and per order and channel sum_j |g_o[j]| sigma_j over them (sigma_bridge:
+// a bound on the bridged values' contribution that holds for any correlation between them, as the
+// errors of one fit are strongly correlated). Outputs whose window holds only real samples are
+// unchanged by the gap: bridged = 0, sigma_bridge = 0.
 #pragma once
 
 #include "boresight/core/capacities.h"
 #include "boresight/core/conventions.h"
+#include "boresight/core/fixed_ldlt.h"
 #include "boresight/core/status.h"
 
 #include <Eigen/Core>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 
 namespace boresight::core {
 
 enum class GapPolicy : std::uint8_t { kRestart = 0, kBridge = 1 };
+/// How bridged samples get their values (see the header comment).
+enum class BridgeFit : std::uint8_t { kLinear = 0, kLocalFit = 1 };
 
 struct CrnConfig {
   double fs_hz = 10.0;       ///< input sampling rate, Hz
@@ -52,6 +73,25 @@ struct CrnConfig {
   TimeUs jitter_tolerance_us = 0;          ///< accepted |dt - 1/fs|, us (0: a quarter interval)
   GapPolicy gap_policy = GapPolicy::kRestart;
   int max_bridge_samples = 20;             ///< longest bridged gap, missing samples (<= kMaxBridgeSamples)
+  BridgeFit bridge_fit = BridgeFit::kLocalFit;  ///< values of bridged samples
+
+  /// Named construction (the defaults above, then these): CrnConfig::at(2.0).outputEvery(kUsPerSecond)
+  /// .bridging(20) instead of a positional list that silently shifts when a field is added.
+  static CrnConfig at(double fs) {
+    CrnConfig c;
+    c.fs_hz = fs;
+    return c;
+  }
+  CrnConfig& outputEvery(TimeUs period_us) {
+    output_period_us = period_us;
+    return *this;
+  }
+  CrnConfig& bridging(int max_samples, BridgeFit fit = BridgeFit::kLocalFit) {
+    gap_policy = GapPolicy::kBridge;
+    max_bridge_samples = max_samples;
+    bridge_fit = fit;
+    return *this;
+  }
 };
 
 /// Designed CRN kernels (full length, index j = n + M).
@@ -103,6 +143,10 @@ class CrnStream {
   struct Output {
     TimeUs t = 0;              ///< centre tag (grid mode) or requested tag (evaluateAt)
     std::array<VecN, 3> y{};   ///< y[0] low-passed value, y[1] first, y[2] second derivative (per s^k)
+    int bridged = 0;           ///< bridged samples in the window (0: every sample real)
+    /// per order: sum over the bridged samples of |g_o| times their sigma, per channel (0 when bridged
+    /// is 0; NaN when a bridged value has no sigma: linear bridging)
+    std::array<VecN, 3> sigma_bridge{};
   };
 
   Status configure(const CrnConfig& cfg) {
@@ -136,6 +180,9 @@ class CrnStream {
     last_t_ = 0;
     last_grid_ = INT64_MIN;
     n_out_ = 0;
+    seq_ = 0;
+    last_bridged_seq_ = INT64_MIN / 2;
+    refit_ = Refit{};
     health_.clear();
   }
 
@@ -177,17 +224,36 @@ class CrnStream {
       if (n > 1) {
         const TimeUs missing = n - 1;
         if (cfg_.gap_policy == GapPolicy::kBridge && on_grid && missing <= cfg_.max_bridge_samples && count_ > 0) {
-          // missing samples evenly spaced between the last real sample and this one, values linear
-          // between the two real neighbours
+          // missing samples evenly spaced between the last real sample and this one
+          refit_.active = false;  // a gap ends the refinement of the previous one
           const TimeUs t0 = last_t_;
           const VecN x0 = last_x_;
-          for (TimeUs k = 1; k <= missing; ++k) {
-            const double f = static_cast<double>(k) / static_cast<double>(n);
-            push(t0 + (d * k) / n, x0 + f * (x - x0), false);
+          const int m = static_cast<int>(missing);
+          const std::int64_t first = seq_ + 1;
+          bool fitted = false;
+          if (cfg_.bridge_fit == BridgeFit::kLocalFit) {
+            refit_.first_seq = first;
+            refit_.missing = m;
+            refit_.side = std::min(kMaxBridgeSamples + 1, std::max(4, m + 1));
+            refit_.after = 0;
+            for (int k = 1; k <= m; ++k) gap_t_[static_cast<std::size_t>(k - 1)] = t0 + (d * k) / n;
+            fitted = fitGap(&t, &x);
           }
+          for (int k = 1; k <= m; ++k) {
+            const auto u = static_cast<std::size_t>(k - 1);
+            if (!fitted) {
+              const double f = static_cast<double>(k) / static_cast<double>(n);
+              gap_x_[u] = x0 + f * (x - x0);
+              gap_s_[u] = VecN::Constant(std::numeric_limits<double>::quiet_NaN());
+            }
+            push(t0 + (d * k) / n, gap_x_[u], false, &gap_s_[u]);
+          }
+          refit_.active = fitted;
+          refit_.after = 0;
           result = Status::kGapBridged;
         } else {
           count_ = 0;
+          refit_.active = false;
           result = Status::kGapRestarted;
         }
       }
@@ -268,21 +334,36 @@ class CrnStream {
   // Doubled ring: sample p lives at p and p + kCrnRing of buf_[ch]; the newest is at pos_ + kCrnRing.
   int centreIndex(int k_back) const { return pos_ + kCrnRing - k_back; }
 
-  void push(TimeUs t, const VecN& x, bool real) {
-    pos_ = (pos_ + 1) & (kCrnRing - 1);
+  void writeSlot(int slot, const VecN& x) {
     for (int ch = 0; ch < N; ++ch) {
-      buf_[static_cast<std::size_t>(ch)][static_cast<std::size_t>(pos_)] = x[ch];
-      buf_[static_cast<std::size_t>(ch)][static_cast<std::size_t>(pos_ + kCrnRing)] = x[ch];
+      buf_[static_cast<std::size_t>(ch)][static_cast<std::size_t>(slot)] = x[ch];
+      buf_[static_cast<std::size_t>(ch)][static_cast<std::size_t>(slot + kCrnRing)] = x[ch];
       if constexpr (kFolded) {  // slot s also at kCrnRing-1-s and 2 kCrnRing-1-s: older samples follow
-        rev_[static_cast<std::size_t>(ch)][static_cast<std::size_t>(kCrnRing - 1 - pos_)] = x[ch];
-        rev_[static_cast<std::size_t>(ch)][static_cast<std::size_t>(2 * kCrnRing - 1 - pos_)] = x[ch];
+        rev_[static_cast<std::size_t>(ch)][static_cast<std::size_t>(kCrnRing - 1 - slot)] = x[ch];
+        rev_[static_cast<std::size_t>(ch)][static_cast<std::size_t>(2 * kCrnRing - 1 - slot)] = x[ch];
       }
+    }
+  }
+
+  // Ring slot of the sample `back` pushes before the newest.
+  int slotBack(std::int64_t back) const { return static_cast<int>((pos_ - back) & (kCrnRing - 1)); }
+
+  // A real sample (sigma null) or a bridged one with its 1-sigma per channel.
+  void push(TimeUs t, const VecN& x, bool real, const VecN* sigma = nullptr) {
+    pos_ = (pos_ + 1) & (kCrnRing - 1);
+    ++seq_;
+    writeSlot(pos_, x);
+    bridged_[static_cast<std::size_t>(pos_)] = real ? 0 : 1;
+    if (!real) {
+      bsig_[static_cast<std::size_t>(pos_)] = *sigma;
+      last_bridged_seq_ = seq_;
     }
     times_[static_cast<std::size_t>(pos_)] = t;
     if (count_ < kCrnRing) ++count_;
     have_last_ = true;
     last_t_ = t;
     if (real) last_x_ = x;
+    if (real && refit_.active) refine();  // before any output reads the bridged values
     if (cfg_.output_period_us <= 0) return;
     const int M = kernel_.half;
     if (count_ < 2 * M + 1) return;
@@ -297,6 +378,127 @@ class CrnStream {
     Output& o = outputs_[static_cast<std::size_t>(n_out_++)];
     evaluate(c, cfg_.max_order, o);
     o.t = tc;
+  }
+
+  // One more real sample after the gap under refinement: fit again and rewrite the bridged slots.
+  void refine() {
+    ++refit_.after;
+    if (!fitGap(nullptr, nullptr)) {
+      refit_.active = false;
+      return;
+    }
+    for (int k = 0; k < refit_.missing; ++k) {
+      const std::int64_t back = seq_ - (refit_.first_seq + k);
+      if (back >= count_) continue;  // already out of the ring (not for gaps <= kMaxBridgeSamples)
+      const int slot = slotBack(back);
+      writeSlot(slot, gap_x_[static_cast<std::size_t>(k)]);
+      bsig_[static_cast<std::size_t>(slot)] = gap_s_[static_cast<std::size_t>(k)];
+    }
+    if (refit_.after >= refit_.side) refit_.active = false;
+  }
+
+  // The local fit of the gap in refit_ (tags gap_t_) into gap_x_ / gap_s_: the real samples before the
+  // gap (up to side, back to a restart or an earlier bridged sample), refit_.after real samples after
+  // it in the ring, and the one sample (extra_t, extra_x) when given (the sample that closes the gap,
+  // not pushed yet). false (nothing written) with fewer than 5 points or a singular fit.
+  bool fitGap(const TimeUs* extra_t, const VecN* extra_x) {
+    const int m = refit_.missing;
+    const TimeUs tc = gap_t_[0] + (gap_t_[static_cast<std::size_t>(m - 1)] - gap_t_[0]) / 2;
+    const double h = (refit_.side + 0.5 * (m + 1)) * toSeconds(dt_us_);  // tau = (t - tc) / h in about [-1, 1]
+    int n = 0;
+    auto add = [&](TimeUs t, const VecN& x) {
+      fit_tau_[static_cast<std::size_t>(n)] = toSeconds(t - tc) / h;
+      fit_x_[static_cast<std::size_t>(n)] = x;
+      ++n;
+    };
+    for (int i = 1; i <= refit_.side; ++i) {
+      const std::int64_t back = seq_ - (refit_.first_seq - i);
+      if (back < 0 || back >= count_) break;
+      const int slot = slotBack(back);
+      if (bridged_[static_cast<std::size_t>(slot)]) break;
+      add(times_[static_cast<std::size_t>(slot)], ringValue(slot));
+    }
+    for (int i = 0; i < refit_.after; ++i) {
+      const std::int64_t back = seq_ - (refit_.first_seq + m + i);
+      if (back < 0 || back >= count_) break;
+      const int slot = slotBack(back);
+      if (bridged_[static_cast<std::size_t>(slot)]) break;
+      add(times_[static_cast<std::size_t>(slot)], ringValue(slot));
+    }
+    if (extra_t != nullptr) add(*extra_t, *extra_x);
+    if (n < 5) return false;
+    // normal equations of the quartic in tau (the cubic's are their leading 4 x 4 block)
+    Eigen::Matrix<double, 5, 5> A = Eigen::Matrix<double, 5, 5>::Zero();
+    Eigen::Matrix<double, 5, N> B = Eigen::Matrix<double, 5, N>::Zero();
+    for (int i = 0; i < n; ++i) {
+      const double u = fit_tau_[static_cast<std::size_t>(i)];
+      const Eigen::Matrix<double, 5, 1> p(1.0, u, u * u, u * u * u, u * u * u * u);
+      A.noalias() += p * p.transpose();
+      B.noalias() += p * fit_x_[static_cast<std::size_t>(i)].transpose();
+    }
+    Eigen::Matrix<double, 4, 4> L3;
+    Eigen::Matrix<double, 4, 1> D3;
+    Eigen::Matrix<double, 5, 5> L4;
+    Eigen::Matrix<double, 5, 1> D4;
+    const Eigen::Matrix<double, 4, 4> A3 = A.template topLeftCorner<4, 4>();
+    if (!ldltFactor<4>(A3, L3, D3) || !ldltFactor<5>(A, L4, D4)) return false;
+    Eigen::Matrix<double, 4, N> c3;
+    Eigen::Matrix<double, 5, N> c4;
+    for (int ch = 0; ch < N; ++ch) {
+      Eigen::Matrix<double, 4, 1> b3 = B.template block<4, 1>(0, ch);
+      Eigen::Matrix<double, 5, 1> b4 = B.col(ch);
+      ldltSolveInPlace<4>(L3, D3, b3);
+      ldltSolveInPlace<5>(L4, D4, b4);
+      c3.col(ch) = b3;
+      c4.col(ch) = b4;
+    }
+    VecN rss = VecN::Zero();  // the cubic's residuals
+    for (int i = 0; i < n; ++i) {
+      const double u = fit_tau_[static_cast<std::size_t>(i)];
+      const Eigen::Matrix<double, 4, 1> p(1.0, u, u * u, u * u * u);
+      rss += (fit_x_[static_cast<std::size_t>(i)].transpose() - p.transpose() * c3).transpose().cwiseAbs2();
+    }
+    const VecN s2 = rss / static_cast<double>(n - 4);
+    for (int k = 0; k < m; ++k) {
+      const auto uk = static_cast<std::size_t>(k);
+      const double u = toSeconds(gap_t_[uk] - tc) / h;
+      const Eigen::Matrix<double, 4, 1> p3(1.0, u, u * u, u * u * u);
+      const Eigen::Matrix<double, 5, 1> p4(1.0, u, u * u, u * u * u, u * u * u * u);
+      Eigen::Matrix<double, 4, 1> y = p3;
+      ldltSolveInPlace<4>(L3, D3, y);
+      const double lever = p3.dot(y);  // p^T (X^T X)^-1 p
+      const VecN v3 = (p3.transpose() * c3).transpose();
+      const VecN v4 = (p4.transpose() * c4).transpose();
+      const VecN var = s2 * lever + (v4 - v3).cwiseAbs2();
+      if (!v3.allFinite() || !var.allFinite()) return false;
+      gap_x_[uk] = v3;
+      gap_s_[uk] = var.cwiseSqrt();
+    }
+    return true;
+  }
+
+  VecN ringValue(int slot) const {
+    VecN v;
+    for (int ch = 0; ch < N; ++ch) v[ch] = buf_[static_cast<std::size_t>(ch)][static_cast<std::size_t>(slot)];
+    return v;
+  }
+
+  // Output::bridged and sigma_bridge of the window centred at doubled-ring index c (see the header).
+  void bridgeTerms(int c, int top, Output& o) const {
+    o.bridged = 0;
+    for (auto& v : o.sigma_bridge) v.setZero();
+    const int M = kernel_.half;
+    const std::int64_t oldest_back = static_cast<std::int64_t>(pos_ + kCrnRing - c) + M;
+    if (seq_ - last_bridged_seq_ > oldest_back) return;  // the newest bridged sample is older than the window
+    for (int j = 0; j <= 2 * M; ++j) {
+      const int slot = (c - M + j) & (kCrnRing - 1);
+      if (!bridged_[static_cast<std::size_t>(slot)]) continue;
+      ++o.bridged;
+      const VecN& sg = bsig_[static_cast<std::size_t>(slot)];
+      for (int order = 0; order <= top; ++order)
+        o.sigma_bridge[static_cast<std::size_t>(order)] +=
+            std::abs(kernel_.g[static_cast<std::size_t>(order)][static_cast<std::size_t>(j)]) * sg;
+    }
   }
 
   // The centre sample c (doubled-ring index) nearest to tau and tau - t_c (s).
@@ -347,6 +549,7 @@ class CrnStream {
         crnDotFolded4x3(half_[0].data(), half_[1].data(), half_[2].data(), centre, xp, xm, xc, (M + 3) & ~3, r);
         for (int ch = 0; ch < 4; ++ch)
           for (int order = 0; order < 3; ++order) o.y[static_cast<std::size_t>(order)][ch] = r[3 * ch + order];
+        bridgeTerms(c, top, o);
         return;
       }
     }
@@ -356,6 +559,7 @@ class CrnStream {
         o.y[static_cast<std::size_t>(order)][ch] =
             order <= top ? crnDot(kernel_.g[static_cast<std::size_t>(order)].data(), x, L) : 0.0;
     }
+    bridgeTerms(c, top, o);
   }
 
   CrnConfig cfg_{};
@@ -380,6 +584,24 @@ class CrnStream {
   std::array<Output, kMaxCrnOutputsPerStep> outputs_{};
   int n_out_ = 0;
   Health health_{};
+  // Bridging: per slot whether the sample is bridged and its 1-sigma; the sequence number (pushes since
+  // reset) of the newest sample and of the newest bridged one; the gap under refinement.
+  std::int64_t seq_ = 0;
+  std::int64_t last_bridged_seq_ = INT64_MIN / 2;
+  std::array<std::uint8_t, kCrnRing> bridged_{};
+  std::array<VecN, kCrnRing> bsig_{};
+  struct Refit {
+    bool active = false;
+    std::int64_t first_seq = 0;  ///< sequence number of the first bridged sample
+    int missing = 0, side = 0;   ///< bridged samples; real samples used per side
+    int after = 0;               ///< real samples after the gap seen so far
+  };
+  Refit refit_{};
+  static constexpr int kFitMax = 2 * (kMaxBridgeSamples + 1) + 1;
+  std::array<TimeUs, kMaxBridgeSamples> gap_t_{};
+  std::array<VecN, kMaxBridgeSamples> gap_x_{}, gap_s_{};
+  std::array<double, kFitMax> fit_tau_{};
+  std::array<VecN, kFitMax> fit_x_{};
 };
 
 }  // namespace boresight::core

@@ -36,9 +36,9 @@ enum class FusionAlignment : std::uint8_t {
 struct PipelineConfig {
   HeadSetConfig heads{};
   /// CRN of the fused attitude: fs_hz = head epoch rate (GRACE-FO 2 Hz); output_period_us = row period.
-  CrnConfig crn_attitude{2.0, 7, 0.1, 70.7, 2, kUsPerSecond, 0, GapPolicy::kBridge, 20};
+  CrnConfig crn_attitude = CrnConfig::at(2.0).outputEvery(kUsPerSecond).bridging(20);
   /// CRN of the accelerometer angular acceleration: fs_hz = its rate (GRACE-FO 10 Hz).
-  CrnConfig crn_acc{10.0, 7, 0.1, 70.7, 2, 0, 0, GapPolicy::kBridge, 20};
+  CrnConfig crn_acc = CrnConfig::at(10.0).outputEvery(0).bridging(20);
   Mat3 C_B_A = accToBodyDefault();  ///< accelerometer frame A to body B
   bool use_accelerometer = true;    ///< false: rows do not wait for accelerometer values
   int wahba_reference_slot = 0;     ///< frame of the star-vector solution
@@ -57,6 +57,15 @@ struct PipelineRow {
   bool has_rates = false;
   Vec3 w_B = Vec3::Constant(std::numeric_limits<double>::quiet_NaN());       ///< rad/s, B
   Vec3 a_sc_B = Vec3::Constant(std::numeric_limits<double>::quiet_NaN());    ///< star-sensor angular accel., rad/s^2, B
+  /// Bridged attitude samples in the rate filter's window (0: all real). Rows with bridged samples are
+  /// flagged: their sigmas below include the bridged values' bound (AttitudeRates, CrnStream).
+  int rate_bridged = 0;
+  /// 1-sigma per axis of w_B and a_sc_B: this epoch's fused covariance P_B taken as white noise through
+  /// the CRN kernels (sqrt(P_kk sum g^2)), and the bridged values' bound in quadrature; NaN without
+  /// rates (and for bridged rows under linear bridging, which has no uncertainty model). The filter's
+  /// band-limit bias and coloured attitude noise are not in it.
+  Vec3 w_sigma_B = Vec3::Constant(std::numeric_limits<double>::quiet_NaN());
+  Vec3 a_sc_sigma_B = Vec3::Constant(std::numeric_limits<double>::quiet_NaN());
   bool has_acc = false;
   Vec3 a_acc_B = Vec3::Constant(std::numeric_limits<double>::quiet_NaN());   ///< accelerometer, same CRN, rad/s^2, B
   std::array<double, kMaxPairs> iba_rad{};      ///< per pair (pairIndex), NaN when a head is missing
@@ -108,6 +117,7 @@ class Pipeline {
   };
   void resolve();
   void emitOldest();
+  void setRates(PipelineRow& row, const RateOutput& r) const;
   void predictBlindPairs(const ValidHeads& v);  ///< pipeline_thermal.cc
   void resetThermalAnchors();
 
@@ -134,6 +144,7 @@ class Pipeline {
   AccAngularFilter acc_{};
   MultiHeadWahba wahba_{};
   TimeUs head_dt_us_ = 0;
+  double gain_w_ = 0, gain_a_ = 0;  ///< the rate filter's white-noise gains (AttitudeRates::noiseGain)
   bool handed_ = false;      ///< a mounting set was handed in: the running means no longer align
   int align_countdown_ = 0;  ///< head epochs to the next alignment update
   TimeUs last_grid_ = 0;

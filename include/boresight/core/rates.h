@@ -23,6 +23,14 @@ struct RateOutput {
   Quat q_I_X = Quat::Identity();  ///< low-passed attitude (normalised)
   Vec3 w_X = Vec3::Zero();        ///< angular rate of X relative to I, in X, rad/s
   Vec3 alpha_X = Vec3::Zero();    ///< angular acceleration, in X, rad/s^2
+  /// Bridged samples in the filter window (0: every sample real; the two sigmas below are then 0).
+  int bridged = 0;
+  /// Bound on the bridged samples' contribution per axis, first order in the kernel sums e_k = |sum_j
+  /// |g_k[j]| sigma_j| over the four components (CrnStream::Output::sigma_bridge): w_sigma_bridge =
+  /// 2 (e1 + e0 |q'|) / |q|^2 + 2 |w| e0 / |q| (rad/s), alpha_sigma_bridge likewise with q'' and the
+  /// (q . q') w term (rad/s^2); NaN with linear bridging.
+  double w_sigma_bridge = 0;
+  double alpha_sigma_bridge = 0;
 };
 
 class AttitudeRates {
@@ -38,6 +46,9 @@ class AttitudeRates {
   Status evaluateAt(TimeUs t, RateOutput& out) const;
   const Health& health() const { return crn_.health(); }
   const CrnStream<4>& stream() const { return crn_; }
+  /// White attitude noise of sigma rad per axis gives sigma * noiseGain(1) rad/s on the rate and sigma *
+  /// noiseGain(2) rad/s^2 on the acceleration per axis: sqrt(sum_j g_k[j]^2).
+  double noiseGain(int order) const;
 
  private:
   static RateOutput fromFiltered(const CrnStream<4>::Output& o);
