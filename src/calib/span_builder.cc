@@ -213,6 +213,7 @@ void SpanBuilder::relativeStep(const core::ValidHeads& v) {
 
 void SpanBuilder::addHeadOutput(int slot, const core::RateOutput& o) {
   if (!o.alpha_X.allFinite()) return;
+  if (o.bridged > 0 && !std::isfinite(o.alpha_sigma_bridge)) return;  // linear bridging: no uncertainty
   if (have_emitted_ && o.t <= last_emitted_t_) {  // its observation is in the span already: one left out
     ++span_.late_head_outputs;
     return;
@@ -230,9 +231,8 @@ void SpanBuilder::addHeadOutput(int slot, const core::RateOutput& o) {
   const auto s = static_cast<std::size_t>(slot);
   it->has_head[s] = true;
   it->alpha_S[s] = o.alpha_X;
-  // a window with bridged samples adds their bound (per axis, in quadrature; NaN under linear bridging:
-  // the solver then leaves the observation out)
   it->cov_alpha_S[s] = cov_head_unit_[s];
+  // a window with bridged samples adds their bound (per axis, in quadrature)
   if (o.bridged > 0) it->cov_alpha_S[s] += o.alpha_sigma_bridge * o.alpha_sigma_bridge * Mat3::Identity();
   // fused context rate: the first head's rate rotated to B with its nominal mounting
   if (it->w_B.isZero()) it->w_B = span_.q_S_B_nominal[s].conjugate() * o.w_X;
@@ -250,10 +250,15 @@ void SpanBuilder::resolve() {
     core::CrnStream<3>::Output o;
     const core::Status s = acc_.stream().evaluateAt(ob.t, o);
     if (s == core::Status::kNotReady) return;
-    if (s == core::Status::kOk && o.y[0].allFinite() && o.y[1].allFinite()) {
+    const bool bound_ok = o.bridged == 0 || o.sigma_bridge[0].allFinite();  // linear bridging: none
+    if (s == core::Status::kOk && o.y[0].allFinite() && o.y[1].allFinite() && bound_ok) {
       ob.alpha_A = o.y[0];
       ob.jerk_A = o.y[1];
       ob.cov_alpha_A = cov_acc_;
+      if (o.bridged > 0) {  // the bridged samples' bound
+        const double b = o.sigma_bridge[0].norm();
+        ob.cov_alpha_A += b * b * Mat3::Identity();
+      }
       emit(std::move(ob));
     } else {
       ++span_.dropped_no_acc;

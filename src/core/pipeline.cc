@@ -118,6 +118,8 @@ void Pipeline::resolve() {
     if (s == Status::kOk) {
       p.row.a_acc_B = a.a_X;
       p.row.has_acc = true;
+      p.row.acc_bridged = a.bridged;
+      p.row.a_acc_sigma_bridge = a.sigma_bridge;
       p.acc_done = true;
     } else if (s == Status::kUnavailable) {
       p.acc_done = true;
@@ -266,6 +268,8 @@ void Pipeline::flush() {
       if (acc_.evaluateAt(p.row.t, a) == Status::kOk) {
         p.row.a_acc_B = a.a_X;
         p.row.has_acc = true;
+        p.row.acc_bridged = a.bridged;
+        p.row.a_acc_sigma_bridge = a.sigma_bridge;
       }
     }
     if (!p.rate_done) {

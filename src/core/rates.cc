@@ -104,9 +104,10 @@ AccOutput AccAngularFilter::output(int i) const {
 }
 
 Status AccAngularFilter::evaluateAt(TimeUs t, AccOutput& out) const {
-  Vec3 y;
-  const Status s = crn_.evaluateValueAt(t, y);
-  if (s == Status::kOk) out = AccOutput{t, C_X_A_ * y};
+  Vec3 y, sb;
+  int bridged = 0;
+  const Status s = crn_.evaluateValueAt(t, y, &bridged, &sb);
+  if (s == Status::kOk) out = AccOutput{t, C_X_A_ * y, bridged, bridged > 0 ? sb.norm() : 0.0};
   return s;
 }
 

@@ -1117,6 +1117,8 @@ struct Node::Impl {
         a.alpha_sc_sigma_B[k] = row.a_sc_sigma_B[k];
       }
       a.rate_bridged = static_cast<int16_t>(row.rate_bridged);
+      a.acc_bridged = static_cast<int16_t>(row.acc_bridged);
+      a.alpha_acc_sigma_bridge = row.a_acc_sigma_bridge;
       a.mounting_version = static_cast<int32_t>(row.t < mounting_from_t ? mounting_prev : mounting_version);
       publish(cfg.channels.attitude, row.t, a);
       boresight_lcm::boresight_monitor_t mm{};

@@ -46,7 +46,8 @@ bool CsvRowSink::begin(const core::PipelineConfig& cfg) {
       const std::string p = std::to_string(hs.head[std::size_t(s1)].id) + std::to_string(hs.head[std::size_t(s2)].id);
       buf_ += ",iba_" + p + "_deg,iba_" + p + "_dev_arcsec";
     }
-  buf_ += ",heads_used,rate_bridged,w_sigma_x,w_sigma_y,w_sigma_z,a_sc_sigma_x,a_sc_sigma_y,a_sc_sigma_z\n";
+  buf_ += ",heads_used,rate_bridged,w_sigma_x,w_sigma_y,w_sigma_z,a_sc_sigma_x,a_sc_sigma_y,a_sc_sigma_z,acc_bridged,"
+          "a_acc_sigma_bridge\n";
   return true;
 }
 
@@ -76,6 +77,9 @@ bool CsvRowSink::write(const core::PipelineRow& r) {
   putInt(buf_, r.rate_bridged);
   for (int k = 0; k < 3; ++k) field(buf_, r.has_rates ? r.w_sigma_B[k] : nan, std::chars_format::scientific, 3);
   for (int k = 0; k < 3; ++k) field(buf_, r.has_rates ? r.a_sc_sigma_B[k] : nan, std::chars_format::scientific, 3);
+  buf_.push_back(',');
+  putInt(buf_, r.acc_bridged);
+  field(buf_, r.has_acc ? r.a_acc_sigma_bridge : nan, std::chars_format::scientific, 3);
   buf_.push_back('\n');
   ++rows_;
   with_rates_ += r.has_rates;

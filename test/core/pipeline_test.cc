@@ -142,8 +142,9 @@ TEST(Pipeline, AccelerometerGapLeavesOnlyThoseRowsWithoutAcc) {
   EXPECT_EQ(run.health.count(Status::kGapRestarted), 1u);
 }
 
-// Heads gap in all heads: epochs [600, 600 + gap) at 2 Hz are missing (5 min into a 10 min run).
-PipelineRun runPipelineHeadGap(int gap) {
+// Heads gap in all heads: epochs [600, 600 + gap) at 2 Hz are missing (5 min into a 10 min run); with
+// acc_gap, accelerometer samples [3000, 3000 + acc_gap) at 10 Hz are missing too (the same time).
+PipelineRun runPipelineHeadGap(int gap, int acc_gap = 0) {
   Rng rng(72);
   Truth tr;
   PipelineConfig pc;
@@ -156,7 +157,8 @@ PipelineRun runPipelineHeadGap(int gap) {
   for (int i = 0; i < 1200; ++i) {
     const TimeUs t = kT0 + 30000 + static_cast<TimeUs>(i) * 500000;
     while (ta <= t) {
-      p->stepAcc(ta, pc.C_B_A.transpose() * tr.alpha_B(ta));
+      const long ia = static_cast<long>((ta - kT0 - 6901) / 100000);
+      if (!(ia >= 3000 && ia < 3000 + acc_gap)) p->stepAcc(ta, pc.C_B_A.transpose() * tr.alpha_B(ta));
       ta += 100000;
     }
     HeadEpoch e;
@@ -238,6 +240,42 @@ TEST(Pipeline, HeadGapsOf1_2_5_20EpochsAndARestartKeepEveryRowWithinTheNoGapErro
     EXPECT_LT(worst_a, 4.0) << gap;
     std::printf("pipeline heads gap %2d epochs: %d rows compared, worst difference / no-gap rms error: rate %.2f, "
                 "accel %.2f\n", gap, compared, worst_w, worst_a);
+  }
+}
+
+// Accelerometer gaps of 5 and 20 samples (10 Hz, noise-free input): the rows whose accelerometer window
+// (+-35.3 s) holds bridged samples are flagged with their number, the others are bit-identical to the
+// no-gap run, and a flagged row's difference stays within its published bound.
+TEST(Pipeline, AccelerometerGapsFlagOnlyTheRowsWhoseWindowHoldsThem) {
+  const PipelineRun ref = runPipelineHeadGap(0);
+  for (int acc_gap : {5, 20}) {
+    const PipelineRun run = runPipelineHeadGap(0, acc_gap);
+    EXPECT_EQ(run.health.count(Status::kGapBridged), 1u);
+    ASSERT_EQ(run.rows.size(), ref.rows.size());
+    const TimeUs first_missing = kT0 + 6901 + 3000 * 100000;
+    int flagged = 0;
+    double worst = 0;
+    for (std::size_t i = 0; i < ref.rows.size(); ++i) {
+      const PipelineRow &a = ref.rows[i], &b = run.rows[i];
+      ASSERT_EQ(a.t, b.t);
+      if (!(a.has_acc && b.has_acc)) continue;
+      int expect = 0;
+      for (int k = 0; k < acc_gap; ++k) expect += std::llabs(first_missing + k * 100000 - a.t) <= 353 * 100000 + 50000;
+      EXPECT_EQ(a.acc_bridged, 0);
+      EXPECT_EQ(b.acc_bridged, expect) << acc_gap << " row " << toSeconds(a.t - kT0);
+      const double d = (b.a_acc_B - a.a_acc_B).cwiseAbs().maxCoeff();
+      if (expect == 0) {
+        EXPECT_EQ(d, 0.0);
+        EXPECT_EQ(b.a_acc_sigma_bridge, 0.0);
+        continue;
+      }
+      ++flagged;
+      EXPECT_LE(d, b.a_acc_sigma_bridge + 1e-15);
+      if (d > 1e-13) worst = std::max(worst, d / b.a_acc_sigma_bridge);
+    }
+    EXPECT_GT(flagged, 65);  // about 71 rows at 1 Hz
+    std::printf("accelerometer gap of %2d samples: %d rows flagged, worst |difference| / bound %.2f\n", acc_gap,
+                flagged, worst);
   }
 }
 

@@ -203,6 +203,8 @@ TEST(CsvRowSink, NumbersAreFormattedAsPrintf) {
     r.rate_bridged = i % 6;
     r.w_sigma_B = Vec3(u(rng) + 1.5, 2.0, i % 4 == 0 ? std::nan("") : 3.0) * 1e-7 * scale;
     r.a_sc_sigma_B = Vec3(1.0, u(rng) + 1.5, 2.5) * 1e-9 * scale;
+    r.acc_bridged = i % 3;
+    r.a_acc_sigma_bridge = r.acc_bridged > 0 ? (u(rng) + 2.0) * 1e-10 * scale : 0.0;
     for (auto& v : r.iba_rad) v = i % 7 == 0 ? std::nan("") : u(rng) * 3;
     for (auto& v : r.iba_dev_rad) v = u(rng) * 1e-4 * scale;
     rows.push_back(r);
@@ -212,7 +214,8 @@ TEST(CsvRowSink, NumbersAreFormattedAsPrintf) {
   // The same rows through printf, as process wrote them before the engine.
   std::string expect = "time_s,q0,q1,q2,q3,w_x,w_y,w_z,a_sc_x,a_sc_y,a_sc_z,a_acc_x,a_acc_y,a_acc_z,"
                        "iba_12_deg,iba_12_dev_arcsec,iba_13_deg,iba_13_dev_arcsec,iba_23_deg,iba_23_dev_arcsec,heads_used,"
-                       "rate_bridged,w_sigma_x,w_sigma_y,w_sigma_z,a_sc_sigma_x,a_sc_sigma_y,a_sc_sigma_z\n";
+                       "rate_bridged,w_sigma_x,w_sigma_y,w_sigma_z,a_sc_sigma_x,a_sc_sigma_y,a_sc_sigma_z,acc_bridged,"
+                       "a_acc_sigma_bridge\n";
   char b[128];
   auto num = [&](double v, const char* fmt) {
     if (std::isfinite(v)) {
@@ -243,6 +246,9 @@ TEST(CsvRowSink, NumbersAreFormattedAsPrintf) {
     expect += b;
     for (int k = 0; k < 3; ++k) num(r.has_rates ? r.w_sigma_B[k] : NAN, ",%.3e");
     for (int k = 0; k < 3; ++k) num(r.has_rates ? r.a_sc_sigma_B[k] : NAN, ",%.3e");
+    std::snprintf(b, sizeof b, ",%d", r.acc_bridged);
+    expect += b;
+    num(r.has_acc ? r.a_acc_sigma_bridge : NAN, ",%.3e");
     expect += '\n';
   }
   std::string got = slurp(path);

@@ -288,11 +288,19 @@ class CrnStream {
   /// The low-passed value only at tag tau (statuses as evaluateAt): with max_order >= 1 the
   /// first-order Taylor step is folded into one kernel, g0 + (tau - t_c) g1, so one pass per channel
   /// (the accelerometer path: order 2 ignored, |dts| <= half an interval).
-  Status evaluateValueAt(TimeUs tau, VecN& y) const {
+  /// With `bridged` given: the bridged samples in the window and, in `sigma0`, their order-0 bound per
+  /// channel (Output::bridged, sigma_bridge[0]; 0 when none).
+  Status evaluateValueAt(TimeUs tau, VecN& y, int* bridged = nullptr, VecN* sigma0 = nullptr) const {
     int c = 0;
     double dts = 0;
     const Status s = locate(tau, c, dts);
     if (s != Status::kOk) return s;
+    if (bridged != nullptr) {
+      Output b;
+      bridgeTerms(c, 0, b);
+      *bridged = b.bridged;
+      if (sigma0 != nullptr) *sigma0 = b.sigma_bridge[0];
+    }
     const int M = kernel_.half, L = 2 * M + 1;
     if constexpr (N == 3) {
       if (cfg_.max_order >= 1) {

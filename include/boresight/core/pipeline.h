@@ -68,6 +68,11 @@ struct PipelineRow {
   Vec3 a_sc_sigma_B = Vec3::Constant(std::numeric_limits<double>::quiet_NaN());
   bool has_acc = false;
   Vec3 a_acc_B = Vec3::Constant(std::numeric_limits<double>::quiet_NaN());   ///< accelerometer, same CRN, rad/s^2, B
+  /// Bridged accelerometer samples in its filter window (0: all real) and the bound on their
+  /// contribution per axis, rad/s^2 (AccOutput; the accelerometer's own noise is not configured in the
+  /// core, so no nominal part)
+  int acc_bridged = 0;
+  double a_acc_sigma_bridge = 0;
   std::array<double, kMaxPairs> iba_rad{};      ///< per pair (pairIndex), NaN when a head is missing
   std::array<double, kMaxPairs> iba_dev_rad{};  ///< iba - ground, rad
 };

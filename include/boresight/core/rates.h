@@ -63,6 +63,10 @@ class AttitudeRates {
 struct AccOutput {
   TimeUs t = 0;
   Vec3 a_X = Vec3::Zero();  ///< CRN low-passed angular acceleration in X, rad/s^2
+  int bridged = 0;          ///< bridged accelerometer samples in the window (0: all real)
+  /// bound on their contribution per axis, |sum_j |g0[j]| sigma_j| over the three axes, rad/s^2 (a
+  /// rotation keeps the norm); 0 without bridged samples, NaN under linear bridging
+  double sigma_bridge = 0;
 };
 
 class AccAngularFilter {
