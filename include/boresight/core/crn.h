@@ -28,15 +28,18 @@
 // first of a new window).
 // Bridged values (BridgeFit): kLinear - on the line between the two real neighbours (no uncertainty:
 // NaN sigmas). kLocalFit (default) - a least-squares cubic in time through the real samples on both
-// sides, S = max(4, missing + 1) per side (S <= kMaxBridgeSamples + 1), so that the values follow the
-// motion (a line through the neighbours misses the curvature by alpha T^2 / 8 over a gap of T). At the
-// gap only the sample after it is known: the values are then fitted from the samples before and that
-// one, and fitted again at each of the next S - 1 real samples (before any output is evaluated), so the
-// rows whose window centre is near the gap - emitted M samples later - use the two-sided fit. Each
-// bridged value carries a 1-sigma per channel: the cubic's prediction variance scaled by its residual
-// variance (noise and misfit of the span) plus the square of the quartic-minus-cubic difference (an
-// estimate of the cubic's truncation error). Fewer than 5 real points (start of a window): linear
-// values with NaN sigmas.
+// sides, so that the values follow the motion (a line through the neighbours misses the curvature by
+// alpha T^2 / 8 over a gap of T). Samples per side: 4, 8, 16, 32 or 64 up to S = max(4, missing + 1)
+// (S <= kMaxBridgeSamples + 1), the one with the smallest summed variance over the gap (short spans
+// where the motion's curvature changes fast, long ones where noise dominates). At the gap only the
+// sample after it is known: the values are then fitted from the samples before and that one, and
+// fitted again at each of the next S - 1 real samples (before any output is evaluated), so the rows
+// whose window centre is near the gap - emitted M samples later - use the two-sided fit. Each bridged
+// value carries a 1-sigma per channel: the cubic's prediction variance scaled by its residual variance
+// (noise and misfit of the span) plus the square of the quartic-minus-cubic difference (an estimate of
+// the cubic's truncation error), and at least the largest difference to another span's values (where
+// the spans disagree, the motion does what no cubic over one of them captures). Fewer than 5 real
+// points (start of a window): linear values with NaN sigmas.
 // Flagged outputs: an output (grid or evaluateAt) whose window holds bridged samples reports their
 // number (Output::bridged) and per order and channel sum_j |g_o[j]| sigma_j over them (sigma_bridge:
 // a bound on the bridged values' contribution that holds for any correlation between them, as the
@@ -405,28 +408,67 @@ class CrnStream {
     if (refit_.after >= refit_.side) refit_.active = false;
   }
 
-  // The local fit of the gap in refit_ (tags gap_t_) into gap_x_ / gap_s_: the real samples before the
-  // gap (up to side, back to a restart or an earlier bridged sample), refit_.after real samples after
-  // it in the ring, and the one sample (extra_t, extra_x) when given (the sample that closes the gap,
-  // not pushed yet). false (nothing written) with fewer than 5 points or a singular fit.
+  // The local fit of the gap in refit_ (tags gap_t_) into gap_x_ / gap_s_, with the samples per side
+  // chosen among 4, 8, 16, 32, 64 up to refit_.side by the smallest summed variance over the gap (a
+  // short span where the motion's curvature changes fast, a long one where noise dominates). Per
+  // candidate: the real samples before the gap (back to a restart or an earlier bridged sample), the
+  // real samples after it in the ring (refit_.after at most), and the one sample (extra_t, extra_x) when
+  // given (the sample that closes the gap, not pushed yet). false (nothing written) when no candidate
+  // has 5 points and a regular fit. A candidate of 5 points (its quartic exactly determined, so its
+  // truncation estimate is unreliable) is taken only when no candidate has 6.
   bool fitGap(const TimeUs* extra_t, const VecN* extra_x) {
+    double best = std::numeric_limits<double>::infinity();
+    int n_cand = 0;
+    // candidates whose quartic (the truncation estimate) keeps a degree of freedom; only when there is
+    // none (a short gap closed by one sample: 4 + 1 points), the exactly determined quartic
+    for (int min_points = 6; min_points >= 5 && n_cand == 0; --min_points)
+      for (int side = 4;; side *= 2) {
+        const int sd = std::min(side, refit_.side);
+        double score = 0;
+        if (fitGapSide(sd, min_points, extra_t, extra_x, score)) {
+          for (int k = 0; k < refit_.missing; ++k) alt_x_[static_cast<std::size_t>(n_cand)][static_cast<std::size_t>(k)] =
+                                                       cand_x_[static_cast<std::size_t>(k)];
+          ++n_cand;
+          if (score < best) {
+            best = score;
+            for (int k = 0; k < refit_.missing; ++k) {
+              gap_x_[static_cast<std::size_t>(k)] = cand_x_[static_cast<std::size_t>(k)];
+              gap_s_[static_cast<std::size_t>(k)] = cand_s_[static_cast<std::size_t>(k)];
+            }
+          }
+        }
+        if (sd >= refit_.side) break;
+      }
+    // the spans disagree where the motion does what no cubic over one of them captures: the sigma is at
+    // least the largest disagreement with the chosen values
+    for (int c = 0; c < n_cand; ++c)
+      for (int k = 0; k < refit_.missing; ++k) {
+        const auto uk = static_cast<std::size_t>(k);
+        gap_s_[uk] = gap_s_[uk].cwiseMax((alt_x_[static_cast<std::size_t>(c)][uk] - gap_x_[uk]).cwiseAbs());
+      }
+    return n_cand > 0;
+  }
+
+  // One candidate of fitGap with `side` samples per side into cand_x_ / cand_s_; score: the sum of the
+  // variances over the gap and channels.
+  bool fitGapSide(int side, int min_points, const TimeUs* extra_t, const VecN* extra_x, double& score) {
     const int m = refit_.missing;
     const TimeUs tc = gap_t_[0] + (gap_t_[static_cast<std::size_t>(m - 1)] - gap_t_[0]) / 2;
-    const double h = (refit_.side + 0.5 * (m + 1)) * toSeconds(dt_us_);  // tau = (t - tc) / h in about [-1, 1]
+    const double h = (side + 0.5 * (m + 1)) * toSeconds(dt_us_);  // tau = (t - tc) / h in about [-1, 1]
     int n = 0;
     auto add = [&](TimeUs t, const VecN& x) {
       fit_tau_[static_cast<std::size_t>(n)] = toSeconds(t - tc) / h;
       fit_x_[static_cast<std::size_t>(n)] = x;
       ++n;
     };
-    for (int i = 1; i <= refit_.side; ++i) {
+    for (int i = 1; i <= side; ++i) {
       const std::int64_t back = seq_ - (refit_.first_seq - i);
       if (back < 0 || back >= count_) break;
       const int slot = slotBack(back);
       if (bridged_[static_cast<std::size_t>(slot)]) break;
       add(times_[static_cast<std::size_t>(slot)], ringValue(slot));
     }
-    for (int i = 0; i < refit_.after; ++i) {
+    for (int i = 0; i < std::min(refit_.after, side); ++i) {
       const std::int64_t back = seq_ - (refit_.first_seq + m + i);
       if (back < 0 || back >= count_) break;
       const int slot = slotBack(back);
@@ -434,7 +476,7 @@ class CrnStream {
       add(times_[static_cast<std::size_t>(slot)], ringValue(slot));
     }
     if (extra_t != nullptr) add(*extra_t, *extra_x);
-    if (n < 5) return false;
+    if (n < min_points) return false;
     // normal equations of the quartic in tau (the cubic's are their leading 4 x 4 block)
     Eigen::Matrix<double, 5, 5> A = Eigen::Matrix<double, 5, 5>::Zero();
     Eigen::Matrix<double, 5, N> B = Eigen::Matrix<double, 5, N>::Zero();
@@ -467,6 +509,7 @@ class CrnStream {
       rss += (fit_x_[static_cast<std::size_t>(i)].transpose() - p.transpose() * c3).transpose().cwiseAbs2();
     }
     const VecN s2 = rss / static_cast<double>(n - 4);
+    score = 0;
     for (int k = 0; k < m; ++k) {
       const auto uk = static_cast<std::size_t>(k);
       const double u = toSeconds(gap_t_[uk] - tc) / h;
@@ -479,8 +522,9 @@ class CrnStream {
       const VecN v4 = (p4.transpose() * c4).transpose();
       const VecN var = s2 * lever + (v4 - v3).cwiseAbs2();
       if (!v3.allFinite() || !var.allFinite()) return false;
-      gap_x_[uk] = v3;
-      gap_s_[uk] = var.cwiseSqrt();
+      cand_x_[uk] = v3;
+      cand_s_[uk] = var.cwiseSqrt();
+      score += var.sum();
     }
     return true;
   }
@@ -607,7 +651,8 @@ class CrnStream {
   Refit refit_{};
   static constexpr int kFitMax = 2 * (kMaxBridgeSamples + 1) + 1;
   std::array<TimeUs, kMaxBridgeSamples> gap_t_{};
-  std::array<VecN, kMaxBridgeSamples> gap_x_{}, gap_s_{};
+  std::array<VecN, kMaxBridgeSamples> gap_x_{}, gap_s_{}, cand_x_{}, cand_s_{};
+  std::array<std::array<VecN, kMaxBridgeSamples>, 5> alt_x_{};  ///< every candidate's values (spans 4..64)
   std::array<double, kFitMax> fit_tau_{};
   std::array<VecN, kFitMax> fit_x_{};
 };
