@@ -426,8 +426,11 @@ class CrnStream {
         const int sd = std::min(side, refit_.side);
         double score = 0;
         if (fitGapSide(sd, min_points, extra_t, extra_x, score)) {
-          for (int k = 0; k < refit_.missing; ++k) alt_x_[static_cast<std::size_t>(n_cand)][static_cast<std::size_t>(k)] =
-                                                       cand_x_[static_cast<std::size_t>(k)];
+          for (int k = 0; k < refit_.missing; ++k) {
+            const auto uk = static_cast<std::size_t>(k);
+            alt_x_[static_cast<std::size_t>(n_cand)][uk] = cand_x_[uk];
+            alt_s_[static_cast<std::size_t>(n_cand)][uk] = cand_s_[uk];
+          }
           ++n_cand;
           if (score < best) {
             best = score;
@@ -440,11 +443,13 @@ class CrnStream {
         if (sd >= refit_.side) break;
       }
     // the spans disagree where the motion does what no cubic over one of them captures: the sigma is at
-    // least the largest disagreement with the chosen values
+    // least the largest disagreement with the chosen values (and, while only the closing sample follows
+    // the gap, the values are extrapolated from one side: there the largest sigma of any span, too)
     for (int c = 0; c < n_cand; ++c)
       for (int k = 0; k < refit_.missing; ++k) {
-        const auto uk = static_cast<std::size_t>(k);
-        gap_s_[uk] = gap_s_[uk].cwiseMax((alt_x_[static_cast<std::size_t>(c)][uk] - gap_x_[uk]).cwiseAbs());
+        const auto uk = static_cast<std::size_t>(k), uc = static_cast<std::size_t>(c);
+        gap_s_[uk] = gap_s_[uk].cwiseMax((alt_x_[uc][uk] - gap_x_[uk]).cwiseAbs());
+        if (extra_t != nullptr) gap_s_[uk] = gap_s_[uk].cwiseMax(alt_s_[uc][uk]);
       }
     return n_cand > 0;
   }
@@ -652,7 +657,7 @@ class CrnStream {
   static constexpr int kFitMax = 2 * (kMaxBridgeSamples + 1) + 1;
   std::array<TimeUs, kMaxBridgeSamples> gap_t_{};
   std::array<VecN, kMaxBridgeSamples> gap_x_{}, gap_s_{}, cand_x_{}, cand_s_{};
-  std::array<std::array<VecN, kMaxBridgeSamples>, 5> alt_x_{};  ///< every candidate's values (spans 4..64)
+  std::array<std::array<VecN, kMaxBridgeSamples>, 5> alt_x_{}, alt_s_{};  ///< every candidate's values, sigmas
   std::array<double, kFitMax> fit_tau_{};
   std::array<VecN, kFitMax> fit_x_{};
 };
