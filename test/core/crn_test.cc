@@ -465,5 +465,70 @@ TEST(CrnStreamTest, LocalFitBridgesACubicExactlyAndBoundsAQuartic) {
   }
 }
 
+// The seams of the local fit: a gap closed right after a restart (fewer than 5 real points: a line,
+// flagged with NaN bounds - no uncertainty is claimed) and the last epochs, evaluated at the end of the
+// data while the gap is still being refined (flagged with a finite bound that holds the difference).
+TEST(CrnStreamTest, LocalFitAtARestartAndAtTheEndOfTheData) {
+  CrnConfig c = grace(2.0);
+  c.gap_policy = GapPolicy::kBridge;
+  c.max_bridge_samples = 20;
+  c.output_period_us = 500000;
+  const TimeUs dt = 500000;
+  auto x = [](TimeUs t) {
+    const double u = toSeconds(t) - 200.0;
+    return Eigen::Matrix<double, 1, 1>(0.3 + 1e-2 * u - 2e-4 * u * u + 3e-6 * u * u * u + 4e-8 * u * u * u * u);
+  };
+  {  // restart (a 30-sample gap), two real samples, then a 3-sample gap: bridged by a line
+    CrnStream<1> s;
+    ASSERT_EQ(s.configure(c), Status::kOk);
+    TimeUs t = 0;
+    auto next = [&](TimeUs step) {
+      t += step;
+      return s.step(t, x(t));
+    };
+    for (int i = 0; i < 200; ++i) ASSERT_EQ(next(dt), Status::kOk);
+    ASSERT_EQ(next(31 * dt), Status::kGapRestarted);
+    ASSERT_EQ(next(dt), Status::kOk);
+    ASSERT_EQ(next(4 * dt), Status::kGapBridged);
+    int flagged = 0;
+    for (int i = 0; i < 200; ++i) {
+      ASSERT_EQ(next(dt), Status::kOk);
+      for (int o = 0; o < s.numOutputs(); ++o) {
+        const auto& out = s.output(o);
+        if (out.bridged == 0) continue;
+        ++flagged;
+        EXPECT_LE(out.bridged, 3);  // the first full windows after the restart hold the gap at their old end
+        EXPECT_TRUE(std::isnan(out.sigma_bridge[0][0]));  // a line: no uncertainty claimed
+      }
+    }
+    EXPECT_GE(flagged, 3);
+  }
+  {  // the data end 3 samples after a 10-sample gap: the newest window holds the gap, still refined
+    CrnStream<1> gap, ref;
+    ASSERT_EQ(gap.configure(c), Status::kOk);
+    ASSERT_EQ(ref.configure(c), Status::kOk);
+    TimeUs t = 0;
+    for (int i = 1; i <= 400; ++i) {
+      t = i * dt;
+      ASSERT_EQ(ref.step(t, x(t)), Status::kOk);
+      if (i > 387 && i <= 397) continue;
+      ASSERT_TRUE(accepted(gap.step(t, x(t))));
+    }
+    // the last epoch the filter can give (M = 70 samples before the newest), as flush() asks for it
+    const TimeUs tau = t - 70 * dt;
+    CrnStream<1>::Output og, orf;
+    ASSERT_EQ(gap.evaluateAt(tau, og), Status::kOk);
+    ASSERT_EQ(ref.evaluateAt(tau, orf), Status::kOk);
+    EXPECT_EQ(og.bridged, 10);
+    EXPECT_EQ(orf.bridged, 0);
+    for (int order = 0; order < 3; ++order) {
+      const auto o = static_cast<std::size_t>(order);
+      ASSERT_TRUE(std::isfinite(og.sigma_bridge[o][0]));
+      EXPECT_GT(og.sigma_bridge[o][0], 0.0);
+      EXPECT_LE(std::abs(og.y[o][0] - orf.y[o][0]), og.sigma_bridge[o][0] + 1e-15) << order;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace boresight::core
