@@ -3,6 +3,7 @@
 #include <boresight/io/overlay_yaml.h>
 #include <boresight/io/time_format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -115,13 +116,31 @@ bool applyOverlay(const model::Overlay& ov, const std::string& path, const std::
     }
   }
 
-  // What no program applies yet.
+  // Thermal terms.
   if (ov.thermal) {
     std::vector<int> h;
     for (const auto& x : ov.thermal->heads) h.push_back(x.head);
-    use.not_applied.push_back("thermal: " + program + " does not apply thermal terms (head" + (h.size() == 1 ? " " : "s ") +
-                              ids(h) + " relative to head " + std::to_string(ov.thermal->datum_head) + ")");
+    const std::string which =
+        "head" + std::string(h.size() == 1 ? " " : "s ") + ids(h) + " relative to head " + std::to_string(ov.thermal->datum_head);
+    if (uses.thermal) {
+      core::ThermalHarmonicModel m;
+      std::string why;
+      if (!thermalModelFromOverlay(*ov.thermal, pc.pipeline.heads, m, &why)) {
+        if (error) *error = path + ": thermal: " + why;
+        return false;
+      }
+      std::string orders;
+      for (int n = 0; n < m.n_harmonics; ++n) orders += (n ? ", " : "") + std::to_string(m.order[static_cast<std::size_t>(n)]);
+      use.applied.push_back("thermal: " + which + " (harmonics " + (orders.empty() ? std::string("none") : orders) + " per revolution" +
+                            (m.beta_terms ? ", beta modulation" : "") +
+                            "): predicts the relative corrections of pairs not seen, from the orbit (GNI1B / GNV1B, ORBIT)");
+      use.thermal_model = m;
+    } else {
+      use.not_applied.push_back("thermal: " + program + " does not apply thermal terms (" + which + ")");
+    }
   }
+
+  // What no program applies yet.
   if (ov.accelerometer)
     use.not_applied.push_back("accelerometer: " + program +
                               " does not apply accelerometer terms (bias, scale, misalignment, non-orthogonality)");
@@ -130,6 +149,69 @@ bool applyOverlay(const model::Overlay& ov, const std::string& path, const std::
                               t.relative_to + ")");
   if (ov.published_frame)
     use.not_applied.push_back("published_frame: boresightd's state (its state_file); " + program + " does not read it");
+  return true;
+}
+
+bool thermalModelFromOverlay(const model::ThermalTerms& t, const core::HeadSetConfig& heads,
+                             core::ThermalHarmonicModel& out, std::string* error) {
+  auto fail = [&](const std::string& m) {
+    if (error) *error = m;
+    return false;
+  };
+  auto slot = [&](int id) {
+    for (int s = 0; s < heads.n_heads; ++s)
+      if (heads.head[static_cast<std::size_t>(s)].id == id) return s;
+    return -1;
+  };
+  core::ThermalHarmonicModel m;
+  m.datum_slot = slot(t.datum_head);
+  if (m.datum_slot < 0) return fail("the datum head " + std::to_string(t.datum_head) + " is not in the platform file");
+  // The model's orders: every harmonic any head names, ascending.
+  std::vector<int> orders;
+  for (const auto& h : t.heads)
+    for (const auto* list : {&h.harmonics, &h.beta_harmonics})
+      for (const auto& e : *list)
+        if (std::find(orders.begin(), orders.end(), e.harmonic) == orders.end()) orders.push_back(e.harmonic);
+  std::sort(orders.begin(), orders.end());
+  if (static_cast<int>(orders.size()) > core::kMaxThermalHarmonics)
+    return fail(std::to_string(orders.size()) + " distinct harmonics; the core takes at most " +
+                std::to_string(core::kMaxThermalHarmonics));
+  m.n_harmonics = static_cast<int>(orders.size());
+  for (std::size_t n = 0; n < orders.size(); ++n) m.order[n] = orders[n];
+  auto var = [](const Vec3& sigma) {
+    Vec3 v;
+    for (int a = 0; a < 3; ++a) v[a] = std::isfinite(sigma[a]) ? sigma[a] * sigma[a] : 0.0;
+    return v;
+  };
+  for (const auto& h : t.heads) {
+    const int s = slot(h.head);
+    if (s < 0) return fail("head " + std::to_string(h.head) + " is not in the platform file");
+    if (s == m.datum_slot) return fail("head " + std::to_string(h.head) + " is the datum and cannot have terms");
+    core::ThermalHeadModel& hm = m.head[static_cast<std::size_t>(s)];
+    hm.valid = true;
+    hm.constant_rad = h.constant_rad.value;
+    Vec3 v = var(h.constant_rad.sigma);
+    for (const auto& e : h.harmonics) {
+      const auto n = static_cast<std::size_t>(std::find(orders.begin(), orders.end(), e.harmonic) - orders.begin());
+      hm.cos_rad[n] = e.cos_rad.value;
+      hm.sin_rad[n] = e.sin_rad.value;
+      v += 0.5 * (var(e.cos_rad.sigma) + var(e.sin_rad.sigma));
+    }
+    for (const auto& e : h.beta_harmonics) {
+      const auto n = static_cast<std::size_t>(std::find(orders.begin(), orders.end(), e.harmonic) - orders.begin());
+      hm.beta_cos_rad[n] = e.cos_rad.value;
+      hm.beta_sin_rad[n] = e.sin_rad.value;
+      m.beta_terms = true;
+    }
+    hm.cov_rad2 = v.asDiagonal();
+  }
+  if (m.beta_terms) {
+    if (!t.beta_ref_rad) return fail("beta harmonics without beta_ref");
+    m.cos_beta_ref = std::cos(*t.beta_ref_rad);
+  }
+  const core::Status st = core::validate(m, heads);
+  if (st != core::Status::kOk) return fail(std::string("the core refuses the model: ") + core::statusName(st));
+  out = m;
   return true;
 }
 
@@ -156,6 +238,7 @@ std::vector<std::string> validityWarnings(const OverlayUse& use, TimeUs t0, Time
   if (o.noise.head_defaults) check(o.noise.head_defaults->valid, "noise.head_defaults", noise_applied);
   for (const auto& h : o.noise.heads) check(h.valid, "noise.heads[id " + std::to_string(h.id) + "]", noise_applied);
   if (o.noise.accelerometer) check(o.noise.accelerometer->valid, "noise.accelerometer", noise_applied);
+  if (o.thermal) check(o.thermal->valid, "the thermal terms", use.thermal_model.has_value());
   return w;
 }
 

@@ -454,6 +454,13 @@ LcmLogReader::Kind LcmLogReader::next(HeadSample& head, AccelSample& accel) {
     }
     return Kind::Stars;
   }
+  if (ev->channel == kOrbitChannel) {
+    if (!decodeOrbit(ev->data, ev->datalen, orbit_)) {
+      ++decode_failures_;
+      return Kind::Skipped;
+    }
+    return Kind::Orbit;
+  }
   ++unknown_channel_;
   return Kind::Skipped;
 }

@@ -126,7 +126,10 @@ bool loadTop(const YAML::Node& top, const std::string& path, Reader& r, NodeConf
   if (top["overlay"]) {
     if (!r.str(top, "overlay", "overlay", out.overlay)) return done(false);
     if (out.overlay[0] != '/') out.overlay = dirOf(path) + "/" + out.overlay;
-    if (!io::applyOverlay(out.overlay, "boresightd", {}, pc, ovu, &perr)) return done(r.fail("overlay", perr, top["overlay"]));
+    io::OverlayUses uses;
+    uses.thermal = true;
+    if (!io::applyOverlay(out.overlay, "boresightd", uses, pc, ovu, &perr)) return done(r.fail("overlay", perr, top["overlay"]));
+    out.thermal_model = ovu.thermal_model;
     for (int s = 0; s < pc.pipeline.heads.n_heads; ++s)
       if (pc.mounting_source[static_cast<std::size_t>(s)].rfind("overlay", 0) == 0) out.overlay_mounting_mask |= 1u << s;
     // Every head's mounting from the overlay: nothing to wait for (later NOMINAL_MOUNTINGS messages are

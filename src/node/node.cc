@@ -8,6 +8,7 @@
 #include <boresight/io/lcm_log.h>
 #include <boresight/io/overlay_yaml.h>
 #include <boresight/stream/assembler.h>
+#include <boresight/stream/engine.h>
 
 #include "boresight_lcm/accel_sample_t.hpp"
 #include "boresight_lcm/boresight_monitor_t.hpp"
@@ -52,6 +53,7 @@ const char* reasonName(Reason r) {
     case Reason::kAssembler: return "assembler";
     case Reason::kImplausible: return "implausible";
     case Reason::kCommand: return "command";
+    case Reason::kNoConsumer: return "no_consumer";
     case Reason::kCount: break;
   }
   return "?";
@@ -355,7 +357,9 @@ struct Node::Impl {
       pass(s, xs, n, t, kind);
       return;
     }
-    const unsigned sensor = kind == stream::Sample::Kind::kAccel ? 2u : 1u;
+    // Orbit messages vote with their own bit and are never required (a slow channel would hold the
+    // fast ones past kMaxHeld).
+    const unsigned sensor = kind == stream::Sample::Kind::kAccel ? 2u : kind == stream::Sample::Kind::kOrbit ? 4u : 1u;
     if (jump_votes > 0 && std::abs(t - jump_last) <= jump_us) {
       ++jump_votes;
       jump_sensors |= sensor;
@@ -416,7 +420,7 @@ struct Node::Impl {
     n_held = 0;
   }
   int jump_votes = 0;
-  unsigned jump_sensors = 0, jump_need_sensors = 0;  ///< bit 0 star cameras, bit 1 accelerometer
+  unsigned jump_sensors = 0, jump_need_sensors = 0;  ///< bit 0 star cameras, bit 1 accelerometer, bit 2 orbit (never needed)
   TimeUs jump_last = 0;
   static constexpr TimeUs kActiveUs = 10 * kUsPerSecond;  ///< a channel is active: it passed a message this recently
   std::vector<const ChannelState*> all_channels;            ///< set at configure
@@ -432,9 +436,9 @@ struct Node::Impl {
     const bool head_like = kind == stream::Sample::Kind::kHead ||
                            (kind == stream::Sample::Kind::kStar && last_emit_kind == stream::Sample::Kind::kStar);
     if (emitted && (t < last_emit_t || (t == last_emit_t && head_like))) return reject(Reason::kLate);
-    const double max_hz = kind == stream::Sample::Kind::kHead    ? cfg.max_head_rate_hz
-                          : kind == stream::Sample::Kind::kAccel ? cfg.max_accel_rate_hz
-                                                                 : cfg.max_star_rate_hz;
+    const double max_hz = kind == stream::Sample::Kind::kHead || kind == stream::Sample::Kind::kOrbit ? cfg.max_head_rate_hz
+                          : kind == stream::Sample::Kind::kAccel                                        ? cfg.max_accel_rate_hz
+                                                                                                        : cfg.max_star_rate_hz;
     if (!floodCheck(s, t, max_hz)) return;
     for (int i = 0; i < n; ++i) {
       if (!src.push(xs[i])) {
@@ -600,8 +604,8 @@ struct Node::Impl {
     pipe.flush();
     publishRows();
     core_base.add(pipe.health());
-    if (pipe.configure(p) != core::Status::kOk) {  // cannot happen for unit quaternions; keep the old ones
-      pipe.configure(pcfg);
+    if (configureCore(p) != core::Status::kOk) {  // cannot happen for unit quaternions; keep the old ones
+      configureCore(pcfg);
       if (core_handed) pipe.handMountings(handed_q);
       ++c.mountings_refused;
       return;
@@ -637,12 +641,30 @@ struct Node::Impl {
     seqCheck(ch_orbit, o.seq);
     for (int k = 0; k < 3; ++k)
       if (!std::isfinite(o.r_m[k]) || !std::isfinite(o.v_m_s[k])) return reject(Reason::kNonFinite);
-    ++c.used;  // no consumer in the node yet: accepted and counted
+    if (!plausibility::orbitRadiusPlausible(o.r_m) || !plausibility::orbitSpeedPlausible(o.v_m_s))
+      return reject(Reason::kImplausible);
+    if (!cfg.thermal_model) return reject(Reason::kNoConsumer);  // the orbit feeds the thermal prediction only
+    if (!core_ready) return reject(Reason::kNoMountings);
+    stream::Sample x;
+    x.kind = stream::Sample::Kind::kOrbit;
+    x.t = o.utime;
+    x.orbit_frame = o.frame;
+    x.r_orbit = Vec3(o.r_m[0], o.r_m[1], o.r_m[2]);
+    x.v_orbit = Vec3(o.v_m_s[0], o.v_m_s[1], o.v_m_s[2]);
+    admit(ch_orbit, &x, 1, o.utime, x.kind);
   }
+
+  /// The core configured with `p`, and the overlay's thermal model set again (configure() drops it).
+  core::Status configureCore(const core::PipelineConfig& p) {
+    const core::Status st = pipe.configure(p);
+    if (st == core::Status::kOk && cfg.thermal_model) pipe.setThermalModel(*cfg.thermal_model);
+    return st;
+  }
+  stream::Sample orbit_out{};  ///< the orbit sample the assembler hands out
 
   // ---------------------------------------------------------------------------------------------
   bool startCore() {
-    if (pipe.configure(pcfg) != core::Status::kOk) return false;
+    if (configureCore(pcfg) != core::Status::kOk) return false;
     core_ready = true;
     for (int k = 0; k < kMaxHeads; ++k) handed_q[static_cast<std::size_t>(k)] = pcfg.heads.head[static_cast<std::size_t>(k)].q_Si_B;
     applyState();
@@ -688,7 +710,7 @@ struct Node::Impl {
     for (;;) {
       TimeUs t = 0;
       Vec3 a = Vec3::Zero();
-      const auto o = asm_->next(epoch, t, a, stars.get());
+      const auto o = asm_->next(epoch, t, a, stars.get(), &orbit_out);
       if (o == stream::EpochAssembler::Out::kPending || o == stream::EpochAssembler::Out::kEnd ||
           o == stream::EpochAssembler::Out::kError)
         break;
@@ -709,6 +731,10 @@ struct Node::Impl {
         it.t = t;
         it.a_A = a;
         pushRing(it);
+      } else if (o == stream::EpochAssembler::Out::kOrbit) {
+        last_emit_t = t;
+        last_emit_kind = stream::Sample::Kind::kOrbit;
+        stepOrbit(t);
       } else {
         last_emit_t = stars->t;
         last_emit_kind = stream::Sample::Kind::kStar;
@@ -734,6 +760,14 @@ struct Node::Impl {
     c.stars_dropped = stars_dropped_push + ac.rejected[static_cast<std::size_t>(stream::Reject::kTooManyStars)];
   }
   std::uint64_t asm_refused = 0, asm_outliers = 0, asm_duplicates = 0, stars_dropped_push = 0;
+
+  /// An orbit sample to the core's thermal prediction (the angles as the engine forms them).
+  void stepOrbit(TimeUs t) {
+    model::OrbitSample o;
+    stream::orbitAngles(orbit_out, o);  // no orbit plane: NaN angles, counted by the core as non-finite
+    pipe.stepOrbit(t, o.u_rad, o.u_rate_rad_s, o.beta_rad);
+    ++c.orbit_steps;
+  }
 
   void stepHeads() {
     if (have_pending_nominal) applyNominal(epoch.t);

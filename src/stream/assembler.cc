@@ -213,19 +213,26 @@ EpochAssembler::Out EpochAssembler::nextSample(Sample& s) {
     ++total_.used_stars;
     return Out::kStars;
   }
+  if (it.s.kind == Sample::Kind::kOrbit) {
+    ++src_[it.src].c.used_orbit;
+    ++total_.used_orbit;
+    return Out::kOrbit;
+  }
   ++src_[it.src].c.used_heads;
   ++total_.used_heads;
   return Out::kHeads;
 }
 
-EpochAssembler::Out EpochAssembler::next(core::HeadEpoch& epoch, TimeUs& t, Vec3& a_A, core::StarEpoch* stars) {
+EpochAssembler::Out EpochAssembler::next(core::HeadEpoch& epoch, TimeUs& t, Vec3& a_A, core::StarEpoch* stars,
+                                         Sample* orbit) {
   Out o = Out::kEnd;
   if (!fill(o)) return o;
   if (heap_.empty()) return Out::kEnd;
   Item it;
   pop(it);
-  while (it.s.kind == Sample::Kind::kStar && stars == nullptr) {  // counted, never handed out
-    reject(it.src, Reject::kNoStarConsumer);
+  // Inputs nobody here takes: counted, never handed out.
+  while ((it.s.kind == Sample::Kind::kStar && stars == nullptr) || (it.s.kind == Sample::Kind::kOrbit && orbit == nullptr)) {
+    reject(it.src, it.s.kind == Sample::Kind::kStar ? Reject::kNoStarConsumer : Reject::kNoOrbitConsumer);
     if (!fill(o)) return o;
     if (heap_.empty()) return Out::kEnd;
     pop(it);
@@ -233,6 +240,13 @@ EpochAssembler::Out EpochAssembler::next(core::HeadEpoch& epoch, TimeUs& t, Vec3
   emitted_ = true;
   last_t_ = it.t;
   last_kind_ = it.s.kind;
+  if (it.s.kind == Sample::Kind::kOrbit) {
+    ++src_[it.src].c.used_orbit;
+    ++total_.used_orbit;
+    *orbit = it.s;
+    t = it.t;
+    return Out::kOrbit;
+  }
   if (it.s.kind == Sample::Kind::kStar) {
     stars->t = it.t;
     stars->n = 0;

@@ -1,6 +1,8 @@
 // Engine: the replay loop (assembler -> core -> sinks).
 #include <boresight/stream/engine.h>
 
+#include <limits>
+
 namespace boresight::stream {
 
 Engine::Engine(const AssemblerConfig& acfg)
@@ -15,6 +17,29 @@ bool Engine::configure(const core::PipelineConfig& cfg, std::string* error) {
   if (configured_) obs_validator_->configure(cfg.heads);
   if (!configured_ && error) *error = std::string("the core rejected the configuration: ") + core::statusName(st);
   return configured_;
+}
+
+bool orbitAngles(const Sample& s, model::OrbitSample& out) {
+  if (model::orbitSampleFromRecord(s.t, s.orbit_frame, s.r_orbit, s.v_orbit, out)) return true;
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  out = model::OrbitSample{};
+  out.t = s.t;
+  out.r_I = out.v_I = Vec3::Constant(nan);
+  out.u_rad = out.u_rate_rad_s = out.beta_rad = nan;
+  return false;
+}
+
+bool Engine::setThermalModel(const core::ThermalHarmonicModel& m, std::string* error) {
+  const core::Status st = configured_ ? pipe_->setThermalModel(m) : core::Status::kNotConfigured;
+  if (st != core::Status::kOk && error) *error = std::string("the core refused the thermal model: ") + core::statusName(st);
+  return st == core::Status::kOk;
+}
+
+bool Engine::wantsOrbit() const {
+  if (pipe_->thermal().configured()) return true;
+  for (const InputObserver* o : observers_)
+    if (o->wantsOrbit()) return true;
+  return false;
 }
 
 void Engine::addSource(std::unique_ptr<Source> s) {
@@ -58,8 +83,18 @@ Engine::Result Engine::run() {
   core::HeadEpoch e;
   TimeUs t = 0;
   Vec3 a = Vec3::Zero();
+  Sample* const orbit = wantsOrbit() ? &orbit_ : nullptr;
   for (;;) {
-    switch (asm_.next(e, t, a, stars_.get())) {
+    switch (asm_.next(e, t, a, stars_.get(), orbit)) {
+      case EpochAssembler::Out::kOrbit: {
+        model::OrbitSample o;
+        orbitAngles(orbit_, o);  // no orbit plane: NaN angles, which the core counts as non-finite
+        ++orbit_samples_;
+        pipe_->stepOrbit(t, o.u_rad, o.u_rate_rad_s, o.beta_rad);
+        for (InputObserver* ob : observers_)
+          if (ob->wantsOrbit()) ob->onOrbit(o);
+        break;
+      }
       case EpochAssembler::Out::kStars: {
         ++star_epochs_;
         if (pipe_->stepStars(*stars_) == core::Status::kOk) {

@@ -262,6 +262,12 @@ bool addSources(const ReplayInputs& in, const io::ReadOptions& opt_in, bool pref
     if (!s->open(f, opt, error)) return false;
     add(std::move(s));
   }
+  if (engine.wantsOrbit())
+    for (const auto& f : in.orbit) {
+      auto s = std::make_unique<OrbitFileSource>();
+      if (!s->open(f, opt, error)) return false;
+      add(std::move(s));
+    }
   for (const auto& f : in.lcm) {
     auto s = std::make_unique<LcmLogSource>();
     if (!s->open(f, error)) return false;

@@ -24,6 +24,7 @@ const char* rejectName(Reject r) {
     case Reject::kImplausible: return "implausible value";
     case Reject::kTimeOutlier: return "time tag far from its neighbours";
     case Reject::kDuplicate: return "duplicate (same head, same tag)";
+    case Reject::kNoOrbitConsumer: return "orbit (no thermal model or fit here)";
     case Reject::kCount: break;
   }
   return "?";
@@ -120,6 +121,33 @@ Source::Next ScvSource::next(Sample& out, Reject& why) {
   return n;
 }
 
+namespace {
+/// An orbit record or message as a sample (kImplausible: a value outside the orbit gates).
+bool orbitSample(TimeUs t, char frame, const double r[3], const double v[3], Sample& out, Reject& why) {
+  if (!plausibility::orbitRadiusPlausible(r) || !plausibility::orbitSpeedPlausible(v)) {  // NaN fails both
+    why = Reject::kImplausible;
+    return false;
+  }
+  out = Sample{};
+  out.kind = Sample::Kind::kOrbit;
+  out.t = t;
+  out.orbit_frame = frame;
+  out.r_orbit = Vec3(r[0], r[1], r[2]);
+  out.v_orbit = Vec3(v[0], v[1], v[2]);
+  return true;
+}
+}  // namespace
+
+Source::Next OrbitFileSource::next(Sample& out, Reject& why) {
+  const Next n = nextRecord(why);
+  if (n != Next::kSample) return n;
+  if (rec_.coord_ref != 'I' && rec_.coord_ref != 'E') {
+    why = Reject::kMalformed;
+    return Next::kRejected;
+  }
+  return orbitSample(rec_.t, rec_.coord_ref, rec_.pos, rec_.vel, out, why) ? Next::kSample : Next::kRejected;
+}
+
 LcmLogSource::LcmLogSource() = default;
 LcmLogSource::~LcmLogSource() = default;
 
@@ -193,6 +221,10 @@ Source::Next LcmLogSource::next(Sample& out, Reject& why) {
       star_n_ = m.n_stars;
       star_next_ = 0;
       return next(out, why);
+    }
+    case io::LcmLogReader::Kind::Orbit: {
+      const io::OrbitSample& o = r_->orbit();
+      return orbitSample(o.utime, o.frame, o.r_m, o.v_m_s, out, why) ? Next::kSample : Next::kRejected;
     }
     case io::LcmLogReader::Kind::End:
       break;

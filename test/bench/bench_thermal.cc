@@ -9,6 +9,8 @@
 
 #include <benchmark/benchmark.h>
 
+#include "../common/three_heads.h"
+
 #include <cmath>
 #include <random>
 #include <vector>
@@ -19,16 +21,7 @@ using namespace boresight;
 
 constexpr double kT0 = 738849600.0;
 
-core::HeadSetConfig heads3() {
-  core::HeadSetConfig c;
-  c.n_heads = 3;
-  const Vec3 axes[3] = {Vec3(1.2, 0.3, -0.4), Vec3(-1.1, 0.9, 0.2), Vec3(0.1, -1.3, 1.0)};
-  for (int k = 0; k < 3; ++k) {
-    c.head[static_cast<std::size_t>(k)].id = k + 1;
-    c.head[static_cast<std::size_t>(k)].q_Si_B = core::quatExp(axes[k]);
-  }
-  return c;
-}
+core::HeadSetConfig heads3() { return testutil::threeTiltedHeads(); }
 
 struct Data {
   std::vector<core::HeadEpoch> epochs;

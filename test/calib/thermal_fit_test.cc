@@ -12,6 +12,8 @@
 #include <Eigen/Dense>
 #include <gtest/gtest.h>
 
+#include "three_heads.h"
+
 #include <cmath>
 #include <cstdio>
 #include <random>
@@ -25,16 +27,7 @@ using core::HeadSetConfig;
 constexpr double kT0 = 738849600.0;  // 2023-06-01 00:00 GPS
 constexpr double kAs = kRadPerArcsec;
 
-HeadSetConfig graceLikeHeads() {
-  HeadSetConfig c;
-  c.n_heads = 3;
-  const Vec3 axes[3] = {Vec3(1.2, 0.3, -0.4), Vec3(-1.1, 0.9, 0.2), Vec3(0.1, -1.3, 1.0)};
-  for (int k = 0; k < 3; ++k) {
-    c.head[static_cast<std::size_t>(k)].id = k + 1;
-    c.head[static_cast<std::size_t>(k)].q_Si_B = core::quatExp(axes[k]);
-  }
-  return c;
-}
+HeadSetConfig graceLikeHeads() { return testutil::threeTiltedHeads(); }
 
 /// The injected truth: deformation of slot k relative to slot 0, in S1, rad, at u.
 struct Truth {

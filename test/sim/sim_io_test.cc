@@ -129,14 +129,14 @@ TEST(SimIo, Level1FilesAndLcmLogReadBackIdentical) {
   ASSERT_TRUE(rd.open((w->dir / "sim.lcmlog").string(), &err)) << err;
   io::HeadSample hs;
   io::AccelSample as;
-  std::size_t ih = 0, ia = 0, is = 0;
+  std::size_t ih = 0, ia = 0, is = 0, io_ = 0;
   std::vector<const sim::HeadSampleOut*> delivered;
   for (const auto& h : w->cap.heads)
     if (!h.blind) delivered.push_back(&h);
   for (;;) {
     const auto k = rd.next(hs, as);
     if (k == io::LcmLogReader::Kind::End) break;
-    if (k == io::LcmLogReader::Kind::Skipped) continue;  // ORBIT messages (counted below)
+    ASSERT_NE(k, io::LcmLogReader::Kind::Skipped);  // every message is of a type the reader knows
     if (k == io::LcmLogReader::Kind::Head) {
       ASSERT_LT(ih, delivered.size());
       const auto& e = *delivered[ih++];
@@ -162,6 +162,16 @@ TEST(SimIo, Level1FilesAndLcmLogReadBackIdentical) {
         }
       }
       ++is;
+    } else if (k == io::LcmLogReader::Kind::Orbit) {  // inertial, as GNI1B
+      ASSERT_LT(io_, w->cap.orb.size());
+      const auto& e = w->cap.orb[io_++];
+      const io::OrbitSample& m = rd.orbit();
+      EXPECT_EQ(m.utime, e.t);
+      EXPECT_EQ(m.frame, 'I');
+      for (int c = 0; c < 3; ++c) {
+        ASSERT_EQ(m.r_m[c], e.r_I[c]);
+        ASSERT_EQ(m.v_m_s[c], e.v_I[c]);
+      }
     } else {
       ASSERT_LT(ia, w->cap.acc.size());
       const auto& e = w->cap.acc[ia++];
@@ -172,9 +182,10 @@ TEST(SimIo, Level1FilesAndLcmLogReadBackIdentical) {
   EXPECT_EQ(ih, delivered.size());
   EXPECT_EQ(ia, w->cap.acc.size());
   EXPECT_EQ(is, w->cap.sv.size());
-  // The orbit travels as ORBIT messages (a channel this reader skips), nothing is undecodable.
-  EXPECT_EQ(rd.unknownChannel(), w->cap.orb.size());
+  // The orbit travels as ORBIT messages, one per sample; no other channel, nothing undecodable.
+  EXPECT_EQ(io_, w->cap.orb.size());
   EXPECT_GT(w->cap.orb.size(), 0u);
+  EXPECT_EQ(rd.unknownChannel(), 0u);
   EXPECT_EQ(rd.decodeFailures(), 0u);
 
   // truth.yaml: the true mounting of each head and the injected effects.

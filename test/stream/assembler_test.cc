@@ -65,15 +65,28 @@ Step acc(double t_s, double v = 0) {
   return s;
 }
 
-/// What the assembler handed out, as text: "H<t>:<ids>" or "A<t>".
-std::string drain(stream::EpochAssembler& a, stream::EpochAssembler::Out* last = nullptr) {
+Step orbitAt(double t_s, double x_m = 6.8e6) {
+  Step s{Source::Next::kSample, {}};
+  s.s.kind = Sample::Kind::kOrbit;
+  s.s.t = static_cast<TimeUs>(std::llround(t_s * 1e6));
+  s.s.r_orbit = Vec3(x_m, 0, 0);
+  s.s.v_orbit = Vec3(0, 7.6e3, 0);
+  return s;
+}
+
+/// What the assembler handed out, as text: "H<t>:<ids>", "A<t>" or "O<t>" (orbit, when `take_orbit`).
+std::string drain(stream::EpochAssembler& a, stream::EpochAssembler::Out* last = nullptr, bool take_orbit = false) {
   std::ostringstream o;
   core::HeadEpoch e;
   TimeUs t;
   Vec3 v;
+  Sample orbit;
   for (;;) {
-    auto r = a.next(e, t, v);
-    if (r == stream::EpochAssembler::Out::kHeads) {
+    auto r = a.next(e, t, v, nullptr, take_orbit ? &orbit : nullptr);
+    if (r == stream::EpochAssembler::Out::kOrbit) {
+      EXPECT_EQ(orbit.t, t);
+      o << "O" << t / 1000000.0 << " ";
+    } else if (r == stream::EpochAssembler::Out::kHeads) {
       o << "H" << e.t / 1000000.0 << ":";
       for (int k = 0; k < e.n; ++k) o << e.sample[std::size_t(k)].head_id;
       o << " ";
@@ -160,6 +173,39 @@ TEST(Assembler, RejectedRecordsPendingAndErrors) {
   EXPECT_EQ(drain(as2, &last), "");
   EXPECT_EQ(last, stream::EpochAssembler::Out::kError);
   EXPECT_EQ(as2.errorSource(), 0);
+}
+
+TEST(Assembler, OrbitSamplesGoInTimeOrderLastAtTheirTagOrAreCountedWithoutAConsumer) {
+  auto run = [](bool take, stream::Counters& c) {
+    ScriptSource a({head(1, 1), head(2, 1), head(3, 1), head(4, 1)});
+    ScriptSource b({acc(2), acc(3.5)});
+    ScriptSource o({orbitAt(0.5), orbitAt(2), orbitAt(3.5)});
+    stream::EpochAssembler as;
+    as.addSource(&o);  // added first: at an equal tag the orbit still goes after heads and accelerometer
+    as.addSource(&a);
+    as.addSource(&b);
+    const std::string s = drain(as, nullptr, take);
+    c = as.counters();
+    return s;
+  };
+  stream::Counters c;
+  EXPECT_EQ(run(true, c), "O0.5 H1:1 H2:1 A2 O2 H3:1 A3.5 O3.5 H4:1 ");
+  EXPECT_EQ(c.used_orbit, 3u);
+  EXPECT_EQ(c.read, c.used() + c.rejectedTotal());
+  EXPECT_EQ(run(false, c), "H1:1 H2:1 A2 H3:1 A3.5 H4:1 ");
+  EXPECT_EQ(c.used_orbit, 0u);
+  EXPECT_EQ(c.rejected[std::size_t(stream::Reject::kNoOrbitConsumer)], 3u);
+  EXPECT_EQ(c.read, c.used() + c.rejectedTotal());
+  // nextSample() (convert) hands orbit samples out as kOrbit and counts them as used.
+  ScriptSource o({orbitAt(1), orbitAt(2)});
+  stream::EpochAssembler as;
+  as.addSource(&o);
+  Sample s;
+  EXPECT_EQ(as.nextSample(s), stream::EpochAssembler::Out::kOrbit);
+  EXPECT_EQ(s.kind, Sample::Kind::kOrbit);
+  EXPECT_EQ(as.nextSample(s), stream::EpochAssembler::Out::kOrbit);
+  EXPECT_EQ(as.nextSample(s), stream::EpochAssembler::Out::kEnd);
+  EXPECT_EQ(as.counters().used_orbit, 2u);
 }
 
 TEST(Assembler, PrefetchHandsOverTheSameSequence) {

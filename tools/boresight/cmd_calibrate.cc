@@ -51,8 +51,8 @@ const char* kUsage =
     "observable (no excitation about them).\n"
     "\n"
     "INPUT: Level-1 files (SCA1A heads, ACC1A accelerometer, QSA1B nominal mountings when the config\n"
-    "says heads.mounting: qsa1b; GNI1B or GNV1B orbit for the thermal fit) or an LCM log, recognised by\n"
-    "content. Other products are listed as ignored.\n"
+    "says heads.mounting: qsa1b; GNI1B or GNV1B orbit for the thermal fit) or an LCM log (its ORBIT\n"
+    "messages for the thermal fit), recognised by content. Other products are listed as ignored.\n"
     "\n"
     "Datum: the accelerometer frame. B is the body frame as the configured C_B_A puts A into it; a\n"
     "rotation of the accelerometer cannot be told from a common rotation of all heads. Error angles:\n"
@@ -106,7 +106,8 @@ const char* kUsage =
     "needed) or bad input (the reason); 2 usage error.\n";
 
 /// Forwards the engine's inputs to the span builder and, when there is an orbit, the thermal collector
-/// (head epochs as the core's validator leaves them).
+/// (head epochs as the core's validator leaves them; the orbit from the same stream: GNI1B / GNV1B
+/// files, ORBIT messages).
 class SpanFeed final : public stream::InputObserver {
  public:
   SpanFeed(calib::SpanBuilder& b, calib::ThermalCollector* thermal) : b_(b), thermal_(thermal) {}
@@ -117,38 +118,14 @@ class SpanFeed final : public stream::InputObserver {
   void onAcc(TimeUs t, const Vec3& a_A, core::Status st) override {
     if (core::accepted(st)) b_.pushAcc(t, a_A);
   }
+  bool wantsOrbit() const override { return thermal_ != nullptr; }
+  void onOrbit(const model::OrbitSample& o) override { thermal_->pushOrbit(o); }
   void onEnd() override { b_.finish(); }
 
  private:
   calib::SpanBuilder& b_;
   calib::ThermalCollector* thermal_;
 };
-
-/// Reads the orbit files (GNI1B / GNV1B, small: 1 Hz) into the thermal collector before the replay
-/// (orbit first: no head epoch waits for its orbit). False with *error (file:line: reason).
-bool pushOrbitFiles(const std::vector<std::string>& files, const io::ReadOptions& opt, calib::ThermalCollector& c,
-                    std::string* error) {
-  for (const auto& f : files) {
-    io::ProductStream<io::GnvRecord> st;
-    if (!st.open(f, opt, error)) return false;
-    io::GnvRecord r;
-    while (st.next(r)) c.pushOrbit(r);
-    if (!st.ok()) {
-      *error = st.error();
-      return false;
-    }
-    // Every record read is used or rejected with its reason, orbit files too.
-    std::printf("%s: %zu read, %zu used", f.c_str(), st.records() + st.rejectedCount(), st.records());
-    if (st.rejectedCount() > st.implausibleCount())
-      std::printf(", %zu %s", st.rejectedCount() - st.implausibleCount(), stream::rejectName(stream::Reject::kMalformed));
-    if (st.implausibleCount())
-      std::printf(", %zu %s", st.implausibleCount(), stream::rejectName(stream::Reject::kImplausible));
-    std::printf("\n");
-    for (std::size_t k = 0; k < st.rejected().size() && k < 5; ++k)
-      std::printf("    rejected %s\n", st.rejected()[k].str().c_str());
-  }
-  return true;
-}
 
 int fail(const std::string& msg) {
   std::fprintf(stderr, "boresight calibrate: %s\n", msg.c_str());
@@ -364,7 +341,7 @@ int runCalibrate(int argc, char** argv) {
   stream::AssemblerConfig acfg;
   acfg.lookahead_us = static_cast<TimeUs>(std::llround(lookahead_s * 1e6));
   stream::Engine engine(acfg);
-  if (!engine.configure(pc.pipeline, &err) || !stream::addSources(in, opt, true, engine, &err)) return fail(err);
+  if (!engine.configure(pc.pipeline, &err)) return fail(err);
   calib::SpanBuilder builder;
   calib::SpanOptions spo;
   spo.decimation_s = decimation;
@@ -379,15 +356,18 @@ int runCalibrate(int argc, char** argv) {
   if (!builder.configure(pc.pipeline, spo, &err)) return fail(err);
   // The thermal harmonic fit of the heads' relative deformation needs the argument of latitude: only
   // with an orbit among the inputs.
+  // with an orbit among the inputs (GNI1B / GNV1B files, or an LCM log's ORBIT messages), read in the
+  // same stream as the heads.
   calib::ThermalCollector thermal;
-  const bool with_thermal = !in.orbit.empty() && pc.pipeline.heads.n_heads >= 2;
-  if (with_thermal && (!thermal.configure(pc.pipeline.heads, calib::ThermalFitConfig{}, &err) ||
-                       !pushOrbitFiles(in.orbit, opt, thermal, &err)))
-    return fail(err);
+  bool with_thermal = (!in.orbit.empty() || !in.lcm.empty()) && pc.pipeline.heads.n_heads >= 2;
+  if (with_thermal && !thermal.configure(pc.pipeline.heads, calib::ThermalFitConfig{}, &err)) return fail(err);
   for (const auto& f : in.orbit) std::printf("%s: orbit for the thermal harmonic fit\n", f.c_str());
   SpanFeed feed(builder, with_thermal ? &thermal : nullptr);
-  engine.addObserver(&feed);
+  engine.addObserver(&feed);  // before the sources: the orbit files are opened for an observer that wants them
+  if (!stream::addSources(in, opt, true, engine, &err)) return fail(err);
   if (engine.run() != stream::Engine::Result::kDone) return fail(engine.error());
+  const bool orbit_seen = engine.orbitSamples() > 0;
+  with_thermal = with_thermal && orbit_seen;
   stages.mark("replay and span");
   printSourceCounters(engine);
   const core::Health h = engine.health();
@@ -482,9 +462,10 @@ int runCalibrate(int argc, char** argv) {
     stages.mark("thermal fit");
     for (const auto& f : in.orbit) ctx.inputs.push_back(f);
   } else {
-    ctx.thermal = {{"status", in.orbit.empty() ? "not computed: no GNI1B or GNV1B among the inputs (the harmonic "
-                                                 "model needs the argument of latitude)"
-                                               : "not computed: one head"}};
+    ctx.thermal = {{"status", pc.pipeline.heads.n_heads < 2 ? "not computed: one head"
+                                                               : "not computed: no orbit among the inputs (GNI1B or GNV1B "
+                                                                 "files, ORBIT messages; the harmonic model needs the "
+                                                                 "argument of latitude)"}};
   }
   ctx.ignored.clear();
   for (const auto& ig : in.ignored)

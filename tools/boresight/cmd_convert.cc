@@ -39,7 +39,8 @@ const char* kUsage =
     "streamed and merged with a bounded look-ahead (memory does not grow with the span): a record more\n"
     "than --lookahead seconds out of time order is rejected as late and counted.\n"
     "\n"
-    "LCM to Level-1: writes SCA1A_<date>_<sat>_04.txt and ACC1A_<date>_<sat>_04.txt in DIR. The LCM\n"
+    "LCM to Level-1: writes SCA1A_<date>_<sat>_04.txt and ACC1A_<date>_<sat>_04.txt in DIR, and the ORBIT\n"
+    "messages as GNI1B (inertial) or GNV1B (Earth-fixed) files by their frame. The LCM\n"
     "types carry time, head, quaternion, star count and accelerations; the SCA1A fields nlocks,\n"
     "sca_confid, sca_mode and qualflg and the ACC1A ICU block number are not in them and come back as 0.\n"
     "\n"
@@ -302,7 +303,8 @@ int toLevel1(const Options& a) {
   }
   sim::ChunkedProductWriter<io::Sca1aRecord> sca;
   sim::ChunkedProductWriter<io::FlaggedRecord> acc;
-  std::string sca_path, acc_path;
+  sim::ChunkedProductWriter<io::GnvRecord> gni, gnv;  // ORBIT messages by frame: inertial, Earth-fixed
+  std::string sca_path, acc_path, gni_path, gnv_path;
   std::uint64_t invalid_heads = 0, invalid_accel = 0;
   io::OutputDir out_dir;  // created when missing, removed again when the conversion fails
   if (!out_dir.open(dir, &err)) {
@@ -346,6 +348,28 @@ int toLevel1(const Options& a) {
         }
       }
       acc.add(io::acc1aFromAccel(m, sat));
+    } else if (k == io::LcmLogReader::Kind::Orbit) {
+      const io::OrbitSample& o = reader.orbit();
+      const bool inertial = o.frame == 'I';
+      std::string& path = inertial ? gni_path : gnv_path;
+      auto& w = inertial ? gni : gnv;
+      if (path.empty()) {
+        path = pathFor(inertial ? "GNI1B" : "GNV1B", o.utime);
+        if (refuseOverInput(path)) return 1;
+        if (!w.open(path, io::makeProduct<io::GnvRecord>(inertial ? io::Product::GNI1B : io::Product::GNV1B, sat), &err)) {
+          std::fprintf(stderr, "boresight convert: %s\n", err.c_str());
+          return 1;
+        }
+      }
+      io::GnvRecord g;
+      g.t = o.utime;
+      g.satellite = sat;
+      g.coord_ref = o.frame;
+      for (int i = 0; i < 3; ++i) {
+        g.pos[i] = o.r_m[i];
+        g.vel[i] = o.v_m_s[i];
+      }
+      w.add(g);
     }
   }
   if (sca_path.empty() && acc_path.empty()) {
@@ -370,6 +394,8 @@ int toLevel1(const Options& a) {
   };
   finish(sca, sca_path);
   finish(acc, acc_path);
+  finish(gni, gni_path);
+  finish(gnv, gnv_path);
   if (status == 0) out_dir.keep();
   if (reader.unknownChannel() || reader.decodeFailures())
     std::printf("%s: %llu events on other channels and %llu undecodable messages skipped\n", log.c_str(),

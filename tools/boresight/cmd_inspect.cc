@@ -102,6 +102,7 @@ io::ProductSummary summarizeLcm(const std::string& path) {
     if (k == io::LcmLogReader::Kind::Skipped) continue;
     const TimeUs t = k == io::LcmLogReader::Kind::Head    ? h.utime
                      : k == io::LcmLogReader::Kind::Stars ? r.stars().utime
+                     : k == io::LcmLogReader::Kind::Orbit ? r.orbit().utime
                                                           : a.utime;
     if (!s.has_time) s.first_time = t;
     s.has_time = true;

@@ -51,8 +51,10 @@ const char* kUsage =
     "                        with the ideal noise preset)\n"
     "  --out FILE.csv        output table\n"
     "  --overlay FILE        a model overlay (README \"The model overlay\"): its noise models replace the\n"
-    "                        platform file's (fusion weights), its mountings the platform file's or QSA1B's;\n"
-    "                        the parts process does not use are listed as not applied\n"
+    "                        platform file's (fusion weights), its mountings the platform file's or QSA1B's,\n"
+    "                        its thermal terms predict the relative corrections of head pairs a head epoch\n"
+    "                        does not see (with the orbit: GNI1B / GNV1B files or ORBIT messages among the\n"
+    "                        inputs); the parts process does not use are listed as not applied\n"
     "  --compare-sca1b FILE  compare the fused attitude with the official SCA1B product: per-axis mean\n"
     "                        and scatter of the difference (arcsec, body axes)\n"
     "  --clk1b FILE          receiver-to-GPS clock offsets for that comparison (Level-1A tags are\n"
@@ -65,7 +67,8 @@ const char* kUsage =
     "                        sorted in; older ones are counted as rejected (late)\n"
     "  --strict              stop at the first malformed input line\n"
     "\n"
-    "Other Level-1 products among the inputs (GNV1B, SCA1B, CLK1B, ...) are listed as ignored. Level-1\n"
+    "Other Level-1 products among the inputs (SCA1B, CLK1B, ...; GNV1B/GNI1B without thermal terms) are\n"
+    "listed as ignored. Level-1\n"
     "files and LCM logs are not mixed in one run. Every record read is reported as used or rejected\n"
     "with its reason.\n";
 
@@ -144,7 +147,9 @@ int runProcess(int argc, char** argv) {
     return 1;
   }
   io::OverlayUse ovu;
-  if (!overlay.empty() && !io::applyOverlay(overlay, "boresight process", {}, pc, ovu, &err)) {
+  io::OverlayUses uses;
+  uses.thermal = true;
+  if (!overlay.empty() && !io::applyOverlay(overlay, "boresight process", uses, pc, ovu, &err)) {
     std::fprintf(stderr, "boresight process: %s\n", err.c_str());
     return 1;
   }
@@ -165,9 +170,17 @@ int runProcess(int argc, char** argv) {
     std::fprintf(stderr, "boresight process: %s\n", err.c_str());
     return 1;
   }
-  for (const auto& [f, product] : in.ignored)
-    std::printf("%s: %s is not an input of process (SCA1A, ACC1A, SCV1A, QSA1B, LCM log): ignored\n", f.c_str(),
-                product.c_str());
+  const bool thermal = ovu.thermal_model.has_value();
+  for (const auto& [f, product] : in.ignored) {
+    const bool orbit = product == "GNV1B" || product == "GNI1B";
+    if (orbit && thermal) std::printf("%s: orbit for the thermal prediction (the overlay's thermal terms)\n", f.c_str());
+    else if (orbit)
+      std::printf("%s: %s is read only with thermal terms in an --overlay (the thermal prediction): ignored\n", f.c_str(),
+                  product.c_str());
+    else
+      std::printf("%s: %s is not an input of process (SCA1A, ACC1A, SCV1A, QSA1B, GNV1B/GNI1B, LCM log): ignored\n",
+                  f.c_str(), product.c_str());
+  }
   io::ReadOptions opt;
   if (strict) opt.on_error = io::OnError::Stop;
   if (!stream::prepareConfig(in, opt, pc, &err)) {
@@ -178,7 +191,8 @@ int runProcess(int argc, char** argv) {
   stream::AssemblerConfig acfg;
   acfg.lookahead_us = static_cast<TimeUs>(std::llround(lookahead_s * 1e6));
   stream::Engine engine(acfg);
-  if (!engine.configure(pc.pipeline, &err) || !stream::addSources(in, opt, true, engine, &err)) {
+  if (!engine.configure(pc.pipeline, &err) || (thermal && !engine.setThermalModel(*ovu.thermal_model, &err)) ||
+      !stream::addSources(in, opt, true, engine, &err)) {
     std::fprintf(stderr, "boresight process: %s\n", err.c_str());
     return 1;
   }
@@ -209,10 +223,11 @@ int runProcess(int argc, char** argv) {
   if (csv.rows() && !csv.withRates())
     std::printf("  no rates: the CRN needs about %.0f s of data before and after an epoch; the input spans %.1f s\n",
                 pc.pipeline.crn_attitude.length_s / 2, toSeconds(engine.lastEpoch() - engine.firstEpoch()));
-  std::printf("inputs: %llu read = %llu used (%llu head samples in %llu epochs, %llu accelerometer) + %llu rejected\n",
+  std::printf("inputs: %llu read = %llu used (%llu head samples in %llu epochs, %llu accelerometer%s%s) + %llu rejected\n",
               static_cast<unsigned long long>(tot.read), static_cast<unsigned long long>(tot.used()),
               static_cast<unsigned long long>(tot.used_heads), static_cast<unsigned long long>(engine.epochs()),
-              static_cast<unsigned long long>(tot.used_accel), static_cast<unsigned long long>(tot.rejectedTotal()));
+              static_cast<unsigned long long>(tot.used_accel), tot.used_orbit ? ", orbit " : "",
+              tot.used_orbit ? std::to_string(tot.used_orbit).c_str() : "", static_cast<unsigned long long>(tot.rejectedTotal()));
   if (tot.used_stars > 0 || !stars_out.empty()) {
     std::printf("star vectors: %llu in %llu star epochs, %llu epochs solved (multi-head Wahba)%s%s\n",
                 static_cast<unsigned long long>(tot.used_stars), static_cast<unsigned long long>(engine.starEpochs()),
@@ -221,6 +236,12 @@ int runProcess(int argc, char** argv) {
     if (!stars_out.empty() && tot.used_stars == 0)
       std::printf("  no star vectors among the inputs (SCV1A files or STAR_VECTORS messages): %s has a header only\n",
                   stars_out.c_str());
+  }
+  if (thermal) {
+    std::printf("orbit: %llu samples stepped the thermal prediction of the pairs a head epoch does not see\n",
+                static_cast<unsigned long long>(engine.orbitSamples()));
+    if (engine.orbitSamples() == 0)
+      std::printf("warning: thermal terms without orbit input (GNI1B / GNV1B files, ORBIT messages): no pair was predicted\n");
   }
   printCoreHealth(engine.health());
   for (const auto& w : io::validityWarnings(ovu, engine.firstEpoch(), engine.lastEpoch())) std::printf("warning: %s\n", w.c_str());

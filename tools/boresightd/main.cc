@@ -294,6 +294,7 @@ int run(int argc, char** argv) {
   j["messages_per_s"] = wall > 0 ? static_cast<double>(c.received) / wall : 0.0;
   j["head_epochs"] = c.head_epochs;
   j["accel_steps"] = c.accel_steps;
+  j["orbit_steps"] = c.orbit_steps;
   j["star_epochs"] = c.star_epochs;
   j["rows"] = c.rows;
   j["time_resyncs"] = c.time_resyncs;

@@ -110,7 +110,7 @@ class LcmLogWriter {
 /// Reads a log event by event. Unknown channels and undecodable messages are counted, not fatal.
 class LcmLogReader {
  public:
-  enum class Kind { Head, Accel, Skipped, End, Stars };
+  enum class Kind { Head, Accel, Skipped, End, Stars, Orbit };
   LcmLogReader();
   ~LcmLogReader();
   LcmLogReader(const LcmLogReader&) = delete;
@@ -120,6 +120,8 @@ class LcmLogReader {
   Kind next(HeadSample& head, AccelSample& accel);
   /// After next() returned Kind::Stars: the star-vector message (STAR_VECTORS channel).
   const StarVectors& stars() const { return stars_; }
+  /// After next() returned Kind::Orbit: the orbit message (ORBIT channel).
+  const OrbitSample& orbit() const { return orbit_; }
   /// One event of the log as it is: channel and encoded bytes (valid until the next call). size -1:
   /// bytes that are not an event (skipped up to the next sync word). False at the end. Use either
   /// next() or nextRaw() on one reader (the node decodes the bytes itself, like live traffic).
@@ -138,6 +140,7 @@ class LcmLogReader {
   std::unique_ptr<Impl> impl_;
   std::uint64_t unknown_channel_ = 0, decode_failures_ = 0;
   StarVectors stars_{};
+  OrbitSample orbit_{};
 };
 
 /// Decodes one STAR_VECTORS message (false: not decodable or n_stars outside 0..kCapacity).

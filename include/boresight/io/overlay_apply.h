@@ -5,7 +5,10 @@
 //     are derived again (io::deriveHeadSigmas);
 //   - mountings: the overlay's q_Si_B of a head replaces the platform file's or QSA1B's; when it gives
 //     every configured head, no QSA1B is needed;
-//   - every other part (thermal terms, accelerometer terms, time offsets, noise or mountings of heads
+//   - thermal (for programs that take it: process, boresightd): the terms as the core's thermal model
+//     (OverlayUse::thermal_model), which predicts the relative corrections of pairs a head epoch does
+//     not see from the orbit (Engine::setThermalModel);
+//   - every other part (accelerometer terms, time offsets, noise or mountings of heads
 //     the platform does not configure, and parts the program does not use) is named as not applied,
 //     with the reason: never silently ignored.
 // Call before stream::prepareConfig (which applies QSA1B to the heads the overlay leaves).
@@ -14,6 +17,7 @@
 #include <boresight/io/core_config.h>
 #include <boresight/model/overlay.h>
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -23,6 +27,7 @@ namespace boresight::io {
 struct OverlayUses {
   bool noise = true;
   bool mountings = true;
+  bool thermal = false;  ///< the program runs the core's thermal prediction (needs the orbit among its inputs)
 };
 
 /// What a program did with an overlay (for its terminal output and its JSON / report).
@@ -31,7 +36,19 @@ struct OverlayUse {
   model::Overlay overlay;                ///< as read
   std::vector<std::string> applied;      ///< "noise: head 1 cross_x, ...", "mountings: heads 1, 2, 3 (datum ...)"
   std::vector<std::string> not_applied;  ///< "thermal: PROGRAM does not use thermal terms", ...
+  /// The overlay's thermal terms as the core's model (OverlayUses::thermal and the overlay has them).
+  std::optional<core::ThermalHarmonicModel> thermal_model;
 };
+
+/// The overlay's thermal terms as the core's model (core/thermal_harmonics.h) for the platform's head
+/// set: every harmonic any head names becomes one of the model's orders (at most
+/// core::kMaxThermalHarmonics), a head's missing harmonic is zero, the beta modulation is on when a
+/// head has beta harmonics (then beta_ref is needed). The prediction covariance of a head is diagonal:
+/// per axis the constant's variance plus half the sum of its harmonics' cos and sin variances (their
+/// mean over the orbit; a sigma the overlay does not give counts as zero). Anchored prediction. False
+/// with *error: a head or the datum not in the platform, the datum with terms, too many harmonics.
+bool thermalModelFromOverlay(const model::ThermalTerms& t, const core::HeadSetConfig& heads,
+                             core::ThermalHarmonicModel& out, std::string* error);
 
 /// Reads the overlay at `path` (refusing an unknown version or key with FILE:LINE) and lays it over
 /// `pc` for `program` (its name in the messages, e.g. "boresight process"). False with *error; an

@@ -45,6 +45,7 @@
 #include <atomic>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -69,6 +70,7 @@ enum class Reason : std::uint8_t {
   kImplausible,      ///< a finite value outside its physical gate (core/plausibility.h): an angular
                      ///< acceleration beyond 0.1 rad/s^2
   kCommand,          ///< a command that does not apply: unknown, or naming a calibration not held / not in use
+  kNoConsumer,       ///< an input nothing in this configuration uses: ORBIT without thermal terms in the overlay
   kCount
 };
 constexpr int kReasonCount = static_cast<int>(Reason::kCount);
@@ -113,6 +115,10 @@ struct NodeConfig {
   /// gives every head the node does not wait for the message).
   std::string overlay;
   std::uint32_t overlay_mounting_mask = 0;
+  /// The overlay's thermal terms as the core's model (io::thermalModelFromOverlay): with it, ORBIT
+  /// messages step the core's thermal prediction of the pairs a head epoch does not see; without it
+  /// they are rejected as no_consumer.
+  std::optional<core::ThermalHarmonicModel> thermal_model;
   /// The accelerometer's white noise per A axis for the worker's method A (the platform's noise
   /// section, or the overlay's), rad/s^2 per sample.
   Vec3 acc_white_noise_radps2 = Vec3(1.5e-7, 3.0e-8, 5.0e-8);
@@ -158,6 +164,7 @@ struct Counters {
   std::uint64_t received = 0, used = 0, lost = 0;
   std::array<std::uint64_t, kReasonCount> rejected{};
   std::uint64_t head_epochs = 0, accel_steps = 0, star_epochs = 0, rows = 0;
+  std::uint64_t orbit_steps = 0;  ///< orbit samples the core's thermal prediction stepped with
   std::uint64_t calibrations_published = 0, calibrations_applied = 0, calibrations_refused = 0;
   std::uint64_t ring_high_water = 0, ring_dropped = 0, ring_waits = 0;
   std::uint64_t stars_dropped = 0;  ///< star vectors (not messages) the assembler refused

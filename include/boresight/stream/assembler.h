@@ -39,7 +39,7 @@ struct AssemblerConfig {
 
 class EpochAssembler {
  public:
-  enum class Out : std::uint8_t { kHeads, kAccel, kEnd, kPending, kError, kStars };
+  enum class Out : std::uint8_t { kHeads, kAccel, kEnd, kPending, kError, kStars, kOrbit };
 
   explicit EpochAssembler(const AssemblerConfig& cfg = {});
   /// Sources are read in the order added (ties at equal tags too). Not owned.
@@ -47,13 +47,15 @@ class EpochAssembler {
   /// The next epoch (kHeads: `epoch`), accelerometer sample (kAccel: `t`, `a_A`) or star epoch
   /// (kStars: `*stars`, all star vectors of one tag, at most core::kMaxStarInputs: the rest are
   /// rejected as kTooManyStars). Without `stars`, star vectors are rejected as kNoStarConsumer
-  /// (counted, never handed out). kPending: a source has nothing now (call again later); kError: a
-  /// source failed (errorSource()).
-  Out next(core::HeadEpoch& epoch, TimeUs& t, Vec3& a_A, core::StarEpoch* stars = nullptr);
+  /// (counted, never handed out). kOrbit: `*orbit` holds an orbit sample; without `orbit`, orbit
+  /// samples are rejected as kNoOrbitConsumer. kPending: a source has nothing now (call again later);
+  /// kError: a source failed (errorSource()).
+  Out next(core::HeadEpoch& epoch, TimeUs& t, Vec3& a_A, core::StarEpoch* stars = nullptr, Sample* orbit = nullptr);
   /// The same merge one sample at a time, with every field the source gave (kHeads: a head sample,
   /// kAccel: an accelerometer sample), for consumers that write messages rather than feed the core
   /// (`boresight convert`). Same order, look-ahead, late rule and counters as next(), except that
-  /// samples are not grouped into epochs, so no kTooManyHeads. Use one of next() and nextSample().
+  /// samples are not grouped into epochs, so no kTooManyHeads; orbit samples come as kOrbit. Use one of
+  /// next() and nextSample().
   Out nextSample(Sample& s);
 
   /// A re-synchronisation (the node after a confirmed clock step back): what is buffered is handed out

@@ -12,6 +12,7 @@
 
 #include <boresight/core/pipeline.h>
 #include <boresight/stream/assembler.h>
+#include <boresight/model/orbit_context.h>
 #include <boresight/stream/sinks.h>
 #include <boresight/stream/source.h>
 
@@ -20,6 +21,12 @@
 #include <vector>
 
 namespace boresight::stream {
+
+/// The orbit angles of an orbit sample (model/orbit_context.h: GNV1B rotated by the Earth rotation
+/// angle): u, du/dt and beta as the core's thermal prediction takes them. False when the position and
+/// velocity span no orbit plane; then the angles are NaN (the core counts that input as non-finite).
+/// The engine and the node step Pipeline::stepOrbit with it.
+bool orbitAngles(const Sample& s, model::OrbitSample& out);
 
 class Engine {
  public:
@@ -32,6 +39,16 @@ class Engine {
 
   /// Configures the core. False with *error when the core rejects the configuration.
   bool configure(const core::PipelineConfig& cfg, std::string* error);
+  /// The thermal model of the heads' relative deformation (Pipeline::setThermalModel), after
+  /// configure(): from then on the engine reads the orbit inputs (addSources opens GNI1B / GNV1B files;
+  /// an LCM log's ORBIT messages are samples) and steps the core's thermal prediction with them.
+  /// False with *error when the core refuses the model.
+  bool setThermalModel(const core::ThermalHarmonicModel& m, std::string* error);
+  /// The orbit is read: the core has a thermal model, or an observer wants the orbit. Otherwise orbit
+  /// samples are counted as rejected (Reject::kNoOrbitConsumer) and orbit files are not opened.
+  bool wantsOrbit() const;
+  /// Orbit samples handed to the core's thermal prediction and the observers that take the orbit.
+  std::uint64_t orbitSamples() const { return orbit_samples_; }
   void addSource(std::unique_ptr<Source> s);
   void addSink(RowSink* sink);  ///< not owned; must outlive run()
   /// Sees every head epoch (validated, see InputObserver) and accelerometer sample handed to the core;
@@ -69,7 +86,8 @@ class Engine {
   core::HeadSetConfig heads_cfg_{};
   std::string error_;
   bool configured_ = false, begun_ = false, finished_ = false;
-  std::uint64_t rows_ = 0, epochs_ = 0, star_epochs_ = 0, star_solutions_ = 0;
+  std::uint64_t rows_ = 0, epochs_ = 0, star_epochs_ = 0, star_solutions_ = 0, orbit_samples_ = 0;
+  Sample orbit_{};  ///< the orbit sample the assembler hands out
   std::unique_ptr<core::StarEpoch> stars_;  ///< scratch (a star epoch is ~5 kB)
   TimeUs first_epoch_ = 0, last_epoch_ = 0;
 };

@@ -25,8 +25,9 @@ struct ReplayInputs {
   std::vector<std::string> qsa;            ///< QSA1B files (read up front: mountings)
   std::vector<io::QsaRecord> qsa_records;
   std::vector<std::pair<std::string, std::string>> ignored;  ///< (file, product): not a replay input
-  /// GNV1B / GNI1B files (orbit): not a replay input either, so also in `ignored`; a consumer that
-  /// wants the orbit (calibrate's thermal fit: the argument of latitude) reads them from here.
+  /// GNV1B / GNI1B files (orbit): also listed in `ignored`, since most runs do not read them;
+  /// addSources opens them when the engine wants the orbit (Engine::wantsOrbit: a thermal model in the
+  /// core, or an observer that takes the orbit); calibrate's thermal fit reads them from here.
   std::vector<std::string> orbit;
 };
 
@@ -49,8 +50,9 @@ bool prepareConfig(const ReplayInputs& in, const io::ReadOptions& opt, io::Platf
 bool checkSampleRates(const ReplayInputs& in, const io::ReadOptions& opt, const core::PipelineConfig& cfg,
                       std::string* error);
 
-/// One source per input file, in the order SCA1A files, ACC1A files, SCV1A files, LCM logs (that order also
-/// breaks ties at equal time tags). `prefetch`: each is read on its own worker thread.
+/// One source per input file, in the order SCA1A files, ACC1A files, SCV1A files, orbit files (only
+/// when engine.wantsOrbit(): set the thermal model and add the observers first), LCM logs (that order
+/// also breaks ties at equal time tags). `prefetch`: each is read on its own worker thread.
 bool addSources(const ReplayInputs& in, const io::ReadOptions& opt, bool prefetch, Engine& engine, std::string* error);
 
 }  // namespace boresight::stream

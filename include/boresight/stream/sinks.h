@@ -4,6 +4,7 @@
 
 #include <boresight/core/pipeline.h>
 #include <boresight/io/files.h>
+#include <boresight/model/orbit_context.h>
 
 #include <cstdio>
 #include <string>
@@ -45,6 +46,10 @@ class InputObserver {
   virtual ~InputObserver() = default;
   virtual void onHeads(const core::HeadEpoch& /*e*/, core::Status /*core_status*/) {}
   virtual void onAcc(TimeUs /*t*/, const Vec3& /*a_A*/, core::Status /*core_status*/) {}
+  /// True when this observer takes the orbit (then the engine reads orbit inputs and calls onOrbit).
+  virtual bool wantsOrbit() const { return false; }
+  /// An orbit sample with its angles (model/orbit_context.h), in time order with the other inputs.
+  virtual void onOrbit(const model::OrbitSample& /*o*/) {}
   /// After the last input (before the sinks end); a consumer completes what it holds.
   virtual void onEnd() {}
 };

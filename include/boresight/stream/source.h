@@ -21,7 +21,9 @@ namespace boresight::stream {
 struct Sample {
   /// Order at equal tags: heads first (the monitor's corrections are then those of the star epoch's
   /// own head epoch), then the accelerometer, then star vectors.
-  enum class Kind : std::uint8_t { kHead = 0, kAccel = 1, kStar = 2 };
+  /// Orbit samples (GNI1B / GNV1B records, ORBIT messages) come last: the thermal prediction of a head
+  /// epoch uses the orbit input before it.
+  enum class Kind : std::uint8_t { kHead = 0, kAccel = 1, kStar = 2, kOrbit = 3 };
   Kind kind = Kind::kHead;
   TimeUs t = 0;                 ///< sensor time tag, us past GPS J2000
   int head_id = 0;              ///< kHead: telemetry id
@@ -34,6 +36,9 @@ struct Sample {
   Vec3 lin_A = Vec3::Zero();     ///< kAccel: linear acceleration, m/s^2, accelerometer frame (flags bit 1)
   core::StarObservation star{};  ///< kStar: head id, measured direction in the head frame, catalogue
                                  ///< direction in I, sigma (0: the head's configured sigma_star)
+  Vec3 r_orbit = Vec3::Zero();   ///< kOrbit: position, m, in the frame `orbit_frame`
+  Vec3 v_orbit = Vec3::Zero();   ///< kOrbit: velocity, m/s, in the frame `orbit_frame`
+  char orbit_frame = 'I';        ///< kOrbit: 'I' inertial (GNI1B, ORBIT messages), 'E' Earth-fixed (GNV1B)
 };
 
 /// Why an input record or message was not handed to the core.
@@ -51,6 +56,8 @@ enum class Reject : std::uint8_t {
   kTimeOutlier,     ///< a tag far from its neighbours in its source (beyond the look-ahead from the
                     ///< source's time, not confirmed by the next sample): one corrupt tag
   kDuplicate,       ///< the same head at the same tag again (a file given twice, a repeated record)
+  kNoOrbitConsumer, ///< an orbit sample, and nothing in this run uses the orbit (no thermal model, no
+                    ///< thermal fit)
   kCount
 };
 constexpr int kRejectCount = static_cast<int>(Reject::kCount);
@@ -62,8 +69,10 @@ struct Counters {
   std::uint64_t used_heads = 0;  ///< head samples handed to the core
   std::uint64_t used_accel = 0;  ///< accelerometer samples handed to the core
   std::uint64_t used_stars = 0;  ///< star vectors handed to the core (each star counts once)
+  std::uint64_t used_orbit = 0;  ///< orbit samples handed to their consumer (the core's thermal
+                                 ///< prediction, a thermal fit)
   std::array<std::uint64_t, kRejectCount> rejected{};
-  std::uint64_t used() const { return used_heads + used_accel + used_stars; }
+  std::uint64_t used() const { return used_heads + used_accel + used_stars + used_orbit; }
   std::uint64_t rejectedTotal() const {
     std::uint64_t n = 0;
     for (auto v : rejected) n += v;

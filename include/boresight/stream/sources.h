@@ -107,7 +107,15 @@ class ScvSource final : public Level1FileSource<io::ScvRecord> {
   Next next(Sample& out, Reject& why) override;
 };
 
-/// An LCM log (channels STAR_HEAD, ACCEL and STAR_VECTORS, see io/lcm_log.h) read message by message
+/// GNI1B (inertial) or GNV1B (Earth-fixed) orbit records from one file, in file order, as kOrbit samples
+/// with the record's frame; a position or velocity outside the plausibility gates is rejected as
+/// Reject::kImplausible (the reader's gates: a well-formed record far from any orbit).
+class OrbitFileSource final : public Level1FileSource<io::GnvRecord> {
+ public:
+  Next next(Sample& out, Reject& why) override;
+};
+
+/// An LCM log (channels STAR_HEAD, ACCEL, STAR_VECTORS and ORBIT, see io/lcm_log.h) read message by message
 /// straight into samples; a STAR_VECTORS message gives one sample per star. Head messages without the
 /// valid bit, accelerometer messages without valid angular acceleration and star messages without
 /// the valid bit or stars are rejected with their reason; other channels and undecodable messages too;
