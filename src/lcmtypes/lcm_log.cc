@@ -7,9 +7,12 @@
 #include "boresight_lcm/orbit_sample_t.hpp"
 #include "boresight_lcm/star_vectors_t.hpp"
 
+#include <boresight/core/plausibility.h>
+
 #include <lcm/lcm-cpp.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
@@ -411,6 +414,15 @@ bool LcmLogReader::nextRaw(RawEvent& out) {
   return true;
 }
 
+bool inputKindOf(const std::string& channel, InputKind& kind) {
+  if (channel == kStarHeadChannel) kind = InputKind::kHead;
+  else if (channel == kAccelChannel) kind = InputKind::kAccel;
+  else if (channel == kStarVectorsChannel) kind = InputKind::kStars;
+  else if (channel == kOrbitChannel) kind = InputKind::kOrbit;
+  else return false;
+  return true;
+}
+
 LcmLogReader::Kind LcmLogReader::next(HeadSample& head, AccelSample& accel) {
   const Impl::Event* ev = impl_->readNextEvent();
   if (!ev) return Kind::End;
@@ -418,51 +430,127 @@ LcmLogReader::Kind LcmLogReader::next(HeadSample& head, AccelSample& accel) {
     ++decode_failures_;
     return Kind::Skipped;
   }
-  if (ev->channel == kStarHeadChannel) {
-    boresight_lcm::star_head_sample_t m;
-    if (m.decode(ev->data, 0, ev->datalen) != ev->datalen) {
-      ++decode_failures_;
-      return Kind::Skipped;
-    }
-    head.utime = m.utime;
-    head.head_id = m.head_id;
-    for (int i = 0; i < 4; ++i) head.q[i] = m.q[i];
-    head.star_count = m.star_count;
-    head.flags = m.flags;
-    head.seq = m.seq;
-    return Kind::Head;
+  InputKind kind;
+  if (!inputKindOf(ev->channel, kind)) {
+    ++unknown_channel_;
+    return Kind::Skipped;
   }
-  if (ev->channel == kAccelChannel) {
-    boresight_lcm::accel_sample_t m;
-    if (m.decode(ev->data, 0, ev->datalen) != ev->datalen) {
-      ++decode_failures_;
-      return Kind::Skipped;
-    }
-    accel.utime = m.utime;
-    for (int i = 0; i < 3; ++i) {
-      accel.ang_accel[i] = m.ang_accel[i];
-      accel.lin_accel[i] = m.lin_accel[i];
-    }
-    accel.flags = m.flags;
-    accel.seq = m.seq;
-    return Kind::Accel;
+  if (!decodeInput(kind, ev->data, ev->datalen, msg_)) {
+    ++decode_failures_;
+    return Kind::Skipped;
   }
-  if (ev->channel == kStarVectorsChannel) {
-    if (!decodeStarVectors(ev->data, ev->datalen, stars_)) {
-      ++decode_failures_;
-      return Kind::Skipped;
-    }
-    return Kind::Stars;
+  switch (kind) {
+    case InputKind::kHead: head = msg_.head; return Kind::Head;
+    case InputKind::kAccel: accel = msg_.accel; return Kind::Accel;
+    case InputKind::kStars: return Kind::Stars;
+    case InputKind::kOrbit: return Kind::Orbit;
   }
-  if (ev->channel == kOrbitChannel) {
-    if (!decodeOrbit(ev->data, ev->datalen, orbit_)) {
-      ++decode_failures_;
-      return Kind::Skipped;
-    }
-    return Kind::Orbit;
-  }
-  ++unknown_channel_;
   return Kind::Skipped;
+}
+
+TimeUs InputMessage::utime() const {
+  switch (kind) {
+    case InputKind::kHead: return head.utime;
+    case InputKind::kAccel: return accel.utime;
+    case InputKind::kStars: return stars.utime;
+    case InputKind::kOrbit: return orbit.utime;
+  }
+  return 0;
+}
+
+std::int32_t InputMessage::seq() const {
+  switch (kind) {
+    case InputKind::kHead: return head.seq;
+    case InputKind::kAccel: return accel.seq;
+    case InputKind::kStars: return stars.seq;
+    case InputKind::kOrbit: return orbit.seq;
+  }
+  return 0;
+}
+
+bool decodeInput(InputKind kind, const void* data, int size, InputMessage& out) {
+  out.kind = kind;
+  switch (kind) {
+    case InputKind::kHead: {
+      boresight_lcm::star_head_sample_t m;
+      if (m.decode(data, 0, size) != size) return false;
+      HeadSample& h = out.head;
+      h.utime = m.utime;
+      h.head_id = m.head_id;
+      for (int i = 0; i < 4; ++i) h.q[i] = m.q[i];
+      h.star_count = m.star_count;
+      h.flags = m.flags;
+      h.seq = m.seq;
+      return true;
+    }
+    case InputKind::kAccel: {
+      boresight_lcm::accel_sample_t m;
+      if (m.decode(data, 0, size) != size) return false;
+      AccelSample& a = out.accel;
+      a.utime = m.utime;
+      for (int i = 0; i < 3; ++i) {
+        a.ang_accel[i] = m.ang_accel[i];
+        a.lin_accel[i] = m.lin_accel[i];
+      }
+      a.flags = m.flags;
+      a.seq = m.seq;
+      return true;
+    }
+    case InputKind::kStars: return decodeStarVectors(data, size, out.stars);
+    case InputKind::kOrbit: return decodeOrbit(data, size, out.orbit);
+  }
+  return false;
+}
+
+const char* inputFaultName(InputFault f) {
+  switch (f) {
+    case InputFault::kNone: return "none";
+    case InputFault::kInvalidFlag: return "invalid_flag";
+    case InputFault::kNonFinite: return "non_finite";
+    case InputFault::kNonUnit: return "non_unit";
+    case InputFault::kImplausible: return "implausible";
+  }
+  return "?";
+}
+
+InputFault checkInput(const InputMessage& m, double quat_tol) {
+  auto finite = [](const double* v, int n) {
+    for (int i = 0; i < n; ++i)
+      if (!std::isfinite(v[i])) return false;
+    return true;
+  };
+  switch (m.kind) {
+    case InputKind::kHead:
+      if (!(m.head.flags & 1)) return InputFault::kInvalidFlag;
+      switch (plausibility::checkQuaternion(m.head.q, quat_tol)) {
+        case plausibility::Quaternion::kOk: return InputFault::kNone;
+        case plausibility::Quaternion::kNonFinite: return InputFault::kNonFinite;
+        default: return InputFault::kNonUnit;
+      }
+    case InputKind::kAccel:
+      if (!(m.accel.flags & 1)) return InputFault::kInvalidFlag;
+      if (!finite(m.accel.ang_accel, 3)) return InputFault::kNonFinite;
+      return plausibility::angularAccelPlausible(m.accel.ang_accel) ? InputFault::kNone : InputFault::kImplausible;
+    case InputKind::kStars: {
+      const StarVectors& s = m.stars;
+      if (!(s.flags & 1) || s.n_stars == 0) return InputFault::kInvalidFlag;
+      for (int i = 0; i < s.n_stars; ++i)
+        if (!finite(s.s_head[i], 3) || !finite(s.r_inertial[i], 3) || !std::isfinite(s.sigma_rad[i]))
+          return InputFault::kNonFinite;
+      for (int i = 0; i < s.n_stars; ++i)
+        if (!plausibility::directionPlausible(s.s_head[i]) || !plausibility::directionPlausible(s.r_inertial[i]))
+          return InputFault::kNonUnit;
+      for (int i = 0; i < s.n_stars; ++i)
+        if (s.sigma_rad[i] < 0) return InputFault::kImplausible;
+      return InputFault::kNone;
+    }
+    case InputKind::kOrbit:
+      if (!finite(m.orbit.r_m, 3) || !finite(m.orbit.v_m_s, 3)) return InputFault::kNonFinite;
+      return plausibility::orbitRadiusPlausible(m.orbit.r_m) && plausibility::orbitSpeedPlausible(m.orbit.v_m_s)
+                 ? InputFault::kNone
+                 : InputFault::kImplausible;
+  }
+  return InputFault::kNone;
 }
 
 HeadSample headFromSca1a(const Sca1aRecord& r, std::int32_t seq) {

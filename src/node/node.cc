@@ -10,14 +10,11 @@
 #include <boresight/stream/assembler.h>
 #include <boresight/stream/engine.h>
 
-#include "boresight_lcm/accel_sample_t.hpp"
 #include "boresight_lcm/boresight_monitor_t.hpp"
 #include "boresight_lcm/calibration_t.hpp"
 #include "boresight_lcm/fused_attitude_t.hpp"
 #include "boresight_lcm/node_command_t.hpp"
 #include "boresight_lcm/node_health_t.hpp"
-#include "boresight_lcm/star_head_sample_t.hpp"
-#include "boresight_lcm/star_vectors_t.hpp"
 
 #include <algorithm>
 #include <fstream>
@@ -493,56 +490,58 @@ struct Node::Impl {
   }
 
   // ---------------------------------------------------------------------------------------------
+  /// The decoded message's content against the rule every reader applies (io::checkInput).
+  bool checked(const io::InputMessage& m) {
+    switch (io::checkInput(m, pcfg.heads.unit_norm_tolerance)) {
+      case io::InputFault::kNone: return true;
+      case io::InputFault::kInvalidFlag: reject(Reason::kInvalidFlag); return false;
+      case io::InputFault::kNonFinite: reject(Reason::kNonFinite); return false;
+      case io::InputFault::kNonUnit: reject(Reason::kNonUnit); return false;
+      case io::InputFault::kImplausible: reject(Reason::kImplausible); return false;
+    }
+    return false;
+  }
+  io::InputMessage msg{};  ///< the message being handled (decodeInput writes it; no allocation)
+
   void onHead(const void* data, int size) {
-    boresight_lcm::star_head_sample_t m;
-    if (m.decode(data, 0, size) != size) return reject(Reason::kUndecodable);
+    if (!io::decodeInput(io::InputKind::kHead, data, size, msg)) return reject(Reason::kUndecodable);
+    const io::HeadSample& m = msg.head;
     const int slot = slotOf(m.head_id);
     if (slot < 0) return reject(Reason::kUnknownHead);
     ChannelState& s = ch_head[static_cast<std::size_t>(slot)];
     seqCheck(s, m.seq);
     if (!core_ready) return reject(Reason::kNoMountings);
-    if (!(m.flags & 1)) return reject(Reason::kInvalidFlag);
-    const Quat q(m.q[0], m.q[1], m.q[2], m.q[3]);
-    if (!q.coeffs().allFinite()) return reject(Reason::kNonFinite);
-    if (std::abs(q.norm() - 1.0) > pcfg.heads.unit_norm_tolerance) return reject(Reason::kNonUnit);
+    if (!checked(msg)) return;
     stream::Sample x;
     x.kind = stream::Sample::Kind::kHead;
     x.t = m.utime;
     x.head_id = m.head_id;
-    x.q_I_S = q;
+    x.q_I_S = quatFromScalarFirst(m.q);
     admit(s, &x, 1, m.utime, x.kind);
   }
 
   void onAccel(const void* data, int size) {
-    boresight_lcm::accel_sample_t m;
-    if (m.decode(data, 0, size) != size) return reject(Reason::kUndecodable);
+    if (!io::decodeInput(io::InputKind::kAccel, data, size, msg)) return reject(Reason::kUndecodable);
+    const io::AccelSample& m = msg.accel;
     seqCheck(ch_acc, m.seq);
     if (!core_ready) return reject(Reason::kNoMountings);
-    if (!(m.flags & 1)) return reject(Reason::kInvalidFlag);
-    const Vec3 a(m.ang_accel[0], m.ang_accel[1], m.ang_accel[2]);
-    if (!a.allFinite()) return reject(Reason::kNonFinite);
-    if (!plausibility::angularAccelPlausible(a)) return reject(Reason::kImplausible);
+    if (!checked(msg)) return;
     stream::Sample x;
     x.kind = stream::Sample::Kind::kAccel;
     x.t = m.utime;
-    x.a_A = a;
+    x.a_A = Vec3(m.ang_accel[0], m.ang_accel[1], m.ang_accel[2]);
     admit(ch_acc, &x, 1, m.utime, x.kind);
   }
 
   void onStars(const void* data, int size) {
-    boresight_lcm::star_vectors_t m;
-    if (m.decode(data, 0, size) != size || m.n_stars < 0 || m.n_stars > 16) return reject(Reason::kUndecodable);
+    if (!io::decodeInput(io::InputKind::kStars, data, size, msg)) return reject(Reason::kUndecodable);
+    const io::StarVectors& m = msg.stars;
     seqCheck(ch_stars_seq, m.seq);
     const int slot = slotOf(m.head_id);
     if (slot < 0) return reject(Reason::kUnknownHead);
     if (!core_ready) return reject(Reason::kNoMountings);
-    if (!(m.flags & 1) || m.n_stars == 0) return reject(Reason::kInvalidFlag);
-    for (int i = 0; i < m.n_stars; ++i) {
-      const Vec3 sv(m.s_head[i][0], m.s_head[i][1], m.s_head[i][2]), r(m.r_inertial[i][0], m.r_inertial[i][1], m.r_inertial[i][2]);
-      if (!sv.allFinite() || !r.allFinite() || !std::isfinite(m.sigma_rad[i])) return reject(Reason::kNonFinite);
-      if (std::abs(sv.norm() - 1) > 1e-6 || std::abs(r.norm() - 1) > 1e-6) return reject(Reason::kNonUnit);
-    }
-    std::array<stream::Sample, 16> xs;
+    if (!checked(msg)) return;
+    std::array<stream::Sample, io::StarVectors::kCapacity> xs;
     for (int i = 0; i < m.n_stars; ++i) {
       stream::Sample& x = xs[static_cast<std::size_t>(i)];
       x.kind = stream::Sample::Kind::kStar;
@@ -636,13 +635,10 @@ struct Node::Impl {
   }
 
   void onOrbit(const void* data, int size) {
-    io::OrbitSample o;
-    if (!io::decodeOrbit(data, size, o)) return reject(Reason::kUndecodable);
+    if (!io::decodeInput(io::InputKind::kOrbit, data, size, msg)) return reject(Reason::kUndecodable);
+    const io::OrbitSample& o = msg.orbit;
     seqCheck(ch_orbit, o.seq);
-    for (int k = 0; k < 3; ++k)
-      if (!std::isfinite(o.r_m[k]) || !std::isfinite(o.v_m_s[k])) return reject(Reason::kNonFinite);
-    if (!plausibility::orbitRadiusPlausible(o.r_m) || !plausibility::orbitSpeedPlausible(o.v_m_s))
-      return reject(Reason::kImplausible);
+    if (!checked(msg)) return;
     if (!cfg.thermal_model) return reject(Reason::kNoConsumer);  // the orbit feeds the thermal prediction only
     if (!core_ready) return reject(Reason::kNoMountings);
     stream::Sample x;
@@ -723,14 +719,16 @@ struct Node::Impl {
         last_emit_t = t;
         last_emit_kind = stream::Sample::Kind::kAccel;
         const auto t0 = std::chrono::steady_clock::now();
-        pipe.stepAcc(t, a);
+        const core::Status st = pipe.stepAcc(t, a);
         lat.add(std::chrono::duration<double, std::nano>(std::chrono::steady_clock::now() - t0).count());
         ++c.accel_steps;
-        RingItem it;
-        it.kind = RingItem::kAcc;
-        it.t = t;
-        it.a_A = a;
-        pushRing(it);
+        if (core::accepted(st)) {  // the samples the core took, as calibrate's feed (SpanFeed) gives them
+          RingItem it;
+          it.kind = RingItem::kAcc;
+          it.t = t;
+          it.a_A = a;
+          pushRing(it);
+        }
       } else if (o == stream::EpochAssembler::Out::kOrbit) {
         last_emit_t = t;
         last_emit_kind = stream::Sample::Kind::kOrbit;

@@ -166,27 +166,34 @@ Source::Next LcmLogSource::next(Sample& out, Reject& why) {
   if (star_next_ < star_n_) {  // the rest of a STAR_VECTORS message, one star per sample
     const io::StarVectors& m = r_->stars();
     const auto k = static_cast<std::size_t>(star_next_++);
-    if (!plausibility::directionPlausible(m.s_head[k]) || !plausibility::directionPlausible(m.r_inertial[k]) ||
-        !(m.sigma_rad[k] >= 0) || !std::isfinite(m.sigma_rad[k])) {
-      why = Reject::kImplausible;
-      return Next::kRejected;
-    }
     out = starSample(m.utime, m.head_id, m.s_head[k], m.r_inertial[k], m.sigma_rad[k]);
     return Next::kSample;
   }
   io::HeadSample h;
   io::AccelSample a;
   const std::uint64_t undecodable = r_->decodeFailures();
-  switch (r_->next(h, a)) {
-    case io::LcmLogReader::Kind::Head:
-      if (!(h.flags & 1)) {
-        why = Reject::kInvalid;
-        return Next::kRejected;
-      }
-      if (plausibility::checkQuaternion(h.q, quat_tol_) != plausibility::Quaternion::kOk) {
-        why = Reject::kImplausible;
-        return Next::kRejected;
-      }
+  const io::LcmLogReader::Kind k = r_->next(h, a);
+  if (k == io::LcmLogReader::Kind::End) return Next::kEnd;
+  if (k == io::LcmLogReader::Kind::Skipped) {
+    why = r_->decodeFailures() != undecodable ? Reject::kMalformed : Reject::kOtherChannel;
+    return Next::kRejected;
+  }
+  // The node's rule (io::checkInput), in the replay's coarser reasons.
+  const io::InputMessage& m = r_->message();
+  switch (io::checkInput(m, quat_tol_)) {
+    case io::InputFault::kNone: break;
+    case io::InputFault::kInvalidFlag:
+      why = m.kind == io::InputKind::kAccel ? Reject::kNoAngular : Reject::kInvalid;
+      return Next::kRejected;
+    case io::InputFault::kNonFinite:
+    case io::InputFault::kNonUnit:
+    case io::InputFault::kImplausible:
+      why = Reject::kImplausible;
+      return Next::kRejected;
+  }
+  switch (m.kind) {
+    case io::InputKind::kHead:
+      out = Sample{};
       out.kind = Sample::Kind::kHead;
       out.t = h.utime;
       out.head_id = h.head_id;
@@ -194,40 +201,22 @@ Source::Next LcmLogSource::next(Sample& out, Reject& why) {
       out.star_count = h.star_count;
       out.flags = h.flags;
       return Next::kSample;
-    case io::LcmLogReader::Kind::Accel:
-      if (!(a.flags & 1)) {
-        why = Reject::kNoAngular;
-        return Next::kRejected;
-      }
-      if (!plausibility::angularAccelPlausible(a.ang_accel)) {
-        why = Reject::kImplausible;
-        return Next::kRejected;
-      }
+    case io::InputKind::kAccel:
+      out = Sample{};
       out.kind = Sample::Kind::kAccel;
       out.t = a.utime;
       out.a_A = Vec3(a.ang_accel[0], a.ang_accel[1], a.ang_accel[2]);
       out.lin_A = Vec3(a.lin_accel[0], a.lin_accel[1], a.lin_accel[2]);
       out.flags = a.flags;
       return Next::kSample;
-    case io::LcmLogReader::Kind::Skipped:
-      why = r_->decodeFailures() != undecodable ? Reject::kMalformed : Reject::kOtherChannel;
-      return Next::kRejected;
-    case io::LcmLogReader::Kind::Stars: {  // star vectors (STAR_VECTORS): one sample per star
-      const io::StarVectors& m = r_->stars();
-      if (!(m.flags & 1) || m.n_stars == 0) {  // a message without usable stars counts once
-        why = Reject::kInvalid;
-        return Next::kRejected;
-      }
-      star_n_ = m.n_stars;
+    case io::InputKind::kStars:  // one sample per star
+      star_n_ = m.stars.n_stars;
       star_next_ = 0;
       return next(out, why);
-    }
-    case io::LcmLogReader::Kind::Orbit: {
-      const io::OrbitSample& o = r_->orbit();
+    case io::InputKind::kOrbit: {
+      const io::OrbitSample& o = m.orbit;
       return orbitSample(o.utime, o.frame, o.r_m, o.v_m_s, out, why) ? Next::kSample : Next::kRejected;
     }
-    case io::LcmLogReader::Kind::End:
-      break;
   }
   return Next::kEnd;
 }

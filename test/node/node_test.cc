@@ -9,6 +9,7 @@
 #include <boresight/io/level1.h>
 #include <boresight/model/rotation.h>
 #include <boresight/node/node.h>
+#include <boresight/stream/sources.h>
 #include <boresight/sim/output.h>
 #include <boresight/sim/scenario.h>
 #include <boresight/sim/simulator.h>
@@ -397,6 +398,153 @@ std::string badLog(const std::string& clean, Injected& inj) {
   }
   w.close();
   return path;
+}
+
+/// Content faults of every input type, one per kind of fault, injected after every 200th message of a
+/// clean log at tags of their own; `faults[reason]` counts them by the node reason they must get.
+std::string contentFaultLog(const std::string& clean, std::map<node::Reason, std::uint64_t>& faults,
+                            std::uint64_t& good_stars) {
+  const std::string path = makeTempDir("node_content") + "/content.lcm";
+  io::LcmLogReader r;
+  io::LcmLogWriter w;
+  std::string err;
+  EXPECT_TRUE(r.open(clean, &err)) << err;
+  EXPECT_TRUE(w.open(path, &err)) << err;
+  std::vector<std::uint8_t> buf(8192);
+  auto put = [&](const std::string& ch, TimeUs t, const auto& m) {
+    const int n = m.getEncodedSize();
+    m.encode(buf.data(), 0, n);
+    w.writeRaw(ch, t, buf.data(), n);
+  };
+  auto stars = [](TimeUs t) {
+    boresight_lcm::star_vectors_t v{};
+    v.utime = t;
+    v.head_id = 1;
+    v.n_stars = 3;
+    v.flags = 1;
+    for (int i = 0; i < 3; ++i) {
+      v.s_head[i][0] = 0.01 * i;
+      v.s_head[i][2] = std::sqrt(1 - 1e-4 * i * i);
+      v.r_inertial[i][1] = 1;
+      v.sigma_rad[i] = 0;
+    }
+    return v;
+  };
+  io::LcmLogReader::RawEvent ev;
+  std::uint64_t n = 0;
+  TimeUs last = 0;
+  while (r.nextRaw(ev)) {
+    w.writeRaw(*ev.channel, 0, ev.data, ev.size);
+    if (*ev.channel == "STAR_HEAD") {
+      boresight_lcm::star_head_sample_t m;
+      m.decode(ev.data, 0, ev.size);
+      last = m.utime;
+    }
+    if (++n % 200 != 0 || last == 0) continue;
+    const TimeUs t = last + 1000;  // 1 ms after the last head epoch: a tag of its own
+    boresight_lcm::star_head_sample_t h{};
+    h.utime = t;
+    h.head_id = 1;
+    h.q[0] = 1;
+    h.flags = 1;
+    auto head = [&](auto edit, node::Reason why) {
+      auto b = h;
+      edit(b);
+      put("STAR_HEAD", t, b);
+      ++faults[why];
+    };
+    head([](auto& b) { b.flags = 0; }, node::Reason::kInvalidFlag);
+    head([](auto& b) { b.q[0] = 0; }, node::Reason::kNonUnit);  // zeros: no rotation
+    head([](auto& b) { b.q[0] = 1.01; }, node::Reason::kNonUnit);
+    head([](auto& b) { b.q[3] = INFINITY; }, node::Reason::kNonFinite);
+    boresight_lcm::accel_sample_t a{};
+    a.utime = t;
+    a.flags = 3;
+    auto acc = [&](auto edit, node::Reason why) {
+      auto b = a;
+      edit(b);
+      put("ACCEL", t, b);
+      ++faults[why];
+    };
+    acc([](auto& b) { b.flags = 2; }, node::Reason::kInvalidFlag);  // linear only
+    acc([](auto& b) { b.ang_accel[1] = NAN; }, node::Reason::kNonFinite);
+    acc([](auto& b) { b.ang_accel[2] = 0.5; }, node::Reason::kImplausible);
+    auto star = [&](auto edit, node::Reason why) {
+      auto b = stars(t);
+      edit(b);
+      put("STAR_VECTORS", t, b);
+      ++faults[why];
+    };
+    star([](auto& b) { b.flags = 0; }, node::Reason::kInvalidFlag);
+    star([](auto& b) { b.n_stars = 0; }, node::Reason::kInvalidFlag);
+    star([](auto& b) { b.sigma_rad[2] = -1e-5f; }, node::Reason::kImplausible);  // one star of three
+    star([](auto& b) { b.s_head[1][0] = 0.1; }, node::Reason::kNonUnit);
+    star([](auto& b) { b.r_inertial[0][2] = NAN; }, node::Reason::kNonFinite);
+    boresight_lcm::orbit_sample_t o{};
+    o.utime = t;
+    o.frame = 'I';
+    o.r_m[0] = 1.0e6;  // inside the Earth
+    o.v_m_s[1] = 7.6e3;
+    put("ORBIT", t, o);
+    ++faults[node::Reason::kImplausible];
+    o.r_m[0] = 6.8e6;
+    o.v_m_s[1] = NAN;
+    put("ORBIT", t, o);
+    ++faults[node::Reason::kNonFinite];
+    put("STAR_VECTORS", t + 1, stars(t + 1));  // and one good star message
+    ++good_stars;
+  }
+  w.close();
+  return path;
+}
+
+// One decoder and one rule (io::decodeInput, io::checkInput) for the node and the replay: every
+// message with a content fault gets the same verdict from both, in the node's reasons and in the
+// replay's coarser ones. Before, the node took a star-vector message with a negative sigma, and the
+// replay dropped only the bad star of a message the node refused whole.
+TEST(NodeBadInput, TheNodeAndTheReplayJudgeEveryInputMessageByOneRule) {
+  const std::string clean = simulate("content", 600, {});
+  std::map<node::Reason, std::uint64_t> faults;
+  std::uint64_t good_stars = 0;
+  const std::string log = contentFaultLog(clean, faults, good_stars);
+  ASSERT_GT(good_stars, 20u);
+  const auto ref = replay(clean, nodeConfig());
+  const auto r = replay(log, nodeConfig());
+  const node::Counters& c = r->c;
+  EXPECT_EQ(c.received, c.used + c.rejectedTotal());
+  std::uint64_t n_faults = 0;
+  for (const auto& [why, n] : faults) {
+    EXPECT_EQ(rejected(c, why), rejected(ref->c, why) + n) << node::reasonName(why);
+    n_faults += n;
+  }
+  EXPECT_EQ(c.used, ref->c.used + good_stars);  // the good star messages, nothing else
+  EXPECT_EQ(c.rejectedTotal(), ref->c.rejectedTotal() + n_faults);
+  // The replay's source reads the same log: the same messages refused, in its reasons.
+  auto readAll = [](const std::string& path) {
+    stream::LcmLogSource src;
+    std::string err;
+    EXPECT_TRUE(src.open(path, &err)) << err;
+    stream::Counters sc;
+    stream::Sample x;
+    stream::Reject why = stream::Reject::kMalformed;
+    for (;;) {
+      const auto nx = src.next(x, why);
+      if (nx == stream::Source::Next::kEnd || nx == stream::Source::Next::kError) break;
+      if (nx == stream::Source::Next::kRejected) ++sc.rejected[static_cast<std::size_t>(why)];
+      if (nx == stream::Source::Next::kSample && x.kind == stream::Sample::Kind::kStar) ++sc.used_stars;
+    }
+    return sc;
+  };
+  const stream::Counters sc_ref = readAll(clean), sc = readAll(log);
+  EXPECT_EQ(sc.used_stars, sc_ref.used_stars + 3 * good_stars);  // a message with one bad star gives none of its stars
+  auto rej = [&](stream::Reject k) {
+    return sc.rejected[static_cast<std::size_t>(k)] - sc_ref.rejected[static_cast<std::size_t>(k)];
+  };
+  EXPECT_EQ(rej(stream::Reject::kInvalid), 3 * good_stars);      // head flag, star flag, no stars
+  EXPECT_EQ(rej(stream::Reject::kNoAngular), good_stars);        // accelerometer without angular
+  EXPECT_EQ(rej(stream::Reject::kImplausible), 10 * good_stars);  // non-finite, non-unit, out of gate
+  EXPECT_EQ(rej(stream::Reject::kInvalid) + rej(stream::Reject::kNoAngular) + rej(stream::Reject::kImplausible),
+            n_faults);
 }
 
 TEST(NodeReplay, BadTrafficIsAccountedMessageByMessage) {

@@ -304,6 +304,30 @@ TEST(Cli, ProcessStreamsTheSimulatorsOutputWhateverTheLogIsCalled) {
   ASSERT_TRUE(gnv_in.ok) << gnv_in.error;
   EXPECT_EQ(gni.records.size(), gnv_in.records.size());
   for (const auto& g : gni.records) EXPECT_EQ(g.coord_ref, 'I');
+  // Thermal terms in an overlay: process reads the orbit (the GNV1B file, or the log's ORBIT messages)
+  // and steps the core's thermal prediction with every sample; without an orbit it says so.
+  {
+    std::ofstream ov(d + "thermal.yaml");
+    ov << "boresight_overlay: 1\nwritten_by: cli_test\nthermal:\n  datum_head: 1\n  heads:\n    - id: 3\n"
+          "      constant_arcsec: [10, -5, 20]\n      constant_sigma_arcsec: [1, 1, 2]\n      harmonics:\n"
+          "        - {harmonic: 1, cos_arcsec: [3, 1, -2], cos_sigma_arcsec: [0.5, 0.5, 1], sin_arcsec: [-1, 2, 4], "
+          "sin_sigma_arcsec: [0.5, 0.5, 1]}\n";
+  }
+  const auto n_gnv = readProduct<GnvRecord>(gnv).records.size();
+  CliRun t = run("process" + cfg + d + "SCA1A_2023-06-01_C_04.txt " + d + "ACC1A_2023-06-01_C_04.txt " + qsa + " " + gnv +
+                 " --overlay " + d + "thermal.yaml --out " + d + "t.csv");
+  ASSERT_EQ(t.status, 0) << t.out;
+  EXPECT_NE(t.out.find("thermal: head 3 relative to head 1 (harmonics 1 per revolution)"), std::string::npos) << t.out;
+  EXPECT_NE(t.out.find(gnv + ": orbit for the thermal prediction"), std::string::npos) << t.out;
+  EXPECT_NE(t.out.find("orbit: " + std::to_string(n_gnv) + " samples stepped the thermal prediction"), std::string::npos)
+      << t.out;
+  CliRun tl = run("process" + cfg + d + "sim.lcmlog " + qsa + " --overlay " + d + "thermal.yaml --out " + d + "tl.csv");
+  ASSERT_EQ(tl.status, 0) << tl.out;
+  EXPECT_NE(tl.out.find("orbit: " + std::to_string(n_gnv) + " samples stepped"), std::string::npos) << tl.out;
+  CliRun none = run("process" + cfg + d + "SCA1A_2023-06-01_C_04.txt " + d + "ACC1A_2023-06-01_C_04.txt " + qsa +
+                    " --overlay " + d + "thermal.yaml --out " + d + "n.csv");
+  ASSERT_EQ(none.status, 0) << none.out;
+  EXPECT_NE(none.out.find("warning: thermal terms without orbit input"), std::string::npos) << none.out;
   // inspect summarises the log too.
   CliRun i = run("inspect " + d + "sim.lcmlog");
   EXPECT_EQ(i.status, 0) << i.out;

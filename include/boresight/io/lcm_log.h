@@ -78,6 +78,46 @@ struct OrbitSample {
 bool decodeNominalMountings(const void* data, int size, NominalMountings& out);
 bool decodeOrbit(const void* data, int size, OrbitSample& out);
 
+// ---- The input messages, decoded and judged once for every reader ------------------------------
+// The node's handlers, the replay's LCM log source (process, calibrate, audit, noise) and the log reader
+// below decode the four input types with decodeInput() and judge them with checkInput(): one decoder,
+// one rule. What only a reader with a configuration can judge (an unknown head, mountings not known
+// yet, the time and sequence checks) stays with that reader.
+
+/// The input message types (channels STAR_HEAD, ACCEL, STAR_VECTORS, ORBIT by default).
+enum class InputKind : std::uint8_t { kHead, kAccel, kStars, kOrbit };
+
+/// One decoded input message: the member of its kind is set.
+struct InputMessage {
+  InputKind kind = InputKind::kHead;
+  HeadSample head;
+  AccelSample accel;
+  StarVectors stars;
+  OrbitSample orbit;
+  TimeUs utime() const;
+  std::int32_t seq() const;
+};
+
+/// Decodes one message of `kind`. False: the bytes are not that type (length, fingerprint) or a count
+/// is outside its range (star vectors above StarVectors::kCapacity, an orbit frame other than I or E).
+bool decodeInput(InputKind kind, const void* data, int size, InputMessage& out);
+
+/// Why a decoded input message cannot be used, from its content alone. A star-vector message is judged
+/// whole: one impossible star makes the message untrustworthy.
+enum class InputFault : std::uint8_t {
+  kNone,
+  kInvalidFlag,  ///< the message says it is not valid (head, star vectors: flags bit 0; no stars;
+                 ///< accelerometer: no valid angular acceleration)
+  kNonFinite,    ///< NaN or Inf in a value the core uses
+  kNonUnit,      ///< a quaternion (zero, a component above 1, norm off by more than quat_tol) or a star
+                 ///< direction (norm off by more than 1e-6) that is no rotation / no direction
+  kImplausible,  ///< a finite value outside its physical gate (core/plausibility.h: angular
+                 ///< acceleration, orbit radius and speed, a negative star sigma)
+};
+const char* inputFaultName(InputFault f);
+/// The rule; `quat_tol` is the platform's heads.unit_norm_tolerance.
+InputFault checkInput(const InputMessage& m, double quat_tol);
+
 class LcmLogWriter {
  public:
   LcmLogWriter();
@@ -119,9 +159,11 @@ class LcmLogReader {
   /// Next event: fills head or accel. Skipped: unknown channel or decode failure (see counters).
   Kind next(HeadSample& head, AccelSample& accel);
   /// After next() returned Kind::Stars: the star-vector message (STAR_VECTORS channel).
-  const StarVectors& stars() const { return stars_; }
+  const StarVectors& stars() const { return msg_.stars; }
   /// After next() returned Kind::Orbit: the orbit message (ORBIT channel).
-  const OrbitSample& orbit() const { return orbit_; }
+  const OrbitSample& orbit() const { return msg_.orbit; }
+  /// After next() returned Head, Accel, Stars or Orbit: the message as decodeInput() gives it.
+  const InputMessage& message() const { return msg_; }
   /// One event of the log as it is: channel and encoded bytes (valid until the next call). size -1:
   /// bytes that are not an event (skipped up to the next sync word). False at the end. Use either
   /// next() or nextRaw() on one reader (the node decodes the bytes itself, like live traffic).
@@ -139,9 +181,11 @@ class LcmLogReader {
   struct Impl;
   std::unique_ptr<Impl> impl_;
   std::uint64_t unknown_channel_ = 0, decode_failures_ = 0;
-  StarVectors stars_{};
-  OrbitSample orbit_{};
+  InputMessage msg_{};
 };
+
+/// The input type of a channel of the default names (kStarHeadChannel, ...); false for any other.
+bool inputKindOf(const std::string& channel, InputKind& kind);
 
 /// Decodes one STAR_VECTORS message (false: not decodable or n_stars outside 0..kCapacity).
 bool decodeStarVectors(const void* data, int size, StarVectors& out);
