@@ -1172,8 +1172,30 @@ struct Node::Impl {
         mm.iba_dev_rad[p] = row.iba_dev_rad[static_cast<std::size_t>(p)];
       }
       mm.corrections_valid = al.mask != 0 ? 1 : 0;
+      fillPairCorrections(mm);
       publish(cfg.channels.monitor, row.t, mm);
     }
+  }
+
+  /// The monitor's three-axis pair corrections at the latest head epoch (what the star-vector solution
+  /// uses; predicted from the thermal model while a head of the pair is blind).
+  void fillPairCorrections(boresight_lcm::boresight_monitor_t& mm) const {
+    mm.pair_utime = last_epoch_t;
+    const core::BoresightMonitor& mon = pipe.monitor();
+    for (int a = 0; a < pcfg.heads.n_heads; ++a)
+      for (int b = a + 1; b < pcfg.heads.n_heads; ++b) {
+        const int p = core::pairIndex(a, b);
+        const core::FilteredDeformation f = mon.filtered(a, b);
+        if (!f.valid) continue;  // source 0, zeros: the ground matrix
+        Mat3 C, cov;
+        mon.relativeFor(a, b, core::RelativeCorrection::kFilteredThreeAxis, last_epoch_t, C, cov);
+        const bool seen = f.t == last_epoch_t;
+        mm.pair_source[p] = static_cast<int8_t>(f.predicted ? 2 : seen ? 1 : 3);
+        for (int k = 0; k < 3; ++k) {
+          mm.pair_delta_rad[p][k] = f.delta_Si[k];
+          mm.pair_sigma_rad[p][k] = std::sqrt(std::max(0.0, cov(k, k)));
+        }
+      }
   }
 
   /// Replay publishes nothing that depends on the wall clock or thread timing (latency, ring fill):
