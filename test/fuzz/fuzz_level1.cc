@@ -366,6 +366,8 @@ void fuzzLcmLog(std::string_view body, std::uint8_t mode) {
   }
   std::uint64_t heads_valid = 0, heads_invalid = 0, acc_valid = 0, acc_invalid = 0, skipped = 0, events = 0;
   std::uint64_t star_msgs = 0, star_msgs_invalid = 0, star_vectors = 0;  // a valid message: one sample per star
+  std::uint64_t star_msgs_bad = 0;  // flagged valid, with an impossible star: refused whole, one read
+  std::uint64_t orbits = 0;         // orbit messages: a sample each, or refused as implausible
   HeadSample h;
   AccelSample a;
   for (;;) {
@@ -377,13 +379,16 @@ void fuzzLcmLog(std::string_view body, std::uint8_t mode) {
       case LcmLogReader::Kind::Accel: ++((a.flags & 1) ? acc_valid : acc_invalid); break;
       case LcmLogReader::Kind::Stars:
         if (r.stars().n_stars < 0 || r.stars().n_stars > StarVectors::kCapacity) fail("star count outside capacity");
-        if ((r.stars().flags & 1) && r.stars().n_stars > 0) {
+        if (!(r.stars().flags & 1) || r.stars().n_stars == 0) {
+          ++star_msgs_invalid;
+        } else if (checkInput(r.message(), boresight::plausibility::kQuatNormTolerance) == InputFault::kNone) {
           ++star_msgs;
           star_vectors += static_cast<std::uint64_t>(r.stars().n_stars);
         } else {
-          ++star_msgs_invalid;
+          ++star_msgs_bad;
         }
         break;
+      case LcmLogReader::Kind::Orbit: ++orbits; break;
       case LcmLogReader::Kind::Skipped: ++skipped; break;
       case LcmLogReader::Kind::End: break;
     }
@@ -402,7 +407,8 @@ void fuzzLcmLog(std::string_view body, std::uint8_t mode) {
   for (;;) {
     const auto o = as.nextSample(x);
     if (o == st::EpochAssembler::Out::kEnd) break;
-    if (o != st::EpochAssembler::Out::kHeads && o != st::EpochAssembler::Out::kAccel && o != st::EpochAssembler::Out::kStars)
+    if (o != st::EpochAssembler::Out::kHeads && o != st::EpochAssembler::Out::kAccel && o != st::EpochAssembler::Out::kStars &&
+        o != st::EpochAssembler::Out::kOrbit)
       fail("a log source failed or is pending");
     if (++out > events - star_msgs + star_vectors) fail("more samples out than events and stars");
   }
@@ -420,7 +426,7 @@ void fuzzLcmLog(std::string_view body, std::uint8_t mode) {
   // outlier of its source or the same head again at one tag: nothing else.
   if (c.used() + rej(st::Reject::kLate) + rej(st::Reject::kImplausible) + rej(st::Reject::kTimeOutlier) +
           rej(st::Reject::kDuplicate) !=
-      heads_valid + acc_valid + star_vectors)
+      heads_valid + acc_valid + star_vectors + star_msgs_bad + orbits)
     fail("valid samples lost");
 }
 
