@@ -184,8 +184,11 @@ struct HeldMessage {
 };
 constexpr int kMaxHeld = 32;  ///< messages held at one jump (time_jump_confirm is at most 16: config.cc)
 
+/// The worker's result slot: empty -> being written (worker) -> ready -> taken back to empty (real-time thread).
+enum class MailState : std::uint8_t { kEmpty, kWriting, kReady };
+
 struct Mailbox {
-  std::atomic<int> state{0};  ///< 0 empty, 1 being written, 2 ready
+  std::atomic<MailState> state{MailState::kEmpty};
   std::uint64_t solve_id = 0;
   bool ok = false;
   std::array<Quat, kMaxHeads> q_Si_B{};
@@ -819,10 +822,10 @@ struct Node::Impl {
     if (!cfg.calibration.enabled) return;
     if (mode == Mode::kReplay) {
       if (due_n == 0 || due[static_cast<std::size_t>(due_head)].second > head_epoch_index) return;
-      while (mail.state.load(std::memory_order_acquire) != 2) std::this_thread::yield();
+      while (mail.state.load(std::memory_order_acquire) != MailState::kReady) std::this_thread::yield();
       due_head = (due_head + 1) % static_cast<int>(due.size());
       --due_n;
-    } else if (mail.state.load(std::memory_order_acquire) != 2) {
+    } else if (mail.state.load(std::memory_order_acquire) != MailState::kReady) {
       return;
     }
     takeMailbox(epoch.t);
@@ -852,7 +855,7 @@ struct Node::Impl {
     m.seq = seq_cal++;
     publish(cfg.channels.calibration, m.utime, m);
     ++c.calibrations_published;
-    mail.state.store(0, std::memory_order_release);
+    mail.state.store(MailState::kEmpty, std::memory_order_release);
   }
 
   /// The calibration in use before each applied one (what a revert command goes back to), newest last.
@@ -1328,13 +1331,13 @@ struct Node::Impl {
       opt.threads = 1;
       const calib::SolveResult r = calib::solve(j->sb->span(), opt);
       // One slot: wait until the real-time thread has taken the previous result.
-      int expected = 0;
-      while (!mail.state.compare_exchange_weak(expected, 1, std::memory_order_acq_rel)) {
-        expected = 0;
+      MailState expected = MailState::kEmpty;
+      while (!mail.state.compare_exchange_weak(expected, MailState::kWriting, std::memory_order_acq_rel)) {
+        expected = MailState::kEmpty;
         std::this_thread::sleep_for(std::chrono::microseconds(100));
       }
       fillResult(j->sb->span(), r, j->req, j->nominal, j->nominal_gen);
-      mail.state.store(2, std::memory_order_release);
+      mail.state.store(MailState::kReady, std::memory_order_release);
       {
         std::lock_guard<std::mutex> lk(job_m);  // the job slot is free once this one is published
         job_cv.notify_all();
@@ -1393,9 +1396,9 @@ struct Node::Impl {
   void stopWorker(bool publish) {
     if (!worker.joinable()) return;
     auto serveMail = [&] {
-      if (mail.state.load(std::memory_order_acquire) != 2) return;
+      if (mail.state.load(std::memory_order_acquire) != MailState::kReady) return;
       if (publish) takeMailbox(last_epoch_t + 1);
-      else mail.state.store(0, std::memory_order_release);
+      else mail.state.store(MailState::kEmpty, std::memory_order_release);
     };
     RingItem s;
     s.kind = RingItem::kStop;
@@ -1490,7 +1493,7 @@ void Node::finish() {
     // Replay: calibrations still due are applied (published) at the end, in order.
     if (m.cfg.calibration.enabled && m.mode == Node::Mode::kReplay) {
       while (m.due_n > 0) {
-        while (m.mail.state.load(std::memory_order_acquire) != 2) std::this_thread::yield();
+        while (m.mail.state.load(std::memory_order_acquire) != MailState::kReady) std::this_thread::yield();
         m.due_head = (m.due_head + 1) % static_cast<int>(m.due.size());
         --m.due_n;
         m.takeMailbox(m.last_epoch_t + 1);
