@@ -369,17 +369,22 @@ Status BoresightMonitor::relativeFor(int a, int b, RelativeCorrection mode, Time
       break;
     case RelativeCorrection::kFilteredThreeAxis: {
       const Filt& F = filt_[p];
+      TimeUs t_value = t;  // when the value in use was last set: it is held since
       if (F.predicted) {
         C_lh = so3Exp(F.delta_pred) * C0_[p];
         P = F.cov_pred;
+        t_value = F.t_pred;
       } else if (F.seen) {
         solveFilter(F, W1_[p]);
         C_lh = so3Exp(F.delta) * C0_[p];
         P = F.cov;
-        const double age = t > F.t ? toSeconds(t - F.t) : 0.0;
-        const double g = fcfg_.hold_drift_rad_per_s * age;
-        P.diagonal().array() += g * g;
+        t_value = F.t;
       }
+      // A held value - the filter's while the pair is not seen, or a prediction no longer renewed (no
+      // orbit input) - grows by the hold drift with its age.
+      const double age = t > t_value ? toSeconds(t - t_value) : 0.0;
+      const double g = fcfg_.hold_drift_rad_per_s * age;
+      P.diagonal().array() += g * g;
       break;
     }
   }

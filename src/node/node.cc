@@ -1192,8 +1192,10 @@ struct Node::Impl {
         if (!f.valid) continue;  // source 0, zeros: the ground matrix
         Mat3 C, cov;
         mon.relativeFor(a, b, core::RelativeCorrection::kFilteredThreeAxis, last_epoch_t, C, cov);
-        const bool seen = f.t == last_epoch_t;
-        mm.pair_source[p] = static_cast<int8_t>(f.predicted ? 2 : seen ? 1 : 3);
+        // Set at this epoch: by the pair's own epoch (filtered) or by the thermal model; otherwise held
+        // (a head blind without a thermal model, or the model without orbit input for max_orbit_age_s).
+        const bool fresh = f.t == last_epoch_t;
+        mm.pair_source[p] = static_cast<int8_t>(!fresh ? 3 : f.predicted ? 2 : 1);
         for (int k = 0; k < 3; ++k) {
           mm.pair_delta_rad[p][k] = f.delta_Si[k];
           mm.pair_sigma_rad[p][k] = std::sqrt(std::max(0.0, cov(k, k)));

@@ -122,19 +122,15 @@ Source::Next ScvSource::next(Sample& out, Reject& why) {
 }
 
 namespace {
-/// An orbit record or message as a sample (kImplausible: a value outside the orbit gates).
-bool orbitSample(TimeUs t, char frame, const double r[3], const double v[3], Sample& out, Reject& why) {
-  if (!plausibility::orbitRadiusPlausible(r) || !plausibility::orbitSpeedPlausible(v)) {  // NaN fails both
-    why = Reject::kImplausible;
-    return false;
-  }
+/// An orbit record or message as a sample. The gates are applied before: the GNV1B/GNI1B reader's
+/// (rejected lines come as kImplausible) and io::checkInput for ORBIT messages.
+void orbitSample(TimeUs t, char frame, const double r[3], const double v[3], Sample& out) {
   out = Sample{};
   out.kind = Sample::Kind::kOrbit;
   out.t = t;
   out.orbit_frame = frame;
   out.r_orbit = Vec3(r[0], r[1], r[2]);
   out.v_orbit = Vec3(v[0], v[1], v[2]);
-  return true;
 }
 }  // namespace
 
@@ -145,7 +141,8 @@ Source::Next OrbitFileSource::next(Sample& out, Reject& why) {
     why = Reject::kMalformed;
     return Next::kRejected;
   }
-  return orbitSample(rec_.t, rec_.coord_ref, rec_.pos, rec_.vel, out, why) ? Next::kSample : Next::kRejected;
+  orbitSample(rec_.t, rec_.coord_ref, rec_.pos, rec_.vel, out);
+  return Next::kSample;
 }
 
 LcmLogSource::LcmLogSource() = default;
@@ -215,7 +212,8 @@ Source::Next LcmLogSource::next(Sample& out, Reject& why) {
       return next(out, why);
     case io::InputKind::kOrbit: {
       const io::OrbitSample& o = m.orbit;
-      return orbitSample(o.utime, o.frame, o.r_m, o.v_m_s, out, why) ? Next::kSample : Next::kRejected;
+      orbitSample(o.utime, o.frame, o.r_m, o.v_m_s, out);
+      return Next::kSample;
     }
   }
   return Next::kEnd;

@@ -23,7 +23,8 @@
 // lag; DeformationFilterConfig documents the default and test/core/thermal_test measures the trade.
 // While the pair is not seen the estimate is held and its covariance grows by (hold_drift * age)^2
 // per axis; setPredictedDeformation() replaces the held value by an external prediction (the batch
-// solver's harmonic model) until the pair is seen again.
+// solver's harmonic model) until the pair is seen again. A prediction not renewed (no orbit input) is
+// held the same way: its covariance grows by (hold_drift * its age)^2.
 //
 // Corrections handed to Wahba (relativeFor):
 //   kNone               C0, covariance 0

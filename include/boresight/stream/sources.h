@@ -109,7 +109,7 @@ class ScvSource final : public Level1FileSource<io::ScvRecord> {
 
 /// GNI1B (inertial) or GNV1B (Earth-fixed) orbit records from one file, in file order, as kOrbit samples
 /// with the record's frame; a position or velocity outside the plausibility gates is rejected as
-/// Reject::kImplausible (the reader's gates: a well-formed record far from any orbit).
+/// Reject::kImplausible by the reader (a well-formed record far from any orbit).
 class OrbitFileSource final : public Level1FileSource<io::GnvRecord> {
  public:
   Next next(Sample& out, Reject& why) override;
