@@ -57,10 +57,10 @@ void Pipeline::reset() {
   align_countdown_ = 0;
   have_grid_ = false;
   last_grid_ = 0;
-  p_head_ = n_pending_ = 0;
+  pending_.clear();
   rate_cursor_ = acc_cursor_ = 0;
   acc_next_check_ = std::numeric_limits<TimeUs>::min();
-  r_head_ = n_ready_ = 0;
+  ready_.clear();
   health_.clear();
 }
 
@@ -78,17 +78,10 @@ Health Pipeline::health() const {
 }
 
 void Pipeline::emitOldest() {
-  if (n_pending_ == 0) return;
-  Pending& p = pending_[static_cast<std::size_t>(p_head_)];
-  if (n_ready_ == kMaxPendingRows) {  // nobody pops: drop the oldest ready row
+  if (pending_.empty()) return;
+  if (ready_.pushOverwrite(pending_.front().row))  // nobody pops: the oldest ready row went
     health_.record(Status::kCapacityExceeded);
-    r_head_ = (r_head_ + 1) % kMaxPendingRows;
-    --n_ready_;
-  }
-  ready_[static_cast<std::size_t>((r_head_ + n_ready_) % kMaxPendingRows)] = p.row;
-  ++n_ready_;
-  p_head_ = (p_head_ + 1) % kMaxPendingRows;
-  --n_pending_;
+  pending_.popFront();
   if (rate_cursor_ > 0) --rate_cursor_;
   if (acc_cursor_ > 0) --acc_cursor_;
 }
@@ -99,8 +92,8 @@ void Pipeline::resolve() {
   const TimeUs rate_deadline = rates_.stream().delayUs() + 2 * head_dt_us_;
   // rows are in time order: the rate deadline and the accelerometer's readiness both move forward,
   // so each scan starts at its cursor (the first row still waiting) and stops at the next one waiting
-  for (; rate_cursor_ < n_pending_; ++rate_cursor_) {
-    Pending& p = pending_[static_cast<std::size_t>((p_head_ + rate_cursor_) % kMaxPendingRows)];
+  for (; rate_cursor_ < pending_.size(); ++rate_cursor_) {
+    Pending& p = pending_[rate_cursor_];
     if (p.rate_done) continue;
     if (!(have_att && att_newest - p.row.t > rate_deadline)) break;
     p.rate_done = true;
@@ -109,8 +102,8 @@ void Pipeline::resolve() {
   // not ready while fewer than M samples follow the tag (a row deferred by this test is only evaluated
   // at a later sample: it never loses its window, the ring holds 1024 samples)
   const TimeUs acc_wait = static_cast<TimeUs>(as.kernel().half) * as.samplingIntervalUs() - as.samplingIntervalUs() / 2;
-  for (; acc_cursor_ < n_pending_; ++acc_cursor_) {
-    Pending& p = pending_[static_cast<std::size_t>((p_head_ + acc_cursor_) % kMaxPendingRows)];
+  for (; acc_cursor_ < pending_.size(); ++acc_cursor_) {
+    Pending& p = pending_[acc_cursor_];
     if (p.acc_done) continue;
     if (as.hasSamples() && as.newestTime() - p.row.t < acc_wait) break;  // surely not ready yet (cheap)
     AccOutput a;
@@ -127,15 +120,15 @@ void Pipeline::resolve() {
       break;  // later rows are not ready either
     }
   }
-  while (n_pending_ > 0) {
-    const Pending& p = pending_[static_cast<std::size_t>(p_head_)];
+  while (!pending_.empty()) {
+    const Pending& p = pending_.front();
     if (!(p.rate_done && p.acc_done)) break;
     emitOldest();
   }
   // the accelerometer time from which the first row still waiting for it can be ready
   acc_next_check_ = std::numeric_limits<TimeUs>::max();  // none waiting: new rows come with stepHeads
-  for (int i = acc_cursor_; i < n_pending_; ++i) {
-    const Pending& p = pending_[static_cast<std::size_t>((p_head_ + i) % kMaxPendingRows)];
+  for (std::size_t i = acc_cursor_; i < pending_.size(); ++i) {
+    const Pending& p = pending_[i];
     if (p.acc_done) continue;
     acc_next_check_ = p.row.t + acc_wait;
     break;
@@ -173,12 +166,11 @@ BORESIGHT_CLONES Status Pipeline::stepHeads(const HeadEpoch& in) {
   if (off <= head_dt_us_ / 2 && off >= -head_dt_us_ / 2 && (!have_grid_ || g > last_grid_)) {
     have_grid_ = true;
     last_grid_ = g;
-    if (n_pending_ == kMaxPendingRows) {
+    if (pending_.full()) {
       health_.record(Status::kCapacityExceeded);
       emitOldest();
     }
-    Pending& p = pending_[static_cast<std::size_t>((p_head_ + n_pending_) % kMaxPendingRows)];
-    ++n_pending_;
+    Pending& p = pending_.emplaceBack();
     p = Pending{};
     p.row.t = f.t;
     p.row.q_I_B = f.q_I_B;
@@ -197,8 +189,8 @@ BORESIGHT_CLONES Status Pipeline::stepHeads(const HeadEpoch& in) {
   const Status rs = rates_.step(f.t, f.q_I_B);
   for (int i = 0; i < rates_.numOutputs(); ++i) {
     const RateOutput& r = rates_.output(i);
-    for (int j = 0; j < n_pending_; ++j) {
-      Pending& p = pending_[static_cast<std::size_t>((p_head_ + j) % kMaxPendingRows)];
+    for (std::size_t j = 0; j < pending_.size(); ++j) {
+      Pending& p = pending_[j];
       if (p.row.t != r.t) continue;
       setRates(p.row, r);
       p.rate_done = true;
@@ -261,8 +253,8 @@ void Pipeline::releaseMountings() {
 }
 
 void Pipeline::flush() {
-  while (n_pending_ > 0) {
-    Pending& p = pending_[static_cast<std::size_t>(p_head_)];
+  while (!pending_.empty()) {
+    Pending& p = pending_.front();
     if (!p.acc_done) {
       AccOutput a;
       if (acc_.evaluateAt(p.row.t, a) == Status::kOk) {
@@ -296,11 +288,7 @@ void Pipeline::setRates(PipelineRow& row, const RateOutput& r) const {
 }
 
 bool Pipeline::popRow(PipelineRow& out) {
-  if (n_ready_ == 0) return false;
-  out = ready_[static_cast<std::size_t>(r_head_)];
-  r_head_ = (r_head_ + 1) % kMaxPendingRows;
-  --n_ready_;
-  return true;
+  return ready_.pop(out);
 }
 
 }  // namespace boresight::core

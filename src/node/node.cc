@@ -5,6 +5,7 @@
 #include <boresight/calib/solver.h>
 #include <boresight/calib/span_builder.h>
 #include <boresight/core/plausibility.h>
+#include <boresight/core/ring.h>
 #include <boresight/io/lcm_log.h>
 #include <boresight/io/overlay_yaml.h>
 #include <boresight/stream/assembler.h>
@@ -103,62 +104,21 @@ struct RingItem {
   std::array<Quat, kMaxHeads> q_Si_B = core::filled<Quat, kMaxHeads>(Quat::Identity());  ///< kMountings: the new nominal mountings by slot
 };
 
-/// Bounded lock-free single-producer/single-consumer ring (capacity a power of two, sized once).
-class SpscRing {
- public:
-  void init(std::size_t capacity) {
-    buf_.assign(capacity, RingItem{});
-    mask_ = capacity - 1;
-  }
-  bool push(const RingItem& it) {
-    const std::size_t h = head_.load(std::memory_order_relaxed);
-    if (h - tail_.load(std::memory_order_acquire) > mask_) return false;
-    buf_[h & mask_] = it;
-    head_.store(h + 1, std::memory_order_release);
-    return true;
-  }
-  bool pop(RingItem& it) {
-    const std::size_t t = tail_.load(std::memory_order_relaxed);
-    if (head_.load(std::memory_order_acquire) == t) return false;
-    it = buf_[t & mask_];
-    tail_.store(t + 1, std::memory_order_release);
-    return true;
-  }
-  std::size_t size() const { return head_.load(std::memory_order_acquire) - tail_.load(std::memory_order_acquire); }
-
- private:
-  std::vector<RingItem> buf_;
-  std::size_t mask_ = 0;
-  alignas(64) std::atomic<std::size_t> head_{0};
-  alignas(64) std::atomic<std::size_t> tail_{0};
-};
-
 /// The node's input samples, pushed by the handlers, pulled by the assembler (kPending when empty,
 /// kEnd once closed and empty). Fixed capacity: the assembler pulls each sample right after its push.
 class PushSource final : public stream::Source {
  public:
-  void init(std::size_t cap) {
-    buf_.assign(cap, stream::Sample{});
-  }
-  bool push(const stream::Sample& s) {
-    if (n_ == buf_.size()) return false;
-    buf_[(head_ + n_) % buf_.size()] = s;
-    ++n_;
-    return true;
-  }
+  void init(std::size_t cap) { buf_.reset(cap); }
+  bool push(const stream::Sample& s) { return buf_.push(s); }
   void close() { closed_ = true; }
   Next next(stream::Sample& out, stream::Reject&) override {
-    if (n_ == 0) return closed_ ? Next::kEnd : Next::kPending;
-    out = buf_[head_];
-    head_ = (head_ + 1) % buf_.size();
-    --n_;
+    if (!buf_.pop(out)) return closed_ ? Next::kEnd : Next::kPending;
     return Next::kSample;
   }
   const std::string& name() const override { return name_; }
 
  private:
-  std::vector<stream::Sample> buf_;
-  std::size_t head_ = 0, n_ = 0;
+  core::Ring<stream::Sample> buf_;
   bool closed_ = false;
   std::string name_ = "node";
 };
@@ -166,8 +126,7 @@ class PushSource final : public stream::Source {
 /// Per channel (a head, the accelerometer, star vectors of a head, the orbit): sequence and time state.
 struct ChannelState {
   SequenceGate seq;
-  std::array<TimeUs, 8> recent{};  ///< tags accepted lately (duplicates)
-  int n_recent = 0, recent_next = 0;
+  core::Ring<TimeUs, 8> recent{};  ///< tags accepted lately (duplicates)
   TimeUs bucket = std::numeric_limits<TimeUs>::min();  ///< data second of the flood count
   int in_bucket = 0;
   TimeUs last_pass_t = std::numeric_limits<TimeUs>::min();  ///< the last tag that passed the time gate
@@ -241,7 +200,7 @@ struct Node::Impl {
   TimeUs last_epoch_t = 0;
 
   // worker
-  SpscRing ring;
+  core::SpscRing<RingItem> ring;
   std::thread worker;
   Mailbox mail;
   std::uint64_t next_solve_id = 1;
@@ -249,8 +208,7 @@ struct Node::Impl {
   bool have_first_head = false;
   std::uint64_t head_epoch_index = 0;
   // replay lockstep: solve id -> epoch index at which it is applied (FIFO, at most a few)
-  std::array<std::pair<std::uint64_t, std::uint64_t>, 64> due{};
-  int due_head = 0, due_n = 0;
+  core::Ring<std::pair<std::uint64_t, std::uint64_t>, 64> due{};
   std::atomic<std::uint64_t> worker_published{0};
   std::array<char, 512> last_reason{};  ///< the last refused calibration's reason (real-time thread's copy)
 
@@ -429,8 +387,8 @@ struct Node::Impl {
 
   /// The checks after the time gate (duplicate, late, flood), then the samples to the assembler.
   void pass(ChannelState& s, const stream::Sample* xs, int n, TimeUs t, stream::Sample::Kind kind) {
-    for (int i = 0; i < s.n_recent; ++i)
-      if (s.recent[static_cast<std::size_t>(i)] == t) return reject(Reason::kDuplicate);
+    for (std::size_t i = 0; i < s.recent.size(); ++i)
+      if (s.recent[i] == t) return reject(Reason::kDuplicate);
     // A head epoch at the last handed-out tag is late (its epoch is gone); an accelerometer sample may
     // share it, a star epoch only after a head or accelerometer step.
     const bool head_like = kind == stream::Sample::Kind::kHead ||
@@ -481,9 +439,7 @@ struct Node::Impl {
     return true;
   }
   void remember(ChannelState& s, TimeUs t) {
-    s.recent[static_cast<std::size_t>(s.recent_next)] = t;
-    s.recent_next = (s.recent_next + 1) % static_cast<int>(s.recent.size());
-    s.n_recent = std::min(s.n_recent + 1, static_cast<int>(s.recent.size()));
+    s.recent.pushOverwrite(t);
     now = std::max(now, t);
   }
   int slotOf(int head_id) const {
@@ -795,18 +751,15 @@ struct Node::Impl {
       }
       // Replay: one calibration in flight at a time (the lockstep waits for it; several queued behind a
       // jump in the data would have the worker, the solver and this thread wait on each other).
-      if (epoch.t >= next_cal_t && !(mode == Mode::kReplay && due_n > 0)) {
+      if (epoch.t >= next_cal_t && !(mode == Mode::kReplay && !due.empty())) {
         next_cal_t += static_cast<TimeUs>(cfg.calibration.cadence_s * 1e6);
         if (next_cal_t <= epoch.t) next_cal_t = epoch.t + static_cast<TimeUs>(cfg.calibration.cadence_s * 1e6);
         RingItem s;
         s.kind = RingItem::kSolve;
         s.t = epoch.t;
         s.solve_id = next_solve_id++;
-        if (mode == Mode::kReplay && due_n < static_cast<int>(due.size())) {
-          due[static_cast<std::size_t>((due_head + due_n) % static_cast<int>(due.size()))] = {
-              s.solve_id, head_epoch_index + static_cast<std::uint64_t>(cfg.calibration.apply_lag_epochs)};
-          ++due_n;
-        }
+        if (mode == Mode::kReplay)
+          due.push({s.solve_id, head_epoch_index + static_cast<std::uint64_t>(cfg.calibration.apply_lag_epochs)});
         pushRing(s);
       }
     }
@@ -821,10 +774,9 @@ struct Node::Impl {
   void applyMailbox() {
     if (!cfg.calibration.enabled) return;
     if (mode == Mode::kReplay) {
-      if (due_n == 0 || due[static_cast<std::size_t>(due_head)].second > head_epoch_index) return;
+      if (due.empty() || due.front().second > head_epoch_index) return;
       while (mail.state.load(std::memory_order_acquire) != MailState::kReady) std::this_thread::yield();
-      due_head = (due_head + 1) % static_cast<int>(due.size());
-      --due_n;
+      due.popFront();
     } else if (mail.state.load(std::memory_order_acquire) != MailState::kReady) {
       return;
     }
@@ -1494,10 +1446,9 @@ void Node::finish() {
     m.publishRows();
     // Replay: calibrations still due are applied (published) at the end, in order.
     if (m.cfg.calibration.enabled && m.mode == Node::Mode::kReplay) {
-      while (m.due_n > 0) {
+      while (!m.due.empty()) {
         while (m.mail.state.load(std::memory_order_acquire) != MailState::kReady) std::this_thread::yield();
-        m.due_head = (m.due_head + 1) % static_cast<int>(m.due.size());
-        --m.due_n;
+        m.due.popFront();
         m.takeMailbox(m.last_epoch_t + 1);
       }
     }

@@ -108,17 +108,10 @@ bool CsvRowSink::commit(std::string* error) {
   return file_.commit(error);
 }
 
-BatchBufferSink::BatchBufferSink(std::size_t capacity) : ring_(capacity < 1 ? 1 : capacity) {}
+BatchBufferSink::BatchBufferSink(std::size_t capacity) : ring_(capacity) {}
 
 bool BatchBufferSink::write(const core::PipelineRow& row) {
-  const std::size_t n = ring_.size();
-  if (size_ < n) {
-    ring_[(head_ + size_) % n] = row;
-    ++size_;
-  } else {
-    ring_[head_] = row;
-    head_ = (head_ + 1) % n;
-  }
+  ring_.pushOverwrite(row);
   ++written_;
   return true;
 }

@@ -19,6 +19,7 @@
 #include "boresight/core/head_fusion.h"
 #include "boresight/core/rates.h"
 #include "boresight/core/relative_attitude.h"
+#include "boresight/core/ring.h"
 #include "boresight/core/thermal.h"
 #include "boresight/core/thermal_harmonics.h"
 #include "boresight/core/wahba.h"
@@ -102,7 +103,7 @@ class Pipeline {
   /// End of data: every pending row is completed with what is available.
   void flush();
   bool popRow(PipelineRow& out);
-  int rowsReady() const { return n_ready_; }
+  int rowsReady() const { return static_cast<int>(ready_.size()); }
 
   /// All counters of all components plus the pipeline's own.
   Health health() const;
@@ -154,12 +155,10 @@ class Pipeline {
   int align_countdown_ = 0;  ///< head epochs to the next alignment update
   TimeUs last_grid_ = 0;
   bool have_grid_ = false;
-  std::array<Pending, kMaxPendingRows> pending_{};
-  int p_head_ = 0, n_pending_ = 0;
-  int rate_cursor_ = 0, acc_cursor_ = 0;  ///< first pending row (offset from p_head_) still waiting
+  Ring<Pending, kMaxPendingRows> pending_{};  ///< rows waiting for their rates or accelerometer
+  std::size_t rate_cursor_ = 0, acc_cursor_ = 0;  ///< first pending row (index into pending_) still waiting
   TimeUs acc_next_check_ = std::numeric_limits<TimeUs>::min();  ///< stepAcc resolves from this tag on
-  std::array<PipelineRow, kMaxPendingRows> ready_{};
-  int r_head_ = 0, n_ready_ = 0;
+  Ring<PipelineRow, kMaxPendingRows> ready_{};  ///< rows for popRow
   Health health_{};
 };
 

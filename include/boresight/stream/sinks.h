@@ -3,6 +3,7 @@
 #pragma once
 
 #include <boresight/core/pipeline.h>
+#include <boresight/core/ring.h>
 #include <boresight/io/files.h>
 #include <boresight/model/orbit_context.h>
 
@@ -118,17 +119,16 @@ class BatchBufferSink final : public RowSink {
  public:
   explicit BatchBufferSink(std::size_t capacity);
   bool write(const core::PipelineRow& row) override;
-  std::size_t size() const { return size_; }
-  std::size_t capacity() const { return ring_.size(); }
+  std::size_t size() const { return ring_.size(); }
+  std::size_t capacity() const { return ring_.capacity(); }
   /// Row i of the buffer, 0 = oldest kept.
-  const core::PipelineRow& at(std::size_t i) const { return ring_[(head_ + i) % ring_.size()]; }
+  const core::PipelineRow& at(std::size_t i) const { return ring_[i]; }
   std::uint64_t written() const { return written_; }
-  std::uint64_t overwritten() const { return written_ - size_; }
-  void clear() { size_ = head_ = 0; }
+  std::uint64_t overwritten() const { return written_ - ring_.size(); }
+  void clear() { ring_.clear(); }
 
  private:
-  std::vector<core::PipelineRow> ring_;
-  std::size_t head_ = 0, size_ = 0;
+  core::Ring<core::PipelineRow> ring_;
   std::uint64_t written_ = 0;
 };
 
