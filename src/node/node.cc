@@ -123,26 +123,6 @@ class PushSource final : public stream::Source {
   std::string name_ = "node";
 };
 
-/// Per channel (a head, the accelerometer, star vectors of a head, the orbit): sequence and time state.
-struct ChannelState {
-  SequenceGate seq;
-  core::Ring<TimeUs, 8> recent{};  ///< tags accepted lately (duplicates)
-  TimeUs bucket = std::numeric_limits<TimeUs>::min();  ///< data second of the flood count
-  int in_bucket = 0;
-  TimeUs last_pass_t = std::numeric_limits<TimeUs>::min();  ///< the last tag that passed the time gate
-};
-
-/// A message whose tag jumped beyond the look-ahead, held until the jump is confirmed or refuted: its
-/// samples as they will be pushed (a star-vector message has up to 16).
-struct HeldMessage {
-  ChannelState* ch = nullptr;
-  TimeUs t = 0;
-  stream::Sample::Kind kind = stream::Sample::Kind::kHead;
-  int n = 0;
-  std::array<stream::Sample, 16> xs{};
-};
-constexpr int kMaxHeld = 32;  ///< messages held at one jump (time_jump_confirm is at most 16: config.cc)
-
 /// The worker's result slot: empty -> being written (worker) -> ready -> taken back to empty (real-time thread).
 enum class MailState : std::uint8_t { kEmpty, kWriting, kReady };
 
@@ -183,15 +163,14 @@ struct Node::Impl {
   TimeUs mounting_from_t = std::numeric_limits<TimeUs>::min();
 
   // time state
-  bool have_time = false;
-  TimeUs now = 0;          ///< data time: the latest accepted tag
+  TimeGate gate;           ///< data time, jumps (channel_gate.h)
   bool emitted = false;    ///< the assembler's late rule, mirrored
   TimeUs last_emit_t = 0;
   stream::Sample::Kind last_emit_kind = stream::Sample::Kind::kHead;
-  TimeUs jump_us = 0, lookahead_us = 0;
+  TimeUs lookahead_us = 0;
 
-  std::array<ChannelState, kMaxHeads> ch_head{}, ch_stars{};
-  ChannelState ch_acc{}, ch_stars_seq{}, ch_orbit{};
+  std::array<ChannelGate, kMaxHeads> ch_head{}, ch_stars{};
+  ChannelGate ch_acc{}, ch_stars_seq{}, ch_orbit{};
 
   // outputs (encode buffers sized once)
   std::vector<std::uint8_t> enc;
@@ -282,113 +261,32 @@ struct Node::Impl {
   void reject(Reason r) { ++c.rejected[static_cast<std::size_t>(r)]; }
 
   SequenceCounts seqc;  ///< lost and restarts over every channel (channel_gate.h)
-  void seqCheck(ChannelState& s, std::int32_t seq) {
+  void seqCheck(ChannelGate& s, std::int32_t seq) {
     s.seq.check(seq, seqc);
     c.lost = seqc.lost;
     c.seq_restarts = seqc.restarts;
   }
 
-  /// Time: every input goes through admit(). A tag within the look-ahead of the data time (the latest
-  /// accepted tag) passes on to the duplicate, late and flood checks. A tag beyond it, either way, is a
-  /// jump: the message is held until time_jump_confirm messages in a row (sensors as below) agree on the
-  /// new time - then the data time moves (a step back re-synchronises the assembler and the core), and
-  /// the held messages pass in their order - or until a message within the look-ahead arrives: then a
-  /// held one still that far from the data time is rejected (time_jump, or late when the assembler has
-  /// handed out its time), and one the data time has come to meanwhile passes. Votes are counted over
-  /// all channels, and where both sensors (the star cameras - heads and star vectors - and the
-  /// accelerometer) passed messages in the last kActiveUs of data time the votes must come from both: a
-  /// whole link that stops and resumes, or a spacecraft clock set back, moves every channel, while one
-  /// sensor whose clock is off is refuted by the other's messages (without that rule a 10 Hz
-  /// accelerometer 10 s ahead confirmed its jump between two head epochs, and the heads then confirmed
-  /// the way back: a re-synchronisation every half second; counted per channel instead of per sensor,
-  /// the three heads' messages of one epoch confirmed a step back of the star cameras alone). One
-  /// corrupt tag therefore never moves the assembler's frontier; the first message sets the data time
-  /// and a wrong one is out-voted the same way.
-  void admit(ChannelState& s, const stream::Sample* xs, int n, TimeUs t, stream::Sample::Kind kind) {
-    if (!have_time) {
-      have_time = true;
-      now = t;
-    }
-    if (t <= now + jump_us && t >= now - jump_us) {
-      jump_votes = 0;
-      if (n_held > 0) settleHeld();
-      pass(s, xs, n, t, kind);
-      return;
-    }
-    // Orbit messages vote with their own bit and are never required (a slow channel would hold the
-    // fast ones past kMaxHeld).
-    const unsigned sensor = kind == stream::Sample::Kind::kAccel ? 2u : kind == stream::Sample::Kind::kOrbit ? 4u : 1u;
-    if (jump_votes > 0 && std::abs(t - jump_last) <= jump_us) {
-      ++jump_votes;
-      jump_sensors |= sensor;
-    } else {
-      dropHeld();  // an earlier jump that nothing confirmed
-      jump_votes = 1;
-      jump_sensors = sensor;
-      jump_need_sensors = 0;  // the sensors active lately: each must vote
-      for (const ChannelState* ch : all_channels)
-        if (ch->last_pass_t != std::numeric_limits<TimeUs>::min() && ch->last_pass_t >= now - kActiveUs)
-          jump_need_sensors |= ch == &ch_acc ? 2u : 1u;
-    }
-    jump_last = t;
-    if (jump_votes < cfg.time_jump_confirm || (jump_sensors & jump_need_sensors) != jump_need_sensors) {
-      hold(s, xs, n, t, kind);
-      return;
-    }
-    // Confirmed: the data time moves to the first message of the jump.
-    ++c.time_resyncs;
-    jump_votes = 0;
-    TimeUs t0 = t;
-    for (int i = 0; i < n_held; ++i) t0 = std::min(t0, held[static_cast<std::size_t>(i)].t);
-    now = t0;
-    // A step back (a sender clock set back): what is buffered goes to the core, then the assembler and
-    // the core start again at the new time (the filters restart, the counts stay).
-    if (emitted && t0 <= last_emit_t) resyncBack();
-    const int nh = n_held;
-    n_held = 0;
-    for (int i = 0; i < nh; ++i) {
-      HeldMessage& h = held[static_cast<std::size_t>(i)];
-      pass(*h.ch, h.xs.data(), h.n, h.t, h.kind);
-    }
-    pass(s, xs, n, t, kind);
+  /// Time: every input goes through the time gate (TimeGate, channel_gate.h); what it lets through
+  /// comes back to pass().
+  struct GateSink final : TimeGate::Sink {
+    Impl* m = nullptr;
+    void pass(ChannelGate& ch, const stream::Sample* xs, int n, TimeUs t) override { m->pass(ch, xs, n, t); }
+    void refuse(bool late) override { m->reject(late ? Reason::kLate : Reason::kTimeJump); }
+    TimeUs handedOut() const override { return m->emitted ? m->last_emit_t : std::numeric_limits<TimeUs>::min(); }
+    void restart() override { m->resyncBack(); }
+  } gate_sink;
+  void admit(ChannelGate& s, const stream::Sample* xs, int n, TimeUs t) {
+    gate.admit(s, xs, n, t, gate_sink);
+    c.held = gate.heldCount();
+    c.time_resyncs = gate.resyncs();
   }
-  void hold(ChannelState& s, const stream::Sample* xs, int n, TimeUs t, stream::Sample::Kind kind) {
-    if (n_held >= kMaxHeld || n > 16) return reject(Reason::kTimeJump);
-    HeldMessage& h = held[static_cast<std::size_t>(n_held++)];
-    h.ch = &s;
-    h.t = t;
-    h.kind = kind;
-    h.n = n;
-    for (int i = 0; i < n; ++i) h.xs[static_cast<std::size_t>(i)] = xs[i];
-    ++c.held;
-  }
-  /// A message within the look-ahead arrived: each held one passes if the data time has come to it,
-  /// else it is rejected.
-  void settleHeld() {
-    const int nh = n_held;
-    n_held = 0;
-    for (int i = 0; i < nh; ++i) {
-      HeldMessage& h = held[static_cast<std::size_t>(i)];
-      if (h.t <= now + jump_us && h.t >= now - jump_us) pass(*h.ch, h.xs.data(), h.n, h.t, h.kind);
-      else reject(emitted && h.t < last_emit_t ? Reason::kLate : Reason::kTimeJump);
-    }
-  }
-  void dropHeld() {
-    for (int i = 0; i < n_held; ++i) reject(Reason::kTimeJump);
-    n_held = 0;
-  }
-  int jump_votes = 0;
-  unsigned jump_sensors = 0, jump_need_sensors = 0;  ///< bit 0 star cameras, bit 1 accelerometer, bit 2 orbit (never needed)
-  TimeUs jump_last = 0;
-  static constexpr TimeUs kActiveUs = 10 * kUsPerSecond;  ///< a channel is active: it passed a message this recently
-  std::vector<const ChannelState*> all_channels;            ///< set at configure
-  std::array<HeldMessage, kMaxHeld> held{};
-  int n_held = 0;
+  void dropHeld() { gate.dropHeld(gate_sink); }
 
   /// The checks after the time gate (duplicate, late, flood), then the samples to the assembler.
-  void pass(ChannelState& s, const stream::Sample* xs, int n, TimeUs t, stream::Sample::Kind kind) {
-    for (std::size_t i = 0; i < s.recent.size(); ++i)
-      if (s.recent[i] == t) return reject(Reason::kDuplicate);
+  void pass(ChannelGate& s, const stream::Sample* xs, int n, TimeUs t) {
+    if (s.duplicate(t)) return reject(Reason::kDuplicate);
+    const stream::Sample::Kind kind = xs[0].kind;
     // A head epoch at the last handed-out tag is late (its epoch is gone); an accelerometer sample may
     // share it, a star epoch only after a head or accelerometer step.
     const bool head_like = kind == stream::Sample::Kind::kHead ||
@@ -397,7 +295,7 @@ struct Node::Impl {
     const double max_hz = kind == stream::Sample::Kind::kHead || kind == stream::Sample::Kind::kOrbit ? cfg.max_head_rate_hz
                           : kind == stream::Sample::Kind::kAccel                                        ? cfg.max_accel_rate_hz
                                                                                                         : cfg.max_star_rate_hz;
-    if (!floodCheck(s, t, max_hz)) return;
+    if (s.flooded(t, max_hz)) return reject(Reason::kFlood);
     for (int i = 0; i < n; ++i) {
       if (!src.push(xs[i])) {
         if (kind != stream::Sample::Kind::kStar) return reject(Reason::kAssembler);
@@ -406,8 +304,8 @@ struct Node::Impl {
       }
       drain();
     }
-    remember(s, t);
-    s.last_pass_t = t;
+    s.passed(t);
+    gate.advance(t);
     ++c.used;
   }
   void resyncBack() {
@@ -426,22 +324,6 @@ struct Node::Impl {
   /// The mountings in use: the nominal ones until a calibration is handed to the core.
   std::array<Quat, kMaxHeads> handed_q = core::filled<Quat, kMaxHeads>(Quat::Identity());
 
-  bool floodCheck(ChannelState& s, TimeUs t, double max_hz) {
-    const TimeUs sec = t >= 0 ? t / kUsPerSecond : (t - kUsPerSecond + 1) / kUsPerSecond;
-    if (sec != s.bucket) {
-      s.bucket = sec;
-      s.in_bucket = 0;
-    }
-    if (++s.in_bucket > static_cast<int>(std::ceil(max_hz))) {
-      reject(Reason::kFlood);
-      return false;
-    }
-    return true;
-  }
-  void remember(ChannelState& s, TimeUs t) {
-    s.recent.pushOverwrite(t);
-    now = std::max(now, t);
-  }
   int slotOf(int head_id) const {
     for (int k = 0; k < pcfg.heads.n_heads; ++k)
       if (pcfg.heads.head[static_cast<std::size_t>(k)].id == head_id) return k;
@@ -467,7 +349,7 @@ struct Node::Impl {
     const io::HeadSample& m = msg.head;
     const int slot = slotOf(m.head_id);
     if (slot < 0) return reject(Reason::kUnknownHead);
-    ChannelState& s = ch_head[static_cast<std::size_t>(slot)];
+    ChannelGate& s = ch_head[static_cast<std::size_t>(slot)];
     seqCheck(s, m.seq);
     if (!core_ready) return reject(Reason::kNoMountings);
     if (!checked(msg)) return;
@@ -476,7 +358,7 @@ struct Node::Impl {
     x.t = m.utime;
     x.head_id = m.head_id;
     x.q_I_S = quatFromScalarFirst(m.q);
-    admit(s, &x, 1, m.utime, x.kind);
+    admit(s, &x, 1, m.utime);
   }
 
   void onAccel(const void* data, int size) {
@@ -489,7 +371,7 @@ struct Node::Impl {
     x.kind = stream::Sample::Kind::kAccel;
     x.t = m.utime;
     x.a_A = Vec3(m.ang_accel[0], m.ang_accel[1], m.ang_accel[2]);
-    admit(ch_acc, &x, 1, m.utime, x.kind);
+    admit(ch_acc, &x, 1, m.utime);
   }
 
   void onStars(const void* data, int size) {
@@ -510,7 +392,7 @@ struct Node::Impl {
       x.star.r_I = Vec3(m.r_inertial[i][0], m.r_inertial[i][1], m.r_inertial[i][2]);
       x.star.sigma_rad = m.sigma_rad[i];
     }
-    admit(ch_stars[static_cast<std::size_t>(slot)], xs.data(), m.n_stars, m.utime, stream::Sample::Kind::kStar);
+    admit(ch_stars[static_cast<std::size_t>(slot)], xs.data(), m.n_stars, m.utime);
   }
 
   void onMountings(const void* data, int size) {
@@ -606,7 +488,7 @@ struct Node::Impl {
     x.orbit_frame = o.frame;
     x.r_orbit = Vec3(o.r_m[0], o.r_m[1], o.r_m[2]);
     x.v_orbit = Vec3(o.v_m_s[0], o.v_m_s[1], o.v_m_s[2]);
-    admit(ch_orbit, &x, 1, o.utime, x.kind);
+    admit(ch_orbit, &x, 1, o.utime);
   }
 
   /// The core configured with `p`, and the overlay's thermal model set again (configure() drops it).
@@ -883,7 +765,7 @@ struct Node::Impl {
   }
 
   /// Ground commands (BORESIGHT_COMMAND): checked on arrival, carried out at the next head-epoch boundary.
-  ChannelState ch_cmd{};
+  ChannelGate ch_cmd{};
   int pending_cmd = 0;  ///< 1 accept, 2 revert
   void onCommand(const void* data, int size) {
     boresight_lcm::node_command_t m;
@@ -1390,11 +1272,15 @@ bool Node::configure(const NodeConfig& cfg, Mode mode, Output* out, std::string*
   m.pcfg = cfg.pipeline;
   stream::AssemblerConfig ac;
   m.lookahead_us = static_cast<TimeUs>(std::llround(cfg.lookahead_s * 1e6));
-  m.jump_us = m.lookahead_us;
-  m.all_channels.clear();
-  for (auto& ch : m.ch_head) m.all_channels.push_back(&ch);
-  for (auto& ch : m.ch_stars) m.all_channels.push_back(&ch);
-  m.all_channels.push_back(&m.ch_acc);
+  m.ch_acc.sensor = ChannelGate::kAccelerometer;
+  m.ch_orbit.sensor = ChannelGate::kOrbit;
+  std::array<ChannelGate*, 2 * kMaxHeads + 1> active{};
+  int n_active = 0;
+  for (auto& ch : m.ch_head) active[static_cast<std::size_t>(n_active++)] = &ch;
+  for (auto& ch : m.ch_stars) active[static_cast<std::size_t>(n_active++)] = &ch;
+  active[static_cast<std::size_t>(n_active++)] = &m.ch_acc;
+  m.gate.configure(m.lookahead_us, cfg.time_jump_confirm, active.data(), n_active);
+  m.gate_sink.m = &m;
   ac.lookahead_us = m.lookahead_us;
   ac.max_buffered = 4096;  // the heap's reserve: no allocation while stepping
   m.asm_ = std::make_unique<stream::EpochAssembler>(ac);
@@ -1469,7 +1355,7 @@ core::Health Node::coreHealth() const {
 }
 std::string Node::lastCalibrationReason() const { return std::string(impl_->last_reason.data()); }
 const core::Pipeline& Node::pipeline() const { return impl_->pipe; }
-TimeUs Node::dataTime() const { return impl_->now; }
+TimeUs Node::dataTime() const { return impl_->gate.now(); }
 std::uint64_t Node::mountingVersion() const { return impl_->mounting_version; }
 Quat Node::frameRotation() const { return impl_->q_frame; }
 
