@@ -2,6 +2,8 @@
 #include <boresight/node/node.h>
 #include <boresight/node/channel_gate.h>
 
+#include "worker.h"
+
 #include <boresight/calib/solver.h>
 #include <boresight/calib/span_builder.h>
 #include <boresight/core/plausibility.h>
@@ -94,16 +96,6 @@ class LatencyHistogram {
   double max_ns_ = 0;
 };
 
-/// What the real-time thread hands the worker.
-struct RingItem {
-  enum Kind : std::uint8_t { kHeads, kAcc, kSolve, kStop, kMountings } kind = kHeads;
-  TimeUs t = 0;
-  core::HeadEpoch heads{};
-  Vec3 a_A = Vec3::Zero();
-  std::uint64_t solve_id = 0;  ///< kSolve: the request; kMountings: the nominal generation from here on
-  std::array<Quat, kMaxHeads> q_Si_B = core::filled<Quat, kMaxHeads>(Quat::Identity());  ///< kMountings: the new nominal mountings by slot
-};
-
 /// The node's input samples, pushed by the handlers, pulled by the assembler (kPending when empty,
 /// kEnd once closed and empty). Fixed capacity: the assembler pulls each sample right after its push.
 class PushSource final : public stream::Source {
@@ -121,22 +113,6 @@ class PushSource final : public stream::Source {
   core::Ring<stream::Sample> buf_;
   bool closed_ = false;
   std::string name_ = "node";
-};
-
-/// The worker's result slot: empty -> being written (worker) -> ready -> taken back to empty (real-time thread).
-enum class MailState : std::uint8_t { kEmpty, kWriting, kReady };
-
-struct Mailbox {
-  std::atomic<MailState> state{MailState::kEmpty};
-  std::uint64_t solve_id = 0;
-  bool ok = false;
-  std::array<Quat, kMaxHeads> q_Si_B{};
-  boresight_lcm::calibration_t msg{};
-  std::array<char, 512> reason{};  ///< why a calibration was refused (the solver's message), NUL-terminated
-  /// The common rotation is determined about every B axis (the solver's unobservable directions of a
-  /// common rotation: none).
-  bool common_determined = false;
-  std::uint64_t nominal_gen = 0;  ///< the nominal mountings the span was built with (0: the first)
 };
 
 int64_t toI64(std::uint64_t v) { return static_cast<int64_t>(v); }
@@ -179,9 +155,7 @@ struct Node::Impl {
   TimeUs last_epoch_t = 0;
 
   // worker
-  core::SpscRing<RingItem> ring;
-  std::thread worker;
-  Mailbox mail;
+  CalibrationWorker worker;
   std::uint64_t next_solve_id = 1;
   TimeUs first_head_t = 0, next_cal_t = 0;
   bool have_first_head = false;
@@ -464,8 +438,8 @@ struct Node::Impl {
     ++nominal_gen;
     ++c.mountings_applied;
     if (cfg.calibration.enabled) {
-      RingItem& it = worker_mountings;
-      it.kind = RingItem::kMountings;
+      WorkItem& it = worker_mountings;
+      it.kind = WorkItem::kMountings;
       it.t = t;
       it.solve_id = nominal_gen;
       it.q_Si_B = pending_nominal;
@@ -505,41 +479,50 @@ struct Node::Impl {
     core_ready = true;
     for (int k = 0; k < kMaxHeads; ++k) handed_q[static_cast<std::size_t>(k)] = pcfg.heads.head[static_cast<std::size_t>(k)].q_Si_B;
     applyState();
-    if (cfg.calibration.enabled) worker = std::thread([this] { workerLoop(); });
+    if (cfg.calibration.enabled) {
+      calib::SpanOptions so;
+      so.acc_white_noise_radps2 = cfg.acc_white_noise_radps2;
+      so.decimation_s = cfg.calibration.decimation_s;
+      so.max_observations = cfg.calibration.max_observations;
+      worker.start(pcfg, so, [this] {  // on the worker thread, whenever its ring is empty
+        printFrameChanges();
+        writeStateIfNew();
+      });
+    }
     return true;
   }
 
   /// New nominal mountings for the worker: they must reach it, and before any later item (those belong
   /// to the new span). Replay waits like any item; live never waits: while the ring is full the item
   /// stays here, and the items after it are dropped (counted) until it is in.
-  RingItem worker_mountings;
+  WorkItem worker_mountings;
   bool worker_mountings_pending = false;
   bool flushWorkerMountings() {
     if (!worker_mountings_pending) return true;
-    if (!ring.push(worker_mountings)) {
+    if (!worker.push(worker_mountings)) {
       if (mode == Mode::kLive) return false;
       ++c.ring_waits;
-      while (!ring.push(worker_mountings)) std::this_thread::yield();
+      while (!worker.push(worker_mountings)) std::this_thread::yield();
     }
     worker_mountings_pending = false;
     return true;
   }
 
-  void pushRing(const RingItem& it) {
+  void pushRing(const WorkItem& it) {
     if (!cfg.calibration.enabled) return;
     if (!flushWorkerMountings()) {
       ++c.ring_dropped;
       return;
     }
-    if (!ring.push(it)) {
+    if (!worker.push(it)) {
       if (mode == Mode::kLive) {
         ++c.ring_dropped;
         return;
       }
       ++c.ring_waits;  // replay is not real time: wait for the worker (deterministic input)
-      while (!ring.push(it)) std::this_thread::yield();
+      while (!worker.push(it)) std::this_thread::yield();
     }
-    c.ring_high_water = std::max<std::uint64_t>(c.ring_high_water, ring.size());
+    c.ring_high_water = std::max<std::uint64_t>(c.ring_high_water, worker.fill());
   }
 
   /// Hands out everything the assembler may give now and steps the core with it.
@@ -564,8 +547,8 @@ struct Node::Impl {
         lat.add(std::chrono::duration<double, std::nano>(std::chrono::steady_clock::now() - t0).count());
         ++c.accel_steps;
         if (core::accepted(st)) {  // the samples the core took, as calibrate's feed (SpanFeed) gives them
-          RingItem it;
-          it.kind = RingItem::kAcc;
+          WorkItem it;
+          it.kind = WorkItem::kAcc;
           it.t = t;
           it.a_A = a;
           pushRing(it);
@@ -620,8 +603,8 @@ struct Node::Impl {
     ++c.head_epochs;
     ++head_epoch_index;
     last_epoch_t = epoch.t;
-    RingItem it;
-    it.kind = RingItem::kHeads;
+    WorkItem it;
+    it.kind = WorkItem::kHeads;
     it.t = epoch.t;
     it.heads = epoch;
     pushRing(it);
@@ -636,8 +619,8 @@ struct Node::Impl {
       if (epoch.t >= next_cal_t && !(mode == Mode::kReplay && !due.empty())) {
         next_cal_t += static_cast<TimeUs>(cfg.calibration.cadence_s * 1e6);
         if (next_cal_t <= epoch.t) next_cal_t = epoch.t + static_cast<TimeUs>(cfg.calibration.cadence_s * 1e6);
-        RingItem s;
-        s.kind = RingItem::kSolve;
+        WorkItem s;
+        s.kind = WorkItem::kSolve;
         s.t = epoch.t;
         s.solve_id = next_solve_id++;
         if (mode == Mode::kReplay)
@@ -657,9 +640,9 @@ struct Node::Impl {
     if (!cfg.calibration.enabled) return;
     if (mode == Mode::kReplay) {
       if (due.empty() || due.front().second > head_epoch_index) return;
-      while (mail.state.load(std::memory_order_acquire) != MailState::kReady) std::this_thread::yield();
+      while (!worker.ready()) std::this_thread::yield();
       due.popFront();
-    } else if (mail.state.load(std::memory_order_acquire) != MailState::kReady) {
+    } else if (!worker.ready()) {
       return;
     }
     takeMailbox(epoch.t);
@@ -667,6 +650,7 @@ struct Node::Impl {
 
   /// from_t: the first row time the new mountings (and a frame change) apply to.
   void takeMailbox(TimeUs from_t) {
+    Mailbox& mail = worker.mailbox();
     boresight_lcm::calibration_t& m = mail.msg;
     m.applied = 0;
     const bool stale = mail.nominal_gen != nominal_gen;  // solved against nominal mountings replaced since
@@ -689,7 +673,7 @@ struct Node::Impl {
     m.seq = seq_cal++;
     publish(cfg.channels.calibration, m.utime, m);
     ++c.calibrations_published;
-    mail.state.store(MailState::kEmpty, std::memory_order_release);
+    worker.release();
   }
 
   /// The calibration in use before each applied one (what a revert command goes back to), newest last.
@@ -1067,189 +1051,28 @@ struct Node::Impl {
   }
 
   // ---------------------------------------------------------------------------------------------
-  // The worker keeps the span builder fed from the ring; a solve request copies the builder and hands
-  // the copy to the solver thread, so the ring keeps draining while Ceres runs (the real-time thread
-  // then rarely finds the ring full). One job at a time, in request order; both threads are not real
-  // time and may block on each other.
-  struct SolveJob {
-    std::unique_ptr<calib::SpanBuilder> sb;
-    RingItem req;
-    std::array<Quat, kMaxHeads> nominal = core::filled<Quat, kMaxHeads>(Quat::Identity());  ///< the mountings the span was built with
-    std::uint64_t nominal_gen = 0;
-  };
-  std::mutex job_m;
-  std::condition_variable job_cv;
-  std::unique_ptr<SolveJob> job;
-  bool job_stop = false;
-
-  void workerLoop() {
-    calib::SpanBuilder sb;
-    calib::SpanOptions so;
-    so.acc_white_noise_radps2 = cfg.acc_white_noise_radps2;
-    so.decimation_s = cfg.calibration.decimation_s;
-    so.max_observations = cfg.calibration.max_observations;
-    std::string err;
-    core::PipelineConfig wcfg = pcfg;  // the worker's copy (the real-time thread changes pcfg)
-    std::uint64_t gen = 0;
-    bool ok = sb.configure(wcfg, so, &err);
-    std::thread solver([this] { solverLoop(); });
-    RingItem it;
-    int idle = 0;
-    for (;;) {
-      if (!ring.pop(it)) {  // nothing to do: yield a while, then sleep (the worker is not real time)
-        printFrameChanges();
-        writeStateIfNew();
-        if (++idle < 64) std::this_thread::yield();
-        else std::this_thread::sleep_for(std::chrono::microseconds(200));
-        continue;
-      }
-      idle = 0;
-      if (it.kind == RingItem::kStop) break;
-      if (it.kind == RingItem::kMountings) {
-        // New nominal mountings: the span starts again with them (its observations were of the old
-        // ones), and the change is logged here, off the real-time thread.
-        std::string what;
-        for (int k = 0; k < wcfg.heads.n_heads; ++k) {
-          auto& h = wcfg.heads.head[static_cast<std::size_t>(k)];
-          const double d = h.q_Si_B.angularDistance(it.q_Si_B[static_cast<std::size_t>(k)]) / kRadPerArcsec;
-          char b[64];
-          std::snprintf(b, sizeof b, "%shead %d %.2f", k ? ", " : "", h.id, d);
-          what += b;
-          h.q_Si_B = it.q_Si_B[static_cast<std::size_t>(k)];
-        }
-        gen = it.solve_id;
-        sb = calib::SpanBuilder();
-        ok = sb.configure(wcfg, so, &err);
-        std::fprintf(stderr,
-                     "boresightd: new nominal mountings applied from data time %lld us (moved: %s arcsec); the "
-                     "calibration span starts again, the published frame is the heads' datum again\n",
-                     static_cast<long long>(it.t), what.c_str());
-        continue;
-      }
-      if (!ok) continue;
-      if (it.kind == RingItem::kHeads) {
-        sb.pushHeads(it.heads);
-      } else if (it.kind == RingItem::kAcc) {
-        sb.pushAcc(it.t, it.a_A);
-      } else {
-        auto j = std::make_unique<SolveJob>();
-        j->sb = std::make_unique<calib::SpanBuilder>(sb);
-        j->req = it;
-        for (int k = 0; k < kMaxHeads; ++k) j->nominal[static_cast<std::size_t>(k)] = wcfg.heads.head[static_cast<std::size_t>(k)].q_Si_B;
-        j->nominal_gen = gen;
-        std::unique_lock<std::mutex> lk(job_m);
-        job_cv.wait(lk, [this] { return !job; });
-        job = std::move(j);
-        job_cv.notify_all();
-      }
-    }
-    {
-      std::unique_lock<std::mutex> lk(job_m);
-      job_cv.wait(lk, [this] { return !job; });
-      job_stop = true;
-      job_cv.notify_all();
-    }
-    solver.join();
-    worker_done.store(true, std::memory_order_release);
-  }
-
-  void solverLoop() {
-    for (;;) {
-      std::unique_ptr<SolveJob> j;
-      {
-        std::unique_lock<std::mutex> lk(job_m);
-        job_cv.wait(lk, [this] { return job || job_stop; });
-        if (!job) return;
-        j = std::move(job);
-      }
-      j->sb->finish();
-      calib::SolveOptions opt;
-      opt.threads = 1;
-      const calib::SolveResult r = calib::solve(j->sb->span(), opt);
-      // One slot: wait until the real-time thread has taken the previous result.
-      MailState expected = MailState::kEmpty;
-      while (!mail.state.compare_exchange_weak(expected, MailState::kWriting, std::memory_order_acq_rel)) {
-        expected = MailState::kEmpty;
-        std::this_thread::sleep_for(std::chrono::microseconds(100));
-      }
-      fillResult(j->sb->span(), r, j->req, j->nominal, j->nominal_gen);
-      mail.state.store(MailState::kReady, std::memory_order_release);
-      {
-        std::lock_guard<std::mutex> lk(job_m);  // the job slot is free once this one is published
-        job_cv.notify_all();
-      }
-    }
-  }
-
-  void fillResult(const calib::CalibrationSpan& sp, const calib::SolveResult& r, const RingItem& it,
-                  const std::array<Quat, kMaxHeads>& nominal, std::uint64_t gen) {
-    boresight_lcm::calibration_t& m = mail.msg;
-    m = boresight_lcm::calibration_t{};
-    mail.solve_id = it.solve_id;
-    mail.nominal_gen = gen;
-    mail.ok = r.ok;
-    const std::size_t n = std::min(r.message.size(), mail.reason.size() - 1);
-    std::copy(r.message.begin(), r.message.begin() + static_cast<std::ptrdiff_t>(n), mail.reason.begin());
-    mail.reason[n] = '\0';
-    if (!r.ok)  // the worker's own thread, never the real-time one
-      std::fprintf(stderr, "boresightd: calibration at data time %lld us refused: %s\n", static_cast<long long>(it.t),
-                   r.message.c_str());
-    m.utime = it.t;
-    m.span_start_utime = sp.t_first;
-    m.span_end_utime = sp.t_last;
-    m.epochs = static_cast<int32_t>(r.epochs);
-    m.status = r.ok ? 0 : 1;
-    m.n_heads = static_cast<int8_t>(pcfg.heads.n_heads);
-    const double nan = std::numeric_limits<double>::quiet_NaN();
-    for (int k = 0; k < kMaxHeads; ++k) {
-      const auto u = static_cast<std::size_t>(k);
-      mail.q_Si_B[u] = nominal[u];
-      if (k >= pcfg.heads.n_heads) continue;
-      m.head_id[k] = static_cast<int8_t>(pcfg.heads.head[u].id);
-      if (!r.ok) continue;
-      mail.q_Si_B[u] = (quatExp(r.estimate.r_S[u]) * nominal[u]).normalized();
-      if (u < r.heads.size()) {
-        const auto& h = r.heads[u];
-        for (int a = 0; a < 3; ++a) {
-          const auto ua = static_cast<std::size_t>(a);
-          m.error_angles_arcsec[k][a] = h.error_angles_arcsec[ua];
-          m.sigma_arcsec[k][a] = h.sigma_arcsec[ua] ? *h.sigma_arcsec[ua] : nan;
-          m.crlb_arcsec[k][a] = h.crlb_arcsec[ua];
-          m.observable[k][a] = h.observable[ua] ? 1 : 0;
-        }
-      }
-    }
-    const std::size_t n3 = static_cast<std::size_t>(3 * pcfg.heads.n_heads);
-    if (r.ok && r.covariance_arcsec2.size() == n3 * n3)
-      for (std::size_t i = 0; i < n3; ++i)
-        for (std::size_t j = 0; j < n3; ++j) m.covariance_arcsec2[i][j] = r.covariance_arcsec2[i * n3 + j];
-    m.residual_rms_radps2 = r.residual_rms_radps2;
-    mail.common_determined = r.ok && r.unobservable_directions_B.empty();
-  }
-
   /// Stops the worker (and its solver). publish: results that arrive meanwhile are published (finish);
   /// otherwise (destructor) they are discarded.
   void stopWorker(bool publish) {
-    if (!worker.joinable()) return;
+    if (!worker.running()) return;
     auto serveMail = [&] {
-      if (mail.state.load(std::memory_order_acquire) != MailState::kReady) return;
+      if (!worker.ready()) return;
       if (publish) takeMailbox(last_epoch_t + 1);
-      else mail.state.store(MailState::kEmpty, std::memory_order_release);
+      else worker.release();
     };
-    RingItem s;
-    s.kind = RingItem::kStop;
-    while (!ring.push(s)) {
+    WorkItem s;
+    s.kind = WorkItem::kStop;
+    while (!worker.push(s)) {
       serveMail();
       std::this_thread::yield();
     }
-    while (!worker_done.load(std::memory_order_acquire)) {
+    while (!worker.done()) {
       serveMail();
       std::this_thread::sleep_for(std::chrono::microseconds(200));
     }
     worker.join();
     serveMail();
   }
-  std::atomic<bool> worker_done{false};
 };
 
 Node::Node() : impl_(new Impl) {}
@@ -1288,7 +1111,7 @@ bool Node::configure(const NodeConfig& cfg, Mode mode, Output* out, std::string*
   m.asm_->addSource(&m.src);
   m.stars = std::make_unique<core::StarEpoch>();
   m.enc.assign(8192, 0);
-  m.ring.init(cfg.ring_capacity);
+  m.worker.init(cfg.ring_capacity);
   if (!m.readState(error)) return false;
   m.configured = true;
   if (!cfg.mountings_from_log && !m.startCore()) {
@@ -1333,7 +1156,7 @@ void Node::finish() {
     // Replay: calibrations still due are applied (published) at the end, in order.
     if (m.cfg.calibration.enabled && m.mode == Node::Mode::kReplay) {
       while (!m.due.empty()) {
-        while (m.mail.state.load(std::memory_order_acquire) != MailState::kReady) std::this_thread::yield();
+        while (!m.worker.ready()) std::this_thread::yield();
         m.due.popFront();
         m.takeMailbox(m.last_epoch_t + 1);
       }

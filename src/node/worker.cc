@@ -1,0 +1,163 @@
+// The node's calibration worker (worker.h).
+#include "worker.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <limits>
+#include <string>
+
+namespace boresight::node {
+
+void CalibrationWorker::start(const core::PipelineConfig& pcfg, const calib::SpanOptions& so,
+                              std::function<void()> idle) {
+  cfg_ = pcfg;
+  so_ = so;
+  idle_ = std::move(idle);
+  done_.store(false, std::memory_order_relaxed);
+  thread_ = std::thread([this] { workerLoop(); });
+}
+
+// The worker keeps the span builder fed from the ring; a solve request copies the builder and hands the
+// copy to the solver thread, so the ring keeps draining while Ceres runs (the real-time thread then
+// rarely finds the ring full). One job at a time, in request order.
+void CalibrationWorker::workerLoop() {
+  calib::SpanBuilder sb;
+  std::string err;
+  std::uint64_t gen = 0;
+  bool ok = sb.configure(cfg_, so_, &err);
+  std::thread solver([this] { solverLoop(); });
+  WorkItem it;
+  int idle = 0;
+  for (;;) {
+    if (!ring_.pop(it)) {  // nothing to do: yield a while, then sleep (the worker is not real time)
+      if (idle_) idle_();
+      if (++idle < 64) std::this_thread::yield();
+      else std::this_thread::sleep_for(std::chrono::microseconds(200));
+      continue;
+    }
+    idle = 0;
+    if (it.kind == WorkItem::kStop) break;
+    if (it.kind == WorkItem::kMountings) {
+      // New nominal mountings: the span starts again with them (its observations were of the old
+      // ones), and the change is logged here, off the real-time thread.
+      std::string what;
+      for (int k = 0; k < cfg_.heads.n_heads; ++k) {
+        auto& h = cfg_.heads.head[static_cast<std::size_t>(k)];
+        const double d = h.q_Si_B.angularDistance(it.q_Si_B[static_cast<std::size_t>(k)]) / kRadPerArcsec;
+        char b[64];
+        std::snprintf(b, sizeof b, "%shead %d %.2f", k ? ", " : "", h.id, d);
+        what += b;
+        h.q_Si_B = it.q_Si_B[static_cast<std::size_t>(k)];
+      }
+      gen = it.solve_id;
+      sb = calib::SpanBuilder();
+      ok = sb.configure(cfg_, so_, &err);
+      std::fprintf(stderr,
+                   "boresightd: new nominal mountings applied from data time %lld us (moved: %s arcsec); the "
+                   "calibration span starts again, the published frame is the heads' datum again\n",
+                   static_cast<long long>(it.t), what.c_str());
+      continue;
+    }
+    if (!ok) continue;
+    if (it.kind == WorkItem::kHeads) {
+      sb.pushHeads(it.heads);
+    } else if (it.kind == WorkItem::kAcc) {
+      sb.pushAcc(it.t, it.a_A);
+    } else {
+      auto j = std::make_unique<SolveJob>();
+      j->sb = std::make_unique<calib::SpanBuilder>(sb);
+      j->req = it;
+      for (int k = 0; k < core::kMaxHeads; ++k) j->nominal[static_cast<std::size_t>(k)] = cfg_.heads.head[static_cast<std::size_t>(k)].q_Si_B;
+      j->nominal_gen = gen;
+      std::unique_lock<std::mutex> lk(job_m_);
+      job_cv_.wait(lk, [this] { return !job_; });
+      job_ = std::move(j);
+      job_cv_.notify_all();
+    }
+  }
+  {
+    std::unique_lock<std::mutex> lk(job_m_);
+    job_cv_.wait(lk, [this] { return !job_; });
+    job_stop_ = true;
+    job_cv_.notify_all();
+  }
+  solver.join();
+  done_.store(true, std::memory_order_release);
+}
+
+void CalibrationWorker::solverLoop() {
+  for (;;) {
+    std::unique_ptr<SolveJob> j;
+    {
+      std::unique_lock<std::mutex> lk(job_m_);
+      job_cv_.wait(lk, [this] { return job_ || job_stop_; });
+      if (!job_) return;
+      j = std::move(job_);
+    }
+    j->sb->finish();
+    calib::SolveOptions opt;
+    opt.threads = 1;
+    const calib::SolveResult r = calib::solve(j->sb->span(), opt);
+    // One slot: wait until the real-time thread has taken the previous result.
+    MailState expected = MailState::kEmpty;
+    while (!mail_.state.compare_exchange_weak(expected, MailState::kWriting, std::memory_order_acq_rel)) {
+      expected = MailState::kEmpty;
+      std::this_thread::sleep_for(std::chrono::microseconds(100));
+    }
+    fillResult(j->sb->span(), r, *j);
+    mail_.state.store(MailState::kReady, std::memory_order_release);
+    {
+      std::lock_guard<std::mutex> lk(job_m_);  // the job slot is free once this one is published
+      job_cv_.notify_all();
+    }
+  }
+}
+
+void CalibrationWorker::fillResult(const calib::CalibrationSpan& sp, const calib::SolveResult& r, const SolveJob& j) {
+  boresight_lcm::calibration_t& m = mail_.msg;
+  m = boresight_lcm::calibration_t{};
+  mail_.solve_id = j.req.solve_id;
+  mail_.nominal_gen = j.nominal_gen;
+  mail_.ok = r.ok;
+  const std::size_t n = std::min(r.message.size(), mail_.reason.size() - 1);
+  std::copy(r.message.begin(), r.message.begin() + static_cast<std::ptrdiff_t>(n), mail_.reason.begin());
+  mail_.reason[n] = '\0';
+  if (!r.ok)  // the solver's own thread, never the real-time one
+    std::fprintf(stderr, "boresightd: calibration at data time %lld us refused: %s\n", static_cast<long long>(j.req.t),
+                 r.message.c_str());
+  m.utime = j.req.t;
+  m.span_start_utime = sp.t_first;
+  m.span_end_utime = sp.t_last;
+  m.epochs = static_cast<int32_t>(r.epochs);
+  m.status = r.ok ? 0 : 1;
+  const int n_heads = cfg_.heads.n_heads;
+  m.n_heads = static_cast<int8_t>(n_heads);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  for (int k = 0; k < core::kMaxHeads; ++k) {
+    const auto u = static_cast<std::size_t>(k);
+    mail_.q_Si_B[u] = j.nominal[u];
+    if (k >= n_heads) continue;
+    m.head_id[k] = static_cast<int8_t>(cfg_.heads.head[u].id);
+    if (!r.ok) continue;
+    mail_.q_Si_B[u] = (core::quatExp(r.estimate.r_S[u]) * j.nominal[u]).normalized();
+    if (u < r.heads.size()) {
+      const auto& h = r.heads[u];
+      for (int a = 0; a < 3; ++a) {
+        const auto ua = static_cast<std::size_t>(a);
+        m.error_angles_arcsec[k][a] = h.error_angles_arcsec[ua];
+        m.sigma_arcsec[k][a] = h.sigma_arcsec[ua] ? *h.sigma_arcsec[ua] : nan;
+        m.crlb_arcsec[k][a] = h.crlb_arcsec[ua];
+        m.observable[k][a] = h.observable[ua] ? 1 : 0;
+      }
+    }
+  }
+  const std::size_t n3 = static_cast<std::size_t>(3 * n_heads);
+  if (r.ok && r.covariance_arcsec2.size() == n3 * n3)
+    for (std::size_t i = 0; i < n3; ++i)
+      for (std::size_t k = 0; k < n3; ++k) m.covariance_arcsec2[i][k] = r.covariance_arcsec2[i * n3 + k];
+  m.residual_rms_radps2 = r.residual_rms_radps2;
+  mail_.common_determined = r.ok && r.unobservable_directions_B.empty();
+}
+
+}  // namespace boresight::node
