@@ -2,6 +2,7 @@
 #include <boresight/node/node.h>
 #include <boresight/node/channel_gate.h>
 
+#include "encode.h"
 #include "worker.h"
 
 #include <boresight/calib/solver.h>
@@ -13,11 +14,8 @@
 #include <boresight/stream/assembler.h>
 #include <boresight/stream/engine.h>
 
-#include "boresight_lcm/boresight_monitor_t.hpp"
 #include "boresight_lcm/calibration_t.hpp"
-#include "boresight_lcm/fused_attitude_t.hpp"
 #include "boresight_lcm/node_command_t.hpp"
-#include "boresight_lcm/node_health_t.hpp"
 
 #include <algorithm>
 #include <fstream>
@@ -115,7 +113,6 @@ class PushSource final : public stream::Source {
   std::string name_ = "node";
 };
 
-int64_t toI64(std::uint64_t v) { return static_cast<int64_t>(v); }
 
 }  // namespace
 
@@ -149,7 +146,7 @@ struct Node::Impl {
   ChannelGate ch_acc{}, ch_stars_seq{}, ch_orbit{};
 
   // outputs (encode buffers sized once)
-  std::vector<std::uint8_t> enc;
+  Encoder enc;
   std::int32_t seq_att = 0, seq_mon = 0, seq_cal = 0, seq_health = 0;
   TimeUs next_health = std::numeric_limits<TimeUs>::min();
   TimeUs last_epoch_t = 0;
@@ -932,93 +929,23 @@ struct Node::Impl {
 
   template <typename Msg>
   void publish(const std::string& ch, TimeUs t, const Msg& m) {
-    const int n = m.getEncodedSize();
-    if (n <= 0 || static_cast<std::size_t>(n) > enc.size()) return;
-    if (m.encode(enc.data(), 0, n) != n) return;
-    if (out) out->publish(ch, t, enc.data(), n);
+    enc.publish(out, ch, t, m);
   }
+
+  boresight_lcm::fused_attitude_t att_msg{};
+  boresight_lcm::boresight_monitor_t mon_msg{};
+  boresight_lcm::node_health_t health_msg{};
 
   void publishRows() {
     core::PipelineRow row;
     while (pipe.popRow(row)) {
       ++c.rows;
-      boresight_lcm::fused_attitude_t a{};
-      a.utime = row.t;
-      a.seq = seq_att++;
-      if (frame_active) {  // the frame change: q_I_B' = q_I_B q_B_B', vectors and P into B'
-        const Quat& qf = row.t >= frame_from_t ? q_frame : q_frame_old;
-        const Mat3 R = qf.conjugate().toRotationMatrix();  // C_B'_B
-        row.q_I_B = (row.q_I_B * qf).normalized();
-        row.P_B = R * row.P_B * R.transpose();
-        row.w_B = R * row.w_B;
-        row.a_sc_B = R * row.a_sc_B;  // a_acc_B is already in B' (the configured C_B_A defines it)
-      }
-      a.q_I_B[0] = row.q_I_B.w();
-      a.q_I_B[1] = row.q_I_B.x();
-      a.q_I_B[2] = row.q_I_B.y();
-      a.q_I_B[3] = row.q_I_B.z();
-      for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 3; ++j) a.P_B[i][j] = row.P_B(i, j);
-      a.heads_used = static_cast<int8_t>(row.heads_used);
-      a.has_rates = row.has_rates ? 1 : 0;
-      a.has_acc = row.has_acc ? 1 : 0;
-      for (int k = 0; k < 3; ++k) {
-        a.w_B[k] = row.w_B[k];
-        a.alpha_sc_B[k] = row.a_sc_B[k];
-        a.alpha_acc_B[k] = row.a_acc_B[k];
-        a.w_sigma_B[k] = row.w_sigma_B[k];  // per axis of B (a frame change is arcseconds: the same)
-        a.alpha_sc_sigma_B[k] = row.a_sc_sigma_B[k];
-      }
-      a.rate_bridged = static_cast<int16_t>(row.rate_bridged);
-      a.acc_bridged = static_cast<int16_t>(row.acc_bridged);
-      a.alpha_acc_sigma_bridge = row.a_acc_sigma_bridge;
-      a.mounting_version = static_cast<int32_t>(row.t < mounting_from_t ? mounting_prev : mounting_version);
-      publish(cfg.channels.attitude, row.t, a);
-      boresight_lcm::boresight_monitor_t mm{};
-      mm.utime = row.t;
-      mm.seq = seq_mon++;
-      mm.n_heads = static_cast<int8_t>(pcfg.heads.n_heads);
-      const auto& al = pipe.fusion().relativeAlignment();
-      for (int k = 0; k < kMaxHeads; ++k) {
-        const bool used = k < pcfg.heads.n_heads;
-        mm.head_id[k] = static_cast<int8_t>(used ? pcfg.heads.head[static_cast<std::size_t>(k)].id : 0);
-        const Quat q = used ? quatExp(al.c_B[static_cast<std::size_t>(k)]) : Quat::Identity();
-        mm.q_corr_B[k][0] = q.w();
-        mm.q_corr_B[k][1] = q.x();
-        mm.q_corr_B[k][2] = q.y();
-        mm.q_corr_B[k][3] = q.z();
-      }
-      for (int p = 0; p < kMaxPairs; ++p) {
-        mm.iba_rad[p] = row.iba_rad[static_cast<std::size_t>(p)];
-        mm.iba_dev_rad[p] = row.iba_dev_rad[static_cast<std::size_t>(p)];
-      }
-      mm.corrections_valid = al.mask != 0 ? 1 : 0;
-      fillPairCorrections(mm);
-      publish(cfg.channels.monitor, row.t, mm);
+      if (frame_active) toPublishedFrame(row, row.t >= frame_from_t ? q_frame : q_frame_old);
+      encodeAttitude(row, seq_att++, static_cast<int32_t>(row.t < mounting_from_t ? mounting_prev : mounting_version), att_msg);
+      publish(cfg.channels.attitude, row.t, att_msg);
+      encodeMonitor(row, seq_mon++, pipe, last_epoch_t, mon_msg);
+      publish(cfg.channels.monitor, row.t, mon_msg);
     }
-  }
-
-  /// The monitor's three-axis pair corrections at the latest head epoch (what the star-vector solution
-  /// uses; predicted from the thermal model while a head of the pair is blind).
-  void fillPairCorrections(boresight_lcm::boresight_monitor_t& mm) const {
-    mm.pair_utime = last_epoch_t;
-    const core::BoresightMonitor& mon = pipe.monitor();
-    for (int a = 0; a < pcfg.heads.n_heads; ++a)
-      for (int b = a + 1; b < pcfg.heads.n_heads; ++b) {
-        const int p = core::pairIndex(a, b);
-        const core::FilteredDeformation f = mon.filtered(a, b);
-        if (!f.valid) continue;  // source 0, zeros: the ground matrix
-        Mat3 C, cov;
-        mon.relativeFor(a, b, core::RelativeCorrection::kFilteredThreeAxis, last_epoch_t, C, cov);
-        // Set at this epoch: by the pair's own epoch (filtered) or by the thermal model; otherwise held
-        // (a head blind without a thermal model, or the model without orbit input for max_orbit_age_s).
-        const bool fresh = f.t == last_epoch_t;
-        mm.pair_source[p] = static_cast<int8_t>(!fresh ? 3 : f.predicted ? 2 : 1);
-        for (int k = 0; k < 3; ++k) {
-          mm.pair_delta_rad[p][k] = f.delta_Si[k];
-          mm.pair_sigma_rad[p][k] = std::sqrt(std::max(0.0, cov(k, k)));
-        }
-      }
   }
 
   /// Replay publishes nothing that depends on the wall clock or thread timing (latency, ring fill):
@@ -1026,28 +953,11 @@ struct Node::Impl {
   bool wallClockFree() const { return mode == Mode::kReplay; }
 
   void publishHealth(TimeUs t) {
-    boresight_lcm::node_health_t h{};
-    h.utime = t;
-    h.seq = seq_health++;
-    h.received = toI64(c.received);
-    h.used = toI64(c.used);
-    for (int r = 0; r < kReasonCount; ++r) h.rejected[r] = toI64(c.rejected[static_cast<std::size_t>(r)]);
-    h.lost = toI64(c.lost);
-    h.epochs = toI64(c.head_epochs + c.accel_steps);
-    h.calibrations_published = static_cast<int32_t>(c.calibrations_published);
-    h.ring_high_water = wallClockFree() ? 0 : static_cast<int32_t>(c.ring_high_water);
-    h.ring_dropped = toI64(c.ring_dropped);
     const LatencySummary l = lat.summary();
-    // Wall-clock figures differ run to run: a replay records them as 0 so its payloads are identical.
-    const bool wall = !wallClockFree();
-    h.step_latency_us[0] = wall ? l.p50_us : 0;
-    h.step_latency_us[1] = wall ? l.p99_us : 0;
-    h.step_latency_us[2] = wall ? l.p999_us : 0;
-    h.step_latency_us[3] = wall ? l.max_us : 0;
     core::Health ch = pipe.health();
     ch.add(core_base);
-    for (int s = 0; s < core::kStatusCount; ++s) h.core_status[s] = toI64(ch.by_status[static_cast<std::size_t>(s)]);
-    publish(cfg.channels.health, t, h);
+    encodeHealth(t, seq_health++, c, wallClockFree() ? nullptr : &l, ch, health_msg);
+    publish(cfg.channels.health, t, health_msg);
   }
 
   // ---------------------------------------------------------------------------------------------
@@ -1110,7 +1020,7 @@ bool Node::configure(const NodeConfig& cfg, Mode mode, Output* out, std::string*
   m.src.init(256);
   m.asm_->addSource(&m.src);
   m.stars = std::make_unique<core::StarEpoch>();
-  m.enc.assign(8192, 0);
+  m.enc.init(8192);
   m.worker.init(cfg.ring_capacity);
   if (!m.readState(error)) return false;
   m.configured = true;
