@@ -4,14 +4,18 @@
 Needs only the generated Python types (lcm-gen --python; the build puts them in
 build/src/lcmtypes/gen/python, `cmake --install` in share/boresight/python), not LCM's Python module:
 the log file is read here. Each event is matched to a type by its fingerprint (the first 8 bytes), so a
-channel renamed in the node's configuration still decodes.
+channel renamed in the node's configuration still decodes. A message written with another layout of a
+type (an older or newer boresight; src/lcmtypes/versions.txt lists every layout's fingerprint) is
+counted under its type and version, not decoded: its fields are not this build's.
 
   tools/lcm_decode.py --types DIR LOG                 counts per channel and type
   tools/lcm_decode.py --types DIR LOG --dump N        and the first N messages of each channel (JSON lines)
   tools/lcm_decode.py --types DIR LOG --json FILE     counts and every message's fields as JSON
+  --versions FILE   the versions table (default: versions.txt beside the types, or src/lcmtypes/ of
+                    this source tree)
 
 Exit status: 0 read to the end; 1 a damaged log (offset and reason) or a message that does not decode;
-2 usage error.
+2 usage error; 3 read to the end, with messages of other layouts of the types (named) not decoded.
 """
 import argparse
 import importlib
@@ -36,6 +40,31 @@ def load_types(types_dir):
         if isinstance(cls, type) and hasattr(cls, "_get_packed_fingerprint"):
             by_fp[cls._get_packed_fingerprint()] = cls
     return by_fp
+
+
+def load_versions(path):
+    """fingerprint (8 bytes) -> (type, version, current) from versions.txt."""
+    rows = []
+    with open(path) as f:
+        for line in f:
+            parts = line.split()
+            if not parts or parts[0].startswith("#"):
+                continue
+            rows.append((parts[0], int(parts[1]), bytes.fromhex(parts[2])))
+    newest = {}
+    for t, v, _fp in rows:
+        newest[t] = max(newest.get(t, 0), v)
+    return {fp: (t, v, v == newest[t]) for t, v, fp in rows}
+
+
+def find_versions(types_dir, given):
+    if given:
+        return given
+    here = os.path.dirname(os.path.abspath(__file__))
+    for c in (os.path.join(types_dir, "versions.txt"), os.path.join(here, "..", "src", "lcmtypes", "versions.txt")):
+        if os.path.exists(c):
+            return c
+    return None
 
 
 def events(path):
@@ -68,14 +97,21 @@ def main():
     ap.add_argument("--types", required=True, help="directory holding the generated boresight_lcm package")
     ap.add_argument("--dump", type=int, default=0, help="print the first N messages of each channel")
     ap.add_argument("--json", help="write counts and all messages to this file")
+    ap.add_argument("--versions", help="versions.txt (every layout of the types)")
     a = ap.parse_args()
     by_fp = load_types(a.types)
-    counts, unknown, out, dumped = {}, {}, {}, {}
+    vpath = find_versions(a.types, a.versions)
+    versions = load_versions(vpath) if vpath else {}
+    counts, unknown, other, out, dumped = {}, {}, {}, {}, {}
     try:
         for ch, ts, data in events(a.log):
             cls = by_fp.get(data[:8])
             if cls is None:
-                unknown[ch] = unknown.get(ch, 0) + 1
+                v = versions.get(data[:8])
+                if v is not None:  # another layout of a boresight type
+                    other[(ch, v[0], v[1])] = other.get((ch, v[0], v[1]), 0) + 1
+                else:
+                    unknown[ch] = unknown.get(ch, 0) + 1
                 continue
             try:
                 msg = cls.decode(data)
@@ -92,13 +128,23 @@ def main():
         sys.exit("lcm_decode: %s: %s" % (a.log, e))
     for (ch, t), n in sorted(counts.items()):
         print("%-24s %-22s %d" % (ch, t, n))
+    current = {t: v for (t, v, cur) in versions.values() if cur}
+    for (ch, t, v), n in sorted(other.items()):
+        print("%-24s %-22s %d   (version %d of the type; these types are version %d: not decoded)"
+              % (ch, t, n, v, current.get(t, 0)))
     for ch, n in sorted(unknown.items()):
         print("%-24s %-22s %d" % (ch, "(not a boresight type)", n))
+    if other:
+        print("lcm_decode: %s: %d messages of other layouts of the types (decode them with the types of the "
+              "boresight version that wrote the log)" % (a.log, sum(other.values())), file=sys.stderr)
     if a.json:
-        summary = {"counts": {ch: n for (ch, _t), n in counts.items()}, "unknown": unknown, "messages": out}
+        summary = {"counts": {ch: n for (ch, _t), n in counts.items()}, "unknown": unknown,
+                   "other_versions": [{"channel": ch, "type": t, "version": v, "count": n}
+                                      for (ch, t, v), n in sorted(other.items())],
+                   "messages": out}
         with open(a.json, "w") as f:
             json.dump(summary, f)
-    return 0
+    return 3 if other else 0
 
 
 if __name__ == "__main__":

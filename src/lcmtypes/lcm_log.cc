@@ -12,6 +12,7 @@
 #include <lcm/lcm-cpp.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cerrno>
 #include <cstdio>
@@ -466,6 +467,66 @@ std::int32_t InputMessage::seq() const {
     case InputKind::kOrbit: return orbit.seq;
   }
   return 0;
+}
+
+namespace {
+struct VersionRow {
+  const char* type;
+  int version;
+  std::uint64_t fingerprint;
+};
+constexpr VersionRow kVersionRows[] = {
+#include "boresight_lcm/versions.inc"
+};
+constexpr int kNumVersions = static_cast<int>(sizeof kVersionRows / sizeof kVersionRows[0]);
+constexpr bool sameName(const char* a, const char* b) {
+  for (; *a && *a == *b; ++a, ++b) {
+  }
+  return *a == *b;
+}
+/// The table with `current` set (the highest version of each type), formed at compile time.
+constexpr std::array<LcmTypeVersion, kNumVersions> makeVersionTable() {
+  std::array<LcmTypeVersion, kNumVersions> t{};
+  for (int i = 0; i < kNumVersions; ++i) {
+    const VersionRow& r = kVersionRows[i];
+    int newest = 0;
+    for (int j = 0; j < kNumVersions; ++j)
+      if (sameName(kVersionRows[j].type, r.type) && kVersionRows[j].version > newest) newest = kVersionRows[j].version;
+    t[static_cast<std::size_t>(i)] = LcmTypeVersion{r.type, r.version, r.fingerprint, r.version == newest};
+  }
+  return t;
+}
+constexpr std::array<LcmTypeVersion, kNumVersions> kVersionTable = makeVersionTable();
+}  // namespace
+
+const LcmTypeVersion* lcmTypeVersions(int& n) {
+  n = kNumVersions;
+  return kVersionTable.data();
+}
+
+const LcmTypeVersion* lcmTypeVersionOf(const void* data, int size) {
+  if (!data || size < 8) return nullptr;
+  const auto* b = static_cast<const unsigned char*>(data);
+  std::uint64_t fp = 0;
+  for (int i = 0; i < 8; ++i) fp = (fp << 8) | b[i];
+  for (const LcmTypeVersion& v : kVersionTable)
+    if (v.fingerprint == fp) return &v;
+  return nullptr;
+}
+
+bool isOtherVersion(const char* type, const void* data, int size) {
+  const LcmTypeVersion* v = lcmTypeVersionOf(data, size);
+  return v && !v->current && sameName(v->type, type);
+}
+
+const char* inputTypeName(InputKind kind) {
+  switch (kind) {
+    case InputKind::kHead: return "star_head_sample_t";
+    case InputKind::kAccel: return "accel_sample_t";
+    case InputKind::kStars: return "star_vectors_t";
+    case InputKind::kOrbit: return "orbit_sample_t";
+  }
+  return "";
 }
 
 bool decodeInput(InputKind kind, const void* data, int size, InputMessage& out) {

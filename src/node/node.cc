@@ -52,6 +52,7 @@ const char* reasonName(Reason r) {
     case Reason::kImplausible: return "implausible";
     case Reason::kCommand: return "command";
     case Reason::kNoConsumer: return "no_consumer";
+    case Reason::kOtherVersion: return "other_version";
     case Reason::kCount: break;
   }
   return "?";
@@ -313,10 +314,14 @@ struct Node::Impl {
     }
     return false;
   }
+  /// Bytes the channel's decoder refused: another layout of its type, or damaged / another type.
+  static Reason undecodable(const char* type, const void* data, int size) {
+    return io::isOtherVersion(type, data, size) ? Reason::kOtherVersion : Reason::kUndecodable;
+  }
   io::InputMessage msg{};  ///< the message being handled (decodeInput writes it; no allocation)
 
   void onHead(const void* data, int size) {
-    if (!io::decodeInput(io::InputKind::kHead, data, size, msg)) return reject(Reason::kUndecodable);
+    if (!io::decodeInput(io::InputKind::kHead, data, size, msg)) return reject(undecodable(io::inputTypeName(io::InputKind::kHead), data, size));
     const io::HeadSample& m = msg.head;
     const int slot = slotOf(m.head_id);
     if (slot < 0) return reject(Reason::kUnknownHead);
@@ -333,7 +338,7 @@ struct Node::Impl {
   }
 
   void onAccel(const void* data, int size) {
-    if (!io::decodeInput(io::InputKind::kAccel, data, size, msg)) return reject(Reason::kUndecodable);
+    if (!io::decodeInput(io::InputKind::kAccel, data, size, msg)) return reject(undecodable(io::inputTypeName(io::InputKind::kAccel), data, size));
     const io::AccelSample& m = msg.accel;
     seqCheck(ch_acc, m.seq);
     if (!core_ready) return reject(Reason::kNoMountings);
@@ -346,7 +351,7 @@ struct Node::Impl {
   }
 
   void onStars(const void* data, int size) {
-    if (!io::decodeInput(io::InputKind::kStars, data, size, msg)) return reject(Reason::kUndecodable);
+    if (!io::decodeInput(io::InputKind::kStars, data, size, msg)) return reject(undecodable(io::inputTypeName(io::InputKind::kStars), data, size));
     const io::StarVectors& m = msg.stars;
     seqCheck(ch_stars_seq, m.seq);
     const int slot = slotOf(m.head_id);
@@ -368,7 +373,7 @@ struct Node::Impl {
 
   void onMountings(const void* data, int size) {
     io::NominalMountings m;
-    if (!io::decodeNominalMountings(data, size, m)) return reject(Reason::kUndecodable);
+    if (!io::decodeNominalMountings(data, size, m)) return reject(undecodable("nominal_mountings_t", data, size));
     core::PipelineConfig p = pcfg;
     for (int k = 0; k < p.heads.n_heads; ++k) {
       auto& h = p.heads.head[static_cast<std::size_t>(k)];
@@ -447,7 +452,7 @@ struct Node::Impl {
   }
 
   void onOrbit(const void* data, int size) {
-    if (!io::decodeInput(io::InputKind::kOrbit, data, size, msg)) return reject(Reason::kUndecodable);
+    if (!io::decodeInput(io::InputKind::kOrbit, data, size, msg)) return reject(undecodable(io::inputTypeName(io::InputKind::kOrbit), data, size));
     const io::OrbitSample& o = msg.orbit;
     seqCheck(ch_orbit, o.seq);
     if (!checked(msg)) return;
@@ -750,7 +755,7 @@ struct Node::Impl {
   int pending_cmd = 0;  ///< 1 accept, 2 revert
   void onCommand(const void* data, int size) {
     boresight_lcm::node_command_t m;
-    if (m.decode(data, 0, size) != size) return reject(Reason::kUndecodable);
+    if (m.decode(data, 0, size) != size) return reject(undecodable("node_command_t", data, size));
     seqCheck(ch_cmd, m.seq);
     if (!core_ready) return reject(Reason::kNoMountings);
     if (m.command == 1) {

@@ -84,6 +84,25 @@ bool decodeOrbit(const void* data, int size, OrbitSample& out);
 // one rule. What only a reader with a configuration can judge (an unknown head, mountings not known
 // yet, the time and sequence checks) stays with that reader.
 
+// ---- Versions of the message types -------------------------------------------------------------
+// Every layout a boresight LCM type has had (src/lcmtypes/versions.txt): a message whose fingerprint is
+// an earlier (or later) layout of the type a channel carries was written by a build with other types -
+// named as such, not taken for damaged bytes.
+
+/// One recorded layout.
+struct LcmTypeVersion {
+  const char* type = nullptr;     ///< e.g. "fused_attitude_t"
+  int version = 0;                ///< the type's VERSION constant for this layout
+  std::uint64_t fingerprint = 0;  ///< the first 8 bytes of every encoded message, big-endian
+  bool current = false;           ///< the layout this build reads and writes
+};
+/// The table, n entries (static storage; no allocation).
+const LcmTypeVersion* lcmTypeVersions(int& n);
+/// The recorded layout whose fingerprint opens `data` (nullptr: fewer than 8 bytes, or none).
+const LcmTypeVersion* lcmTypeVersionOf(const void* data, int size);
+/// The bytes open with the fingerprint of a layout of `type` other than the current one.
+bool isOtherVersion(const char* type, const void* data, int size);
+
 /// The input message types (channels STAR_HEAD, ACCEL, STAR_VECTORS, ORBIT by default).
 enum class InputKind : std::uint8_t { kHead, kAccel, kStars, kOrbit };
 
@@ -101,6 +120,8 @@ struct InputMessage {
 /// Decodes one message of `kind`. False: the bytes are not that type (length, fingerprint) or a count
 /// is outside its range (star vectors above StarVectors::kCapacity, an orbit frame other than I or E).
 bool decodeInput(InputKind kind, const void* data, int size, InputMessage& out);
+/// The LCM type name of an input kind ("star_head_sample_t", "accel_sample_t", ...).
+const char* inputTypeName(InputKind kind);
 
 /// Why a decoded input message cannot be used, from its content alone. A star-vector message is judged
 /// whole: one impossible star makes the message untrustworthy.

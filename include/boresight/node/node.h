@@ -71,6 +71,8 @@ enum class Reason : std::uint8_t {
                      ///< acceleration beyond 0.1 rad/s^2
   kCommand,          ///< a command that does not apply: unknown, or naming a calibration not held / not in use
   kNoConsumer,       ///< an input nothing in this configuration uses: ORBIT without thermal terms in the overlay
+  kOtherVersion,     ///< a layout of the channel's type other than this build's (io::isOtherVersion: a
+                     ///< sender or recorder built with other message types; src/lcmtypes/versions.txt)
   kCount
 };
 constexpr int kReasonCount = static_cast<int>(Reason::kCount);

@@ -11,6 +11,7 @@ import json
 import math
 import os
 import shutil
+import struct
 import subprocess
 import sys
 import tempfile
@@ -79,6 +80,35 @@ try:
     cal = dec["messages"]["BORESIGHT_CALIBRATION"][-1]
     check(cal["status"] == 0 and all(math.isfinite(v) for v in cal["common_rotation_B_arcsec"]),
           "the calibration decodes with its status and common rotation")
+    # A log written with an earlier layout of a type (here: every monitor message opening with the
+    # fingerprint of boresight_monitor_t version 1 from src/lcmtypes/versions.txt) is named, not decoded
+    # as today's fields, and the exit status says so.
+    v1 = None
+    for line in open(os.path.join(a.src, "src/lcmtypes/versions.txt")):
+        p = line.split()
+        if len(p) >= 3 and p[0] == "boresight_monitor_t" and p[1] == "1":
+            v1 = bytes.fromhex(p[2])
+    check(v1 is not None, "versions.txt lists boresight_monitor_t version 1")
+    blob, off, old = bytearray(open(out, "rb").read()), 0, os.path.join(d, "old.lcm")
+    hdr = struct.Struct(">IqqII")
+    while off < len(blob):
+        _sync, _n, _ts, clen, dlen = hdr.unpack_from(blob, off)
+        start = off + hdr.size
+        if blob[start:start + clen] == b"BORESIGHT_MONITOR":
+            blob[start + clen:start + clen + 8] = v1
+        off = start + clen + dlen
+    open(old, "wb").write(blob)
+    jold = os.path.join(d, "old.json")
+    r = subprocess.run([sys.executable, decode, "--types", a.types, old, "--json", jold],
+                       stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    check(r.returncode == 3, "a log with another layout: exit status 3 (%d)" % r.returncode)
+    dold = json.load(open(jold))
+    check(dold["other_versions"] == [{"channel": "BORESIGHT_MONITOR", "type": "boresight_monitor_t", "version": 1,
+                                      "count": s["rows"]}], "the monitor messages named as version 1: %s" % dold["other_versions"])
+    check("BORESIGHT_MONITOR" not in dold["counts"] and dold["counts"].get("BORESIGHT_ATTITUDE") == s["rows"]
+          and not dold["unknown"], "nothing decoded as today's monitor, the rest as before")
+    check("version 1 of the type" in r.stdout, "the counts table says which version")
+
     # The input log decodes too: one message per received one.
     jin = os.path.join(d, "in.json")
     run([sys.executable, decode, "--types", a.types, os.path.join(d, "sim.lcmlog"), "--json", jin])
