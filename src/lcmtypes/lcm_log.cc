@@ -401,7 +401,7 @@ bool LcmLogReader::open(const std::string& path, std::string* error) {
     impl_->file_size = size > 0 ? static_cast<std::uint64_t>(size) : 0;
   }
   std::rewind(impl_->f);
-  unknown_channel_ = decode_failures_ = 0;  // a reader opened again counts the new log only
+  unknown_channel_ = decode_failures_ = other_versions_ = 0;  // a reader opened again counts the new log only
   return true;
 }
 
@@ -437,7 +437,7 @@ LcmLogReader::Kind LcmLogReader::next(HeadSample& head, AccelSample& accel) {
     return Kind::Skipped;
   }
   if (!decodeInput(kind, ev->data, ev->datalen, msg_)) {
-    ++decode_failures_;
+    ++(isOtherVersion(inputTypeName(kind), ev->data, ev->datalen) ? other_versions_ : decode_failures_);
     return Kind::Skipped;
   }
   switch (kind) {

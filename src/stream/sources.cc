@@ -25,6 +25,7 @@ const char* rejectName(Reject r) {
     case Reject::kTimeOutlier: return "time tag far from its neighbours";
     case Reject::kDuplicate: return "duplicate (same head, same tag)";
     case Reject::kNoOrbitConsumer: return "orbit (no thermal model or fit here)";
+    case Reject::kOtherVersion: return "other layout of the message type (versions.txt)";
     case Reject::kCount: break;
   }
   return "?";
@@ -168,11 +169,13 @@ Source::Next LcmLogSource::next(Sample& out, Reject& why) {
   }
   io::HeadSample h;
   io::AccelSample a;
-  const std::uint64_t undecodable = r_->decodeFailures();
+  const std::uint64_t undecodable = r_->decodeFailures(), other_version = r_->otherVersions();
   const io::LcmLogReader::Kind k = r_->next(h, a);
   if (k == io::LcmLogReader::Kind::End) return Next::kEnd;
   if (k == io::LcmLogReader::Kind::Skipped) {
-    why = r_->decodeFailures() != undecodable ? Reject::kMalformed : Reject::kOtherChannel;
+    why = r_->otherVersions() != other_version ? Reject::kOtherVersion
+          : r_->decodeFailures() != undecodable ? Reject::kMalformed
+                                                : Reject::kOtherChannel;
     return Next::kRejected;
   }
   // The node's rule (io::checkInput), in the replay's coarser reasons.

@@ -197,11 +197,13 @@ class LcmLogReader {
   bool nextRaw(RawEvent& ev);
   std::uint64_t unknownChannel() const { return unknown_channel_; }
   std::uint64_t decodeFailures() const { return decode_failures_; }
+  /// Input messages of another layout of their type (isOtherVersion; not in decodeFailures).
+  std::uint64_t otherVersions() const { return other_versions_; }
 
  private:
   struct Impl;
   std::unique_ptr<Impl> impl_;
-  std::uint64_t unknown_channel_ = 0, decode_failures_ = 0;
+  std::uint64_t unknown_channel_ = 0, decode_failures_ = 0, other_versions_ = 0;
   InputMessage msg_{};
 };
 

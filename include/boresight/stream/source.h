@@ -58,6 +58,8 @@ enum class Reject : std::uint8_t {
   kDuplicate,       ///< the same head at the same tag again (a file given twice, a repeated record)
   kNoOrbitConsumer, ///< an orbit sample, and nothing in this run uses the orbit (no thermal model, no
                     ///< thermal fit)
+  kOtherVersion,    ///< an LCM message of another layout of its type (io::isOtherVersion,
+                    ///< src/lcmtypes/versions.txt): written with other message types
   kCount
 };
 constexpr int kRejectCount = static_cast<int>(Reject::kCount);
