@@ -934,7 +934,7 @@ struct Node::Impl {
 
   template <typename Msg>
   void publish(const std::string& ch, TimeUs t, const Msg& m) {
-    enc.publish(out, ch, t, m);
+    if (!enc.publish(out, ch, t, m)) c.outputs_failed = enc.failed();
   }
 
   boresight_lcm::fused_attitude_t att_msg{};

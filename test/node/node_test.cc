@@ -141,6 +141,7 @@ std::unique_ptr<Replay> replay(const std::string& log, const node::NodeConfig& c
   EXPECT_TRUE(n.configure(cfg, node::Node::Mode::kReplay, &r->out, &err)) << err;
   EXPECT_TRUE(node::replayLog(n, log, &err)) << err;
   r->c = n.counters();
+  EXPECT_EQ(r->c.outputs_failed, 0u) << "every output message encoded";
   io::LcmLogReader rd;
   EXPECT_TRUE(rd.open(log, &err));
   io::LcmLogReader::RawEvent ev;

@@ -286,6 +286,7 @@ int run(int argc, char** argv) {
   }
   j["ring_high_water"] = c.ring_high_water;
   j["ring_dropped"] = c.ring_dropped;
+  j["outputs_failed"] = c.outputs_failed;
   j["ring_waits"] = c.ring_waits;
   j["step_latency_us"] = {{"p50", l.p50_us}, {"p99", l.p99_us}, {"p99.9", l.p999_us}, {"max", l.max_us}, {"n", l.n}};
   const node::LatencySummary lh = n.headStepLatency();

@@ -169,6 +169,7 @@ struct Counters {
   std::uint64_t orbit_steps = 0;  ///< orbit samples the core's thermal prediction stepped with
   std::uint64_t calibrations_published = 0, calibrations_applied = 0, calibrations_refused = 0;
   std::uint64_t ring_high_water = 0, ring_dropped = 0, ring_waits = 0;
+  std::uint64_t outputs_failed = 0;  ///< output messages that did not encode into the encoder's buffer (not published; stays 0)
   std::uint64_t stars_dropped = 0;  ///< star vectors (not messages) the assembler refused
   std::uint64_t time_resyncs = 0;  ///< confirmed jumps of the data time (forward or back)
   std::uint64_t held = 0;          ///< messages held at a jump until it was confirmed or refuted
