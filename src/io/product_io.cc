@@ -110,7 +110,14 @@ std::vector<std::string> headerForWrite(const Header& hin, std::size_t records) 
   // indentation, any spacing before ':') gets the real count, and one is added when there is none.
   const std::string n = std::to_string(records);
   bool has_count = false;
-  const bool yaml = !lines.empty() && lines.front().rfind("header:", 0) == 0;
+  // YAML exactly when the reader takes it so: a first line that is "header:" up to trailing blanks (a
+  // fixed header whose first key merely starts with "header:" stays fixed).
+  bool yaml = false;
+  if (!lines.empty()) {
+    std::string_view f = lines.front();
+    while (!f.empty() && (f.back() == ' ' || f.back() == '\t' || f.back() == '\r')) f.remove_suffix(1);
+    yaml = f == "header:";
+  }
   for (auto& l : lines) {
     const std::size_t ind = l.find_first_not_of(" \t");
     const std::string_view t = ind == std::string::npos ? std::string_view() : std::string_view(l).substr(ind);
