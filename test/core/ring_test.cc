@@ -35,10 +35,9 @@ void againstDeque(R& r, std::size_t cap, std::uint32_t seed) {
       if (dropped) d.pop_front();
       d.push_back(next);
     } else if (k < 65) {
-      if (!r.full()) {
-        r.emplaceBack() = next;
-        d.push_back(next);
-      }
+      if (d.size() == cap) d.pop_front();  // a full ring drops its oldest, as pushOverwrite does
+      r.emplaceBack() = next;
+      d.push_back(next);
     } else if (k < 95) {
       int out = -1;
       const bool ok = r.pop(out);

@@ -72,8 +72,10 @@ class Ring {
     ++n_;
     return drop;
   }
-  /// A new element at the back (its old content is left; the caller writes it); requires !full().
+  /// A new element at the back (its old content is left; the caller writes it); when full the
+  /// oldest goes first, as with pushOverwrite.
   T& emplaceBack() {
+    if (full()) popFront();
     ++n_;
     return back();
   }
