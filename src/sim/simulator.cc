@@ -269,6 +269,7 @@ void Simulator::run(SimSink& sink, const std::function<void(double)>& progress) 
       a.index = n;
       a.t_true_s = t_true_s;
       a.a_B_true = att.meanAngularAcceleration(t_true_us, acc_T_us);
+      a.w_B_true = att.bodyRate(t_true_s);
       stats_.max_abs_alpha = std::max(stats_.max_abs_alpha, a.a_B_true.cwiseAbs().maxCoeff());
       Vec3 w_ang, w_lin;
       acc_noise.white(n, w_ang, w_lin);

@@ -60,6 +60,8 @@ class AttitudeSim {
   /// since the start, so that the rate at a shared end point is the same number whether it is
   /// computed or reused (bitwise reproducible with or without gaps).
   Vec3 meanAngularAcceleration(std::int64_t t_us, std::int64_t T_us) const;
+  /// Body rate w_B at t (rad/s, B), as eval() gives it, without evaluating the orbit.
+  Vec3 bodyRate(double t) const { return rate(t); }
   /// The commanded deviation alpha of the step containing t (rad/s^2, B; diagnostics and tests).
   Vec3 stepAlpha(double t) const;
   double earliestValid() const;

@@ -70,6 +70,7 @@ struct AccSampleOut {
   Vec3 lin_A = Vec3::Zero();   ///< m/s^2, frame A
   double t_true_s = 0;
   Vec3 a_B_true = Vec3::Zero();  ///< true mean angular acceleration over the sample, B
+  Vec3 w_B_true = Vec3::Zero();  ///< true body rate at t_true_s, B (rad/s)
   Vec3 coloured_rad_s2 = Vec3::Zero();     ///< acc_coloured_noise at t_true_s, frame A (in ang_A)
   Vec3 bias_wander_rad_s2 = Vec3::Zero();  ///< acc_bias_wander at t_true_s, frame A (in ang_A)
 };

@@ -1,0 +1,167 @@
+// The raw-data Cramer-Rao bound of method A: what the raw measurements of a span can tell about each
+// head's mounting, whatever the estimator. It is the yardstick every method A accuracy figure is
+// stated against, and it is computed on its own code path: no CRN filter, no decimation, nothing of
+// the solver (calib/solver.h) is used.
+//
+// Linearised raw model (small angles, about the true trajectory; phi is the body's attitude
+// perturbation, a rotation vector in B, C_I_B = C_I_B,true Exp(phi)):
+//   head i, axis j (e1, e2, b), at each delivered sample:
+//       y_ij = (R_i phi)_j + e_ij [+ harmonics_ij(t)] + n_ij(t)
+//     R_i = head axes x C_Si_B (body -> head axes), e_i the mounting error (head axes), n_ij the head
+//     axis's noise model (white per sample plus Gauss-Markov terms: coloured error, thermal wander).
+//   accelerometer (the datum), between its samples, drives the trajectory:
+//       phi' = v,   v' = -[alpha]x phi - [w]x v - C_B_A (b + s o alpha_A + tau alpha_A' + g(t) + n(t))
+//     alpha, w the true angular acceleration and rate (B), alpha_A = C_A_B alpha, b the bias, s the scale
+//     error, tau the time offset, g the Gauss-Markov terms of the accelerometer's noise model (colour,
+//     bias wander) and n its white part (a continuous white noise of density sigma^2 T per A axis, T
+//     the sample interval: its mean over one sample has the per-sample variance sigma^2). Where the
+//     accelerometer has no sample, the angular acceleration is free (a white density of
+//     gap_sigma^2 T, no bias or scale terms).
+// Everything above that is unknown and not a parameter - the trajectory's start (phi0, v0) and every
+// noise state - is a nuisance: the trajectory is free at every head epoch except through the
+// accelerometer. The parameters are e_i for every head, the bias, and (options) the scale, the time
+// offset and orbit harmonics (cos, sin of k u, u = orbit rate x t) of heads 2..n's alignment.
+//
+// Why a mounting error is visible at all: a constant rotation of all heads together looks like a
+// constant attitude offset to the heads; it differs from one only through [alpha]x phi, i.e. where
+// the body accelerates about another axis (the mismatch alpha x e between the heads' and the
+// accelerometer's angular acceleration). A rotation about the only excited axis stays undetermined.
+//
+// Computation: the Fisher information of a linear Gaussian model with a diffuse trajectory start is
+// sum_k u_k^T u_k / F_k over the scalar head observations, u_k the Kalman filter's innovation of the
+// parameter columns and F_k its innovation variance (the Kalman gain does not depend on the data, so
+// the information is exact), with (phi0, v0) as extra columns eliminated at the end (Schur
+// complement). The 6-state trajectory block is stepped at every accelerometer sample; the noise
+// states and the full covariance only at head epochs (the accelerometer's Gauss-Markov states enter
+// the trajectory with their mean over the interval: exact to O(dt / tau) with dt the head interval).
+// Cost: O(n^2) per scalar head observation, n = 6 + noise states.
+//
+// Not included: the field-of-view error (a deterministic function of the stars in view, not a
+// stationary noise), outliers, sign flips. Times are seconds since any fixed origin, non-decreasing.
+#pragma once
+
+#include <boresight/core/conventions.h>
+#include <boresight/model/noise.h>
+
+#include <Eigen/Core>
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace boresight::model {
+class HeadModel;
+class AccelModel;
+}  // namespace boresight::model
+
+namespace boresight::calib {
+
+struct RawBoundHead {
+  int id = 1;
+  Mat3 R_axes_B = Mat3::Identity();        ///< body vector -> components on the head axes (e1, e2, b)
+  std::array<model::NoiseModel, 3> noise;  ///< per head axis (e1, e2, b), rad: white per sample + colour
+};
+
+struct RawBoundOptions {
+  bool bias = true;          ///< a constant accelerometer bias per A axis
+  bool scale = false;        ///< a scale error per A axis
+  bool time_offset = false;  ///< the accelerometer's time offset
+  int harmonics = 0;         ///< orbit harmonics 1..K of heads 2..n's alignment (cos and sin per axis)
+  double orbit_rate_rad_s = 0;
+  double gap_sigma_rad_s2 = 1e-3;  ///< angular acceleration where the accelerometer has no sample
+};
+
+struct RawBoundConfig {
+  std::vector<RawBoundHead> heads;
+  Mat3 C_A_B = Mat3::Identity();                ///< body -> accelerometer frame
+  std::array<model::NoiseModel, 3> acc_noise;   ///< per A axis, rad/s^2 (white: per sample)
+  double acc_interval_s = 0.1;
+  RawBoundOptions options;
+  /// "" when usable, else the reason.
+  std::string validate() const;
+};
+
+/// The configuration of a simulated instrument set: each head's nominal mounting and axes, its white
+/// levels with coloured_noise and thermal_wander, the accelerometer's nominal frame, white, low-
+/// frequency, acc_coloured_noise and acc_bias_wander models.
+RawBoundConfig rawBoundConfig(const std::vector<model::HeadModel>& heads, const model::AccelModel& acc,
+                              const RawBoundOptions& options);
+
+struct RawBoundResult {
+  std::vector<std::string> names;  ///< parameter names, in the order of `information`
+  Eigen::MatrixXd information;     ///< of the parameters, the trajectory start eliminated (SI units)
+  Eigen::MatrixXd covariance;      ///< its pseudo-inverse (eigenvalues below 1e-14 of the largest dropped)
+  std::vector<Vec3> head_sigma_rad;  ///< per head, head axes (e1, e2, b)
+  std::vector<Vec3> relative_sigma_rad;  ///< head i against head 1 (i >= 2; entry 0 zero), head i's axes
+  /// The rotation common to all heads (head 1's error in B, the others tied to it), its information with
+  /// every other parameter eliminated, as principal body directions (columns, unit) and sigmas (rad,
+  /// infinite where the information is zero), smallest sigma first.
+  Mat3 common_axes_B = Mat3::Identity();
+  Vec3 common_sigma_rad = Vec3::Zero();
+  Vec3 bias_sigma_rad_s2 = Vec3::Zero();  ///< zero when the bias is not a parameter
+  double span_s = 0;
+  std::vector<std::uint64_t> head_samples;
+  std::uint64_t acc_samples = 0, acc_gaps = 0, head_samples_before_acc = 0;
+};
+
+/// Receives the discrete model as the bound steps it (for an independent batch computation in tests):
+/// each transition x' = T x + G theta + w, Cov(w) = Q, and each scalar observation
+/// y = h^T x + d^T theta + v, Var(v) = r. theta holds the parameters without the trajectory start.
+class RawBoundRecorder {
+ public:
+  virtual ~RawBoundRecorder() = default;
+  virtual void transition(const Eigen::MatrixXd& T, const Eigen::MatrixXd& Q, const Eigen::MatrixXd& G) = 0;
+  virtual void observation(const Eigen::VectorXd& h, const Eigen::VectorXd& d, double r) = 0;
+};
+
+class RawBound {
+ public:
+  explicit RawBound(const RawBoundConfig& cfg);
+
+  /// An accelerometer sample at t: the true mean angular acceleration over it and the rate (B).
+  void accel(double t_s, const Vec3& alpha_B, const Vec3& w_B);
+  /// A delivered sample of head `index` (position in the configuration) at t.
+  void head(double t_s, std::size_t index);
+  RawBoundResult result() const;
+
+  std::size_t stateSize() const { return n_; }
+  std::size_t parameterCount() const { return p_; }  ///< without the trajectory start
+  /// The initial state covariance's diagonal: 0 for the trajectory start (free), the stationary
+  /// variance of every noise state.
+  Eigen::VectorXd initialVariance() const;
+  void setRecorder(RawBoundRecorder* r) { recorder_ = r; }
+
+ private:
+  void advance(double t_s);
+  void subStep(double h, bool gap);
+  void flush(double t_s);
+  void observe(std::size_t head, int axis, double t_s);
+
+  RawBoundConfig cfg_;
+  std::size_t n_ = 0, p_ = 0, pt_ = 0;  ///< states, parameters, parameters + trajectory start
+  std::size_t ka_ = 0;                  ///< accelerometer noise states (after the 6 trajectory states)
+  std::vector<int> acc_axis_;           ///< A axis of each accelerometer noise state
+  std::vector<double> tau_, var_;       ///< every noise state's correlation time and variance
+  std::vector<std::array<std::size_t, 3>> head_state_begin_, head_state_end_;
+  std::vector<std::array<double, 3>> head_white_;
+  std::size_t col_bias_ = 0, col_scale_ = 0, col_tau_ = 0, col_harm_ = 0, col_start_ = 0;
+  Mat3 C_B_A_ = Mat3::Identity();
+  Vec3 q_white_ = Vec3::Zero();  ///< white density per A axis, (rad/s^2)^2 s
+
+  Eigen::MatrixXd P_, E_, info_;
+  // Trajectory block accumulated since the last flush.
+  Eigen::Matrix<double, 6, 6> Phi6_, Q6_;
+  Eigen::Matrix<double, 6, 3> Psi3_, Sc3_;
+  Eigen::Matrix<double, 6, 1> Tau1_;
+  double t_flush_ = 0, t_cur_ = 0, t_acc_ = 0;
+  bool started_ = false, gap_counted_ = false;
+  Vec3 alpha_ = Vec3::Zero(), w_ = Vec3::Zero(), alpha_dot_A_ = Vec3::Zero();
+  double first_t_ = 0, last_t_ = 0;
+  std::vector<std::uint64_t> head_samples_;
+  std::uint64_t acc_samples_ = 0, acc_gaps_ = 0, head_before_ = 0;
+  RawBoundRecorder* recorder_ = nullptr;
+};
+
+}  // namespace boresight::calib

@@ -1,0 +1,425 @@
+// The raw-data Cramer-Rao bound of method A (include/boresight/calib/raw_bound.h has the model).
+#include <boresight/calib/raw_bound.h>
+
+#include <boresight/core/rotation.h>
+#include <boresight/model/sensors.h>
+
+#include <Eigen/Eigenvalues>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+
+namespace boresight::calib {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+/// Pseudo-inverse of an information matrix after scaling it to unit diagonal (its units differ by
+/// many orders of magnitude), and which parameters lie off its null space (eigenvalues of the scaled
+/// matrix below 1e-12 of the largest).
+struct ScaledInverse {
+  Eigen::MatrixXd cov;
+  std::vector<char> determined;
+};
+
+ScaledInverse scaledInverse(const Eigen::MatrixXd& info) {
+  const auto m = static_cast<Eigen::Index>(info.rows());
+  ScaledInverse out;
+  out.cov = Eigen::MatrixXd::Zero(m, m);
+  out.determined.assign(static_cast<std::size_t>(m), 0);
+  if (m == 0) return out;
+  Eigen::VectorXd s(m);
+  for (Eigen::Index i = 0; i < m; ++i) s(i) = info(i, i) > 0 ? 1 / std::sqrt(info(i, i)) : 0.0;
+  Eigen::MatrixXd a = s.asDiagonal() * info * s.asDiagonal();
+  a = 0.5 * (a + a.transpose());
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(a);
+  const Eigen::VectorXd& lam = es.eigenvalues();
+  const double top = std::max(lam.maxCoeff(), 0.0);
+  Eigen::VectorXd null_weight = Eigen::VectorXd::Zero(m);
+  Eigen::VectorXd inv = Eigen::VectorXd::Zero(m);
+  for (Eigen::Index k = 0; k < m; ++k) {
+    if (top > 0 && lam(k) > 1e-12 * top) {
+      inv(k) = 1 / lam(k);
+    } else {
+      null_weight += es.eigenvectors().col(k).cwiseAbs2();
+    }
+  }
+  out.cov = s.asDiagonal() * (es.eigenvectors() * inv.asDiagonal() * es.eigenvectors().transpose()) * s.asDiagonal();
+  for (Eigen::Index i = 0; i < m; ++i) out.determined[static_cast<std::size_t>(i)] = s(i) > 0 && null_weight(i) < 1e-6 ? 1 : 0;
+  return out;
+}
+
+/// Information of the `keep` leading parameters with the others eliminated.
+Eigen::MatrixXd schurLeading(const Eigen::MatrixXd& info, Eigen::Index keep) {
+  const Eigen::Index rest = info.rows() - keep;
+  if (rest == 0) return info;
+  const ScaledInverse r = scaledInverse(info.bottomRightCorner(rest, rest));
+  Eigen::MatrixXd out = info.topLeftCorner(keep, keep) -
+                        info.topRightCorner(keep, rest) * r.cov * info.bottomLeftCorner(rest, keep);
+  return 0.5 * (out + out.transpose());
+}
+
+double sigmaOf(const ScaledInverse& inv, Eigen::Index i) {
+  const auto k = static_cast<std::size_t>(i);
+  return inv.determined[k] ? std::sqrt(std::max(inv.cov(i, i), 0.0)) : kInf;
+}
+
+}  // namespace
+
+std::string RawBoundConfig::validate() const {
+  if (heads.empty()) return "no head";
+  for (const auto& h : heads) {
+    for (int j = 0; j < 3; ++j) {
+      const std::string e = h.noise[static_cast<std::size_t>(j)].validate();
+      if (!e.empty()) return "head " + std::to_string(h.id) + " axis " + std::to_string(j + 1) + ": " + e;
+      if (!(h.noise[static_cast<std::size_t>(j)].whiteVariance() > 0))
+        return "head " + std::to_string(h.id) + " axis " + std::to_string(j + 1) + ": no white noise";
+    }
+  }
+  for (int a = 0; a < 3; ++a) {
+    const std::string e = acc_noise[static_cast<std::size_t>(a)].validate();
+    if (!e.empty()) return "accelerometer axis " + std::to_string(a + 1) + ": " + e;
+    if (!(acc_noise[static_cast<std::size_t>(a)].whiteVariance() > 0))
+      return "accelerometer axis " + std::to_string(a + 1) + ": no white noise";
+  }
+  if (!(acc_interval_s > 0) || !std::isfinite(acc_interval_s)) return "accelerometer sample interval is not positive";
+  if (options.harmonics < 0 || options.harmonics > 8) return "harmonics outside 0..8";
+  if (options.harmonics > 0 && !(options.orbit_rate_rad_s > 0)) return "harmonics need the orbit rate";
+  if (!(options.gap_sigma_rad_s2 > 0)) return "gap_sigma_rad_s2 is not positive";
+  return "";
+}
+
+RawBoundConfig rawBoundConfig(const std::vector<model::HeadModel>& heads, const model::AccelModel& acc,
+                              const RawBoundOptions& options) {
+  RawBoundConfig cfg;
+  cfg.options = options;
+  for (const auto& hm : heads) {
+    RawBoundHead h;
+    h.id = hm.config().id;
+    const Mat3 C_Si_B = hm.config().q_Si_B.toRotationMatrix();
+    for (int c = 0; c < 3; ++c) h.R_axes_B.col(c) = hm.toHeadAxes(C_Si_B.col(c));
+    const auto& e = hm.effects();
+    for (int j = 0; j < 3; ++j) {
+      const bool about = j == 2;
+      model::NoiseModel m = model::NoiseModel::white(about ? hm.sigmaAbout() : hm.sigmaCross());
+      for (const auto& t : (about ? e.coloured_about : e.coloured_cross).terms) m.add(t);
+      for (const auto& t : (about ? e.wander_about : e.wander_cross).terms) m.add(t);
+      h.noise[static_cast<std::size_t>(j)] = m;
+    }
+    cfg.heads.push_back(h);
+  }
+  const auto& ac = acc.config();
+  cfg.C_A_B = ac.C_A_B;
+  cfg.acc_interval_s = 1.0 / ac.rate_hz;
+  for (int a = 0; a < 3; ++a) {
+    const auto k = static_cast<std::size_t>(a);
+    model::NoiseModel m = model::NoiseModel::white(ac.white_rad_s2(a));
+    if (ac.lowfreq_rad_s2(a) > 0) m.add(model::NoiseTerm::gaussMarkov(ac.lowfreq_rad_s2(a), ac.lowfreq_tau_s));
+    for (const auto& t : acc.effects().coloured[k].terms) m.add(t);
+    for (const auto& t : acc.effects().bias_wander[k].terms) m.add(t);
+    cfg.acc_noise[k] = m;
+  }
+  return cfg;
+}
+
+RawBound::RawBound(const RawBoundConfig& cfg) : cfg_(cfg) {
+  const std::size_t nh = cfg_.heads.size();
+  n_ = 6;
+  for (int a = 0; a < 3; ++a) {
+    for (const auto& m : cfg_.acc_noise[static_cast<std::size_t>(a)].markovTerms()) {
+      acc_axis_.push_back(a);
+      tau_.push_back(m.tau_s);
+      var_.push_back(m.var);
+      ++n_;
+    }
+  }
+  ka_ = n_ - 6;
+  head_state_begin_.resize(nh);
+  head_state_end_.resize(nh);
+  head_white_.resize(nh);
+  for (std::size_t i = 0; i < nh; ++i) {
+    for (std::size_t j = 0; j < 3; ++j) {
+      head_state_begin_[i][j] = n_;
+      for (const auto& m : cfg_.heads[i].noise[j].markovTerms()) {
+        tau_.push_back(m.tau_s);
+        var_.push_back(m.var);
+        ++n_;
+      }
+      head_state_end_[i][j] = n_;
+      head_white_[i][j] = cfg_.heads[i].noise[j].whiteVariance();
+    }
+  }
+  std::size_t c = 3 * nh;
+  col_bias_ = c;
+  if (cfg_.options.bias) c += 3;
+  col_scale_ = c;
+  if (cfg_.options.scale) c += 3;
+  col_tau_ = c;
+  if (cfg_.options.time_offset) c += 1;
+  col_harm_ = c;
+  if (nh > 1) c += (nh - 1) * 3 * 2 * static_cast<std::size_t>(std::max(cfg_.options.harmonics, 0));
+  col_start_ = c;
+  p_ = c;
+  pt_ = c + 6;
+
+  C_B_A_ = cfg_.C_A_B.transpose();
+  for (int a = 0; a < 3; ++a) q_white_(a) = cfg_.acc_noise[static_cast<std::size_t>(a)].whiteVariance() * cfg_.acc_interval_s;
+
+  const auto n = static_cast<Eigen::Index>(n_);
+  P_ = Eigen::MatrixXd::Zero(n, n);
+  for (std::size_t k = 0; k < var_.size(); ++k) P_(static_cast<Eigen::Index>(6 + k), static_cast<Eigen::Index>(6 + k)) = var_[k];
+  E_ = Eigen::MatrixXd::Zero(n, static_cast<Eigen::Index>(pt_));
+  E_.block(0, static_cast<Eigen::Index>(col_start_), 6, 6).setIdentity();
+  info_ = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(pt_), static_cast<Eigen::Index>(pt_));
+  head_samples_.assign(nh, 0);
+  Phi6_.setIdentity();
+  Q6_.setZero();
+  Psi3_.setZero();
+  Sc3_.setZero();
+  Tau1_.setZero();
+}
+
+Eigen::VectorXd RawBound::initialVariance() const {
+  Eigen::VectorXd v = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(n_));
+  for (std::size_t k = 0; k < var_.size(); ++k) v(static_cast<Eigen::Index>(6 + k)) = var_[k];
+  return v;
+}
+
+void RawBound::accel(double t_s, const Vec3& alpha_B, const Vec3& w_B) {
+  ++acc_samples_;
+  if (!started_) {
+    started_ = true;
+    t_cur_ = t_flush_ = t_acc_ = first_t_ = last_t_ = t_s;
+    alpha_ = alpha_B;
+    w_ = w_B;
+    return;
+  }
+  if (t_s < t_cur_) t_s = t_cur_;
+  advance(t_s);
+  const double dt = t_s - t_acc_;
+  alpha_dot_A_ = dt > 0 && dt <= 1.5 * cfg_.acc_interval_s ? Vec3(cfg_.C_A_B * (alpha_B - alpha_) / dt) : Vec3::Zero();
+  alpha_ = alpha_B;
+  w_ = w_B;
+  t_acc_ = t_s;
+  gap_counted_ = false;
+  last_t_ = std::max(last_t_, t_s);
+}
+
+void RawBound::advance(double t_s) {
+  const double T = cfg_.acc_interval_s;
+  const double covered = t_acc_ + 1.5 * T;  // a sample stands for its interval, with some tag jitter
+  while (t_cur_ < t_s) {
+    const bool gap = t_cur_ >= covered;
+    const double end = gap ? t_s : std::min(t_s, covered);
+    const double h = std::min(end - t_cur_, T);
+    if (gap && !gap_counted_) {
+      ++acc_gaps_;
+      gap_counted_ = true;
+    }
+    subStep(h, gap);
+    if (end - t_cur_ < 1e-12) t_cur_ = end;
+  }
+}
+
+void RawBound::subStep(double h, bool gap) {
+  const Vec3 alpha = gap ? Vec3::Zero() : alpha_;
+  const Mat3 A = core::skew(alpha), W = core::skew(w_), I = Mat3::Identity();
+  Eigen::Matrix<double, 6, 6> Fs;
+  Fs.block<3, 3>(0, 0) = I - 0.5 * h * h * A;
+  Fs.block<3, 3>(0, 3) = h * I - 0.5 * h * h * W;
+  Fs.block<3, 3>(3, 0) = -h * A;
+  Fs.block<3, 3>(3, 3) = I - h * W;
+  Eigen::Matrix<double, 6, 3> Bs;
+  Bs.topRows<3>() = -0.5 * h * h * C_B_A_;
+  Bs.bottomRows<3>() = -h * C_B_A_;
+  const double g2 = cfg_.options.gap_sigma_rad_s2 * cfg_.options.gap_sigma_rad_s2 * cfg_.acc_interval_s;
+  const Mat3 C = gap ? Mat3(g2 * I) : Mat3(C_B_A_ * q_white_.asDiagonal() * cfg_.C_A_B);
+  Eigen::Matrix<double, 6, 6> Qs;
+  Qs.block<3, 3>(0, 0) = h * h * h / 3 * C;
+  Qs.block<3, 3>(0, 3) = 0.5 * h * h * C;
+  Qs.block<3, 3>(3, 0) = 0.5 * h * h * C;
+  Qs.block<3, 3>(3, 3) = h * C;
+  Phi6_ = Fs * Phi6_;
+  Q6_ = Fs * Q6_ * Fs.transpose() + Qs;
+  Psi3_ = Fs * Psi3_;
+  Sc3_ = Fs * Sc3_;
+  Tau1_ = Fs * Tau1_;
+  if (!gap) {
+    Psi3_ += Bs;
+    Sc3_ += Bs * (cfg_.C_A_B * alpha).asDiagonal();
+    Tau1_ += Bs * alpha_dot_A_;
+  }
+  t_cur_ += h;
+}
+
+void RawBound::flush(double t_s) {
+  const double dt = t_s - t_flush_;
+  if (!(dt > 0)) return;  // a second head at the same epoch: nothing has moved
+  const auto n = static_cast<Eigen::Index>(n_), ka = static_cast<Eigen::Index>(ka_), nn = n - 6;
+  Eigen::VectorXd d(nn), q(nn);
+  for (Eigen::Index k = 0; k < nn; ++k) {
+    const auto kk = static_cast<std::size_t>(k);
+    d(k) = std::exp(-dt / tau_[kk]);
+    q(k) = var_[kk] * (1 - d(k) * d(k));
+  }
+  Eigen::MatrixXd Psig(6, ka);
+  for (Eigen::Index k = 0; k < ka; ++k) Psig.col(k) = Psi3_.col(acc_axis_[static_cast<std::size_t>(k)]) * (0.5 * (1 + d(k)));
+  Eigen::MatrixXd G6 = Eigen::MatrixXd::Zero(6, static_cast<Eigen::Index>(p_));
+  if (cfg_.options.bias) G6.middleCols(static_cast<Eigen::Index>(col_bias_), 3) = Psi3_;
+  if (cfg_.options.scale) G6.middleCols(static_cast<Eigen::Index>(col_scale_), 3) = Sc3_;
+  if (cfg_.options.time_offset) G6.col(static_cast<Eigen::Index>(col_tau_)) = Tau1_;
+
+  if (recorder_) {
+    Eigen::MatrixXd T = Eigen::MatrixXd::Zero(n, n), Q = Eigen::MatrixXd::Zero(n, n);
+    Eigen::MatrixXd G = Eigen::MatrixXd::Zero(n, static_cast<Eigen::Index>(p_));
+    T.topLeftCorner(6, 6) = Phi6_;
+    T.block(0, 6, 6, ka) = Psig;
+    T.bottomRightCorner(nn, nn) = d.asDiagonal();
+    Q.topLeftCorner(6, 6) = Q6_;
+    Q.bottomRightCorner(nn, nn) = q.asDiagonal();
+    G.topRows(6) = G6;
+    recorder_->transition(T, Q, G);
+  }
+
+  // P <- T P T^T + Q, T = [[Phi6, Psig, 0], [0, diag(d)]].
+  Eigen::MatrixXd top = Phi6_ * P_.topRows(6) + Psig * P_.middleRows(6, ka);
+  P_.bottomRows(nn) = d.asDiagonal() * P_.bottomRows(nn);
+  P_.topRows(6) = top;
+  Eigen::MatrixXd left = P_.leftCols(6) * Phi6_.transpose() + P_.middleCols(6, ka) * Psig.transpose();
+  P_.rightCols(nn) = P_.rightCols(nn) * d.asDiagonal();
+  P_.leftCols(6) = left;
+  P_.topLeftCorner(6, 6) += Q6_;
+  P_.bottomRightCorner(nn, nn).diagonal() += q;
+
+  // E <- T E + [G, 0].
+  Eigen::MatrixXd etop = Phi6_ * E_.topRows(6) + Psig * E_.middleRows(6, ka);
+  etop.leftCols(static_cast<Eigen::Index>(p_)) += G6;
+  E_.bottomRows(nn) = d.asDiagonal() * E_.bottomRows(nn);
+  E_.topRows(6) = etop;
+
+  Phi6_.setIdentity();
+  Q6_.setZero();
+  Psi3_.setZero();
+  Sc3_.setZero();
+  Tau1_.setZero();
+  t_flush_ = t_s;
+}
+
+void RawBound::observe(std::size_t i, int j, double t_s) {
+  const auto jj = static_cast<std::size_t>(j);
+  const auto b = static_cast<Eigen::Index>(head_state_begin_[i][jj]), e = static_cast<Eigen::Index>(head_state_end_[i][jj]);
+  const Eigen::RowVector3d r = cfg_.heads[i].R_axes_B.row(j);
+  // P h and E^T h for h = [r, 0.., 1 on this axis's noise states, 0..].
+  Eigen::VectorXd Ph = P_.leftCols(3) * r.transpose();
+  Eigen::RowVectorXd u = r * E_.topRows(3);
+  for (Eigen::Index s = b; s < e; ++s) {
+    Ph += P_.col(s);
+    u += E_.row(s);
+  }
+  const double rw = head_white_[i][jj];
+  double F = r.dot(Ph.head<3>()) + rw;
+  for (Eigen::Index s = b; s < e; ++s) F += Ph(s);
+  // d: the mounting error of this axis, and the harmonics of heads 2..n.
+  u(static_cast<Eigen::Index>(3 * i + jj)) += 1;
+  const int K = cfg_.options.harmonics;
+  if (i > 0 && K > 0) {
+    const double ang = cfg_.options.orbit_rate_rad_s * t_s;
+    const auto base = static_cast<Eigen::Index>(col_harm_ + ((i - 1) * 3 + jj) * 2 * static_cast<std::size_t>(K));
+    for (int k = 1; k <= K; ++k) {
+      u(base + 2 * (k - 1)) += std::cos(k * ang);
+      u(base + 2 * (k - 1) + 1) += std::sin(k * ang);
+    }
+  }
+  if (recorder_) {
+    Eigen::VectorXd h = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(n_));
+    for (Eigen::Index s = 0; s < static_cast<Eigen::Index>(n_); ++s) h(s) = s < 3 ? r(s) : (s >= b && s < e ? 1.0 : 0.0);
+    // d^T theta: u minus the filter's part h^T E, restricted to the parameters.
+    Eigen::RowVectorXd he = r * E_.topRows(3);
+    for (Eigen::Index s = b; s < e; ++s) he += E_.row(s);
+    const Eigen::VectorXd dvec = (u - he).head(static_cast<Eigen::Index>(p_)).transpose();
+    recorder_->observation(h, dvec, rw);
+  }
+  info_.noalias() += u.transpose() * (u / F);
+  E_.noalias() -= Ph * (u / F);
+  P_.noalias() -= Ph * (Ph.transpose() / F);
+}
+
+void RawBound::head(double t_s, std::size_t index) {
+  if (index >= cfg_.heads.size()) return;
+  if (!started_) {
+    ++head_before_;
+    return;
+  }
+  if (t_s < t_cur_) t_s = t_cur_;
+  advance(t_s);
+  flush(t_s);
+  for (int j = 0; j < 3; ++j) observe(index, j, t_s);
+  ++head_samples_[index];
+  last_t_ = std::max(last_t_, t_s);
+}
+
+RawBoundResult RawBound::result() const {
+  RawBoundResult out;
+  const std::size_t nh = cfg_.heads.size();
+  const auto p = static_cast<Eigen::Index>(p_);
+  static const char* kAxis[3] = {"e1", "e2", "b"};
+  static const char* kA[3] = {"x", "y", "z"};
+  for (std::size_t i = 0; i < nh; ++i)
+    for (int j = 0; j < 3; ++j) out.names.push_back("head" + std::to_string(cfg_.heads[i].id) + "." + kAxis[j]);
+  if (cfg_.options.bias)
+    for (int a = 0; a < 3; ++a) out.names.push_back(std::string("acc_bias.") + kA[a]);
+  if (cfg_.options.scale)
+    for (int a = 0; a < 3; ++a) out.names.push_back(std::string("acc_scale.") + kA[a]);
+  if (cfg_.options.time_offset) out.names.push_back("acc_time_offset");
+  for (std::size_t i = 1; i < nh; ++i)
+    for (int j = 0; j < 3; ++j)
+      for (int k = 1; k <= cfg_.options.harmonics; ++k) {
+        const std::string stem = "head" + std::to_string(cfg_.heads[i].id) + "." + kAxis[j] + ".h" + std::to_string(k);
+        out.names.push_back(stem + "cos");
+        out.names.push_back(stem + "sin");
+      }
+
+  // Eliminate the trajectory start (the last six columns).
+  out.information = schurLeading(info_, p);  // the parameters lead, the start is last
+  const ScaledInverse inv = scaledInverse(out.information);
+  out.covariance = inv.cov;
+  out.head_sigma_rad.assign(nh, Vec3::Zero());
+  for (std::size_t i = 0; i < nh; ++i)
+    for (int j = 0; j < 3; ++j) out.head_sigma_rad[i](j) = sigmaOf(inv, static_cast<Eigen::Index>(3 * i) + j);
+  if (cfg_.options.bias)
+    for (int a = 0; a < 3; ++a) out.bias_sigma_rad_s2(a) = sigmaOf(inv, static_cast<Eigen::Index>(col_bias_) + a);
+
+  // Common rotation c (head 1's error in B) and relative errors r_i: e_1 = R_1 c, e_i = R_i c + r_i.
+  Eigen::MatrixXd J = Eigen::MatrixXd::Identity(p, p);
+  for (std::size_t i = 0; i < nh; ++i) {
+    const auto row = static_cast<Eigen::Index>(3 * i);
+    J.block(row, 0, 3, 3) = cfg_.heads[i].R_axes_B;
+    if (i == 0) continue;
+    J.block(row, row, 3, 3).setIdentity();
+  }
+  const Eigen::MatrixXd Inew = J.transpose() * out.information * J;
+  const Eigen::MatrixXd Ic = schurLeading(Inew, 3);
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(Mat3(0.5 * (Ic + Ic.transpose())));
+  const double top = std::max(es.eigenvalues().maxCoeff(), 0.0);
+  for (int k = 0; k < 3; ++k) {
+    const int src = 2 - k;  // largest information first
+    const double lam = es.eigenvalues()(src);
+    out.common_axes_B.col(k) = es.eigenvectors().col(src);
+    out.common_sigma_rad(k) = lam > 1e-12 * top && lam > 0 ? 1 / std::sqrt(lam) : kInf;
+  }
+  const ScaledInverse inv_new = scaledInverse(Inew);
+  out.relative_sigma_rad.assign(nh, Vec3::Zero());
+  for (std::size_t i = 1; i < nh; ++i)
+    for (int j = 0; j < 3; ++j) out.relative_sigma_rad[i](j) = sigmaOf(inv_new, static_cast<Eigen::Index>(3 * i) + j);
+
+  out.span_s = started_ ? last_t_ - first_t_ : 0;
+  out.head_samples = head_samples_;
+  out.acc_samples = acc_samples_;
+  out.acc_gaps = acc_gaps_;
+  out.head_samples_before_acc = head_before_;
+  return out;
+}
+
+}  // namespace boresight::calib

@@ -1,0 +1,290 @@
+// The raw-data Cramer-Rao bound (calib/raw_bound.h) against closed forms and against an independent
+// batch computation of the same linear model.
+//
+// Closed form: a body oscillating about x with angle a sin(W t) over T seconds (whole periods). A common
+// mounting error e makes the heads' angular acceleration differ from the accelerometer's by alpha x e,
+// amplitude a W^2 |e_perp|, so the information on e_y and e_z is a^2 T / S with
+//   S = S_head(f) + S_acc(f) / W^4,
+// the one-sided densities at f = W / 2 pi of the head's attitude noise and of the accelerometer's noise
+// (rad^2/Hz and (rad/s^2)^2/Hz), and e_x (about the only excited axis) is not determined.
+#include <boresight/calib/raw_bound.h>
+#include <boresight/calib/raw_bound_sim.h>
+#include <boresight/sim/scenario.h>
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Cholesky>
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+namespace boresight::calib {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+RawBoundConfig oneHead(const model::NoiseModel& head_noise, const model::NoiseModel& acc_noise) {
+  RawBoundConfig c;
+  RawBoundHead h;
+  h.noise = {head_noise, head_noise, head_noise};
+  c.heads.push_back(h);
+  c.acc_noise = {acc_noise, acc_noise, acc_noise};
+  c.acc_interval_s = 0.1;
+  return c;
+}
+
+struct Oscillation {
+  Vec3 axis = Vec3::UnitX();
+  double a = 2e-3, period = 100, start = 0, duration = 0;
+  Vec3 alpha(double t) const {
+    if (t < start || t >= start + duration) return Vec3::Zero();
+    const double W = 2 * kPi / period;
+    return -a * W * W * std::sin(W * (t - start)) * axis;
+  }
+  Vec3 rate(double t) const {
+    if (t < start || t >= start + duration) return Vec3::Zero();
+    const double W = 2 * kPi / period;
+    return a * W * std::cos(W * (t - start)) * axis;
+  }
+};
+
+/// Accelerometer at 10 Hz, heads at 2 Hz, over [0, span); the sample at t stands for [t, t + 0.1).
+RawBoundResult drive(RawBound& b, const std::vector<Oscillation>& osc, double span, std::size_t heads,
+                     const Vec3& w0 = Vec3::Zero()) {
+  for (long k = 0; k * 0.1 < span; ++k) {
+    const double t = static_cast<double>(k) * 0.1;
+    Vec3 alpha = Vec3::Zero(), w = w0;
+    for (const auto& o : osc) {
+      alpha += o.alpha(t + 0.05);
+      w += o.rate(t + 0.05);
+    }
+    b.accel(t, alpha, w);
+    if (k % 5 == 0)
+      for (std::size_t i = 0; i < heads; ++i) b.head(t, i);
+  }
+  return b.result();
+}
+
+double closedFormSigma(double a, double period, double span, double s_head, double s_acc) {
+  const double W = 2 * kPi / period;
+  return std::sqrt((s_head + s_acc / std::pow(W, 4)) / (a * a * span));
+}
+
+struct Regime {
+  const char* name;
+  double head_sigma, acc_sigma;
+};
+
+TEST(RawBound, SinusoidMatchesTheClosedFormInEveryNoiseRegime) {
+  const Regime regimes[] = {{"head-limited", 1.2e-5, 1e-9}, {"accelerometer-limited", 1e-7, 1e-6}, {"both", 1.2e-5, 8e-8}};
+  const double span = 4000, a = 2e-3, period = 100;
+  for (const auto& r : regimes) {
+    SCOPED_TRACE(r.name);
+    RawBound b(oneHead(model::NoiseModel::white(r.head_sigma), model::NoiseModel::white(r.acc_sigma)));
+    Oscillation o;
+    o.a = a;
+    o.period = period;
+    o.duration = span;
+    const RawBoundResult res = drive(b, {o}, span, 1);
+    const double expect = closedFormSigma(a, period, span, 2 * r.head_sigma * r.head_sigma / 2.0,
+                                          2 * r.acc_sigma * r.acc_sigma / 10.0);
+    EXPECT_NEAR(res.head_sigma_rad[0](1) / expect, 1.0, 0.03) << res.head_sigma_rad[0](1) << " vs " << expect;
+    EXPECT_NEAR(res.head_sigma_rad[0](2) / expect, 1.0, 0.03) << res.head_sigma_rad[0](2) << " vs " << expect;
+    // About the excited axis: nothing.
+    EXPECT_FALSE(std::isfinite(res.head_sigma_rad[0](0)) && res.head_sigma_rad[0](0) < 1e3 * expect)
+        << res.head_sigma_rad[0](0);
+    EXPECT_EQ(res.head_samples[0], 8000u);
+    EXPECT_EQ(res.acc_gaps, 0u);
+  }
+}
+
+TEST(RawBound, ColouredNoiseEntersThroughItsDensityAtTheExcitation) {
+  const double span = 4000, a = 2e-3, period = 100, f = 1 / period;
+  model::NoiseModel head = model::NoiseModel::white(4e-6);
+  head.add(model::NoiseTerm::gaussMarkov(2e-5, 30));
+  model::NoiseModel acc = model::NoiseModel::white(2e-8);
+  acc.add(model::NoiseTerm::gaussMarkov(2e-7, 200));
+  RawBound b(oneHead(head, acc));
+  Oscillation o;
+  o.a = a;
+  o.period = period;
+  o.duration = span;
+  const RawBoundResult res = drive(b, {o}, span, 1);
+  const double expect = closedFormSigma(a, period, span, head.psdContinuous(f, 0.5), acc.psdContinuous(f, 0.1));
+  const double white_only = closedFormSigma(a, period, span, 2 * 4e-6 * 4e-6 / 2.0, 2 * 2e-8 * 2e-8 / 10.0);
+  ASSERT_GT(expect, 2 * white_only);  // the colour matters here, the accelerometer's as much as the head's
+  ASSERT_GT(acc.psdContinuous(f, 0.1) / std::pow(2 * kPi * f, 4), 0.5 * head.psdContinuous(f, 0.5));
+  EXPECT_NEAR(res.head_sigma_rad[0](1) / expect, 1.0, 0.04) << res.head_sigma_rad[0](1) << " vs " << expect;
+  EXPECT_NEAR(res.head_sigma_rad[0](2) / expect, 1.0, 0.04) << res.head_sigma_rad[0](2) << " vs " << expect;
+}
+
+TEST(RawBound, OneExcitedAxisLeavesItsRotationUndeterminedTwoDetermineAll) {
+  RawBoundConfig c = oneHead(model::NoiseModel::white(1.2e-5), model::NoiseModel::white(1e-8));
+  // A second head, boresight along body y (mounting: a rotation about x by 90 deg).
+  RawBoundHead h2 = c.heads[0];
+  h2.id = 2;
+  h2.R_axes_B << 1, 0, 0, 0, 0, -1, 0, 1, 0;
+  c.heads.push_back(h2);
+  const Vec3 orbit_rate(0, -1.1e-3, 0);
+  Oscillation ox, oy;
+  ox.duration = oy.duration = 1500;
+  oy.axis = Vec3::UnitY();
+  oy.start = 1500;
+  {
+    RawBound b(c);
+    const RawBoundResult r = drive(b, {ox}, 1500, 2, orbit_rate);
+    EXPECT_LT(r.common_sigma_rad(1), 1e-3);
+    EXPECT_GT(r.common_sigma_rad(2), 1e3 * r.common_sigma_rad(1));
+    EXPECT_GT(std::abs(r.common_axes_B.col(2).dot(Vec3::UnitX())), 0.999);
+    // The relative alignment needs no excitation: the heads see it directly.
+    EXPECT_LT(r.relative_sigma_rad[1].maxCoeff(), 1e-5);
+  }
+  {
+    RawBound b(c);
+    const RawBoundResult r = drive(b, {ox, oy}, 3000, 2, orbit_rate);
+    EXPECT_LT(r.common_sigma_rad(2), 1e-3);
+    for (std::size_t i = 0; i < 2; ++i) EXPECT_LT(r.head_sigma_rad[i].maxCoeff(), 1e-3);
+  }
+}
+
+TEST(RawBound, UniformRotationAloneDeterminesNoCommonDirection) {
+  RawBound b(oneHead(model::NoiseModel::white(1.2e-5), model::NoiseModel::white(1e-8)));
+  const RawBoundResult r = drive(b, {}, 3000, 1, Vec3(0, -1.1e-3, 0));
+  for (int k = 0; k < 3; ++k) EXPECT_GT(r.common_sigma_rad(k), 1.0) << k;
+}
+
+/// Every transition and observation, for the batch computation.
+struct Recorder : RawBoundRecorder {
+  struct Obs {
+    std::size_t state;
+    Eigen::VectorXd h, d;
+    double r;
+  };
+  std::vector<Eigen::MatrixXd> T, Q, G;
+  std::vector<Obs> obs;
+  void transition(const Eigen::MatrixXd& t, const Eigen::MatrixXd& q, const Eigen::MatrixXd& g) override {
+    T.push_back(t);
+    Q.push_back(q);
+    G.push_back(g);
+  }
+  void observation(const Eigen::VectorXd& h, const Eigen::VectorXd& d, double r) override {
+    obs.push_back({T.size(), h, d, r});
+  }
+};
+
+TEST(RawBound, KalmanInformationEqualsTheBatchSolutionOfTheSameModel) {
+  // Two heads, coloured noise everywhere, every optional parameter, an accelerometer gap, a head dropout.
+  model::NoiseModel hn = model::NoiseModel::white(6e-6);
+  hn.add(model::NoiseTerm::gaussMarkov(8e-6, 12));
+  model::NoiseModel an = model::NoiseModel::white(3e-8);
+  an.add(model::NoiseTerm::gaussMarkov(2e-8, 40));
+  RawBoundConfig c = oneHead(hn, an);
+  RawBoundHead h2 = c.heads[0];
+  h2.id = 2;
+  h2.R_axes_B = Eigen::AngleAxisd(0.7, Vec3(1, 2, 3).normalized()).toRotationMatrix();
+  h2.noise[2] = model::NoiseModel::white(5e-5);
+  c.heads.push_back(h2);
+  c.C_A_B = Eigen::AngleAxisd(0.3, Vec3(0, 1, 1).normalized()).toRotationMatrix();
+  c.options.scale = c.options.time_offset = true;
+  c.options.harmonics = 1;
+  c.options.orbit_rate_rad_s = 2 * kPi / 60;
+  ASSERT_EQ(c.validate(), "");
+  RawBound b(c);
+  Recorder rec;
+  b.setRecorder(&rec);
+  const double span = 12;
+  for (long k = 0; k * 0.1 < span; ++k) {
+    const double t = static_cast<double>(k) * 0.1;
+    if (k > 40 && k < 63) continue;  // an accelerometer gap of 2.2 s
+    const Vec3 alpha(3e-5 * std::sin(0.9 * t), 2e-5 * std::cos(1.7 * t), 1e-5 * std::sin(2.3 * t + 1));
+    const Vec3 w(1e-4 * std::cos(0.9 * t), -1.1e-3, 4e-5 * std::sin(t));
+    b.accel(t, alpha, w);
+    if (k % 5 == 0) {
+      b.head(t, 0);
+      if (k < 80 || k > 95) b.head(t + 0.05 * (k % 2), 1);  // a dropout; head 2 sometimes 50 ms late
+    }
+  }
+  const RawBoundResult r = b.result();
+  EXPECT_EQ(r.acc_gaps, 1u);
+
+  // Batch: unknowns x_0 .. x_M (states) and theta; normal matrix of prior, transitions, observations,
+  // in long double (in double, this normal matrix loses four digits at this accelerometer noise).
+  const auto n = static_cast<Eigen::Index>(b.stateSize()), p = static_cast<Eigen::Index>(b.parameterCount());
+  const auto M = static_cast<Eigen::Index>(rec.T.size());
+  const Eigen::Index N = (M + 1) * n + p;
+  using ML = Eigen::Matrix<long double, Eigen::Dynamic, Eigen::Dynamic>;
+  ML A = ML::Zero(N, N);
+  const Eigen::VectorXd v0 = b.initialVariance();
+  for (Eigen::Index k = 0; k < n; ++k)
+    if (v0(k) > 0) A(k, k) += 1 / v0(k);
+  for (Eigen::Index k = 0; k < M; ++k) {
+    // r = x_{k+1} - T x_k - G theta, weight Q^-1: rows [ -T  I  -G ].
+    ML L = ML::Zero(n, N);
+    L.block(0, k * n, n, n) = -rec.T[static_cast<std::size_t>(k)].cast<long double>();
+    L.block(0, (k + 1) * n, n, n) = ML::Identity(n, n);
+    L.rightCols(p) = -rec.G[static_cast<std::size_t>(k)].cast<long double>();
+    const ML W = rec.Q[static_cast<std::size_t>(k)].cast<long double>().inverse();
+    A += L.transpose() * W * L;
+  }
+  for (const auto& o : rec.obs) {
+    Eigen::Matrix<long double, Eigen::Dynamic, 1> l = Eigen::Matrix<long double, Eigen::Dynamic, 1>::Zero(N);
+    l.segment(static_cast<Eigen::Index>(o.state) * n, n) = o.h.cast<long double>();
+    l.tail(p) = o.d.cast<long double>();
+    A += l * l.transpose() / o.r;
+  }
+  const Eigen::Index nx = (M + 1) * n;
+  // Scale before the Schur complement (units differ by orders of magnitude).
+  Eigen::Matrix<long double, Eigen::Dynamic, 1> s = A.diagonal().cwiseSqrt().cwiseInverse();
+  const ML As = s.asDiagonal() * A * s.asDiagonal();
+  const ML Xs = As.topLeftCorner(nx, nx).ldlt().solve(As.topRightCorner(nx, p));
+  const ML Is = As.bottomRightCorner(p, p) - As.bottomLeftCorner(p, nx) * Xs;
+  const Eigen::Matrix<long double, Eigen::Dynamic, 1> sp = s.tail(p).cwiseInverse();
+  const Eigen::MatrixXd batch = (sp.asDiagonal() * Is * sp.asDiagonal()).cast<double>();
+
+  ASSERT_EQ(r.information.rows(), p);
+  double worst = 0;
+  for (Eigen::Index i = 0; i < p; ++i)
+    for (Eigen::Index j = 0; j < p; ++j)
+      worst = std::max(worst, std::abs(r.information(i, j) - batch(i, j)) / std::sqrt(batch(i, i) * batch(j, j)));
+  EXPECT_LT(worst, 1e-6) << "largest normalised difference";
+  for (Eigen::Index i = 0; i < p; ++i) EXPECT_GT(batch(i, i), 0) << r.names[static_cast<std::size_t>(i)];
+}
+
+TEST(RawBound, AConstantInertialRotationOfTheTrajectoryIsInvisibleToTheAccelerometer) {
+  // The body turns at the orbit rate; rotating the whole trajectory by a constant inertial delta gives
+  // phi(t) = C_B_I(t) delta = Exp(-w t) delta in B, phi' = -w x phi: the accelerometer sees nothing, so
+  // the model's noise-free transitions must carry this state unchanged in form.
+  RawBound b(oneHead(model::NoiseModel::white(1e-5), model::NoiseModel::white(1e-8)));
+  Recorder rec;
+  b.setRecorder(&rec);
+  const Vec3 w(0, -1.1e-3, 0);
+  for (long k = 0; k <= 6000; ++k) {
+    b.accel(static_cast<double>(k) * 0.1, Vec3::Zero(), w);
+    if (k % 5 == 0) b.head(static_cast<double>(k) * 0.1, 0);
+  }
+  ASSERT_EQ(rec.T.size(), 1200u);
+  const Vec3 delta(1e-3, 2e-3, -1.5e-3);
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(6);
+  x.head<3>() = delta;
+  x.tail<3>() = -w.cross(delta);
+  for (const auto& T : rec.T) x = T.topLeftCorner(6, 6) * x;
+  const double t = 600;
+  const Vec3 expect = Eigen::AngleAxisd(-w.norm() * t, w.normalized()).toRotationMatrix() * delta;
+  EXPECT_LT((x.head<3>() - expect).norm(), 1e-3 * delta.norm()) << x.head<3>().transpose() << " vs " << expect.transpose();
+  EXPECT_LT((x.tail<3>() + w.cross(expect)).norm(), 1e-3 * w.norm() * delta.norm());
+}
+
+TEST(RawBound, RefusesAConfigurationWithoutWhiteNoise) {
+  RawBoundConfig c = oneHead(model::NoiseModel::white(1e-5), model::NoiseModel::white(1e-8));
+  EXPECT_EQ(c.validate(), "");
+  c.heads[0].noise[1] = model::NoiseModel();
+  c.heads[0].noise[1].add(model::NoiseTerm::gaussMarkov(1e-5, 10));
+  EXPECT_NE(c.validate().find("no white noise"), std::string::npos);
+  c = oneHead(model::NoiseModel::white(1e-5), model::NoiseModel::white(1e-8));
+  c.options.harmonics = 2;
+  EXPECT_NE(c.validate().find("orbit rate"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace boresight::calib
