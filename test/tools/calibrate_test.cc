@@ -173,6 +173,54 @@ TEST(Calibrate, ShortScenarioInjectsAtLeastFiveTimesTheBoundItReports) {
   }
 }
 
+TEST(Calibrate, TheRawDataBoundLiesBelowTheBoundOfTheCrnPipeline) {
+  // Two independent computations: calibrate's bound is the information of CRN-filtered, decimated
+  // angular accelerations; `boresight bound` is the information of the raw samples of the same span
+  // (calib/raw_bound.h, no filter). Filtering and decimating cannot add information, so per head the
+  // raw bound's total variance (trace: the head frames of the two differ by a rotation) is below the
+  // pipeline's - here by a large factor, which is the point of issue 19.
+  const std::string out = testutil::makeTempDir("calibrate_bound");
+  const CliRun c = run("calibrate --config " + kConfig + " " + level1() + " --time-offset --json " + out + "/c.json");
+  ASSERT_EQ(c.status, 0) << c.out;
+  const CliRun b = run("bound --scenario " + kSrc + "/config/sim_gracefo_calibration_short.yaml --seed 1 --duration 860 " +
+                       "--time-offset --quiet --json " + out + "/b.json");
+  ASSERT_EQ(b.status, 0) << b.out;
+  const auto cj = readJson(out + "/c.json"), bj = readJson(out + "/b.json");
+  ASSERT_EQ(bj["heads"].size(), 3u);
+  const auto truth = expectedAngles(sim().dir + "/truth.yaml");
+  for (std::size_t i = 0; i < 3; ++i) {
+    const auto& ch = cj["heads"][i];
+    const auto& bh = bj["heads"][i];
+    ASSERT_EQ(ch["id"], bh["id"]);
+    double crn = 0, raw = 0, inj_c = 0, inj_b = 0;
+    for (int a = 0; a < 3; ++a) {
+      ASSERT_TRUE(bh["sigma_arcsec"][a].is_number()) << bh.dump();
+      crn += std::pow(ch["crlb_arcsec"][a].get<double>(), 2);
+      raw += std::pow(bh["sigma_arcsec"][a].get<double>(), 2);
+      inj_c += std::pow(truth.at(ch["id"].get<int>())[a], 2);
+      inj_b += std::pow(bh["injected_arcsec"][a].get<double>(), 2);
+    }
+    EXPECT_LT(std::sqrt(raw), 0.5 * std::sqrt(crn)) << "head " << bh["id"] << ": raw " << std::sqrt(raw) << "\" vs CRN "
+                                                  << std::sqrt(crn) << "\"";
+    EXPECT_GT(raw, 0.0);
+    // Both name the same injected error (the accelerometer datum), in their own head axes.
+    EXPECT_NEAR(std::sqrt(inj_b), std::sqrt(inj_c), 0.01) << "head " << bh["id"];
+  }
+}
+
+TEST(Calibrate, BoundHelpAndUsageErrors) {
+  const CliRun h = run("bound --help");
+  EXPECT_EQ(h.status, 0);
+  for (const char* s : {"--scenario", "--seed", "--time-offset", "--harmonics", "Cramer-Rao", "accelerometer datum"})
+    EXPECT_NE(h.out.find(s), std::string::npos) << s;
+  EXPECT_EQ(run("bound --scenario " + kSrc + "/config/sim_gracefo_calibration_short.yaml").status, 2);  // no seed
+  EXPECT_EQ(run("bound --scenario x.yaml --seed -1").status, 2);
+  EXPECT_EQ(run("bound --scenario x.yaml --seed 1 --harmonics 9").status, 2);
+  const CliRun m = run("bound --scenario " + kSrc + "/config/no_such_scenario.yaml --seed 1");
+  EXPECT_EQ(m.status, 1);
+  EXPECT_NE(m.out.find("no_such_scenario.yaml"), std::string::npos) << m.out;
+}
+
 /// sqrt(sum over axes of cos^2 + sin^2) of harmonic index k, and the largest sigma among those terms.
 std::pair<double, double> harmonicNorm(const nlohmann::json& head, std::size_t k) {
   double s = 0, sg = 0;

@@ -106,4 +106,26 @@ inline int parseCommandLine(CLI::App& app, int argc, char** argv) {
   }
 }
 
+/// A progress bar on stderr ("  LABEL [####....]  42%"), redrawn only when it moves; off: silent.
+class ProgressBar {
+ public:
+  ProgressBar(bool on, const char* label) : on_(on), label_(label) {}
+  void operator()(double f) {
+    if (!on_) return;
+    const int width = 40, done = static_cast<int>(f * width + 0.5);
+    if (done == last_ && f < 1.0) return;
+    last_ = done;
+    std::fprintf(stderr, "\r  %s [", label_);
+    for (int i = 0; i < width; ++i) std::fputc(i < done ? '#' : '.', stderr);
+    std::fprintf(stderr, "] %3d%%", static_cast<int>(f * 100 + 0.5));
+    if (f >= 1.0) std::fputc('\n', stderr);
+    std::fflush(stderr);
+  }
+
+ private:
+  bool on_;
+  const char* label_;
+  int last_ = -1;
+};
+
 }  // namespace boresight::cli

@@ -53,26 +53,6 @@ bool makeDirs(const std::string& dir, std::string* error) {
   return true;
 }
 
-class ProgressBar {
- public:
-  explicit ProgressBar(bool on) : on_(on) {}
-  void operator()(double f) {
-    if (!on_) return;
-    const int width = 40, done = static_cast<int>(f * width + 0.5);
-    if (done == last_ && f < 1.0) return;
-    last_ = done;
-    std::fprintf(stderr, "\r  simulating [");
-    for (int i = 0; i < width; ++i) std::fputc(i < done ? '#' : '.', stderr);
-    std::fprintf(stderr, "] %3d%%", static_cast<int>(f * 100 + 0.5));
-    if (f >= 1.0) std::fputc('\n', stderr);
-    std::fflush(stderr);
-  }
-
- private:
-  bool on_;
-  int last_ = -1;
-};
-
 }  // namespace
 
 int runSimulate(int argc, char** argv) {
@@ -137,7 +117,7 @@ int runSimulate(int argc, char** argv) {
   tee.add(&l1);
   if (lcm) tee.add(&log);
   const auto t0 = std::chrono::steady_clock::now();
-  ProgressBar bar(!quiet && ::isatty(::fileno(stderr)));
+  ProgressBar bar(!quiet && ::isatty(::fileno(stderr)), "simulating");
   simulator.run(tee, [&](double f) { bar(f); });
   files = l1.files();
   const std::string qsa = out + "/" + sim::productFileName("QSA1B", sc);

@@ -14,5 +14,6 @@ int runGround(int argc, char** argv);
 int runSimulateGround(int argc, char** argv);
 int runAudit(int argc, char** argv);
 int runNoise(int argc, char** argv);
+int runBound(int argc, char** argv);
 
 }  // namespace boresight::cli

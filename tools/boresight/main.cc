@@ -31,6 +31,10 @@ const Command kCommands[] = {
     {"calibrate", "method A: each head's mounting-error angles with sigma, Cramer-Rao bound, observability",
      boresight::cli::runCalibrate},
 #endif
+#ifdef BORESIGHT_HAVE_BOUND
+    {"bound", "method A's raw-data Cramer-Rao bound for a simulated span: what the raw measurements determine",
+     boresight::cli::runBound},
+#endif
 #ifdef BORESIGHT_HAVE_AUDIT
     {"audit", "model audit: what the model gets wrong in measured data, the named cause, the gain of extending it",
      boresight::cli::runAudit},
