@@ -99,7 +99,9 @@ RawBoundConfig rawBoundConfig(const std::vector<model::HeadModel>& heads, const 
     RawBoundHead h;
     h.id = hm.config().id;
     const Mat3 C_Si_B = hm.config().q_Si_B.toRotationMatrix();
-    for (int c = 0; c < 3; ++c) h.R_axes_B.col(c) = hm.toHeadAxes(C_Si_B.col(c));
+    for (int c = 0; c < 3; ++c) h.axes_Si.col(c) = hm.toHeadAxes(Vec3::Unit(c));
+    h.C_Si_B = C_Si_B;
+    h.R_axes_B = h.axes_Si * C_Si_B;
     const auto& e = hm.effects();
     for (int j = 0; j < 3; ++j) {
       const bool about = j == 2;
@@ -173,6 +175,8 @@ RawBound::RawBound(const RawBoundConfig& cfg) : cfg_(cfg) {
   E_ = Eigen::MatrixXd::Zero(n, static_cast<Eigen::Index>(pt_));
   E_.block(0, static_cast<Eigen::Index>(col_start_), 6, 6).setIdentity();
   info_ = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(pt_), static_cast<Eigen::Index>(pt_));
+  x_ = Eigen::VectorXd::Zero(n);
+  bvec_ = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(pt_));
   head_samples_.assign(nh, 0);
   Phi6_.setIdentity();
   Q6_.setZero();
@@ -196,12 +200,16 @@ void RawBound::accel(double t_s, const Vec3& alpha_B, const Vec3& w_B) {
     w_ = w_B;
     return;
   }
+  stepAcc(t_s, alpha_B);
+  w_ = w_B;
+}
+
+void RawBound::stepAcc(double t_s, const Vec3& alpha_B) {
   if (t_s < t_cur_) t_s = t_cur_;
   advance(t_s);
   const double dt = t_s - t_acc_;
   alpha_dot_A_ = dt > 0 && dt <= 1.5 * cfg_.acc_interval_s ? Vec3(cfg_.C_A_B * (alpha_B - alpha_) / dt) : Vec3::Zero();
   alpha_ = alpha_B;
-  w_ = w_B;
   t_acc_ = t_s;
   gap_counted_ = false;
   last_t_ = std::max(last_t_, t_s);
@@ -246,6 +254,10 @@ void RawBound::subStep(double h, bool gap) {
   Psi3_ = Fs * Psi3_;
   Sc3_ = Fs * Sc3_;
   Tau1_ = Fs * Tau1_;
+  if (data_) {  // the reference trajectory moves with the measured angular acceleration
+    q_nom_ = (q_nom_ * core::quatExp(w_ * h + 0.5 * h * h * alpha)).normalized();
+    w_ += alpha * h;
+  }
   if (!gap) {
     Psi3_ += Bs;
     Sc3_ += Bs * (cfg_.C_A_B * alpha).asDiagonal();
@@ -293,6 +305,11 @@ void RawBound::flush(double t_s) {
   P_.topLeftCorner(6, 6) += Q6_;
   P_.bottomRightCorner(nn, nn).diagonal() += q;
 
+  if (data_) {  // the error state: x <- T x (the filter runs with theta = 0)
+    const Eigen::Matrix<double, 6, 1> xt = Phi6_ * x_.head(6) + Psig * x_.segment(6, ka);
+    x_.tail(nn) = d.cwiseProduct(x_.tail(nn));
+    x_.head(6) = xt;
+  }
   // E <- T E + [G, 0].
   Eigen::MatrixXd etop = Phi6_ * E_.topRows(6) + Psig * E_.middleRows(6, ka);
   etop.leftCols(static_cast<Eigen::Index>(p_)) += G6;
@@ -307,7 +324,7 @@ void RawBound::flush(double t_s) {
   t_flush_ = t_s;
 }
 
-void RawBound::observe(std::size_t i, int j, double t_s) {
+void RawBound::observe(std::size_t i, int j, double t_s, double y) {
   const auto jj = static_cast<std::size_t>(j);
   const auto b = static_cast<Eigen::Index>(head_state_begin_[i][jj]), e = static_cast<Eigen::Index>(head_state_end_[i][jj]);
   const Eigen::RowVector3d r = cfg_.heads[i].R_axes_B.row(j);
@@ -342,6 +359,14 @@ void RawBound::observe(std::size_t i, int j, double t_s) {
     recorder_->observation(h, dvec, rw);
   }
   info_.noalias() += u.transpose() * (u / F);
+  if (data_) {
+    double v = y - r.dot(x_.head<3>());
+    for (Eigen::Index s2 = b; s2 < e; ++s2) v -= x_(s2);
+    x_.noalias() += Ph * (v / F);
+    bvec_.noalias() += u.transpose() * (v / F);
+    chi2_ += v * v / F;
+    ++chi2_n_;
+  }
   E_.noalias() -= Ph * (u / F);
   P_.noalias() -= Ph * (Ph.transpose() / F);
 }
@@ -355,9 +380,133 @@ void RawBound::head(double t_s, std::size_t index) {
   if (t_s < t_cur_) t_s = t_cur_;
   advance(t_s);
   flush(t_s);
-  for (int j = 0; j < 3; ++j) observe(index, j, t_s);
+  for (int j = 0; j < 3; ++j) observe(index, j, t_s, 0.0);
   ++head_samples_[index];
   last_t_ = std::max(last_t_, t_s);
+}
+
+void RawBound::enableData(const std::vector<Mat3>& C_Si_B_applied, const Vec3& bias, const Vec3& scale) {
+  data_ = true;
+  C_Si_B_applied_ = C_Si_B_applied;
+  bias_applied_ = bias;
+  scale_applied_ = scale;
+  // The trajectory's start is a wide prior of the filter (it re-anchors the reference), not a column.
+  E_.block(0, static_cast<Eigen::Index>(col_start_), 6, 6).setZero();
+  for (int k = 0; k < 3; ++k) {
+    P_(k, k) = 1e-4;      // (0.01 rad)^2
+    P_(3 + k, 3 + k) = 1e-5;  // (3e-3 rad/s)^2
+  }
+}
+
+void RawBound::accelData(double t_s, const Vec3& z_A) {
+  ++acc_samples_;
+  if (!started_) return;  // the reference starts at the first head sample
+  stepAcc(t_s, C_B_A_ * (z_A - bias_applied_).cwiseQuotient(Vec3::Ones() + scale_applied_));
+}
+
+void RawBound::headData(double t_s, std::size_t index, const Quat& q_I_Si) {
+  if (index >= cfg_.heads.size()) return;
+  const Mat3 C_meas = q_I_Si.normalized().toRotationMatrix();
+  if (!started_) {
+    started_ = true;
+    t_cur_ = t_flush_ = t_acc_ = first_t_ = last_t_ = t_s;
+    alpha_.setZero();
+    w_.setZero();
+    q_nom_ = Quat(Mat3(C_meas * C_Si_B_applied_[index])).normalized();
+  }
+  if (t_s < t_cur_) t_s = t_cur_;
+  advance(t_s);
+  flush(t_s);
+  const Mat3 C_hat = q_nom_.toRotationMatrix() * C_Si_B_applied_[index].transpose();  // C_I_Si predicted
+  const Vec3 y = cfg_.heads[index].axes_Si * core::so3Log(Mat3(C_hat.transpose() * C_meas));
+  // Gate on the marginal innovations before any update.
+  const Mat3& R = cfg_.heads[index].R_axes_B;
+  for (int j = 0; j < 3; ++j) {
+    const auto jj = static_cast<std::size_t>(j);
+    const auto b = static_cast<Eigen::Index>(head_state_begin_[index][jj]), e = static_cast<Eigen::Index>(head_state_end_[index][jj]);
+    const Eigen::RowVector3d r = R.row(j);
+    Eigen::VectorXd Ph = P_.leftCols(3) * r.transpose();
+    double v0 = y(j) - r.dot(x_.head<3>());
+    for (Eigen::Index s2 = b; s2 < e; ++s2) {
+      Ph += P_.col(s2);
+      v0 -= x_(s2);
+    }
+    double F0 = r.dot(Ph.head<3>()) + head_white_[index][jj];
+    for (Eigen::Index s2 = b; s2 < e; ++s2) F0 += Ph(s2);
+    if (gate_sigma_ > 0 && v0 * v0 > gate_sigma_ * gate_sigma_ * F0) {
+      ++rejected_;
+      return;
+    }
+  }
+  for (int j = 0; j < 3; ++j) observe(index, j, t_s, y(j));
+  // Re-anchor the reference: C_I_B <- C_I_B Exp(phi), w <- w + w x phi + phi'.
+  const Vec3 phi = x_.head<3>(), v = x_.segment<3>(3);
+  q_nom_ = (q_nom_ * core::quatExp(phi)).normalized();
+  w_ += w_.cross(phi) + v;
+  x_.head(6).setZero();
+  ++head_samples_[index];
+  last_t_ = std::max(last_t_, t_s);
+}
+
+Eigen::VectorXd RawBound::solveParameters(const RawBoundResult& r) const {
+  const auto p = static_cast<Eigen::Index>(p_);
+  Eigen::VectorXd b = bvec_.head(p);
+  const Eigen::Index rest = static_cast<Eigen::Index>(pt_) - p;
+  if (rest > 0) {
+    const ScaledInverse nn = scaledInverse(info_.bottomRightCorner(rest, rest));
+    const Eigen::VectorXd tail = bvec_.tail(rest);
+    const Eigen::VectorXd start = nn.cov * tail;
+    const Eigen::MatrixXd cross_info = info_.topRightCorner(p, rest);
+    b.noalias() -= cross_info * start;
+  }
+  return r.covariance * b;
+}
+
+RawEstimate estimateRaw(const RawBoundConfig& cfg_in, const RawData& data, const Vec3& bias0, int passes) {
+  RawBoundConfig cfg = cfg_in;
+  cfg.options.time_offset = false;  // its column needs the jerk, which the measured data do not give
+  const std::size_t nh = cfg.heads.size();
+  std::vector<Vec3> eps(nh, Vec3::Zero());
+  std::vector<Mat3> applied(nh);
+  Vec3 bias = bias0, scale = Vec3::Zero();
+  RawEstimate out;
+  // An accelerometer sample is the mean over [t - T/2, t + T/2): it drives the trajectory from t - T/2,
+  // so it is taken in before a head sample at t.
+  const double half = 0.5 * cfg.acc_interval_s;
+  std::vector<std::size_t> order(data.events.size());
+  for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    const auto key = [&](const RawData::Event& e) { return e.head < 0 ? e.t_s - half : e.t_s; };
+    return key(data.events[a]) < key(data.events[b]);
+  });
+  for (int pass = 0; pass < std::max(passes, 1); ++pass) {
+    for (std::size_t i = 0; i < nh; ++i) applied[i] = core::quatExp(eps[i]).toRotationMatrix() * cfg.heads[i].C_Si_B;
+    RawBound b(cfg);
+    b.enableData(applied, bias, scale);
+    // The first pass runs with the nominal mountings: the heads disagree by their relative errors (up to
+    // some 1000"), which the filter (theta = 0) cannot tell from outliers; no gate there.
+    b.gate_sigma_ = pass == 0 ? 0.0 : 6.0;
+    for (const std::size_t k : order) {
+      const auto& ev = data.events[k];
+      if (ev.head < 0) {
+        b.accelData(ev.t_s - half, ev.z_A);
+      } else {
+        b.headData(ev.t_s, static_cast<std::size_t>(ev.head), ev.q_I_Si);
+      }
+    }
+    out.bound = b.result();
+    const Eigen::VectorXd th = b.solveParameters(out.bound);
+    for (std::size_t i = 0; i < nh; ++i) eps[i] -= cfg.heads[i].axes_Si.transpose() * Vec3(th.segment<3>(static_cast<Eigen::Index>(3 * i)));
+    if (cfg.options.bias) bias += th.segment<3>(static_cast<Eigen::Index>(b.col_bias_));
+    if (cfg.options.scale) scale += th.segment<3>(static_cast<Eigen::Index>(b.col_scale_));
+    out.chi2_per_obs = b.chi2_n_ ? b.chi2_ / static_cast<double>(b.chi2_n_) : 0;
+    out.head_samples_rejected = b.rejected_;
+    out.passes = pass + 1;
+  }
+  out.mounting_rad = eps;
+  out.bias_rad_s2 = bias;
+  out.scale = scale;
+  return out;
 }
 
 RawBoundResult RawBound::result() const {

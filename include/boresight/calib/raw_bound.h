@@ -61,6 +61,8 @@ namespace boresight::calib {
 struct RawBoundHead {
   int id = 1;
   Mat3 R_axes_B = Mat3::Identity();        ///< body vector -> components on the head axes (e1, e2, b)
+  Mat3 C_Si_B = Mat3::Identity();          ///< nominal mounting (the estimator's prediction; the bound needs only R_axes_B)
+  Mat3 axes_Si = Mat3::Identity();         ///< rows e1, e2, b in Si (R_axes_B = axes_Si C_Si_B)
   std::array<model::NoiseModel, 3> noise;  ///< per head axis (e1, e2, b), rad: white per sample + colour
 };
 
@@ -106,6 +108,37 @@ struct RawBoundResult {
   std::uint64_t acc_samples = 0, acc_gaps = 0, head_samples_before_acc = 0;
 };
 
+/// Method A's estimate in the attitude domain: the bound's filter run on measured data. The trajectory's
+/// reference is the filter's own (propagated with the measured angular acceleration, re-anchored at
+/// every head sample: an error-state Kalman filter), the parameters are estimated by the regression
+/// through the filter (their columns' innovations, as for the bound), so that at the end
+/// theta = I^-1 sum u^T v / F, v the data's innovations. Passes linearise again about the previous
+/// estimate (Gauss-Newton). A head sample whose innovations exceed 6 sigma is rejected (counted).
+struct RawEstimate {
+  RawBoundResult bound;            ///< information and sigmas at this estimate's linearisation
+  std::vector<Vec3> mounting_rad;  ///< per head r, C_Si_B(true) = Exp(r) C_Si_B(nominal), Si axes; datum: the accelerometer
+  Vec3 bias_rad_s2 = Vec3::Zero(), scale = Vec3::Zero();
+  double time_offset_s = 0;
+  double chi2_per_obs = 0;  ///< sum v^2 / F over the head axes used, divided by their number
+  std::uint64_t head_samples_rejected = 0;
+  int passes = 0;
+};
+
+/// The measured data of a span, in time order (the estimator needs them once per pass).
+struct RawData {
+  struct Event {
+    double t_s = 0;
+    int head = -1;            ///< -1: accelerometer sample (z_A), else head index (q_I_Si)
+    Vec3 z_A = Vec3::Zero();  ///< rad/s^2, A
+    Quat q_I_Si = Quat::Identity();
+  };
+  std::vector<Event> events;
+};
+
+/// Runs `passes` passes of the estimator over the data (cfg's heads need C_Si_B and axes_Si; the
+/// accelerometer's nominal bias is `bias0`, subtracted before the first pass).
+RawEstimate estimateRaw(const RawBoundConfig& cfg, const RawData& data, const Vec3& bias0, int passes = 2);
+
 /// Receives the discrete model as the bound steps it (for an independent batch computation in tests):
 /// each transition x' = T x + G theta + w, Cov(w) = Q, and each scalar observation
 /// y = h^T x + d^T theta + v, Var(v) = r. theta holds the parameters without the trajectory start.
@@ -134,10 +167,20 @@ class RawBound {
   void setRecorder(RawBoundRecorder* r) { recorder_ = r; }
 
  private:
+  friend RawEstimate estimateRaw(const RawBoundConfig&, const RawData&, const Vec3&, int);
+  /// Data mode (estimateRaw): the nominal trajectory is propagated with the measured angular
+  /// acceleration and re-anchored at every head sample; mountings, bias and scale applied from a
+  /// previous pass.
+  void enableData(const std::vector<Mat3>& C_Si_B_applied, const Vec3& bias, const Vec3& scale);
+  void accelData(double t_s, const Vec3& z_A);
+  void headData(double t_s, std::size_t index, const Quat& q_I_Si);
+  Eigen::VectorXd solveParameters(const RawBoundResult& r) const;
+  void stepAcc(double t_s, const Vec3& alpha_B);
   void advance(double t_s);
   void subStep(double h, bool gap);
   void flush(double t_s);
-  void observe(std::size_t head, int axis, double t_s);
+  /// One scalar head observation; in data mode y is the measured innovation of that axis.
+  void observe(std::size_t head, int axis, double t_s, double y);
 
   RawBoundConfig cfg_;
   std::size_t n_ = 0, p_ = 0, pt_ = 0;  ///< states, parameters, parameters + trajectory start
@@ -162,6 +205,15 @@ class RawBound {
   std::vector<std::uint64_t> head_samples_;
   std::uint64_t acc_samples_ = 0, acc_gaps_ = 0, head_before_ = 0;
   RawBoundRecorder* recorder_ = nullptr;
+  // Data mode.
+  bool data_ = false;
+  std::vector<Mat3> C_Si_B_applied_;
+  Vec3 bias_applied_ = Vec3::Zero(), scale_applied_ = Vec3::Zero();
+  Quat q_nom_ = Quat::Identity();  ///< q_I_B of the reference trajectory (w_ is its rate)
+  Eigen::VectorXd x_, bvec_;       ///< the filter's error state; sum u^T v / F
+  double chi2_ = 0;
+  std::uint64_t chi2_n_ = 0, rejected_ = 0;
+  double gate_sigma_ = 6;  ///< head samples with an innovation beyond this many sigma are rejected (0: none)
 };
 
 }  // namespace boresight::calib
