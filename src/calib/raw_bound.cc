@@ -2,6 +2,9 @@
 #include <boresight/calib/raw_bound.h>
 
 #include <boresight/core/rotation.h>
+#include <boresight/core/pipeline.h>
+#include <boresight/model/overlay.h>
+#include <boresight/model/rotation.h>
 #include <boresight/model/sensors.h>
 
 #include <Eigen/Eigenvalues>
@@ -123,6 +126,30 @@ RawBoundConfig rawBoundConfig(const std::vector<model::HeadModel>& heads, const 
     for (const auto& t : acc.effects().bias_wander[k].terms) m.add(t);
     cfg.acc_noise[k] = m;
   }
+  return cfg;
+}
+
+RawBoundConfig rawBoundConfig(const core::PipelineConfig& pipeline, const model::NoiseInUse& noise,
+                              const RawBoundOptions& options) {
+  RawBoundConfig cfg;
+  cfg.options = options;
+  for (int s = 0; s < pipeline.heads.n_heads; ++s) {
+    const auto& hc = pipeline.heads.head[static_cast<std::size_t>(s)];
+    RawBoundHead h;
+    h.id = hc.id;
+    h.C_Si_B = hc.q_Si_B.toRotationMatrix();
+    Vec3 e1, e2, b;
+    model::boresightBasis(hc.boresight_Si, e1, e2, b);
+    h.axes_Si.row(0) = e1.transpose();
+    h.axes_Si.row(1) = e2.transpose();
+    h.axes_Si.row(2) = b.transpose();
+    h.R_axes_B = h.axes_Si * h.C_Si_B;
+    for (std::size_t j = 0; j < 3; ++j) h.noise[j] = noise.head[static_cast<std::size_t>(s)][j].noise.model;
+    cfg.heads.push_back(h);
+  }
+  cfg.C_A_B = pipeline.C_B_A.transpose();
+  cfg.acc_interval_s = 1.0 / pipeline.crn_acc.fs_hz;
+  for (std::size_t a = 0; a < 3; ++a) cfg.acc_noise[a] = noise.acc[a].noise.model;
   return cfg;
 }
 
@@ -398,10 +425,11 @@ void RawBound::enableData(const std::vector<Mat3>& C_Si_B_applied, const Vec3& b
   }
 }
 
-void RawBound::accelData(double t_s, const Vec3& z_A) {
+void RawBound::accelData(double t_s, const Vec3& z_A, const Vec3& jerk_A) {
   ++acc_samples_;
   if (!started_) return;  // the reference starts at the first head sample
   stepAcc(t_s, C_B_A_ * (z_A - bias_applied_).cwiseQuotient(Vec3::Ones() + scale_applied_));
+  alpha_dot_A_ = jerk_A;  // smoothed over the neighbours: a difference of two noisy samples is mostly noise
 }
 
 void RawBound::headData(double t_s, std::size_t index, const Quat& q_I_Si) {
@@ -462,24 +490,63 @@ Eigen::VectorXd RawBound::solveParameters(const RawBoundResult& r) const {
   return r.covariance * b;
 }
 
-RawEstimate estimateRaw(const RawBoundConfig& cfg_in, const RawData& data, const Vec3& bias0, int passes) {
-  RawBoundConfig cfg = cfg_in;
-  cfg.options.time_offset = false;  // its column needs the jerk, which the measured data do not give
+namespace {
+
+/// The accelerometer's angular jerk at each of its samples (A, rad/s^3): the least-squares slope over the
+/// samples within +-1 s (the time offset's column; zero for head events).
+std::vector<Vec3> smoothedJerk(const RawData& data) {
+  std::vector<std::size_t> acc;
+  for (std::size_t k = 0; k < data.events.size(); ++k)
+    if (data.events[k].head < 0) acc.push_back(k);
+  std::vector<Vec3> out(data.events.size(), Vec3::Zero());
+  std::size_t lo = 0, hi = 0;
+  for (std::size_t m = 0; m < acc.size(); ++m) {
+    const double t = data.events[acc[m]].t_s;
+    while (lo < m && data.events[acc[lo]].t_s < t - 1.0) ++lo;
+    while (hi + 1 < acc.size() && data.events[acc[hi + 1]].t_s <= t + 1.0) ++hi;
+    if (hi < m) hi = m;
+    double st = 0;
+    Vec3 sz = Vec3::Zero();
+    const double n = static_cast<double>(hi - lo + 1);
+    for (std::size_t q = lo; q <= hi; ++q) {
+      st += data.events[acc[q]].t_s;
+      sz += data.events[acc[q]].z_A;
+    }
+    const double tm = st / n;
+    const Vec3 zm = sz / n;
+    double stt = 0;
+    Vec3 stz = Vec3::Zero();
+    for (std::size_t q = lo; q <= hi; ++q) {
+      const double dt = data.events[acc[q]].t_s - tm;
+      stt += dt * dt;
+      stz += dt * (data.events[acc[q]].z_A - zm);
+    }
+    if (stt > 0) out[acc[m]] = stz / stt;
+  }
+  return out;
+}
+
+}  // namespace
+
+RawEstimate estimateRaw(const RawBoundConfig& cfg, const RawData& data, const Vec3& bias0, int passes) {
   const std::size_t nh = cfg.heads.size();
+  const std::vector<Vec3> jerk = cfg.options.time_offset ? smoothedJerk(data) : std::vector<Vec3>(data.events.size(), Vec3::Zero());
   std::vector<Vec3> eps(nh, Vec3::Zero());
   std::vector<Mat3> applied(nh);
   Vec3 bias = bias0, scale = Vec3::Zero();
   RawEstimate out;
   // An accelerometer sample is the mean over [t - T/2, t + T/2): it drives the trajectory from t - T/2,
   // so it is taken in before a head sample at t.
+  // With a time offset tau the sample tagged t is the mean about t + tau.
   const double half = 0.5 * cfg.acc_interval_s;
+  double tau = 0;
   std::vector<std::size_t> order(data.events.size());
-  for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
-  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
-    const auto key = [&](const RawData::Event& e) { return e.head < 0 ? e.t_s - half : e.t_s; };
-    return key(data.events[a]) < key(data.events[b]);
-  });
   for (int pass = 0; pass < std::max(passes, 1); ++pass) {
+    for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
+    std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+      const auto key = [&](const RawData::Event& e) { return e.head < 0 ? e.t_s + tau - half : e.t_s; };
+      return key(data.events[a]) < key(data.events[b]);
+    });
     for (std::size_t i = 0; i < nh; ++i) applied[i] = core::quatExp(eps[i]).toRotationMatrix() * cfg.heads[i].C_Si_B;
     RawBound b(cfg);
     b.enableData(applied, bias, scale);
@@ -489,7 +556,7 @@ RawEstimate estimateRaw(const RawBoundConfig& cfg_in, const RawData& data, const
     for (const std::size_t k : order) {
       const auto& ev = data.events[k];
       if (ev.head < 0) {
-        b.accelData(ev.t_s - half, ev.z_A);
+        b.accelData(ev.t_s + tau - half, ev.z_A, jerk[k]);
       } else {
         b.headData(ev.t_s, static_cast<std::size_t>(ev.head), ev.q_I_Si);
       }
@@ -499,6 +566,7 @@ RawEstimate estimateRaw(const RawBoundConfig& cfg_in, const RawData& data, const
     for (std::size_t i = 0; i < nh; ++i) eps[i] -= cfg.heads[i].axes_Si.transpose() * Vec3(th.segment<3>(static_cast<Eigen::Index>(3 * i)));
     if (cfg.options.bias) bias += th.segment<3>(static_cast<Eigen::Index>(b.col_bias_));
     if (cfg.options.scale) scale += th.segment<3>(static_cast<Eigen::Index>(b.col_scale_));
+    if (cfg.options.time_offset) tau += th(static_cast<Eigen::Index>(b.col_tau_));
     out.chi2_per_obs = b.chi2_n_ ? b.chi2_ / static_cast<double>(b.chi2_n_) : 0;
     out.head_samples_rejected = b.rejected_;
     out.passes = pass + 1;
@@ -506,6 +574,7 @@ RawEstimate estimateRaw(const RawBoundConfig& cfg_in, const RawData& data, const
   out.mounting_rad = eps;
   out.bias_rad_s2 = bias;
   out.scale = scale;
+  out.time_offset_s = -tau;  // tags late: the sample tagged t is the mean about t - offset
   return out;
 }
 

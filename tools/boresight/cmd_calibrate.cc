@@ -2,6 +2,7 @@
 // mounting-error angles of every head from the star cameras and the accelerometer (METHODS 1.7).
 // Option parsing and printing only: the replay engine feeds a calib::SpanBuilder through its input
 // observer, calib::solve() estimates, report:: writes.
+#include <boresight/calib/raw_bound.h>
 #include <boresight/calib/solver.h>
 #include <boresight/calib/span_builder.h>
 #include <boresight/calib/thermal_fit.h>
@@ -101,6 +102,13 @@ const char* kUsage =
     "  --plan-sigma A           ... and the 1-sigma (arcsec) it should reach (default 30)\n"
     "  --lookahead S            out-of-order tolerance of the inputs, seconds (default 2)\n"
     "  --strict                 stop at the first malformed input line\n"
+    "  --raw                    also estimate in the attitude domain (beside the CRN result, JSON key\n"
+    "                           attitude_domain): the raw head samples and accelerometer angular\n"
+    "                           accelerations at their own rates, the trajectory driven by the\n"
+    "                           accelerometer, weighted with the noise models in use, no filter or\n"
+    "                           decimation (calib/raw_bound.h; bias, scale with --acc-scale, time\n"
+    "                           offset with --time-offset; no thermal harmonics or aberration in its\n"
+    "                           model yet)\n"
     "\n"
     "Exit status: 0 calibrated; 1 refused (span too short or too quiet: the reason and what would be\n"
     "needed) or bad input (the reason); 2 usage error.\n";
@@ -125,6 +133,49 @@ class SpanFeed final : public stream::InputObserver {
  private:
   calib::SpanBuilder& b_;
   calib::ThermalCollector* thermal_;
+};
+
+/// Records the raw samples for the attitude-domain estimate (--raw): head samples as the core's validator
+/// leaves them, accepted accelerometer samples; times in seconds since the first.
+class RawFeed final : public stream::InputObserver {
+ public:
+  explicit RawFeed(const core::HeadSetConfig& heads) : heads_(heads) {}
+  void onHeads(const core::HeadEpoch& e, core::Status) override {
+    for (int k = 0; k < e.n; ++k) {
+      const auto& h = e.sample[static_cast<std::size_t>(k)];
+      const int slot = core::slotOf(heads_, h.head_id);
+      if (slot < 0) continue;
+      calib::RawData::Event ev;
+      ev.t_s = seconds(e.t);
+      ev.head = slot;
+      ev.q_I_Si = h.q_I_Si;
+      data.events.push_back(ev);
+    }
+  }
+  void onAcc(TimeUs t, const Vec3& a_A, core::Status st) override {
+    if (!core::accepted(st)) return;
+    calib::RawData::Event ev;
+    ev.t_s = seconds(t);
+    ev.z_A = a_A;
+    data.events.push_back(ev);
+    sum_A += a_A;
+    ++n_acc;
+  }
+  calib::RawData data;
+  Vec3 sum_A = Vec3::Zero();
+  std::uint64_t n_acc = 0;
+
+ private:
+  double seconds(TimeUs t) {
+    if (!have_t0_) {
+      t0_ = t;
+      have_t0_ = true;
+    }
+    return static_cast<double>(t - t0_) * 1e-6;
+  }
+  const core::HeadSetConfig& heads_;
+  TimeUs t0_ = 0;
+  bool have_t0_ = false;
 };
 
 int fail(const std::string& msg) {
@@ -260,7 +311,8 @@ int runCalibrate(int argc, char** argv) {
   CLI::App app{"boresight calibrate"};
   std::string config, json_path, yaml_path, report_dir, relative = "hard", overlay, write_model;
   std::vector<std::string> files;
-  bool moments = false, no_whiten = false, no_bias = false, acc_scale = false, acc_nonorth = false, time_offset = false, strict = false;
+  bool moments = false, no_whiten = false, no_bias = false, acc_scale = false, acc_nonorth = false, time_offset = false, strict = false,
+       raw = false;
   double huber = 5.0, decimation = 10.0, unobs = 3600.0, lookahead_s = 2.0, plan_exc = 4.9e-5, plan_sigma = 30.0;
   std::size_t max_obs = 0;
   double crn_bw = 0.0, crn_len = 0.0;
@@ -287,6 +339,7 @@ int runCalibrate(int argc, char** argv) {
   app.add_option("--plan-sigma", plan_sigma)->check(finiteRange(1e-6, 1e9));
   app.add_option("--lookahead", lookahead_s)->check(finiteRange(0.0, 3600.0));
   app.add_flag("--strict", strict);
+  app.add_flag("--raw", raw);
   app.add_option("inputs", files)->required();
   if (int st = parseCommandLine(app, argc, argv, "calibrate", kUsage); st >= 0) return st;
 
@@ -364,6 +417,8 @@ int runCalibrate(int argc, char** argv) {
   for (const auto& f : in.orbit) std::printf("%s: orbit for the thermal harmonic fit\n", f.c_str());
   SpanFeed feed(builder, with_thermal ? &thermal : nullptr);
   engine.addObserver(&feed);  // before the sources: the orbit files are opened for an observer that wants them
+  RawFeed raw_feed(pc.pipeline.heads);
+  if (raw) engine.addObserver(&raw_feed);
   if (!stream::addSources(in, opt, true, engine, &err)) return fail(err);
   if (engine.run() != stream::Engine::Result::kDone) return fail(engine.error());
   const bool orbit_seen = engine.orbitSamples() > 0;
@@ -472,6 +527,65 @@ int runCalibrate(int argc, char** argv) {
     if (ig.second != "GNV1B" && ig.second != "GNI1B") ctx.ignored.push_back(ig);
   report::Json j = report::calibrationJson(r, ctx);
   j["model_in_use"] = modelInUseJson(pc, ovu);
+  std::string raw_text;
+  if (raw) {
+    // The attitude-domain estimate from the raw samples (calib::estimateRaw; no CRN, no decimation).
+    if (const std::string e = pc.noise_in_use.missing(); !e.empty()) return fail("--raw needs a noise model for " + e);
+    calib::RawBoundOptions ro;
+    ro.bias = !no_bias;
+    ro.scale = acc_scale;
+    ro.time_offset = time_offset;
+    const calib::RawBoundConfig rc = calib::rawBoundConfig(pc.pipeline, pc.noise_in_use, ro);
+    if (const std::string e = rc.validate(); !e.empty()) return fail("--raw: " + e);
+    const Vec3 bias0 = raw_feed.n_acc ? Vec3(raw_feed.sum_A / static_cast<double>(raw_feed.n_acc)) : Vec3::Zero();
+    const calib::RawEstimate est = calib::estimateRaw(rc, raw_feed.data, bias0, 2);
+    stages.mark("attitude-domain estimate");
+    report::Json jr;
+    jr["method"] = "attitude domain: raw head samples and accelerometer angular accelerations at their rates, "
+                   "trajectory driven by the accelerometer, noise models in use (calib/raw_bound.h)";
+    jr["passes"] = est.passes;
+    jr["chi2_per_observation"] = est.chi2_per_obs;
+    jr["head_samples_rejected"] = est.head_samples_rejected;
+    raw_text = "\nattitude domain (--raw: raw samples, no CRN; chi2 per observation " + fmt("%.3f", est.chi2_per_obs) +
+               ", " + std::to_string(est.head_samples_rejected) + " head samples rejected)\n  head  axis   error [arcsec]   sigma [arcsec]\n";
+    for (std::size_t i = 0; i < rc.heads.size(); ++i) {
+      const Mat3& A = rc.heads[i].axes_Si;
+      const auto o = static_cast<Eigen::Index>(3 * i);
+      const Mat3 C_axes = est.bound.covariance.block<3, 3>(o, o);
+      const Mat3 C_Si = A.transpose() * C_axes * A;
+      const bool determined = std::isfinite(est.bound.head_sigma_rad[i].maxCoeff());
+      report::Json hj;
+      hj["id"] = rc.heads[i].id;
+      for (int a = 0; a < 3; ++a) {
+        const double e = est.mounting_rad[i](a) * kArcsecPerRad;
+        const double sg = std::sqrt(std::max(0.0, C_Si(a, a))) * kArcsecPerRad;
+        hj["error_angles_arcsec"].push_back(e);
+        hj["sigma_arcsec"].push_back(determined ? report::Json(sg) : report::Json(nullptr));
+        raw_text += "  " + fmt("%4.0f", rc.heads[i].id) + "  " + std::string(1, "xyz"[a]) + "     " + fmt("%14.2f", e) + "   " +
+                    (determined ? fmt("%14.2f", sg) : std::string("  not determined")) + "\n";
+      }
+      jr["heads"].push_back(hj);
+    }
+    for (int k = 0; k < 3; ++k) {
+      const Vec3 u = est.bound.common_axes_B.col(k);
+      const double sg = est.bound.common_sigma_rad(k);
+      jr["common_rotation"].push_back({{"direction_B", {u.x(), u.y(), u.z()}},
+                                       {"sigma_arcsec", std::isfinite(sg) ? report::Json(sg * kArcsecPerRad) : report::Json(nullptr)}});
+    }
+    if (ro.bias) jr["acc_bias_rad_s2"] = {est.bias_rad_s2.x(), est.bias_rad_s2.y(), est.bias_rad_s2.z()};
+    if (ro.scale) jr["acc_scale"] = {est.scale.x(), est.scale.y(), est.scale.z()};
+    if (ro.time_offset) {
+      jr["time_offset_s"] = est.time_offset_s;
+      const auto to = static_cast<Eigen::Index>(est.bound.names.size());
+      for (Eigen::Index k = 0; k < to; ++k)
+        if (est.bound.names[static_cast<std::size_t>(k)] == "acc_time_offset") {
+          const double sg = std::sqrt(std::max(0.0, est.bound.covariance(k, k)));
+          jr["time_offset_sigma_s"] = sg;
+          raw_text += "  time offset " + fmt("%.4f", est.time_offset_s) + " s +- " + fmt("%.4f", sg) + " s (accelerometer tags late)\n";
+        }
+    }
+    j["attitude_domain"] = jr;
+  }
   if (!writeText(json_path, j.dump(2) + "\n", &err)) return fail(err);
   if (!yaml_path.empty() && !writeText(yaml_path, report::toYaml(j), &err)) return fail(err);
   if (!report_dir.empty()) {
@@ -506,6 +620,7 @@ int runCalibrate(int argc, char** argv) {
   if (r.time_offset_s)
     std::printf("  time offset %.4f s +- %.4f s (accelerometer tags late)\n", *r.time_offset_s,
                 r.time_offset_sigma_s.value_or(NAN));
+  if (!raw_text.empty()) std::printf("%s", raw_text.c_str());
   if (!thermal_text.empty()) std::printf("\nthermal harmonic model:\n%s", thermal_text.c_str());
   else std::printf("thermal: %s\n", ctx.thermal["status"].get<std::string>().c_str());
   std::printf("stages: %s\n", stages.text.c_str());

@@ -54,7 +54,11 @@
 namespace boresight::model {
 class HeadModel;
 class AccelModel;
+struct NoiseInUse;
 }  // namespace boresight::model
+namespace boresight::core {
+struct PipelineConfig;
+}  // namespace boresight::core
 
 namespace boresight::calib {
 
@@ -91,6 +95,11 @@ struct RawBoundConfig {
 RawBoundConfig rawBoundConfig(const std::vector<model::HeadModel>& heads, const model::AccelModel& acc,
                               const RawBoundOptions& options);
 
+/// The configuration of a platform file (with its overlay): the heads' nominal mountings and boresight
+/// axes from the pipeline, every head axis's and accelerometer axis's noise model in use.
+RawBoundConfig rawBoundConfig(const core::PipelineConfig& pipeline, const model::NoiseInUse& noise,
+                              const RawBoundOptions& options);
+
 struct RawBoundResult {
   std::vector<std::string> names;  ///< parameter names, in the order of `information`
   Eigen::MatrixXd information;     ///< of the parameters, the trajectory start eliminated (SI units)
@@ -118,7 +127,7 @@ struct RawEstimate {
   RawBoundResult bound;            ///< information and sigmas at this estimate's linearisation
   std::vector<Vec3> mounting_rad;  ///< per head r, C_Si_B(true) = Exp(r) C_Si_B(nominal), Si axes; datum: the accelerometer
   Vec3 bias_rad_s2 = Vec3::Zero(), scale = Vec3::Zero();
-  double time_offset_s = 0;
+  double time_offset_s = 0;  ///< accelerometer tags late by this (s); with options.time_offset
   double chi2_per_obs = 0;  ///< sum v^2 / F over the head axes used, divided by their number
   std::uint64_t head_samples_rejected = 0;
   int passes = 0;
@@ -172,7 +181,7 @@ class RawBound {
   /// acceleration and re-anchored at every head sample; mountings, bias and scale applied from a
   /// previous pass.
   void enableData(const std::vector<Mat3>& C_Si_B_applied, const Vec3& bias, const Vec3& scale);
-  void accelData(double t_s, const Vec3& z_A);
+  void accelData(double t_s, const Vec3& z_A, const Vec3& jerk_A);
   void headData(double t_s, std::size_t index, const Quat& q_I_Si);
   Eigen::VectorXd solveParameters(const RawBoundResult& r) const;
   void stepAcc(double t_s, const Vec3& alpha_B);

@@ -1,0 +1,182 @@
+// raw_mc: Monte Carlo of method A in the attitude domain (calib::estimateRaw) against the raw-data bound
+// (calib::RawBound at the truth) on the project simulator, in memory. Per run: simulate the span, the
+// bound from the truth, the estimate from what the instruments delivered; per head axis the error
+// against the truth (accelerometer datum, head axes), over the bound. The simulator's measurement
+// equation is not the estimator's (star-tracker attitude from star vectors, aberration, field-of-view
+// error, thermal wander, tag jitter, thruster steps inside accelerometer samples); the estimator is
+// given the true noise models of the heads and accelerometer (rawBoundConfig).
+//
+// usage: raw_mc --scenario FILE [--duration S] [--runs N] [--seed S0] [--effect SPEC]... [--drop NAME]...
+//               [--scale] [--time-offset] [--harmonics K] [--passes P]
+// --drop NAME removes the scenario's effects of that name (e.g. aberration, thermal_periodic: a world
+// inside the estimator's model, to see its efficiency apart from its model errors).
+#include <boresight/calib/raw_bound.h>
+#include <boresight/calib/raw_bound_sim.h>
+#include <boresight/core/rotation.h>
+#include <boresight/sim/output.h>
+#include <boresight/sim/scenario.h>
+#include <boresight/sim/simulator.h>
+
+#include <Eigen/Eigenvalues>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <map>
+#include <string>
+#include <vector>
+
+using namespace boresight;
+
+namespace {
+
+struct Recorder : sim::SimSink {
+  explicit Recorder(const sim::Simulator& s) : start(s.scenario().start) {
+    for (std::size_t i = 0; i < s.heads().size(); ++i) index[s.heads()[i].config().id] = static_cast<int>(i);
+  }
+  void head(const sim::HeadSampleOut& h) override {
+    if (h.blind != sim::kBlindNone) return;
+    calib::RawData::Event e;
+    e.t_s = static_cast<double>(h.tag - start) * 1e-6;
+    e.head = index.at(h.head);
+    e.q_I_Si = h.q_I_Si;
+    data.events.push_back(e);
+  }
+  void accel(const sim::AccSampleOut& a) override {
+    calib::RawData::Event e;
+    e.t_s = static_cast<double>(a.tag - start) * 1e-6;
+    e.z_A = a.ang_A;
+    data.events.push_back(e);
+  }
+  TimeUs start;
+  std::map<int, int> index;
+  calib::RawData data;
+};
+
+Vec3 truthInDatum(const model::HeadModel& h, const model::AccelModel& acc) {
+  const Mat3 C_true = (core::quatExp(h.effects().misalignment_rad) * h.qSiBTrue()).toRotationMatrix();
+  return core::so3Log(Mat3(C_true * acc.C_A_B_true().transpose() * acc.config().C_A_B *
+                           h.config().q_Si_B.toRotationMatrix().transpose()));
+}
+
+int usage() {
+  std::fprintf(stderr, "usage: raw_mc --scenario FILE [--duration S] [--runs N] [--seed S0] [--effect SPEC]... "
+                       "[--drop NAME]... [--scale] [--time-offset] [--harmonics K] [--passes P]\n");
+  return 2;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::string scenario;
+  double duration = 21600;
+  int runs = 10, passes = 2;
+  unsigned long long seed0 = 1000;
+  std::vector<std::string> effects, drop;
+  calib::RawBoundOptions opt;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    const bool has = i + 1 < argc;
+    if (a == "--scenario" && has) scenario = argv[++i];
+    else if (a == "--duration" && has) duration = std::atof(argv[++i]);
+    else if (a == "--runs" && has) runs = std::atoi(argv[++i]);
+    else if (a == "--seed" && has) seed0 = std::strtoull(argv[++i], nullptr, 10);
+    else if (a == "--effect" && has) effects.push_back(argv[++i]);
+    else if (a == "--drop" && has) drop.push_back(argv[++i]);
+    else if (a == "--harmonics" && has) opt.harmonics = std::atoi(argv[++i]);
+    else if (a == "--passes" && has) passes = std::atoi(argv[++i]);
+    else if (a == "--scale") opt.scale = true;
+    else if (a == "--time-offset") opt.time_offset = true;
+    else return usage();
+  }
+  if (scenario.empty() || runs < 1 || !(duration > 0)) return usage();
+  std::printf("raw_mc: %s, %.0f s, %d runs from seed %llu, passes %d%s%s, harmonics %d\n", scenario.c_str(), duration, runs,
+              seed0, passes, opt.scale ? ", scale" : "", opt.time_offset ? ", time offset" : "", opt.harmonics);
+  double sum_z2_truth = 0, sum_nees = 0, sum_ratio_sigma = 0;
+  int n_axes = 0, n_within3 = 0, n_runs = 0, dof_total = 0;
+  for (int r = 0; r < runs; ++r) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const unsigned long long seed = seed0 + static_cast<unsigned long long>(r);
+    sim::Scenario sc;
+    std::string err;
+    if (!sim::loadScenario(scenario, sc, &err) || !sim::addEffectArgs(sc, effects, &err)) {
+      std::fprintf(stderr, "raw_mc: %s\n", err.c_str());
+      return 1;
+    }
+    for (const auto& name : drop)
+      sc.effects.erase(std::remove_if(sc.effects.begin(), sc.effects.end(), [&](const model::EffectSpec& x) { return x.name == name; }),
+                       sc.effects.end());
+    sim::Simulator simu;
+    if (!simu.init(sc, seed, duration, &err)) {
+      std::fprintf(stderr, "raw_mc: %s\n", err.c_str());
+      return 1;
+    }
+    if (opt.harmonics > 0) {
+      Vec3 r_I, v_I;
+      simu.orbit().posVel(toSeconds(sc.start), r_I, v_I);
+      opt.orbit_rate_rad_s = r_I.cross(v_I).norm() / r_I.squaredNorm();
+    }
+    const calib::RawBoundConfig cfg = calib::rawBoundConfig(simu.heads(), simu.accel(), opt);
+    calib::RawBound bound(cfg);
+    calib::RawBoundSimSink bs(bound, simu);
+    Recorder rec(simu);
+    sim::TeeSink tee;
+    tee.add(&bs);
+    tee.add(&rec);
+    simu.run(tee);
+    const calib::RawBoundResult at_truth = bound.result();
+    const calib::RawEstimate est = calib::estimateRaw(cfg, rec.data, simu.accel().config().bias_rad_s2, passes);
+    const std::size_t nh = simu.heads().size();
+    Eigen::VectorXd e(static_cast<Eigen::Index>(3 * nh));
+    double max_z = 0, z2 = 0;
+    for (std::size_t i = 0; i < nh; ++i) {
+      const Vec3 ei = cfg.heads[i].axes_Si * (est.mounting_rad[i] - truthInDatum(simu.heads()[i], simu.accel()));
+      for (int j = 0; j < 3; ++j) {
+        const double s_truth = at_truth.head_sigma_rad[i](j), s_est = est.bound.head_sigma_rad[i](j);
+        const double z = ei(j) / s_truth;
+        e(static_cast<Eigen::Index>(3 * i) + j) = -ei(j);  // the estimator's head-axis parameter is -r
+        sum_z2_truth += z * z;
+        z2 += z * z;
+        max_z = std::max(max_z, std::abs(ei(j) / s_est));
+        n_within3 += std::abs(ei(j)) < 3 * s_est ? 1 : 0;
+        sum_ratio_sigma += s_est / s_truth;
+        ++n_axes;
+      }
+    }
+    // NEES over the head parameters on the determined subspace of their covariance.
+    const Eigen::MatrixXd C = est.bound.covariance.topLeftCorner(e.size(), e.size());
+    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(0.5 * (C + C.transpose()));
+    const double top = es.eigenvalues().maxCoeff();
+    double nees = 0;
+    int dof = 0;
+    for (Eigen::Index k = 0; k < e.size(); ++k) {
+      const double lam = es.eigenvalues()(k);
+      if (lam > 1e-12 * top && lam > 0) {
+        const double proj = es.eigenvectors().col(k).dot(e);
+        nees += proj * proj / lam;
+        ++dof;
+      }
+    }
+    sum_nees += nees;
+    dof_total += dof;
+    ++n_runs;
+    const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    std::printf("seed %llu: RMS error/bound %.2f, max |error|/sigma %.2f, NEES %.1f (%d dof), chi2/obs %.3f, rejected %llu, "
+                "bound %.2f-%.2f\", %.1f s\n",
+                seed, std::sqrt(z2 / static_cast<double>(3 * nh)), max_z, nees, dof, est.chi2_per_obs,
+                static_cast<unsigned long long>(est.head_samples_rejected),
+                at_truth.head_sigma_rad[0].minCoeff() / kRadPerArcsec, at_truth.head_sigma_rad[0].maxCoeff() / kRadPerArcsec, secs);
+    std::fflush(stdout);
+  }
+  const double nees_per_dof = sum_nees / dof_total;
+  // 95 % bounds of chi2(dof_total) / dof_total by the Wilson-Hilferty approximation.
+  const double k = dof_total, zq = 1.959964;
+  const double lo = std::pow(1 - 2 / (9 * k) - zq * std::sqrt(2 / (9 * k)), 3), hi = std::pow(1 - 2 / (9 * k) + zq * std::sqrt(2 / (9 * k)), 3);
+  std::printf("%d runs, %d head axes: RMS error over the bound at the truth %.3f; sigma at the estimate over the bound %.3f; "
+              "within 3 sigma %d of %d; NEES/dof %.3f (95 %% bounds %.3f-%.3f)\n",
+              n_runs, n_axes, std::sqrt(sum_z2_truth / n_axes), sum_ratio_sigma / n_axes, n_within3, n_axes, nees_per_dof, lo, hi);
+  return 0;
+}
