@@ -338,6 +338,7 @@ TEST(RawEstimator, ShortSpanRecoversTheMountingsWithinTheBoundsSigmas) {
   const RawEstimate est = estimateRaw(cfg, rec.data, simu.accel().config().bias_rad_s2, 2);
   EXPECT_EQ(est.passes, 2);
   EXPECT_LT(est.head_samples_rejected, 5u);
+  EXPECT_NEAR(est.chi2_per_obs, 1.0, 0.1);  // the residuals fit the noise model
   std::printf("chi2 per observation %.3f, rejected %llu\n", est.chi2_per_obs, static_cast<unsigned long long>(est.head_samples_rejected));
   for (std::size_t i = 0; i < simu.heads().size(); ++i) {
     const auto& h = simu.heads()[i];
