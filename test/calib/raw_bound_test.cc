@@ -280,37 +280,6 @@ TEST(RawBound, AConstantInertialRotationOfTheTrajectoryIsInvisibleToTheAccelerom
   EXPECT_LT((x.tail<3>() + w.cross(expect)).norm(), 1e-3 * w.norm() * delta.norm());
 }
 
-/// Records what the instruments deliver (blinded head samples are not delivered).
-struct DataRecorder : sim::SimSink {
-  DataRecorder(const sim::Simulator& s) : start(s.scenario().start) {
-    for (std::size_t i = 0; i < s.heads().size(); ++i) index[s.heads()[i].config().id] = static_cast<int>(i);
-  }
-  void head(const sim::HeadSampleOut& h) override {
-    if (h.blind != sim::kBlindNone) return;
-    RawData::Event e;
-    e.t_s = static_cast<double>(h.tag - start) * 1e-6;
-    e.head = index.at(h.head);
-    e.q_I_Si = h.q_I_Si;
-    data.events.push_back(e);
-  }
-  void accel(const sim::AccSampleOut& a) override {
-    RawData::Event e;
-    e.t_s = static_cast<double>(a.tag - start) * 1e-6;
-    e.z_A = a.ang_A;
-    data.events.push_back(e);
-  }
-  TimeUs start;
-  std::map<int, int> index;
-  RawData data;
-};
-
-/// The error calibrate and the estimator should find (Si axes, the accelerometer datum).
-Vec3 truthInDatum(const model::HeadModel& h, const model::AccelModel& acc) {
-  const Mat3 C_true = (core::quatExp(h.effects().misalignment_rad) * h.qSiBTrue()).toRotationMatrix();
-  return core::so3Log(Mat3(C_true * acc.C_A_B_true().transpose() * acc.config().C_A_B *
-                           h.config().q_Si_B.toRotationMatrix().transpose()));
-}
-
 TEST(RawEstimator, ShortSpanRecoversTheMountingsWithinTheBoundsSigmas) {
   // The short calibration scenario (5-deg manoeuvres about each axis, 860 s) without its orbit-periodic
   // head deformation and aberration (not in this estimator's model) and with the accelerometer's 15 ms
@@ -329,7 +298,7 @@ TEST(RawEstimator, ShortSpanRecoversTheMountingsWithinTheBoundsSigmas) {
   const RawBoundConfig cfg = rawBoundConfig(simu.heads(), simu.accel(), opt);
   RawBound truth_bound(cfg);
   RawBoundSimSink bound_sink(truth_bound, simu);
-  DataRecorder rec(simu);
+  RawDataSimSink rec(simu);
   sim::TeeSink tee;
   tee.add(&bound_sink);
   tee.add(&rec);
@@ -342,7 +311,7 @@ TEST(RawEstimator, ShortSpanRecoversTheMountingsWithinTheBoundsSigmas) {
   std::printf("chi2 per observation %.3f, rejected %llu\n", est.chi2_per_obs, static_cast<unsigned long long>(est.head_samples_rejected));
   for (std::size_t i = 0; i < simu.heads().size(); ++i) {
     const auto& h = simu.heads()[i];
-    const Vec3 e = cfg.heads[i].axes_Si * (est.mounting_rad[i] - truthInDatum(h, simu.accel()));
+    const Vec3 e = cfg.heads[i].axes_Si * (est.mounting_rad[i] - trueErrorInDatum(h, simu.accel()));
     for (int j = 0; j < 3; ++j) {
       const double s_est = est.bound.head_sigma_rad[i](j), s_truth = at_truth.head_sigma_rad[i](j);
       std::printf("head %d axis %d: error %7.2f\"  sigma %5.2f\" (bound at truth %5.2f\")  z %+.2f\n", h.config().id, j,

@@ -73,16 +73,6 @@ int fail(const std::string& msg) {
 
 double arcsec(double rad) { return rad / kRadPerArcsec; }
 
-/// The constant error of a head in the accelerometer datum, head axes (rad): what calibrate estimates,
-/// Exp(r) = C_Si_B(true) C_B_A(true) C_B_A(nominal)^T C_Si_B(nominal)^T with the head's mounting error
-/// and relative misalignment, and the accelerometer's misalignment.
-Vec3 injected(const model::HeadModel& h, const model::AccelModel& acc) {
-  const Mat3 C_Si_B_true = (core::quatExp(h.effects().misalignment_rad) * h.qSiBTrue()).toRotationMatrix();
-  const Mat3 E = C_Si_B_true * acc.C_A_B_true().transpose() * acc.config().C_A_B *
-                 h.config().q_Si_B.toRotationMatrix().transpose();
-  return h.toHeadAxes(core::so3Log(E));
-}
-
 std::string sigmaText(double rad) { return std::isfinite(rad) ? report::fmt(arcsec(rad), "%.3g") : std::string("inf"); }
 
 nlohmann::json finiteOrNull(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
@@ -156,7 +146,7 @@ int runBound(int argc, char** argv) {
   std::printf("\n%-6s %-5s %12s %14s %10s\n", "head", "axis", "sigma [\"]", "injected [\"]", "inj/sigma");
   static const char* kAxis[3] = {"e1", "e2", "b"};
   for (std::size_t i = 0; i < heads.size(); ++i) {
-    const Vec3 inj = injected(heads[i], simulator.accel());
+    const Vec3 inj = heads[i].toHeadAxes(calib::trueErrorInDatum(heads[i], simulator.accel()));
     for (int j = 0; j < 3; ++j) {
       const double s = r.head_sigma_rad[i](j);
       std::printf("%-6d %-5s %12s %14.2f %10s\n", heads[i].config().id, kAxis[j], sigmaText(s).c_str(), arcsec(inj(j)),
@@ -186,7 +176,7 @@ int runBound(int argc, char** argv) {
     j["options"] = {{"bias", opt.bias}, {"scale", opt.scale}, {"time_offset", opt.time_offset}, {"harmonics", opt.harmonics}};
     j["heads"] = nlohmann::json::array();
     for (std::size_t i = 0; i < heads.size(); ++i) {
-      const Vec3 inj = injected(heads[i], simulator.accel());
+      const Vec3 inj = heads[i].toHeadAxes(calib::trueErrorInDatum(heads[i], simulator.accel()));
       nlohmann::json h;
       h["id"] = heads[i].config().id;
       h["samples"] = r.head_samples[i];

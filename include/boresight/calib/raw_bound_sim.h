@@ -1,9 +1,12 @@
-// Feeds a simulation's truth to the raw-data bound (calib/raw_bound.h): every delivered head sample and
-// every accelerometer sample with the true angular acceleration and rate. Header-only, so that
-// boresight_calib does not link the simulator; users link boresight_sim.
+// The raw-data bound and the attitude-domain estimate (calib/raw_bound.h) on a simulation: a sink that
+// feeds the truth to the bound (every delivered head sample, every accelerometer sample with the true
+// angular acceleration and rate), a sink that records what the instruments delivered for estimateRaw,
+// and a head's true constant error in the accelerometer datum. Header-only, so that boresight_calib does
+// not link the simulator; users link boresight_sim.
 #pragma once
 
 #include <boresight/calib/raw_bound.h>
+#include <boresight/core/rotation.h>
 #include <boresight/sim/simulator.h>
 
 #include <cstddef>
@@ -29,5 +32,43 @@ class RawBoundSimSink : public sim::SimSink {
   TimeUs start_;
   std::map<int, std::size_t> index_;
 };
+
+/// Records the delivered samples (blinded head samples are not delivered) as RawData.
+class RawDataSimSink : public sim::SimSink {
+ public:
+  explicit RawDataSimSink(const sim::Simulator& s) : start_(s.scenario().start) {
+    for (std::size_t i = 0; i < s.heads().size(); ++i) index_[s.heads()[i].config().id] = static_cast<int>(i);
+  }
+  void head(const sim::HeadSampleOut& h) override {
+    const auto it = index_.find(h.head);
+    if (h.blind != sim::kBlindNone || it == index_.end()) return;
+    RawData::Event e;
+    e.t_s = seconds(h.tag);
+    e.head = it->second;
+    e.q_I_Si = h.q_I_Si;
+    data.events.push_back(e);
+  }
+  void accel(const sim::AccSampleOut& a) override {
+    RawData::Event e;
+    e.t_s = seconds(a.tag);
+    e.z_A = a.ang_A;
+    data.events.push_back(e);
+  }
+  RawData data;
+
+ private:
+  double seconds(TimeUs t) const { return static_cast<double>(t - start_) * 1e-6; }
+  TimeUs start_;
+  std::map<int, int> index_;
+};
+
+/// A head's true constant error in the accelerometer datum (Si axes, rad) - what calibrate and
+/// estimateRaw estimate: Exp(r) = C_Si_B(true) C_B_A(true) C_B_A(nominal)^T C_Si_B(nominal)^T with the
+/// head's mounting error and relative misalignment and the accelerometer's misalignment.
+inline Vec3 trueErrorInDatum(const model::HeadModel& h, const model::AccelModel& acc) {
+  const Mat3 C_Si_B_true = (core::quatExp(h.effects().misalignment_rad) * h.qSiBTrue()).toRotationMatrix();
+  return core::so3Log(Mat3(C_Si_B_true * acc.C_A_B_true().transpose() * acc.config().C_A_B *
+                           h.config().q_Si_B.toRotationMatrix().transpose()));
+}
 
 }  // namespace boresight::calib

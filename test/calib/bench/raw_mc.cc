@@ -33,35 +33,6 @@ using namespace boresight;
 
 namespace {
 
-struct Recorder : sim::SimSink {
-  explicit Recorder(const sim::Simulator& s) : start(s.scenario().start) {
-    for (std::size_t i = 0; i < s.heads().size(); ++i) index[s.heads()[i].config().id] = static_cast<int>(i);
-  }
-  void head(const sim::HeadSampleOut& h) override {
-    if (h.blind != sim::kBlindNone) return;
-    calib::RawData::Event e;
-    e.t_s = static_cast<double>(h.tag - start) * 1e-6;
-    e.head = index.at(h.head);
-    e.q_I_Si = h.q_I_Si;
-    data.events.push_back(e);
-  }
-  void accel(const sim::AccSampleOut& a) override {
-    calib::RawData::Event e;
-    e.t_s = static_cast<double>(a.tag - start) * 1e-6;
-    e.z_A = a.ang_A;
-    data.events.push_back(e);
-  }
-  TimeUs start;
-  std::map<int, int> index;
-  calib::RawData data;
-};
-
-Vec3 truthInDatum(const model::HeadModel& h, const model::AccelModel& acc) {
-  const Mat3 C_true = (core::quatExp(h.effects().misalignment_rad) * h.qSiBTrue()).toRotationMatrix();
-  return core::so3Log(Mat3(C_true * acc.C_A_B_true().transpose() * acc.config().C_A_B *
-                           h.config().q_Si_B.toRotationMatrix().transpose()));
-}
-
 int usage() {
   std::fprintf(stderr, "usage: raw_mc --scenario FILE [--duration S] [--runs N] [--seed S0] [--effect SPEC]... "
                        "[--drop NAME]... [--scale] [--time-offset] [--harmonics K] [--passes P]\n");
@@ -122,7 +93,7 @@ int main(int argc, char** argv) {
     const calib::RawBoundConfig cfg = calib::rawBoundConfig(simu.heads(), simu.accel(), opt);
     calib::RawBound bound(cfg);
     calib::RawBoundSimSink bs(bound, simu);
-    Recorder rec(simu);
+    calib::RawDataSimSink rec(simu);
     sim::TeeSink tee;
     tee.add(&bs);
     tee.add(&rec);
@@ -133,7 +104,7 @@ int main(int argc, char** argv) {
     Eigen::VectorXd e(static_cast<Eigen::Index>(3 * nh));
     double max_z = 0, z2 = 0;
     for (std::size_t i = 0; i < nh; ++i) {
-      const Vec3 ei = cfg.heads[i].axes_Si * (est.mounting_rad[i] - truthInDatum(simu.heads()[i], simu.accel()));
+      const Vec3 ei = cfg.heads[i].axes_Si * (est.mounting_rad[i] - calib::trueErrorInDatum(simu.heads()[i], simu.accel()));
       for (int j = 0; j < 3; ++j) {
         const double s_truth = at_truth.head_sigma_rad[i](j), s_est = est.bound.head_sigma_rad[i](j);
         const double z = ei(j) / s_truth;
