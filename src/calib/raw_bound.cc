@@ -3,6 +3,7 @@
 
 #include <boresight/core/rotation.h>
 #include <boresight/core/pipeline.h>
+#include <boresight/model/effects.h>
 #include <boresight/model/overlay.h>
 #include <boresight/model/rotation.h>
 #include <boresight/model/sensors.h>
@@ -557,8 +558,15 @@ RawEstimate estimateRaw(const RawBoundConfig& cfg, const RawData& data, const Ve
       const auto& ev = data.events[k];
       if (ev.head < 0) {
         b.accelData(ev.t_s + tau - half, ev.z_A, jerk[k]);
-      } else {
+      } else if (ev.v_obs_I.isZero()) {
         b.headData(ev.t_s, static_cast<std::size_t>(ev.head), ev.q_I_Si);
+      } else {
+        // Remove the aberration: q_meas = q_true Exp(C_Si_I (b_I x v / c)).
+        const auto hi = static_cast<std::size_t>(ev.head);
+        const Mat3 C_I_Si = ev.q_I_Si.normalized().toRotationMatrix();
+        const Vec3 b_I = C_I_Si * Vec3(cfg.heads[hi].axes_Si.row(2).transpose());
+        const Vec3 phi = C_I_Si.transpose() * (b_I.cross(ev.v_obs_I) / model::kSpeedOfLight);
+        b.headData(ev.t_s, hi, ev.q_I_Si.normalized() * core::quatExp(-phi));
       }
     }
     out.bound = b.result();

@@ -140,6 +140,10 @@ struct RawData {
     int head = -1;            ///< -1: accelerometer sample (z_A), else head index (q_I_Si)
     Vec3 z_A = Vec3::Zero();  ///< rad/s^2, A
     Quat q_I_Si = Quat::Identity();
+    /// Head events: the observer's inertial velocity (m/s; the Earth's and the satellite's) when the
+    /// attitude carries the stars' aberration, which estimateRaw then removes (model/effects.h's
+    /// aberration: the apparent boresight turned by b x v / c); zero: none to remove.
+    Vec3 v_obs_I = Vec3::Zero();
   };
   std::vector<Event> events;
 };

@@ -36,7 +36,10 @@ class RawBoundSimSink : public sim::SimSink {
 /// Records the delivered samples (blinded head samples are not delivered) as RawData.
 class RawDataSimSink : public sim::SimSink {
  public:
-  explicit RawDataSimSink(const sim::Simulator& s) : start_(s.scenario().start) {
+  /// aberration: give each head sample the observer velocity of the aberration the simulation put in
+  /// it (its annual and orbital parts as the head's effects have them), so that estimateRaw removes it.
+  explicit RawDataSimSink(const sim::Simulator& s, bool aberration = false)
+      : sim_(s), start_(s.scenario().start), aberration_(aberration) {
     for (std::size_t i = 0; i < s.heads().size(); ++i) index_[s.heads()[i].config().id] = static_cast<int>(i);
   }
   void head(const sim::HeadSampleOut& h) override {
@@ -46,6 +49,12 @@ class RawDataSimSink : public sim::SimSink {
     e.t_s = seconds(h.tag);
     e.head = it->second;
     e.q_I_Si = h.q_I_Si;
+    if (aberration_) {
+      const auto& eff = sim_.heads()[static_cast<std::size_t>(it->second)].effects();
+      const model::OrbitContext c = sim_.context(h.t_true_s);
+      if (eff.aberration_annual) e.v_obs_I += c.v_earth_I;
+      if (eff.aberration_orbital) e.v_obs_I += c.v_sat_I;
+    }
     data.events.push_back(e);
   }
   void accel(const sim::AccSampleOut& a) override {
@@ -58,7 +67,9 @@ class RawDataSimSink : public sim::SimSink {
 
  private:
   double seconds(TimeUs t) const { return static_cast<double>(t - start_) * 1e-6; }
+  const sim::Simulator& sim_;
   TimeUs start_;
+  bool aberration_;
   std::map<int, int> index_;
 };
 

@@ -7,7 +7,9 @@
 // given the true noise models of the heads and accelerometer (rawBoundConfig).
 //
 // usage: raw_mc --scenario FILE [--duration S] [--runs N] [--seed S0] [--effect SPEC]... [--drop NAME]...
-//               [--scale] [--time-offset] [--harmonics K] [--passes P]
+//               [--scale] [--time-offset] [--harmonics K] [--passes P] [--correct-aberration]
+// --correct-aberration: the head samples carry the observer velocity of the simulated aberration, which
+// the estimator removes (the physics a processor applies with the orbit and the Earth's velocity).
 // --drop NAME removes the scenario's effects of that name (e.g. aberration, thermal_periodic: a world
 // inside the estimator's model, to see its efficiency apart from its model errors).
 #include <boresight/calib/raw_bound.h>
@@ -35,7 +37,7 @@ namespace {
 
 int usage() {
   std::fprintf(stderr, "usage: raw_mc --scenario FILE [--duration S] [--runs N] [--seed S0] [--effect SPEC]... "
-                       "[--drop NAME]... [--scale] [--time-offset] [--harmonics K] [--passes P]\n");
+                       "[--drop NAME]... [--scale] [--time-offset] [--harmonics K] [--passes P] [--correct-aberration]\n");
   return 2;
 }
 
@@ -47,6 +49,7 @@ int main(int argc, char** argv) {
   int runs = 10, passes = 2;
   unsigned long long seed0 = 1000;
   std::vector<std::string> effects, drop;
+  bool correct_aberration = false;
   calib::RawBoundOptions opt;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -61,6 +64,7 @@ int main(int argc, char** argv) {
     else if (a == "--passes" && has) passes = std::atoi(argv[++i]);
     else if (a == "--scale") opt.scale = true;
     else if (a == "--time-offset") opt.time_offset = true;
+    else if (a == "--correct-aberration") correct_aberration = true;
     else return usage();
   }
   if (scenario.empty() || runs < 1 || !(duration > 0)) return usage();
@@ -93,7 +97,7 @@ int main(int argc, char** argv) {
     const calib::RawBoundConfig cfg = calib::rawBoundConfig(simu.heads(), simu.accel(), opt);
     calib::RawBound bound(cfg);
     calib::RawBoundSimSink bs(bound, simu);
-    calib::RawDataSimSink rec(simu);
+    calib::RawDataSimSink rec(simu, correct_aberration);
     sim::TeeSink tee;
     tee.add(&bs);
     tee.add(&rec);
