@@ -10,6 +10,8 @@
 //               [--scale] [--time-offset] [--harmonics K] [--passes P] [--correct-aberration]
 // --correct-aberration: the head samples carry the observer velocity of the simulated aberration, which
 // the estimator removes (the physics a processor applies with the orbit and the Earth's velocity).
+// --fov-mean-in-truth: the field-of-view error's mean over the delivered samples (truth.yaml's
+// realised_mean_arcsec) counted in the truth: no span can tell it from a mounting rotation.
 // --drop NAME removes the scenario's effects of that name (e.g. aberration, thermal_periodic: a world
 // inside the estimator's model, to see its efficiency apart from its model errors).
 #include <boresight/calib/raw_bound.h>
@@ -37,7 +39,8 @@ namespace {
 
 int usage() {
   std::fprintf(stderr, "usage: raw_mc --scenario FILE [--duration S] [--runs N] [--seed S0] [--effect SPEC]... "
-                       "[--drop NAME]... [--scale] [--time-offset] [--harmonics K] [--passes P] [--correct-aberration]\n");
+                       "[--drop NAME]... [--scale] [--time-offset] [--harmonics K] [--passes P] [--correct-aberration]\n"
+                       "              [--fov-mean-in-truth]\n");
   return 2;
 }
 
@@ -49,7 +52,7 @@ int main(int argc, char** argv) {
   int runs = 10, passes = 2;
   unsigned long long seed0 = 1000;
   std::vector<std::string> effects, drop;
-  bool correct_aberration = false;
+  bool correct_aberration = false, fov_mean_in_truth = false;
   calib::RawBoundOptions opt;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -65,6 +68,7 @@ int main(int argc, char** argv) {
     else if (a == "--scale") opt.scale = true;
     else if (a == "--time-offset") opt.time_offset = true;
     else if (a == "--correct-aberration") correct_aberration = true;
+    else if (a == "--fov-mean-in-truth") fov_mean_in_truth = true;
     else return usage();
   }
   if (scenario.empty() || runs < 1 || !(duration > 0)) return usage();
@@ -107,8 +111,15 @@ int main(int argc, char** argv) {
     const std::size_t nh = simu.heads().size();
     Eigen::VectorXd e(static_cast<Eigen::Index>(3 * nh));
     double max_z = 0, z2 = 0;
+    std::vector<double> delivered(nh, 0.0);
+    for (const auto& ev : rec.data.events)
+      if (ev.head >= 0) delivered[static_cast<std::size_t>(ev.head)] += 1;
     for (std::size_t i = 0; i < nh; ++i) {
-      const Vec3 ei = cfg.heads[i].axes_Si * (est.mounting_rad[i] - calib::trueErrorInDatum(simu.heads()[i], simu.accel()));
+      Vec3 truth = calib::trueErrorInDatum(simu.heads()[i], simu.accel());
+      // The delivered attitude is q Exp(f), f the field-of-view error (Si): a mounting shifted by -f.
+      if (fov_mean_in_truth && delivered[i] > 0)
+        truth -= simu.heads()[i].fromHeadAxes(simu.stats().head_fov_sum[i] / delivered[i]);
+      const Vec3 ei = cfg.heads[i].axes_Si * (est.mounting_rad[i] - truth);
       for (int j = 0; j < 3; ++j) {
         const double s_truth = at_truth.head_sigma_rad[i](j), s_est = est.bound.head_sigma_rad[i](j);
         const double z = ei(j) / s_truth;
