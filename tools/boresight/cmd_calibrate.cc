@@ -7,6 +7,7 @@
 #include <boresight/calib/span_builder.h>
 #include <boresight/calib/thermal_fit.h>
 #include <boresight/core/rotation.h>
+#include <boresight/model/orbit_context.h>
 #include <boresight/io/product_stream.h>
 #include <boresight/io/core_config.h>
 #include <boresight/io/files.h>
@@ -22,6 +23,7 @@
 #include "model_json.h"
 #include "replay_summary.h"
 
+#include <algorithm>
 #include <chrono>
 #include <limits>
 #include <cmath>
@@ -107,8 +109,9 @@ const char* kUsage =
     "                           accelerations at their own rates, the trajectory driven by the\n"
     "                           accelerometer, weighted with the noise models in use, no filter or\n"
     "                           decimation (calib/raw_bound.h; bias, scale with --acc-scale, time\n"
-    "                           offset with --time-offset; no thermal harmonics or aberration in its\n"
-    "                           model yet)\n"
+    "                           offset with --time-offset; the stars' aberration removed where an orbit\n"
+    "                           (GNI1B / GNV1B, ORBIT messages) gives the velocity; no thermal\n"
+    "                           harmonics in its model yet)\n"
     "\n"
     "Exit status: 0 calibrated; 1 refused (span too short or too quiet: the reason and what would be\n"
     "needed) or bad input (the reason); 2 usage error.\n";
@@ -161,9 +164,33 @@ class RawFeed final : public stream::InputObserver {
     sum_A += a_A;
     ++n_acc;
   }
+  /// The orbit's velocity, for the stars' aberration (GNI1B / GNV1B files, ORBIT messages).
+  bool wantsOrbit() const override { return true; }
+  void onOrbit(const model::OrbitSample& o) override { orbit.emplace_back(o.t, o.v_I); }
+  /// Gives every head sample inside the orbit's span the observer velocity (the satellite's, linear
+  /// between orbit samples, and the Earth's), so that the estimate removes the aberration; returns how
+  /// many head samples got one.
+  std::uint64_t addObserverVelocity() {
+    std::uint64_t n = 0;
+    if (orbit.size() < 2 || !have_t0_) return 0;
+    std::size_t k = 0;
+    for (auto& ev : data.events) {  // in time order, as the orbit
+      if (ev.head < 0) continue;
+      const TimeUs t = t0_ + static_cast<TimeUs>(std::llround(ev.t_s * 1e6));
+      while (k + 2 < orbit.size() && orbit[k + 1].first <= t) ++k;
+      const auto& [ta, va] = orbit[k];
+      const auto& [tb, vb] = orbit[k + 1];
+      if (t < ta || t > tb || tb <= ta || tb - ta > 60 * kUsPerSecond) continue;  // outside, or an orbit gap
+      const double f = static_cast<double>(t - ta) / static_cast<double>(tb - ta);
+      ev.v_obs_I = va + f * (vb - va) + model::earthVelocityLowPrecision(toSeconds(t));
+      ++n;
+    }
+    return n;
+  }
   calib::RawData data;
   Vec3 sum_A = Vec3::Zero();
   std::uint64_t n_acc = 0;
+  std::vector<std::pair<TimeUs, Vec3>> orbit;
 
  private:
   double seconds(TimeUs t) {
@@ -538,6 +565,9 @@ int runCalibrate(int argc, char** argv) {
     const calib::RawBoundConfig rc = calib::rawBoundConfig(pc.pipeline, pc.noise_in_use, ro);
     if (const std::string e = rc.validate(); !e.empty()) return fail("--raw: " + e);
     const Vec3 bias0 = raw_feed.n_acc ? Vec3(raw_feed.sum_A / static_cast<double>(raw_feed.n_acc)) : Vec3::Zero();
+    std::sort(raw_feed.orbit.begin(), raw_feed.orbit.end(),
+              [](const std::pair<TimeUs, Vec3>& a, const std::pair<TimeUs, Vec3>& b) { return a.first < b.first; });
+    const std::uint64_t aberrated = raw_feed.addObserverVelocity();
     const calib::RawEstimate est = calib::estimateRaw(rc, raw_feed.data, bias0, 2);
     stages.mark("attitude-domain estimate");
     report::Json jr;
@@ -546,8 +576,12 @@ int runCalibrate(int argc, char** argv) {
     jr["passes"] = est.passes;
     jr["chi2_per_observation"] = est.chi2_per_obs;
     jr["head_samples_rejected"] = est.head_samples_rejected;
+    jr["aberration_removed_head_samples"] = aberrated;
     raw_text = "\nattitude domain (--raw: raw samples, no CRN; chi2 per observation " + fmt("%.3f", est.chi2_per_obs) +
-               ", " + std::to_string(est.head_samples_rejected) + " head samples rejected)\n  head  axis   error [arcsec]   sigma [arcsec]\n";
+               ", " + std::to_string(est.head_samples_rejected) + " head samples rejected; aberration " +
+               (aberrated ? "removed from " + std::to_string(aberrated) + " head samples (orbit among the inputs)"
+                          : std::string("not removed: no orbit among the inputs")) +
+               ")\n  head  axis   error [arcsec]   sigma [arcsec]\n";
     for (std::size_t i = 0; i < rc.heads.size(); ++i) {
       const Mat3& A = rc.heads[i].axes_Si;
       const auto o = static_cast<Eigen::Index>(3 * i);

@@ -3,7 +3,8 @@
 # estimate - against the raw-data bound (`boresight bound`) on the same simulated spans: per head, each
 # one's error against the truth (accelerometer datum) and its reported sigma, and the raw data's bound,
 # as totals over the three head axes (sqrt of the sum of squares: frame-free). An efficient estimator
-# has error / bound about 1. Both estimate the bias, the scale and the time offset.
+# has error / bound about 1. Both estimate the bias, the scale and the time offset; the GNV1B file gives
+# the attitude-domain estimate the orbit velocity for the stars' aberration (and the CRN run its thermal fit).
 # Usage: bound_vs_crn.sh BUILD_DIR OUT_DIR SCENARIO CONFIG DURATION_S [SEEDS...]
 #   e.g. bound_vs_crn.sh build /tmp/bvc config/sim_gracefo_calibration_realistic.yaml config/gracefo.yaml 21600 1 2 3
 # Prints one line per run and head, then the RMS over runs of error / bound and the medians.
@@ -16,7 +17,7 @@ for seed in ${seeds[@]}; do
   d="$out/seed_$seed"
   rm -rf "$d"
   "$build/tools/boresight" simulate --scenario "$scen" --seed "$seed" --duration "$dur" --out "$d" --no-lcm --quiet
-  "$build/tools/boresight" calibrate --config "$cfg" "$d"/SCA1A_*.txt "$d"/ACC1A_*.txt "$d"/QSA1B_*.txt \
+  "$build/tools/boresight" calibrate --config "$cfg" "$d"/SCA1A_*.txt "$d"/ACC1A_*.txt "$d"/QSA1B_*.txt "$d"/GNV1B_*.txt \
     --acc-scale --time-offset --raw --json "$d/calibrate.json" > "$d/calibrate.txt" 2>&1 || { echo "seed $seed: calibrate failed"; tail -3 "$d/calibrate.txt"; continue; }
   "$build/tools/boresight" bound --scenario "$scen" --seed "$seed" --duration "$dur" --scale --time-offset --quiet \
     --json "$d/bound.json" > /dev/null
