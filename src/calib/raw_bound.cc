@@ -366,6 +366,7 @@ void RawBound::observe(std::size_t i, int j, double t_s, double y) {
   const double rw = head_white_[i][jj];
   double F = r.dot(Ph.head<3>()) + rw;
   for (Eigen::Index s = b; s < e; ++s) F += Ph(s);
+  const Eigen::RowVectorXd hE = recorder_ ? Eigen::RowVectorXd(u) : Eigen::RowVectorXd();  // h^T E, for the recorder
   // d: the mounting error of this axis, and the harmonics of heads 2..n.
   u(static_cast<Eigen::Index>(3 * i + jj)) += 1;
   const int K = cfg_.options.harmonics;
@@ -381,9 +382,7 @@ void RawBound::observe(std::size_t i, int j, double t_s, double y) {
     Eigen::VectorXd h = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(n_));
     for (Eigen::Index s = 0; s < static_cast<Eigen::Index>(n_); ++s) h(s) = s < 3 ? r(s) : (s >= b && s < e ? 1.0 : 0.0);
     // d^T theta: u minus the filter's part h^T E, restricted to the parameters.
-    Eigen::RowVectorXd he = r * E_.topRows(3);
-    for (Eigen::Index s = b; s < e; ++s) he += E_.row(s);
-    const Eigen::VectorXd dvec = (u - he).head(static_cast<Eigen::Index>(p_)).transpose();
+    const Eigen::VectorXd dvec = (u - hE).head(static_cast<Eigen::Index>(p_)).transpose();
     recorder_->observation(h, dvec, rw);
   }
   info_.noalias() += u.transpose() * (u / F);

@@ -284,7 +284,7 @@ TEST(RawBound, AConstantInertialRotationOfTheTrajectoryIsInvisibleToTheAccelerom
 /// head deformation (over 860 s a constant the truth's constant term does not include), the aberration
 /// either left out or in the data with its observer velocity for the estimator to remove, and the
 /// accelerometer's 15 ms time offset estimated. Injected: 411-853" per head axis in the datum.
-void shortSpanWithinTheBound(bool aberration_in_data) {
+void shortSpanWithinTheBound(bool aberration_in_data, bool holes = false) {
   sim::Scenario sc;
   std::string err;
   ASSERT_TRUE(sim::loadScenario(std::string(BORESIGHT_SOURCE_DIR) + "/config/sim_gracefo_calibration_short.yaml", sc, &err)) << err;
@@ -307,7 +307,42 @@ void shortSpanWithinTheBound(bool aberration_in_data) {
   tee.add(&rec);
   simu.run(tee);
   const RawBoundResult at_truth = truth_bound.result();
-  const RawEstimate est = estimateRaw(cfg, rec.data, simu.accel().config().bias_rad_s2, 2);
+  RawData data = rec.data;
+  if (holes) {
+    // Holes, never bridged: every head out for 12 samples (6 s) at each of the first manoeuvre's twelve
+    // angular-acceleration peaks (60 s + 10 s + 20 s k, 72 s in all, 8 % of the span), the
+    // accelerometer out for 4 s at a peak of the second, head 1 out for 2 minutes, and the
+    // accelerometer's first 5 s missing (the span starts with heads only).
+    const auto out = [](const RawData::Event& e) {
+      if (e.head < 0) return e.t_s < 5.0 || (e.t_s >= 448.0 && e.t_s < 452.0);
+      for (int k = 0; k < 12; ++k) {
+        const double c = 70.0 + 20.0 * k;
+        if (e.t_s >= c - 3.0 && e.t_s < c + 3.0) return true;
+      }
+      return e.head == 0 && e.t_s >= 600.0 && e.t_s < 720.0;
+    };
+    data.events.erase(std::remove_if(data.events.begin(), data.events.end(), out), data.events.end());
+  }
+  const RawEstimate est = estimateRaw(cfg, data, simu.accel().config().bias_rad_s2, 2);
+  if (holes) {
+    // Against the same span without them. The holes sit where the information is (the peaks), so the
+    // sigmas grow (never shrink) and the estimate moves; for nested efficient estimates the change has
+    // variance sigma_holes^2 - sigma_full^2: it must be consistent with that, not invented by a bridge.
+    const RawEstimate full = estimateRaw(cfg, rec.data, simu.accel().config().bias_rad_s2, 2);
+    EXPECT_GE(est.bound.acc_gaps, 2u);  // the 4 s gap and the 5 s start are counted
+    double worst_sigma = 0, worst_z = 0;
+    for (std::size_t i = 0; i < simu.heads().size(); ++i) {
+      const Vec3 d = cfg.heads[i].axes_Si * (est.mounting_rad[i] - full.mounting_rad[i]);
+      for (int j = 0; j < 3; ++j) {
+        const double sh = est.bound.head_sigma_rad[i](j), sf = full.bound.head_sigma_rad[i](j);
+        EXPECT_GE(sh, sf) << "head " << i << " axis " << j;
+        worst_sigma = std::max(worst_sigma, std::abs(d(j)) / sh);
+        worst_z = std::max(worst_z, std::abs(d(j)) / std::sqrt(std::max(sh * sh - sf * sf, 1e-6 * sh * sh)));
+      }
+    }
+    std::printf("largest change against the span without holes: %.2f sigma, %.2f of its own sd\n", worst_sigma, worst_z);
+    EXPECT_LT(worst_z, 4.0);
+  }
   EXPECT_EQ(est.passes, 2);
   EXPECT_LT(est.head_samples_rejected, 5u);
   EXPECT_NEAR(est.chi2_per_obs, 1.0, 0.1);  // the residuals fit the noise model
@@ -321,7 +356,9 @@ void shortSpanWithinTheBound(bool aberration_in_data) {
       std::printf("head %d axis %d: error %7.2f\"  sigma %5.2f\" (bound at truth %5.2f\")  z %+.2f\n", h.config().id, j,
                   e(j) / kRadPerArcsec, s_est / kRadPerArcsec, s_truth / kRadPerArcsec, e(j) / s_est);
       EXPECT_LT(std::abs(e(j)), 4 * s_est) << "head " << h.config().id << " axis " << j;
-      EXPECT_NEAR(s_est / s_truth, 1.0, 0.2) << "head " << h.config().id << " axis " << j;
+      // The bound at the truth saw every sample; with holes the sigma may only be larger.
+      if (holes) EXPECT_GE(s_est / s_truth, 0.95) << "head " << h.config().id << " axis " << j;
+      else EXPECT_NEAR(s_est / s_truth, 1.0, 0.2) << "head " << h.config().id << " axis " << j;
     }
   }
   // The relative alignment (head i against head 1, head i's axes), known to some 0.1" from the heads
@@ -344,6 +381,8 @@ void shortSpanWithinTheBound(bool aberration_in_data) {
 TEST(RawEstimator, ShortSpanRecoversTheMountingsWithinTheBoundsSigmas) { shortSpanWithinTheBound(false); }
 
 TEST(RawEstimator, AberrationRemovedWithTheObserverVelocityLeavesTheSameAccuracy) { shortSpanWithinTheBound(true); }
+
+TEST(RawEstimator, GapsAtTheAccelerationPeaksAndDropoutsAreHolesNotErrors) { shortSpanWithinTheBound(true, true); }
 
 TEST(RawBound, RefusesAConfigurationWithoutWhiteNoise) {
   RawBoundConfig c = oneHead(model::NoiseModel::white(1e-5), model::NoiseModel::white(1e-8));

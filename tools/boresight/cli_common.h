@@ -10,7 +10,9 @@
 
 #include <CLI/CLI.hpp>
 
+#include <cerrno>
 #include <cmath>
+#include <cstdlib>
 #include <cstdio>
 #include <exception>
 #include <string>
@@ -104,6 +106,19 @@ inline int parseCommandLine(CLI::App& app, int argc, char** argv) {
                  app.get_name().c_str());
     return 2;
   }
+}
+
+/// A --seed value: an unsigned decimal integer (no sign, nothing after it, in range). False, with the
+/// reason printed as "boresight CMD: --seed: 'TEXT' is not an unsigned integer", otherwise.
+inline bool parseSeed(const char* cmd, const std::string& text, unsigned long long& seed) {
+  char* end = nullptr;
+  errno = 0;
+  seed = std::strtoull(text.c_str(), &end, 10);
+  if (text.empty() || *end || errno || text[0] == '-' || text[0] == '+' || text[0] == ' ') {
+    std::fprintf(stderr, "boresight %s: --seed: '%s' is not an unsigned integer\n", cmd, text.c_str());
+    return false;
+  }
+  return true;
 }
 
 /// A progress bar on stderr ("  LABEL [####....]  42%"), redrawn only when it moves; off: silent.

@@ -98,13 +98,8 @@ int runBound(int argc, char** argv) {
   app.add_flag("--quiet", quiet);
   if (int st = parseCommandLine(app, argc, argv, "bound", kUsage); st >= 0) return st;
   opt.bias = !no_bias;
-  char* end = nullptr;
-  errno = 0;
-  const unsigned long long seed = std::strtoull(seed_s.c_str(), &end, 10);
-  if (*end || errno || seed_s[0] == '-') {
-    std::fprintf(stderr, "boresight bound: --seed: '%s' is not an unsigned integer\n", seed_s.c_str());
-    return 2;
-  }
+  unsigned long long seed = 0;
+  if (!parseSeed("bound", seed_s, seed)) return 2;
   std::string err;
   if (!json_path.empty() && !io::checkOutputs({scenario}, {{"--json", json_path}}, &err)) return fail(err);
   sim::Scenario sc;

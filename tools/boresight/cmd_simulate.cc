@@ -84,13 +84,8 @@ int runSimulate(int argc, char** argv) {
     std::fprintf(stderr, "boresight simulate: --scenario, --seed and --out are required (--help lists the options)\n");
     return 2;
   }
-  char* end = nullptr;
-  errno = 0;
-  const unsigned long long seed = std::strtoull(seed_s.c_str(), &end, 10);
-  if (*end || errno || seed_s[0] == '-') {
-    std::fprintf(stderr, "boresight simulate: --seed: '%s' is not an unsigned integer\n", seed_s.c_str());
-    return 2;
-  }
+  unsigned long long seed = 0;
+  if (!parseSeed("simulate", seed_s, seed)) return 2;
   std::string err;
   sim::Scenario sc;
   if (!sim::loadScenario(scenario, sc, &err) || !sim::addEffectArgs(sc, effects, &err)) {

@@ -89,12 +89,10 @@ int runSimulateGround(int argc, char** argv) {
   if (app.count("--tilt-deg")) base.tilt_deg = cfg.tilt_deg;
   if (app.count("--prism-faces")) base.prism_faces = cfg.prism_faces;
   cfg = base;
-  char* end = nullptr;
-  errno = 0;
-  cfg.seed = std::strtoull(seed_s.c_str(), &end, 10);
-  if (seed_s.empty() || *end || errno || seed_s[0] == '-') {
-    std::fprintf(stderr, "boresight simulate-ground: --seed: '%s' is not an unsigned integer\n", seed_s.c_str());
-    return 2;
+  {
+    unsigned long long seed = 0;
+    if (!parseSeed("simulate-ground", seed_s, seed)) return 2;
+    cfg.seed = seed;
   }
   if (!bias_s.empty()) {
     if (!parseVec3(bias_s, cfg.bias_ug)) {
