@@ -393,6 +393,30 @@ void RawBound::observe(std::size_t i, int j, double t_s, double y) {
     bvec_.noalias() += u.transpose() * (v / F);
     chi2_ += v * v / F;
     ++chi2_n_;
+    const auto p = static_cast<Eigen::Index>(p_);
+    const auto add = [&](Acc& a) {
+      if (a.N.size() == 0) {
+        a.N = Eigen::MatrixXd::Zero(p, p);
+        a.b = Eigen::VectorXd::Zero(p);
+      }
+      a.N.noalias() += u.head(p).transpose() * (u.head(p) / F);
+      a.b.noalias() += u.head(p).transpose() * (v / F);
+      a.vv += v * v / F;
+      a.n += 1;
+    };
+    add(groups_[2 * i + (j == 2 ? 1 : 0)]);
+    if (record_innovations_) {
+      auto& sr = innovations_[3 * i + jj];
+      if (sr.t_s.empty() || t_s > sr.t_s.back()) {
+        sr.t_s.push_back(t_s);
+        sr.y.push_back(v);
+      }
+    }
+    if (cfg_.options.score_block_s > 0) {
+      const auto k = static_cast<std::size_t>(std::max(0.0, std::floor((t_s - block_t0_) / cfg_.options.score_block_s)));
+      if (k >= blocks_.size()) blocks_.resize(k + 1);
+      add(blocks_[k]);
+    }
   }
   E_.noalias() -= Ph * (u / F);
   P_.noalias() -= Ph * (Ph.transpose() / F);
@@ -414,6 +438,8 @@ void RawBound::head(double t_s, std::size_t index) {
 
 void RawBound::enableData(const std::vector<Mat3>& C_Si_B_applied, const Vec3& bias, const Vec3& scale) {
   data_ = true;
+  groups_.assign(2 * cfg_.heads.size(), Acc{});
+  innovations_.assign(3 * cfg_.heads.size(), model::NoiseSeries{});
   C_Si_B_applied_ = C_Si_B_applied;
   bias_applied_ = bias;
   scale_applied_ = scale;
@@ -441,6 +467,7 @@ void RawBound::headData(double t_s, std::size_t index, const Quat& q_I_Si) {
     alpha_.setZero();
     w_.setZero();
     q_nom_ = Quat(Mat3(C_meas * C_Si_B_applied_[index])).normalized();
+    block_t0_ = t_s;
   }
   if (t_s < t_cur_) t_s = t_cur_;
   advance(t_s);
@@ -526,33 +553,79 @@ std::vector<Vec3> smoothedJerk(const RawData& data) {
   return out;
 }
 
+/// Each term's level times sqrt(f): the whole model's variance times f.
+model::NoiseModel scaledNoise(const model::NoiseModel& m, double f) {
+  model::NoiseModel out = m;
+  for (auto& t : out.terms) t.sigma *= std::sqrt(f);
+  return out;
+}
+
+/// The sandwich covariance C M C of the parameters from per-block scores G_b = b_b - N_b theta
+/// (Bell-McCaffrey's bias-reduced form: in C's whitened coordinates each block's score is divided by
+/// (1 - H_b)^(1/2), H_b the block's leverage matrix, so that under the model in use the result has
+/// expectation C exactly; leverage eigenvalues are clamped at 0.95).
+Eigen::MatrixXd robustCovariance(const Eigen::MatrixXd& C, const std::vector<Eigen::MatrixXd>& N,
+                                 const std::vector<Eigen::VectorXd>& G) {
+  const Eigen::Index p = C.rows();
+  Eigen::VectorXd d(p);
+  for (Eigen::Index i = 0; i < p; ++i) d(i) = C(i, i) > 0 ? std::sqrt(C(i, i)) : 0.0;
+  Eigen::VectorXd dinv = d;
+  for (Eigen::Index i = 0; i < p; ++i) dinv(i) = d(i) > 0 ? 1 / d(i) : 0.0;
+  const Eigen::MatrixXd Cs = dinv.asDiagonal() * C * dinv.asDiagonal();
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(0.5 * (Cs + Cs.transpose()));
+  const Eigen::VectorXd root = es.eigenvalues().cwiseMax(0.0).cwiseSqrt();
+  const Eigen::MatrixXd W = d.asDiagonal() * es.eigenvectors() * root.asDiagonal() * es.eigenvectors().transpose();  // W W^T = C
+  Eigen::MatrixXd M = Eigen::MatrixXd::Zero(p, p);
+  for (std::size_t b = 0; b < N.size(); ++b) {
+    const Eigen::MatrixXd H = W.transpose() * N[b] * W;
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eh(0.5 * (H + H.transpose()));
+    Eigen::VectorXd f(p);
+    for (Eigen::Index k = 0; k < p; ++k) f(k) = 1 / std::sqrt(1 - std::min(std::max(eh.eigenvalues()(k), 0.0), 0.95));
+    const Eigen::VectorXd z = eh.eigenvectors() * f.asDiagonal() * eh.eigenvectors().transpose() * (W.transpose() * G[b]);
+    M.noalias() += z * z.transpose();
+  }
+  const Eigen::MatrixXd out = W * M * W.transpose();
+  return 0.5 * (out + out.transpose());
+}
+
 }  // namespace
 
-RawEstimate estimateRaw(const RawBoundConfig& cfg, const RawData& data, const Vec3& bias0, int passes) {
-  const std::size_t nh = cfg.heads.size();
+RawEstimate estimateRaw(const RawBoundConfig& cfg0, const RawData& data, const Vec3& bias0, int passes) {
+  const std::size_t nh = cfg0.heads.size();
+  RawBoundConfig cfg = cfg0;
   const std::vector<Vec3> jerk = cfg.options.time_offset ? smoothedJerk(data) : std::vector<Vec3>(data.events.size(), Vec3::Zero());
   std::vector<Vec3> eps(nh, Vec3::Zero());
   std::vector<Mat3> applied(nh);
   Vec3 bias = bias0, scale = Vec3::Zero();
   RawEstimate out;
+  std::vector<std::array<double, 2>> factor(nh, {1.0, 1.0});
+  std::vector<std::array<model::NoiseModel, 3>> base(nh);  // the noise models the factors apply to
+  for (std::size_t i = 0; i < nh; ++i) base[i] = cfg0.heads[i].noise;
+  out.chi2_per_dof.assign(nh, {0.0, 0.0});
   // An accelerometer sample is the mean over [t - T/2, t + T/2): it drives the trajectory from t - T/2,
   // so it is taken in before a head sample at t.
   // With a time offset tau the sample tagged t is the mean about t + tau.
   const double half = 0.5 * cfg.acc_interval_s;
   double tau = 0;
   std::vector<std::size_t> order(data.events.size());
-  for (int pass = 0; pass < std::max(passes, 1); ++pass) {
+  const int npass = std::max(passes, 1);
+  for (int pass = 0; pass < npass; ++pass) {
     for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
     std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
       const auto key = [&](const RawData::Event& e) { return e.head < 0 ? e.t_s + tau - half : e.t_s; };
       return key(data.events[a]) < key(data.events[b]);
     });
-    for (std::size_t i = 0; i < nh; ++i) applied[i] = core::quatExp(eps[i]).toRotationMatrix() * cfg.heads[i].C_Si_B;
+    for (std::size_t i = 0; i < nh; ++i) {
+      applied[i] = core::quatExp(eps[i]).toRotationMatrix() * cfg.heads[i].C_Si_B;
+      for (std::size_t j = 0; j < 3; ++j) cfg.heads[i].noise[j] = scaledNoise(base[i][j], factor[i][j == 2 ? 1 : 0]);
+    }
     RawBound b(cfg);
     b.enableData(applied, bias, scale);
     // The first pass runs with the nominal mountings: the heads disagree by their relative errors (up to
     // some 1000"), which the filter (theta = 0) cannot tell from outliers; no gate there.
     b.gate_sigma_ = pass == 0 ? 0.0 : 6.0;
+    const bool fit_now = cfg.options.fit_noise && pass == 1 && npass > 2;
+    b.record_innovations_ = fit_now;
     for (const std::size_t k : order) {
       const auto& ev = data.events[k];
       if (ev.head < 0) {
@@ -577,6 +650,93 @@ RawEstimate estimateRaw(const RawBoundConfig& cfg, const RawData& data, const Ve
     out.chi2_per_obs = b.chi2_n_ ? b.chi2_ / static_cast<double>(b.chi2_n_) : 0;
     out.head_samples_rejected = b.rejected_;
     out.passes = pass + 1;
+
+    // Variance components at this pass's estimate: the residual square sum of a group is
+    // sum (v - u theta)^2 / F = vv - 2 theta^T b + theta^T N theta.
+    std::vector<model::VarianceGroup> vg;
+    std::vector<std::size_t> vg_index;
+    for (std::size_t g = 0; g < b.groups_.size(); ++g) {
+      const auto& a = b.groups_[g];
+      if (a.n <= 0) continue;
+      model::VarianceGroup x;
+      x.N = a.N;
+      x.ssr = std::max(0.0, a.vv - 2 * th.dot(a.b) + th.dot(a.N * th));
+      x.n_obs = a.n;
+      vg.push_back(std::move(x));
+      vg_index.push_back(g);
+    }
+    const model::VarianceComponents vc = model::estimateVarianceComponents(vg);
+    for (std::size_t k = 0; k < vg_index.size() && k < vc.factor.size(); ++k)
+      out.chi2_per_dof[vg_index[k] / 2][vg_index[k] % 2] = vc.factor[k];
+    out.variance_factor = factor;
+    // The first pass's residuals hold the heads' relative mounting errors: factors from the second on.
+    if (cfg.options.variance_components && pass >= 1 && pass + 1 < npass && vc.ok)
+      for (std::size_t k = 0; k < vg_index.size(); ++k)
+        factor[vg_index[k] / 2][vg_index[k] % 2] *= std::min(std::max(vc.factor[k], 1e-2), 1e2);
+
+    if (fit_now) {
+      // The noise as the data has it: every head axis's model fitted to this pass's innovations, in use
+      // from the next pass on (at factor 1: the fit has the level).
+      out.fitted_noise.assign(nh, {});
+      model::NoiseFitOptions fo;
+      fo.likelihood = model::NoiseLikelihood::Auto;
+      fo.pl_terms = 6;  // each term is a filter state per head axis
+      fo.band_lo = 3;   // a correlation time counts as determined when the span holds 3 of its periods
+      const std::vector<model::NoiseStructure> st = {model::NoiseStructure::White, model::NoiseStructure::WhiteGaussMarkov,
+                                                     model::NoiseStructure::WhitePowerLaw};
+      for (std::size_t i = 0; i < nh; ++i) {
+        for (std::size_t j = 0; j < 3; ++j) {
+          // At most 16384 samples (every k-th): the exact likelihood's cost is linear in them, and what
+          // the fit determines (times from 20 intervals up) does not need every 0.5 s sample.
+          const model::NoiseSeries& full = b.innovations_[3 * i + j];
+          const std::size_t stride = full.size() / 16384 + 1;
+          model::NoiseSeries sr;
+          for (std::size_t k = 0; k < full.size(); k += stride) {
+            sr.t_s.push_back(full.t_s[k]);
+            sr.y.push_back(full.y[k]);
+          }
+          if (sr.size() < 200) {
+            out.fitted_noise[i][j] = cfg0.heads[i].noise[j];
+            continue;
+          }
+          const Eigen::MatrixXd X = Eigen::MatrixXd::Ones(static_cast<Eigen::Index>(sr.size()), 1);
+          // The smallest BIC among the fits whose every parameter the span and sampling determine: a
+          // correlation time or corner outside them (fitNoise says so) is slow content the span cannot
+          // tell from a constant mounting error, and would hand the filter a wandering mounting.
+          const model::NoiseSelection sel = model::selectNoise(sr, st, X, fo);
+          const model::NoiseFit* best = nullptr;
+          for (const auto& f : sel.fits) {
+            if (f.model.empty()) continue;
+            bool all = true;
+            for (const auto& q : f.params) all = all && (q.derived || q.determined);
+            if (all && (best == nullptr || f.bic < best->bic)) best = &f;
+          }
+          out.fitted_noise[i][j] = best != nullptr ? best->model : cfg0.heads[i].noise[j];
+        }
+        factor[i] = {1.0, 1.0};
+      }
+      for (std::size_t i = 0; i < nh; ++i)
+        for (std::size_t j = 0; j < 3; ++j) base[i][j] = out.fitted_noise[i][j];
+    }
+
+    if (pass + 1 == npass && !b.blocks_.empty()) {
+      std::vector<Eigen::MatrixXd> Nb;
+      std::vector<Eigen::VectorXd> Gb;
+      for (const auto& a : b.blocks_) {
+        if (a.n <= 0) continue;
+        Nb.push_back(a.N);
+        Gb.push_back(a.b - a.N * th);
+      }
+      out.score_blocks = Nb.size();
+      out.robust_covariance = robustCovariance(out.bound.covariance, Nb, Gb);
+      out.robust_head_sigma_rad.assign(nh, Vec3::Zero());
+      for (std::size_t i = 0; i < nh; ++i)
+        for (int j = 0; j < 3; ++j) {
+          const auto k = static_cast<Eigen::Index>(3 * i) + j;
+          out.robust_head_sigma_rad[i](j) =
+              std::isfinite(out.bound.head_sigma_rad[i](j)) ? std::sqrt(std::max(out.robust_covariance(k, k), 0.0)) : kInf;
+        }
+    }
   }
   out.mounting_rad = eps;
   out.bias_rad_s2 = bias;

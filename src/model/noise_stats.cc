@@ -3,6 +3,7 @@
 #include <boresight/model/stats.h>
 
 #include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
 #include <unsupported/Eigen/FFT>
 
 #include <algorithm>
@@ -124,12 +125,22 @@ VarianceComponents estimateVarianceComponents(const std::vector<VarianceGroup>& 
     }
     N += g.N;
   }
-  const Eigen::LDLT<Eigen::MatrixXd> ldlt(N);
-  if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().array() > 1e-300 * std::max(1.0, N.diagonal().maxCoeff())).all()) {
-    r.message = "the normal matrix is singular: the parameters are not determined";
+  // N^+ on the unit-diagonal scaling (the parameters' units differ by orders of magnitude): a direction
+  // the groups together do not determine (eigenvalue below 1e-12 of the largest) carries no parameter
+  // and takes no redundancy, so a rank-deficient problem has its variance components too.
+  Eigen::VectorXd sc(p);
+  for (Eigen::Index i = 0; i < p; ++i) sc(i) = N(i, i) > 0 ? 1 / std::sqrt(N(i, i)) : 0.0;
+  Eigen::MatrixXd Ns = sc.asDiagonal() * N * sc.asDiagonal();
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(0.5 * (Ns + Ns.transpose()));
+  const double top = p > 0 ? es.eigenvalues().maxCoeff() : 0.0;
+  if (!(top > 0)) {
+    r.message = "the normal matrix is zero: no parameter is determined";
     return r;
   }
-  const Eigen::MatrixXd Ninv = ldlt.solve(Eigen::MatrixXd::Identity(p, p));
+  Eigen::VectorXd inv = Eigen::VectorXd::Zero(p);
+  for (Eigen::Index k = 0; k < p; ++k)
+    if (es.eigenvalues()(k) > 1e-12 * top) inv(k) = 1 / es.eigenvalues()(k);
+  const Eigen::MatrixXd Ninv = sc.asDiagonal() * (es.eigenvectors() * inv.asDiagonal() * es.eigenvectors().transpose()) * sc.asDiagonal();
   r.ok = true;
   for (const auto& g : groups) {
     const double red = g.n_obs - (g.N.cwiseProduct(Ninv.transpose())).sum();  // tr(N_g N^-1)

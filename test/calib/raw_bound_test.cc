@@ -280,6 +280,19 @@ TEST(RawBound, AConstantInertialRotationOfTheTrajectoryIsInvisibleToTheAccelerom
   EXPECT_LT((x.tail<3>() + w.cross(expect)).norm(), 1e-3 * w.norm() * delta.norm());
 }
 
+/// Runs a simulation once into the bound at the truth and the recorded data.
+RawData runWithBound(sim::Simulator& simu, const RawBoundConfig& cfg, bool aberration_in_data, RawBoundResult& at_truth) {
+  RawBound truth_bound(cfg);
+  RawBoundSimSink bound_sink(truth_bound, simu);
+  RawDataSimSink rec(simu, aberration_in_data);
+  sim::TeeSink tee;
+  tee.add(&bound_sink);
+  tee.add(&rec);
+  simu.run(tee);
+  at_truth = truth_bound.result();
+  return rec.data;
+}
+
 /// The short calibration scenario (5-deg manoeuvres about each axis, 860 s) without its orbit-periodic
 /// head deformation (over 860 s a constant the truth's constant term does not include), the aberration
 /// either left out or in the data with its observer velocity for the estimator to remove, and the
@@ -299,15 +312,9 @@ void shortSpanWithinTheBound(bool aberration_in_data, bool holes = false) {
   opt.scale = true;
   opt.time_offset = true;
   const RawBoundConfig cfg = rawBoundConfig(simu.heads(), simu.accel(), opt);
-  RawBound truth_bound(cfg);
-  RawBoundSimSink bound_sink(truth_bound, simu);
-  RawDataSimSink rec(simu, aberration_in_data);
-  sim::TeeSink tee;
-  tee.add(&bound_sink);
-  tee.add(&rec);
-  simu.run(tee);
-  const RawBoundResult at_truth = truth_bound.result();
-  RawData data = rec.data;
+  RawBoundResult at_truth;
+  const RawData recorded = runWithBound(simu, cfg, aberration_in_data, at_truth);
+  RawData data = recorded;
   if (holes) {
     // Holes, never bridged: every head out for 12 samples (6 s) at each of the first manoeuvre's twelve
     // angular-acceleration peaks (60 s + 10 s + 20 s k, 72 s in all, 8 % of the span), the
@@ -328,7 +335,7 @@ void shortSpanWithinTheBound(bool aberration_in_data, bool holes = false) {
     // Against the same span without them. The holes sit where the information is (the peaks), so the
     // sigmas grow (never shrink) and the estimate moves; for nested efficient estimates the change has
     // variance sigma_holes^2 - sigma_full^2: it must be consistent with that, not invented by a bridge.
-    const RawEstimate full = estimateRaw(cfg, rec.data, simu.accel().config().bias_rad_s2, 2);
+    const RawEstimate full = estimateRaw(cfg, recorded, simu.accel().config().bias_rad_s2, 2);
     EXPECT_GE(est.bound.acc_gaps, 2u);  // the 4 s gap and the 5 s start are counted
     double worst_sigma = 0, worst_z = 0;
     for (std::size_t i = 0; i < simu.heads().size(); ++i) {
@@ -383,6 +390,69 @@ TEST(RawEstimator, ShortSpanRecoversTheMountingsWithinTheBoundsSigmas) { shortSp
 TEST(RawEstimator, AberrationRemovedWithTheObserverVelocityLeavesTheSameAccuracy) { shortSpanWithinTheBound(true); }
 
 TEST(RawEstimator, GapsAtTheAccelerationPeaksAndDropoutsAreHolesNotErrors) { shortSpanWithinTheBound(true, true); }
+
+/// The short calibration span (white noise as simulated), the estimator told a wrong white level: head 2
+/// cross-boresight 2x the truth, head 3 about the boresight 0.5x. The variance components of the second
+/// pass find the factors (1/4 and 4) from the data, the third pass applies them: the sigmas come back to
+/// the bound at the truth and chi-square per degree of freedom to 1. Without them the sigmas stay off by
+/// the told factor (the test's own control). The score blocks' covariance (60 s blocks) agrees with
+/// the model's when the model is right
+/// (20 s blocks: the sandwich needs blocks well beyond the parameters' count).
+TEST(RawEstimator, VarianceComponentsTakeTheNoiseLevelsFromTheData) {
+  sim::Scenario sc;
+  std::string err;
+  ASSERT_TRUE(sim::loadScenario(std::string(BORESIGHT_SOURCE_DIR) + "/config/sim_gracefo_calibration_short.yaml", sc, &err)) << err;
+  sc.effects.erase(std::remove_if(sc.effects.begin(), sc.effects.end(),
+                                  [&](const model::EffectSpec& e) { return e.name == "thermal_periodic" || e.name == "aberration"; }),
+                   sc.effects.end());
+  sim::Simulator simu;
+  ASSERT_TRUE(simu.init(sc, 2, 860, &err)) << err;
+  RawBoundOptions opt;
+  opt.score_block_s = 20;  // 43 blocks for 16 parameters
+  opt.scale = true;
+  opt.time_offset = true;  // the scenario's accelerometer tags are 15 ms late
+  const RawBoundConfig cfg = rawBoundConfig(simu.heads(), simu.accel(), opt);
+  RawBoundResult at_truth;
+  const RawData recorded = runWithBound(simu, cfg, false, at_truth);
+  RawBoundConfig told = cfg;
+  for (int j = 0; j < 2; ++j) told.heads[1].noise[static_cast<std::size_t>(j)] = model::NoiseModel::white(2 * std::sqrt(cfg.heads[1].noise[0].whiteVariance()));
+  told.heads[2].noise[2] = model::NoiseModel::white(0.5 * std::sqrt(cfg.heads[2].noise[2].whiteVariance()));
+  const Vec3 bias0 = simu.accel().config().bias_rad_s2;
+  const RawEstimate est = estimateRaw(told, recorded, bias0, 3);
+  RawBoundConfig told_no_vce = told;
+  told_no_vce.options.variance_components = false;
+  const RawEstimate fixed = estimateRaw(told_no_vce, recorded, bias0, 3);
+  const RawEstimate right = estimateRaw(cfg, recorded, bias0, 2);
+  ASSERT_EQ(est.variance_factor.size(), 3u);
+  std::printf("variance factors applied: head 2 cross %.3f (expected 0.25), head 3 about %.3f (expected 4), head 1 %.3f/%.3f\n",
+              est.variance_factor[1][0], est.variance_factor[2][1], est.variance_factor[0][0], est.variance_factor[0][1]);
+  // A variance from n samples scatters by sqrt(2 / n) (n > 1000 per group here); 15 % allows the
+  // estimate's own redundancy approximation.
+  EXPECT_NEAR(est.variance_factor[1][0] / 0.25, 1.0, 0.15);
+  EXPECT_NEAR(est.variance_factor[2][1] / 4.0, 1.0, 0.15);
+  EXPECT_NEAR(est.variance_factor[0][0], 1.0, 0.15);
+  EXPECT_NEAR(est.variance_factor[0][1], 1.0, 0.15);
+  for (std::size_t i = 0; i < 3; ++i)
+    for (int g = 0; g < 2; ++g) {
+      EXPECT_NEAR(est.chi2_per_dof[i][static_cast<std::size_t>(g)], 1.0, 0.1) << "head " << i << " group " << g;
+      EXPECT_EQ(fixed.variance_factor[i][static_cast<std::size_t>(g)], 1.0);
+    }
+  EXPECT_NEAR(fixed.chi2_per_dof[1][0], 0.25, 0.05);  // what the data say about the told level, unapplied
+  double worst = 0, worst_fixed = 0, ratio_robust = 0;
+  for (std::size_t i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) {
+      const double b = at_truth.head_sigma_rad[i](j);
+      worst = std::max(worst, std::abs(std::log(est.bound.head_sigma_rad[i](j) / b)));
+      worst_fixed = std::max(worst_fixed, std::abs(std::log(fixed.bound.head_sigma_rad[i](j) / b)));
+      ratio_robust += right.robust_head_sigma_rad[i](j) / right.bound.head_sigma_rad[i](j) / 9;
+    }
+  std::printf("largest sigma / bound: %.3f with the variance components, %.3f without; score blocks over model %.3f (%zu blocks)\n",
+              std::exp(worst), std::exp(worst_fixed), ratio_robust, right.score_blocks);
+  EXPECT_LT(worst, std::log(1.25));
+  EXPECT_GT(worst_fixed, std::log(1.25));
+  EXPECT_GE(right.score_blocks, 40u);
+  EXPECT_NEAR(ratio_robust, 1.0, 0.3);
+}
 
 TEST(RawBound, RefusesAConfigurationWithoutWhiteNoise) {
   RawBoundConfig c = oneHead(model::NoiseModel::white(1e-5), model::NoiseModel::white(1e-8));

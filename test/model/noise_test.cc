@@ -352,6 +352,15 @@ TEST(VarianceComponents, OneGroupIsTheUnbiasedResidualVarianceAndTwoGroupsSepara
   Eigen::Matrix2d N = Eigen::Matrix2d::Identity() * 10;
   const VarianceComponents one = estimateVarianceComponents({{"all", N, 35.0, 37}});
   EXPECT_NEAR(one.factor[0], 35.0 / 35.0, 1e-12);
+  // A direction no group determines (a parameter without any information, and a combination of two):
+  // it takes no redundancy, the others count as before.
+  Eigen::Matrix3d N3 = Eigen::Matrix3d::Zero();
+  N3.topLeftCorner<2, 2>() << 4, 4, 4, 4;  // only p1 + p2 is determined; p3 not at all
+  const VarianceComponents rd = estimateVarianceComponents({{"g", N3, 18.0, 10}});
+  ASSERT_TRUE(rd.ok) << rd.message;
+  EXPECT_NEAR(rd.redundancy[0], 9.0, 1e-9);
+  EXPECT_NEAR(rd.factor[0], 2.0, 1e-9);
+  EXPECT_FALSE(estimateVarianceComponents({{"g", Eigen::Matrix3d::Zero(), 1.0, 10}}).ok);
 }
 
 TEST(BandedWhitener, WhitensAMovingAverageToUnitVarianceIndependentSamples) {

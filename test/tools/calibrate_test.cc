@@ -245,7 +245,29 @@ TEST(Calibrate, RawEstimatesInTheAttitudeDomainBesideTheCrnAndErrsLess) {
     EXPECT_LT(std::sqrt(raw_err), 0.3 * std::sqrt(crn_err))
         << "head " << rh["id"] << ": raw " << std::sqrt(raw_err) << "\" vs CRN " << std::sqrt(crn_err) << "\"";
     EXPECT_LT(std::sqrt(raw_err), 4 * std::sqrt(raw_sigma2)) << "head " << rh["id"];
+    // The noise fitted to the data (--raw-noise fit, the default): every axis has a model, the third
+    // pass's residuals fit it, and the score blocks give a second sigma.
+    for (const char* ax : {"e1", "e2", "b"}) EXPECT_NE(rh["noise_arcsec"][ax].get<std::string>().find("white"), std::string::npos);
+    for (const char* g : {"cross", "about"}) {
+      EXPECT_NEAR(rh["chi2_per_dof"][g].get<double>(), 1.0, 0.2) << rh.dump();
+      EXPECT_EQ(rh["variance_factor"][g].get<double>(), 1.0);  // the fit has the level
+    }
+    for (int a = 0; a < 3; ++a) EXPECT_GT(rh["sigma_score_blocks_arcsec"][a].get<double>(), 0.0) << rh.dump();
   }
+  EXPECT_EQ(ad["passes"].get<int>(), 3);
+  // --raw-noise in-use: the platform file's levels scaled by the variance factors of the second pass
+  // (the simulated heads are quieter than config/gracefo.yaml says: factors below 1), after which the
+  // residuals fit (chi2 per degree of freedom about 1).
+  const CliRun u = run("calibrate --config " + kConfig + " " + level1() + " " + sim().gnv +
+                       " --time-offset --acc-scale --raw --raw-noise in-use --json " + out + "/u.json");
+  ASSERT_EQ(u.status, 0) << u.out;
+  const auto ju = readJson(out + "/u.json");
+  for (const auto& rh : ju["attitude_domain"]["heads"])
+    for (const char* g : {"cross", "about"}) {
+      EXPECT_NEAR(rh["chi2_per_dof"][g].get<double>(), 1.0, 0.2) << rh.dump();
+      EXPECT_NE(rh["variance_factor"][g].get<double>(), 1.0) << rh.dump();
+    }
+  EXPECT_EQ(run("calibrate --config " + kConfig + " " + level1() + " --raw --raw-noise magic").status, 2);
 }
 
 TEST(Calibrate, BoundHelpAndUsageErrors) {

@@ -111,7 +111,14 @@ const char* kUsage =
     "                           decimation (calib/raw_bound.h; bias, scale with --acc-scale, time\n"
     "                           offset with --time-offset; the stars' aberration removed where an orbit\n"
     "                           (GNI1B / GNV1B, ORBIT messages) gives the velocity; no thermal\n"
-    "                           harmonics in its model yet)\n"
+    "                           harmonics in its model yet). Three passes; sigmas at the noise model\n"
+    "                           fitted to the data (--raw-noise) and, beside them, from the data's own\n"
+    "                           scores over 600 s blocks (sigma_score_blocks_arcsec); variance factors\n"
+    "                           and chi-square per degree of freedom per head, cross and about\n"
+    "  --raw-noise MODE         fit (default): every head axis's noise model fitted to the second pass's\n"
+    "                           innovations (white, + Gauss-Markov, + power law, by BIC) and used in the\n"
+    "                           third; in-use: the noise models in use (platform file, --overlay) scaled\n"
+    "                           by the variance factors estimated in the second pass\n"
     "\n"
     "Exit status: 0 calibrated; 1 refused (span too short or too quiet: the reason and what would be\n"
     "needed) or bad input (the reason); 2 usage error.\n";
@@ -236,6 +243,12 @@ std::string fmt(const char* f, double v) {
   return b;
 }
 
+/// The noise model a head axis had in the attitude-domain estimate's last pass, in arcsec.
+std::string m_describe(const calib::RawEstimate& est, const calib::RawBoundConfig& rc, std::size_t i, std::size_t j) {
+  const model::NoiseModel& m = est.fitted_noise.empty() ? rc.heads[i].noise[j] : est.fitted_noise[i][j];
+  return m.describe(kArcsecPerRad, "\"");
+}
+
 /// A sigma given in arcsec (empty: not determined) -> rad (NaN: not determined).
 double sigmaRad(const std::optional<double>& arcsec) {
   return arcsec ? *arcsec * kRadPerArcsec : std::numeric_limits<double>::quiet_NaN();
@@ -336,7 +349,7 @@ model::Overlay resultOverlay(const calib::SolveResult& r, const io::PlatformConf
 
 int runCalibrate(int argc, char** argv) {
   CLI::App app{"boresight calibrate"};
-  std::string config, json_path, yaml_path, report_dir, relative = "hard", overlay, write_model;
+  std::string config, json_path, yaml_path, report_dir, relative = "hard", overlay, write_model, raw_noise = "fit";
   std::vector<std::string> files;
   bool moments = false, no_whiten = false, no_bias = false, acc_scale = false, acc_nonorth = false, time_offset = false, strict = false,
        raw = false;
@@ -367,6 +380,7 @@ int runCalibrate(int argc, char** argv) {
   app.add_option("--lookahead", lookahead_s)->check(finiteRange(0.0, 3600.0));
   app.add_flag("--strict", strict);
   app.add_flag("--raw", raw);
+  app.add_option("--raw-noise", raw_noise)->check(CLI::IsMember({"fit", "in-use"}));
   app.add_option("inputs", files)->required();
   if (int st = parseCommandLine(app, argc, argv, "calibrate", kUsage); st >= 0) return st;
 
@@ -562,13 +576,14 @@ int runCalibrate(int argc, char** argv) {
     ro.bias = !no_bias;
     ro.scale = acc_scale;
     ro.time_offset = time_offset;
+    ro.fit_noise = raw_noise == "fit";
     const calib::RawBoundConfig rc = calib::rawBoundConfig(pc.pipeline, pc.noise_in_use, ro);
     if (const std::string e = rc.validate(); !e.empty()) return fail("--raw: " + e);
     const Vec3 bias0 = raw_feed.n_acc ? Vec3(raw_feed.sum_A / static_cast<double>(raw_feed.n_acc)) : Vec3::Zero();
     std::sort(raw_feed.orbit.begin(), raw_feed.orbit.end(),
               [](const std::pair<TimeUs, Vec3>& a, const std::pair<TimeUs, Vec3>& b) { return a.first < b.first; });
     const std::uint64_t aberrated = raw_feed.addObserverVelocity();
-    const calib::RawEstimate est = calib::estimateRaw(rc, raw_feed.data, bias0, 2);
+    const calib::RawEstimate est = calib::estimateRaw(rc, raw_feed.data, bias0, 3);
     stages.mark("attitude-domain estimate");
     report::Json jr;
     jr["method"] = "attitude domain: raw head samples and accelerometer angular accelerations at their rates, "
@@ -577,27 +592,44 @@ int runCalibrate(int argc, char** argv) {
     jr["chi2_per_observation"] = est.chi2_per_obs;
     jr["head_samples_rejected"] = est.head_samples_rejected;
     jr["aberration_removed_head_samples"] = aberrated;
-    raw_text = "\nattitude domain (--raw: raw samples, no CRN; chi2 per observation " + fmt("%.3f", est.chi2_per_obs) +
+    jr["noise"] = ro.fit_noise ? "fitted to the innovations of the second pass" : "in use, scaled by the variance factors";
+    jr["score_blocks"] = est.score_blocks;
+    raw_text = "\nattitude domain (--raw: raw samples, no CRN; noise " +
+               std::string(ro.fit_noise ? "fitted to the data" : "in use with variance factors") + "; chi2 per observation " +
+               fmt("%.3f", est.chi2_per_obs) +
                ", " + std::to_string(est.head_samples_rejected) + " head samples rejected; aberration " +
                (aberrated ? "removed from " + std::to_string(aberrated) + " head samples (orbit among the inputs)"
                           : std::string("not removed: no orbit among the inputs")) +
-               ")\n  head  axis   error [arcsec]   sigma [arcsec]\n";
+               ")\n  head  axis   error [arcsec]   sigma [arcsec]   data sigma [arcsec]\n";
     for (std::size_t i = 0; i < rc.heads.size(); ++i) {
       const Mat3& A = rc.heads[i].axes_Si;
       const auto o = static_cast<Eigen::Index>(3 * i);
       const Mat3 C_axes = est.bound.covariance.block<3, 3>(o, o);
       const Mat3 C_Si = A.transpose() * C_axes * A;
       const bool determined = std::isfinite(est.bound.head_sigma_rad[i].maxCoeff());
+      // The data's own covariance (score blocks) in the same frame.
+      const bool have_r = est.robust_covariance.rows() >= o + 3;
+      const Mat3 R_Si = have_r ? Mat3(A.transpose() * Mat3(est.robust_covariance.block<3, 3>(o, o)) * A) : Mat3::Zero();
       report::Json hj;
       hj["id"] = rc.heads[i].id;
       for (int a = 0; a < 3; ++a) {
         const double e = est.mounting_rad[i](a) * kArcsecPerRad;
         const double sg = std::sqrt(std::max(0.0, C_Si(a, a))) * kArcsecPerRad;
+        const double sr = std::sqrt(std::max(0.0, R_Si(a, a))) * kArcsecPerRad;
         hj["error_angles_arcsec"].push_back(e);
         hj["sigma_arcsec"].push_back(determined ? report::Json(sg) : report::Json(nullptr));
+        hj["sigma_score_blocks_arcsec"].push_back(determined && have_r ? report::Json(sr) : report::Json(nullptr));
         raw_text += "  " + fmt("%4.0f", rc.heads[i].id) + "  " + std::string(1, "xyz"[a]) + "     " + fmt("%14.2f", e) + "   " +
-                    (determined ? fmt("%14.2f", sg) : std::string("  not determined")) + "\n";
+                    (determined ? fmt("%14.2f", sg) + "   " + (have_r ? fmt("%19.2f", sr) : std::string("")) : std::string("  not determined")) +
+                    "\n";
       }
+      static const char* kAx[3] = {"e1", "e2", "b"};
+      for (std::size_t ax = 0; ax < 3; ++ax) hj["noise_arcsec"][kAx[ax]] = m_describe(est, rc, i, ax);
+      hj["variance_factor"] = {{"cross", est.variance_factor[i][0]}, {"about", est.variance_factor[i][1]}};
+      hj["chi2_per_dof"] = {{"cross", est.chi2_per_dof[i][0]}, {"about", est.chi2_per_dof[i][1]}};
+      raw_text += "        noise e1 " + m_describe(est, rc, i, 0) + "; e2 " + m_describe(est, rc, i, 1) + "; b " + m_describe(est, rc, i, 2) +
+                  "\n        chi2/dof cross " + fmt("%.3f", est.chi2_per_dof[i][0]) + ", about " + fmt("%.3f", est.chi2_per_dof[i][1]) +
+                  " (variance factors applied " + fmt("%.3f", est.variance_factor[i][0]) + ", " + fmt("%.3f", est.variance_factor[i][1]) + ")\n";
       jr["heads"].push_back(hj);
     }
     for (int k = 0; k < 3; ++k) {

@@ -77,6 +77,19 @@ struct RawBoundOptions {
   int harmonics = 0;         ///< orbit harmonics 1..K of heads 2..n's alignment (cos and sin per axis)
   double orbit_rate_rad_s = 0;
   double gap_sigma_rad_s2 = 1e-3;  ///< angular acceleration where the accelerometer has no sample
+  /// estimateRaw: from its second pass on, a variance factor per head and group (cross-boresight axes
+  /// e1 and e2 together, the boresight axis b) estimated from the data (model::estimateVarianceComponents
+  /// on the groups' parameter information and residuals) and applied to that group's whole noise model
+  /// in the next pass.
+  bool variance_components = true;
+  /// estimateRaw: the parameters' scores (information minus its part at the estimate) summed over blocks
+  /// of this length for the data's own covariance (RawEstimate::robust_covariance); the noise's
+  /// correlations shorter than a block are counted. 0: none.
+  double score_block_s = 600;
+  /// estimateRaw with 3 passes or more: after the second pass, every head axis's noise model is fitted
+  /// to that pass's innovations (model::selectNoise: white, white + Gauss-Markov, white + power law,
+  /// by BIC) and replaces the model in use for the following passes (RawEstimate::fitted_noise).
+  bool fit_noise = false;
 };
 
 struct RawBoundConfig {
@@ -131,6 +144,22 @@ struct RawEstimate {
   double chi2_per_obs = 0;  ///< sum v^2 / F over the head axes used, divided by their number
   std::uint64_t head_samples_rejected = 0;
   int passes = 0;
+  /// Per head {cross-boresight, about the boresight}: the variance factor applied to the noise model in
+  /// use in the last pass (the product of the passes' estimates; 1 without variance components), and the
+  /// last pass's residual square sum over its redundancy (chi-square per degree of freedom: about 1 when
+  /// the applied factor fits the data).
+  std::vector<std::array<double, 2>> variance_factor, chi2_per_dof;
+  /// The data's own covariance of the parameters (same order as bound.information): the sandwich
+  /// C M C with C = bound.covariance and M the sum over score blocks of each block's score outer
+  /// product, each divided by 1 - its leverage (options.score_block_s). Counts noise that the model in
+  /// use lacks (colour, wander) as far as it decorrelates within a block. Empty without blocks.
+  Eigen::MatrixXd robust_covariance;
+  std::vector<Vec3> robust_head_sigma_rad;  ///< per head, head axes; infinite where not determined
+  std::size_t score_blocks = 0;             ///< blocks with head samples
+  /// options.fit_noise: per head and axis (e1, e2, b) the model fitted to the innovations (rad); empty
+  /// otherwise. An approximation: the innovation of a head axis is its noise less what the fused
+  /// trajectory took of it, so slow parts common to the trajectory are seen reduced.
+  std::vector<std::array<model::NoiseModel, 3>> fitted_noise;
 };
 
 /// The measured data of a span, in time order (the estimator needs them once per pass).
@@ -226,6 +255,17 @@ class RawBound {
   Eigen::VectorXd x_, bvec_;       ///< the filter's error state; sum u^T v / F
   double chi2_ = 0;
   std::uint64_t chi2_n_ = 0, rejected_ = 0;
+  /// Variance groups (head i: 2 i cross, 2 i + 1 about) and score blocks: parameter information and
+  /// sum u^T v / F (parameters only; the start columns are zero in data mode), sum v^2 / F, count.
+  struct Acc {
+    Eigen::MatrixXd N;
+    Eigen::VectorXd b;
+    double vv = 0, n = 0;
+  };
+  std::vector<Acc> groups_, blocks_;
+  double block_t0_ = 0;
+  bool record_innovations_ = false;
+  std::vector<model::NoiseSeries> innovations_;  ///< per head axis 3 i + j: t, v (not normalised)
   double gate_sigma_ = 6;  ///< head samples with an innovation beyond this many sigma are rejected (0: none)
 };
 

@@ -448,13 +448,15 @@ struct VarianceGroup {
 
 struct VarianceComponents {
   std::vector<double> factor;      ///< estimated variance factor per group (multiply its variances by it)
-  std::vector<double> redundancy;  ///< r_g = n_g - tr(N_g N^-1)
+  std::vector<double> redundancy;  ///< r_g = n_g - tr(N_g N^+)
   bool ok = false;
   std::string message;
 };
 
-/// One estimation step: with N = sum_g N_g, r_g = n_g - tr(N_g N^-1), factor_g = ssr_g / r_g. Iterate
-/// (re-weight each group's P_g by 1 / factor_g, re-solve, call again) until the factors are 1.
+/// One estimation step: with N = sum_g N_g, r_g = n_g - tr(N_g N^+), factor_g = ssr_g / r_g. Iterate
+/// (re-weight each group's P_g by 1 / factor_g, re-solve, call again) until the factors are 1. N^+ is
+/// the pseudo-inverse: directions that no group determines take no redundancy (a problem with an
+/// unobservable direction, as method A's about an unexcited axis, has its components too).
 VarianceComponents estimateVarianceComponents(const std::vector<VarianceGroup>& groups);
 
 }  // namespace boresight::model

@@ -12,6 +12,11 @@
 // the estimator removes (the physics a processor applies with the orbit and the Earth's velocity).
 // --fov-mean-in-truth: the field-of-view error's mean over the delivered samples (truth.yaml's
 // realised_mean_arcsec) counted in the truth: no span can tell it from a mounting rotation.
+// --white-model CROSS,ABOUT: the estimator is given white head noise only (arcsec per sample, every
+// head) and the accelerometer's white levels only - what a platform file without a noise overlay
+// gives: its sigmas at the model in use, after the variance components and from the score blocks
+// (RawEstimate::robust_covariance) are compared with the errors.
+// --passes P (default 3): passes of estimateRaw; --no-vce: no variance components applied.
 // --drop NAME removes the scenario's effects of that name (e.g. aberration, thermal_periodic: a world
 // inside the estimator's model, to see its efficiency apart from its model errors).
 #include <boresight/calib/raw_bound.h>
@@ -40,7 +45,7 @@ namespace {
 int usage() {
   std::fprintf(stderr, "usage: raw_mc --scenario FILE [--duration S] [--runs N] [--seed S0] [--effect SPEC]... "
                        "[--drop NAME]... [--scale] [--time-offset] [--harmonics K] [--passes P] [--correct-aberration]\n"
-                       "              [--fov-mean-in-truth]\n");
+                       "              [--fov-mean-in-truth] [--white-model CROSS,ABOUT] [--no-vce] [--score-block S] [--fit-noise]\n");
   return 2;
 }
 
@@ -49,7 +54,8 @@ int usage() {
 int main(int argc, char** argv) {
   std::string scenario;
   double duration = 21600;
-  int runs = 10, passes = 2;
+  int runs = 10, passes = 3;
+  double white_cross = 0, white_about = 0;
   unsigned long long seed0 = 1000;
   std::vector<std::string> effects, drop;
   bool correct_aberration = false, fov_mean_in_truth = false;
@@ -69,13 +75,20 @@ int main(int argc, char** argv) {
     else if (a == "--time-offset") opt.time_offset = true;
     else if (a == "--correct-aberration") correct_aberration = true;
     else if (a == "--fov-mean-in-truth") fov_mean_in_truth = true;
+    else if (a == "--no-vce") opt.variance_components = false;
+    else if (a == "--fit-noise") opt.fit_noise = true;
+    else if (a == "--score-block" && has) opt.score_block_s = std::atof(argv[++i]);
+    else if (a == "--white-model" && has) {
+      if (std::sscanf(argv[++i], "%lf,%lf", &white_cross, &white_about) != 2 || !(white_cross > 0) || !(white_about > 0)) return usage();
+    }
     else return usage();
   }
   if (scenario.empty() || runs < 1 || !(duration > 0)) return usage();
   std::printf("raw_mc: %s, %.0f s, %d runs from seed %llu, passes %d%s%s, harmonics %d\n", scenario.c_str(), duration, runs,
               seed0, passes, opt.scale ? ", scale" : "", opt.time_offset ? ", time offset" : "", opt.harmonics);
-  double sum_z2_truth = 0, sum_nees = 0, sum_ratio_sigma = 0;
-  int n_axes = 0, n_within3 = 0, n_runs = 0, dof_total = 0;
+  double sum_z2_truth = 0, sum_nees = 0, sum_ratio_sigma = 0, sum_nees_r = 0, sum_ratio_r = 0;
+  int n_axes = 0, n_within3 = 0, n_runs = 0, dof_total = 0, n_within3_r = 0, dof_total_r = 0;
+  bool have_robust = true;
   for (int r = 0; r < runs; ++r) {
     const auto t0 = std::chrono::steady_clock::now();
     const unsigned long long seed = seed0 + static_cast<unsigned long long>(r);
@@ -99,6 +112,12 @@ int main(int argc, char** argv) {
       opt.orbit_rate_rad_s = r_I.cross(v_I).norm() / r_I.squaredNorm();
     }
     const calib::RawBoundConfig cfg = calib::rawBoundConfig(simu.heads(), simu.accel(), opt);
+    calib::RawBoundConfig cfg_est = cfg;  // what the estimator is told
+    if (white_cross > 0) {
+      for (auto& h : cfg_est.heads)
+        for (int j = 0; j < 3; ++j) h.noise[static_cast<std::size_t>(j)] = model::NoiseModel::white((j == 2 ? white_about : white_cross) * kRadPerArcsec);
+      for (auto& m : cfg_est.acc_noise) m = model::NoiseModel::white(std::sqrt(m.whiteVariance()));
+    }
     calib::RawBound bound(cfg);
     calib::RawBoundSimSink bs(bound, simu);
     calib::RawDataSimSink rec(simu, correct_aberration);
@@ -107,7 +126,7 @@ int main(int argc, char** argv) {
     tee.add(&rec);
     simu.run(tee);
     const calib::RawBoundResult at_truth = bound.result();
-    const calib::RawEstimate est = calib::estimateRaw(cfg, rec.data, simu.accel().config().bias_rad_s2, passes);
+    const calib::RawEstimate est = calib::estimateRaw(cfg_est, rec.data, simu.accel().config().bias_rad_s2, passes);
     const std::size_t nh = simu.heads().size();
     Eigen::VectorXd e(static_cast<Eigen::Index>(3 * nh));
     double max_z = 0, z2 = 0;
@@ -129,40 +148,79 @@ int main(int argc, char** argv) {
         max_z = std::max(max_z, std::abs(ei(j) / s_est));
         n_within3 += std::abs(ei(j)) < 3 * s_est ? 1 : 0;
         sum_ratio_sigma += s_est / s_truth;
+        if (!est.robust_head_sigma_rad.empty()) {
+          const double s_r = est.robust_head_sigma_rad[i](j);
+          n_within3_r += std::abs(ei(j)) < 3 * s_r ? 1 : 0;
+          sum_ratio_r += s_r / s_truth;
+        }
         ++n_axes;
       }
     }
-    // NEES over the head parameters on the determined subspace of their covariance.
-    const Eigen::MatrixXd C = est.bound.covariance.topLeftCorner(e.size(), e.size());
-    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(0.5 * (C + C.transpose()));
-    const double top = es.eigenvalues().maxCoeff();
-    double nees = 0;
-    int dof = 0;
-    for (Eigen::Index k = 0; k < e.size(); ++k) {
-      const double lam = es.eigenvalues()(k);
-      if (lam > 1e-12 * top && lam > 0) {
-        const double proj = es.eigenvectors().col(k).dot(e);
-        nees += proj * proj / lam;
-        ++dof;
+    // NEES over the head parameters on the determined subspace of a covariance.
+    const auto neesOf = [&](const Eigen::MatrixXd& full, int& dof) {
+      const Eigen::MatrixXd C = full.topLeftCorner(e.size(), e.size());
+      Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(0.5 * (C + C.transpose()));
+      const double top = es.eigenvalues().maxCoeff();
+      double v = 0;
+      dof = 0;
+      for (Eigen::Index k = 0; k < e.size(); ++k) {
+        const double lam = es.eigenvalues()(k);
+        if (lam > 1e-12 * top && lam > 0) {
+          const double proj = es.eigenvectors().col(k).dot(e);
+          v += proj * proj / lam;
+          ++dof;
+        }
       }
+      return v;
+    };
+    int dof = 0, dof_r = 0;
+    const double nees = neesOf(est.bound.covariance, dof);
+    double nees_r = 0;
+    if (est.robust_covariance.size() > 0) {
+      nees_r = neesOf(est.robust_covariance, dof_r);
+      sum_nees_r += nees_r;
+      dof_total_r += dof_r;
+    } else {
+      have_robust = false;
     }
     sum_nees += nees;
     dof_total += dof;
     ++n_runs;
     const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    std::printf("seed %llu: RMS error/bound %.2f, max |error|/sigma %.2f, NEES %.1f (%d dof), chi2/obs %.3f, rejected %llu, "
-                "bound %.2f-%.2f\", %.1f s\n",
-                seed, std::sqrt(z2 / static_cast<double>(3 * nh)), max_z, nees, dof, est.chi2_per_obs,
+    if (r == 0 && !est.fitted_noise.empty()) {  // the first run's fitted models against the generator's
+      for (std::size_t i = 0; i < nh; ++i)
+        for (std::size_t j = 0; j < 3; ++j)
+          std::printf("  head %d axis %zu: fitted %s; generator %s\n", cfg.heads[i].id, j + 1,
+                      est.fitted_noise[i][j].describe(1 / kRadPerArcsec, "\"").c_str(), cfg.heads[i].noise[j].describe(1 / kRadPerArcsec, "\"").c_str());
+    }
+    std::string vf;
+    for (std::size_t i = 0; i < nh; ++i)
+      vf += (i ? " " : "") + std::to_string(est.variance_factor[i][0]).substr(0, 5) + "/" + std::to_string(est.variance_factor[i][1]).substr(0, 5);
+    std::printf("seed %llu: RMS error/bound %.2f, max |error|/sigma %.2f, NEES %.1f (%d dof), NEES from score blocks %.1f (%d dof, "
+                "%zu blocks), variance factors %s, chi2/obs %.3f, rejected %llu, bound %.2f-%.2f\", %.1f s\n",
+                seed, std::sqrt(z2 / static_cast<double>(3 * nh)), max_z, nees, dof, nees_r, dof_r, est.score_blocks, vf.c_str(),
+                est.chi2_per_obs,
                 static_cast<unsigned long long>(est.head_samples_rejected),
                 at_truth.head_sigma_rad[0].minCoeff() / kRadPerArcsec, at_truth.head_sigma_rad[0].maxCoeff() / kRadPerArcsec, secs);
     std::fflush(stdout);
   }
-  const double nees_per_dof = sum_nees / dof_total;
-  // 95 % bounds of chi2(dof_total) / dof_total by the Wilson-Hilferty approximation.
-  const double k = dof_total, zq = 1.959964;
-  const double lo = std::pow(1 - 2 / (9 * k) - zq * std::sqrt(2 / (9 * k)), 3), hi = std::pow(1 - 2 / (9 * k) + zq * std::sqrt(2 / (9 * k)), 3);
-  std::printf("%d runs, %d head axes: RMS error over the bound at the truth %.3f; sigma at the estimate over the bound %.3f; "
-              "within 3 sigma %d of %d; NEES/dof %.3f (95 %% bounds %.3f-%.3f)\n",
-              n_runs, n_axes, std::sqrt(sum_z2_truth / n_axes), sum_ratio_sigma / n_axes, n_within3, n_axes, nees_per_dof, lo, hi);
+  // 95 % bounds of chi2(k) / k by the Wilson-Hilferty approximation.
+  const auto bounds = [](double k, double& lo, double& hi) {
+    const double zq = 1.959964;
+    lo = std::pow(1 - 2 / (9 * k) - zq * std::sqrt(2 / (9 * k)), 3);
+    hi = std::pow(1 - 2 / (9 * k) + zq * std::sqrt(2 / (9 * k)), 3);
+  };
+  double lo = 0, hi = 0;
+  bounds(dof_total, lo, hi);
+  std::printf("%d runs, %d head axes: RMS error over the bound at the truth %.3f\n"
+              "  model in use (after variance components): sigma over the bound %.3f, within 3 sigma %d of %d, NEES/dof %.3f "
+              "(95 %% bounds %.3f-%.3f)\n",
+              n_runs, n_axes, std::sqrt(sum_z2_truth / n_axes), sum_ratio_sigma / n_axes, n_within3, n_axes, sum_nees / dof_total, lo, hi);
+  if (have_robust && dof_total_r > 0) {
+    bounds(dof_total_r, lo, hi);
+    std::printf("  score blocks (robust_covariance): sigma over the bound %.3f, within 3 sigma %d of %d, NEES/dof %.3f "
+                "(95 %% bounds %.3f-%.3f)\n",
+                sum_ratio_r / n_axes, n_within3_r, n_axes, sum_nees_r / dof_total_r, lo, hi);
+  }
   return 0;
 }
