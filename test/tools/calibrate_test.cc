@@ -270,6 +270,39 @@ TEST(Calibrate, RawEstimatesInTheAttitudeDomainBesideTheCrnAndErrsLess) {
   EXPECT_EQ(run("calibrate --config " + kConfig + " " + level1() + " --raw --raw-noise magic").status, 2);
 }
 
+TEST(Calibrate, WritesTheCalibratedMountingsAsAQsa1bThatAnotherRunTakesAsNominal) {
+  // --write-qsa1b with --raw: the attitude-domain estimate's mountings as a QSA1B file. Run again on the
+  // same data with that file in place of the nominal QSA1B, the estimate finds (almost) nothing left:
+  // every axis within a tenth of its sigma of zero (a sign or order slip would leave twice the error).
+  const std::string out = testutil::makeTempDir("calibrate_qsa1b");
+  const std::string opts = " --time-offset --acc-scale --raw ";
+  const CliRun a = run("calibrate --config " + kConfig + " " + level1() + " " + sim().gnv + opts + "--json " + out +
+                       "/a.json --write-qsa1b " + out + "/QSA1B_calibrated.txt --satellite D --write-model " + out + "/m.yaml");
+  ASSERT_EQ(a.status, 0) << a.out;
+  EXPECT_NE(a.out.find("mountings written from the attitude-domain estimate"), std::string::npos) << a.out;
+  const auto ja = readJson(out + "/a.json");
+  EXPECT_EQ(ja["mountings_written_from"], "attitude-domain estimate (--raw)");
+  const std::string text = testutil::slurp(out + "/QSA1B_calibrated.txt");
+  EXPECT_NE(text.find(" D "), std::string::npos) << text;
+  const CliRun b = run("calibrate --config " + kConfig + " " + sim().sca + " " + sim().acc + " " + out + "/QSA1B_calibrated.txt " +
+                       sim().gnv + opts + "--json " + out + "/b.json");
+  ASSERT_EQ(b.status, 0) << b.out;
+  const auto jb = readJson(out + "/b.json");
+  ASSERT_EQ(jb["attitude_domain"]["heads"].size(), 3u);
+  for (const auto& h : jb["attitude_domain"]["heads"])
+    for (int k = 0; k < 3; ++k) {
+      const double e = h["error_angles_arcsec"][k].get<double>(), sg = h["sigma_arcsec"][k].get<double>();
+      EXPECT_LT(std::abs(e), 0.1 * sg) << "head " << h["id"] << " axis " << k << ": " << e << "\" of " << sg << "\"";
+    }
+  // Without --raw the CRN solver's mountings are written.
+  const CliRun c = run("calibrate --config " + kConfig + " " + level1() + " --json " + out + "/c.json --write-qsa1b " + out +
+                       "/QSA1B_crn.txt");
+  ASSERT_EQ(c.status, 0) << c.out;
+  EXPECT_EQ(readJson(out + "/c.json")["mountings_written_from"], "CRN solver");
+  EXPECT_EQ(run("calibrate --config " + kConfig + " " + level1() + " --json " + out + "/d.json --write-qsa1b " + out +
+                "/QSA1B_x.txt --satellite Q").status, 2);
+}
+
 TEST(Calibrate, BoundHelpAndUsageErrors) {
   const CliRun h = run("bound --help");
   EXPECT_EQ(h.status, 0);

@@ -11,6 +11,7 @@
 #include <boresight/io/product_stream.h>
 #include <boresight/io/core_config.h>
 #include <boresight/io/files.h>
+#include <boresight/io/level1.h>
 #include <boresight/io/overlay_apply.h>
 #include <boresight/io/overlay_yaml.h>
 #include <boresight/io/time_format.h>
@@ -39,7 +40,7 @@ namespace {
 
 const char* kUsage =
     "usage: boresight calibrate --config FILE INPUT... --json FILE [--yaml FILE] [--report DIR]\n"
-    "                           [--overlay FILE] [--write-model FILE]\n"
+    "                           [--overlay FILE] [--write-model FILE] [--write-qsa1b FILE [--satellite X]]\n"
     "                           [--relative hard|prior] [--no-acc-bias] [--acc-scale] [--acc-nonorthogonality]\n"
     "                           [--time-offset] [--huber S] [--no-whiten] [--decimation S] [--max-observations N]\n"
     "                           [--crn-bandwidth HZ --crn-length S] [--moments]\n"
@@ -70,7 +71,15 @@ const char* kUsage =
     "  --write-model FILE       the result as a model overlay: per head the mounting Exp([r]x) q_Si_B(nominal)\n"
     "                           with its sigma (datum: the accelerometer frame; epoch: the middle of the span;\n"
     "                           valid over the span), the accelerometer terms, the thermal harmonics and the\n"
-    "                           time offset when estimated\n"
+    "                           time offset when estimated. With --raw the mountings and their sigmas\n"
+    "                           are the attitude-domain estimate's, else the CRN solver's\n"
+    "  --write-qsa1b FILE       the calibrated mountings as a GRACE-FO QSA1B file (one record per head at the\n"
+    "                           span's first whole second, q_Si_B = Exp([r]x) q_Si_B(nominal), scalar first,\n"
+    "                           the fixed header of the static product): an input of process, calibrate\n"
+    "                           and any Level-1B chain in place of the nominal QSA1B. From the attitude-\n"
+    "                           domain estimate with --raw, else from the CRN solver; axes not determined\n"
+    "                           keep their nominal value\n"
+    "  --satellite X            the satellite letter of the QSA1B file's header and records (default C)\n"
     "  --json FILE              the result (keys: heads[] {id, error_angles_arcsec, sigma_arcsec (null: not\n"
     "                           determined), crlb_arcsec, observable}, unobservable_directions_B,\n"
     "                           covariance_arcsec2, accelerometer, time_offset_s, time_offset_sigma_s,\n"
@@ -266,8 +275,38 @@ model::Uncertain3 uncertain(const calib::Estimate3& e, double scale) {
 
 /// The result as a model overlay (--write-model): mountings in the accelerometer datum, the
 /// accelerometer terms, the thermal harmonics and the time offset, valid over the data's span.
+/// Per configured head slot, the mounting error r (Si axes, C_Si_B(true) = Exp([r]x) C_Si_B(nominal)) and
+/// its 1-sigma per Si axis (NaN: not determined), from the estimate the outputs take.
+struct MountingResult {
+  std::vector<Vec3> r_Si, sigma_Si;
+  std::string source;
+};
+
+Quat calibratedMounting(const io::PlatformConfig& pc, const MountingResult& m, std::size_t slot) {
+  return (core::quatExp(m.r_Si[slot]) * pc.pipeline.heads.head[slot].q_Si_B).normalized();
+}
+
+/// The calibrated mountings as a QSA1B file (--write-qsa1b).
+bool writeMountingsQsa1b(const std::string& path, const io::PlatformConfig& pc, const MountingResult& m, TimeUs t0, char satellite,
+                         std::string* error) {
+  auto f = io::makeProduct<io::QsaRecord>(io::Product::QSA1B, satellite);
+  f.header.style = io::HeaderStyle::Fixed;  // GRACE-FO static products use the fixed header
+  for (int s = 0; s < pc.pipeline.heads.n_heads; ++s) {
+    const auto slot = static_cast<std::size_t>(s);
+    io::QsaRecord rec;
+    rec.t = (t0 / kUsPerSecond) * kUsPerSecond;
+    rec.satellite = satellite;
+    rec.sensor = pc.pipeline.heads.head[slot].id;
+    quatToScalarFirst(calibratedMounting(pc, m, slot), rec.q);
+    rec.zero = 0;
+    rec.qualflg = io::Bits{0, 8};
+    f.records.push_back(rec);
+  }
+  return io::writeProduct(path, f, error);
+}
+
 model::Overlay resultOverlay(const calib::SolveResult& r, const io::PlatformConfig& pc, const calib::ThermalFitResult* tf,
-                             TimeUs t0, TimeUs t1, const std::string& config) {
+                             TimeUs t0, TimeUs t1, const std::string& config, const MountingResult& mr) {
   model::Overlay o;
   o.written_by = std::string("boresight calibrate ") + BORESIGHT_VERSION;
   o.platform = pc.platform;
@@ -282,10 +321,10 @@ model::Overlay resultOverlay(const calib::SolveResult& r, const io::PlatformConf
     if (s < 0) continue;
     model::MountingEntry m;
     m.head = hr.id;
-    m.q_Si_B = (core::quatExp(r.estimate.r_S[static_cast<std::size_t>(s)]) * pc.pipeline.heads.head[static_cast<std::size_t>(s)].q_Si_B).normalized();
+    m.q_Si_B = calibratedMounting(pc, mr, static_cast<std::size_t>(s));
     m.datum = model::MountingDatum::Accelerometer;
     m.epoch = t0 + (t1 - t0) / 2;
-    for (int a = 0; a < 3; ++a) m.sigma_rad[a] = sigmaRad(hr.sigma_arcsec[static_cast<std::size_t>(a)]);
+    for (int a = 0; a < 3; ++a) m.sigma_rad[a] = mr.sigma_Si[static_cast<std::size_t>(s)](a);
     m.valid = span;
     o.mountings.push_back(m);
   }
@@ -349,7 +388,8 @@ model::Overlay resultOverlay(const calib::SolveResult& r, const io::PlatformConf
 
 int runCalibrate(int argc, char** argv) {
   CLI::App app{"boresight calibrate"};
-  std::string config, json_path, yaml_path, report_dir, relative = "hard", overlay, write_model, raw_noise = "fit";
+  std::string config, json_path, yaml_path, report_dir, relative = "hard", overlay, write_model, raw_noise = "fit",
+              write_qsa1b, satellite = "C";
   std::vector<std::string> files;
   bool moments = false, no_whiten = false, no_bias = false, acc_scale = false, acc_nonorth = false, time_offset = false, strict = false,
        raw = false;
@@ -362,6 +402,8 @@ int runCalibrate(int argc, char** argv) {
   app.add_option("--report", report_dir);
   app.add_option("--overlay", overlay);
   app.add_option("--write-model", write_model);
+  app.add_option("--write-qsa1b", write_qsa1b);
+  app.add_option("--satellite", satellite)->check(CLI::IsMember({"A", "B", "C", "D"}));
   app.add_option("--relative", relative)->check(CLI::IsMember({"hard", "prior"}));
   app.add_flag("--no-acc-bias", no_bias);
   app.add_flag("--acc-scale", acc_scale);
@@ -403,7 +445,7 @@ int runCalibrate(int argc, char** argv) {
     ins.push_back(config);
     if (!overlay.empty()) ins.push_back(overlay);
     if (!io::checkOutputs(ins, {{"--json", json_path}, {"--yaml", yaml_path}, {"--report", report_dir, true},
-                                {"--write-model", write_model}},
+                                {"--write-model", write_model}, {"--write-qsa1b", write_qsa1b}},
                           &err))
       return fail(err);
   }
@@ -568,6 +610,18 @@ int runCalibrate(int argc, char** argv) {
     if (ig.second != "GNV1B" && ig.second != "GNI1B") ctx.ignored.push_back(ig);
   report::Json j = report::calibrationJson(r, ctx);
   j["model_in_use"] = modelInUseJson(pc, ovu);
+  // The mountings the outputs take: the CRN solver's, replaced by the attitude-domain estimate's with --raw.
+  MountingResult mounting;
+  mounting.source = "CRN solver";
+  for (int s = 0; s < pc.pipeline.heads.n_heads; ++s) {
+    const auto slot = static_cast<std::size_t>(s);
+    mounting.r_Si.push_back(r.estimate.r_S[slot]);
+    Vec3 sg = Vec3::Constant(std::numeric_limits<double>::quiet_NaN());
+    for (const auto& hr : r.heads)
+      if (hr.id == pc.pipeline.heads.head[slot].id)
+        for (int a = 0; a < 3; ++a) sg(a) = sigmaRad(hr.sigma_arcsec[static_cast<std::size_t>(a)]);
+    mounting.sigma_Si.push_back(sg);
+  }
   std::string raw_text;
   if (raw) {
     // The attitude-domain estimate from the raw samples (calib::estimateRaw; no CRN, no decimation).
@@ -612,6 +666,9 @@ int runCalibrate(int argc, char** argv) {
       const Mat3 R_Si = have_r ? Mat3(A.transpose() * Mat3(est.robust_covariance.block<3, 3>(o, o)) * A) : Mat3::Zero();
       report::Json hj;
       hj["id"] = rc.heads[i].id;
+      mounting.r_Si[i] = est.mounting_rad[i];
+      for (int a = 0; a < 3; ++a)
+        mounting.sigma_Si[i](a) = determined ? std::sqrt(std::max(0.0, C_Si(a, a))) : std::numeric_limits<double>::quiet_NaN();
       for (int a = 0; a < 3; ++a) {
         const double e = est.mounting_rad[i](a) * kArcsecPerRad;
         const double sg = std::sqrt(std::max(0.0, C_Si(a, a))) * kArcsecPerRad;
@@ -651,7 +708,9 @@ int runCalibrate(int argc, char** argv) {
         }
     }
     j["attitude_domain"] = jr;
+    mounting.source = "attitude-domain estimate (--raw)";
   }
+  j["mountings_written_from"] = mounting.source;
   if (!writeText(json_path, j.dump(2) + "\n", &err)) return fail(err);
   if (!yaml_path.empty() && !writeText(yaml_path, report::toYaml(j), &err)) return fail(err);
   if (!report_dir.empty()) {
@@ -666,9 +725,10 @@ int runCalibrate(int argc, char** argv) {
       return fail(err);
   }
   if (!write_model.empty()) {
-    const model::Overlay m = resultOverlay(r, pc, with_thermal ? &thermal_fit : nullptr, span.t_first, span.t_last, config);
+    const model::Overlay m = resultOverlay(r, pc, with_thermal ? &thermal_fit : nullptr, span.t_first, span.t_last, config, mounting);
     if (!io::writeOverlay(write_model, m, &err)) return fail(err);
   }
+  if (!write_qsa1b.empty() && !writeMountingsQsa1b(write_qsa1b, pc, mounting, span.t_first, satellite[0], &err)) return fail(err);
   stages.mark("output");
 
   std::printf("\n%s (%zu epochs over %.1f s, residual RMS %.3e rad/s^2, relative attitude as a %s)\n",
@@ -690,9 +750,11 @@ int runCalibrate(int argc, char** argv) {
   if (!thermal_text.empty()) std::printf("\nthermal harmonic model:\n%s", thermal_text.c_str());
   else std::printf("thermal: %s\n", ctx.thermal["status"].get<std::string>().c_str());
   std::printf("stages: %s\n", stages.text.c_str());
-  std::printf("-> %s%s%s%s%s%s%s\n", json_path.c_str(), yaml_path.empty() ? "" : ", ", yaml_path.c_str(),
+  std::printf("-> %s%s%s%s%s%s%s%s%s\n", json_path.c_str(), yaml_path.empty() ? "" : ", ", yaml_path.c_str(),
               report_dir.empty() ? "" : ", ", report_dir.empty() ? "" : (report_dir + "/report.md").c_str(),
-              write_model.empty() ? "" : ", model overlay ", write_model.c_str());
+              write_model.empty() ? "" : ", model overlay ", write_model.c_str(), write_qsa1b.empty() ? "" : ", QSA1B ",
+              write_qsa1b.c_str());
+  if (!write_model.empty() || !write_qsa1b.empty()) std::printf("   mountings written from the %s\n", mounting.source.c_str());
   return 0;
 }
 
