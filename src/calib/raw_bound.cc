@@ -92,6 +92,7 @@ std::string RawBoundConfig::validate() const {
   if (options.harmonics < 0 || options.harmonics > 8) return "harmonics outside 0..8";
   if (options.harmonics > 0 && !(options.orbit_rate_rad_s > 0)) return "harmonics need the orbit rate";
   if (!(options.gap_sigma_rad_s2 > 0)) return "gap_sigma_rad_s2 is not positive";
+  if (!(options.unobservable_sigma_rad > 0)) return "unobservable_sigma_rad is not positive";
   return "";
 }
 
@@ -793,6 +794,37 @@ RawBoundResult RawBound::result() const {
     const double lam = es.eigenvalues()(src);
     out.common_axes_B.col(k) = es.eigenvectors().col(src);
     out.common_sigma_rad(k) = lam > 1e-12 * top && lam > 0 ? 1 / std::sqrt(lam) : kInf;
+  }
+  // Directions of the common rotation above the observability threshold are held at their nominal value:
+  // c = V_o c_o over the observable directions V_o only, the covariance of the head errors (and every
+  // other parameter) that of the parameters (c_o, r_2.., rest) mapped back.
+  {
+    Eigen::MatrixXd Vo(3, 3);
+    Eigen::Index ko = 0;
+    for (int k = 0; k < 3; ++k) {
+      if (out.common_sigma_rad(k) > cfg_.options.unobservable_sigma_rad) {
+        out.unobservable_B.push_back(out.common_axes_B.col(k));
+      } else {
+        Vo.col(ko++) = out.common_axes_B.col(k);
+      }
+    }
+    if (!out.unobservable_B.empty()) {
+      Eigen::MatrixXd Jp = Eigen::MatrixXd::Zero(p, p - 3 + ko);
+      Jp.leftCols(ko) = J.leftCols(3) * Vo.leftCols(ko);
+      Jp.rightCols(p - 3) = J.rightCols(p - 3);
+      const ScaledInverse ci = scaledInverse(Jp.transpose() * out.information * Jp);
+      out.covariance = Jp * ci.cov * Jp.transpose();
+      for (std::size_t i = 0; i < nh; ++i)
+        for (int j = 0; j < 3; ++j) {
+          const auto k = static_cast<Eigen::Index>(3 * i) + j;
+          out.head_sigma_rad[i](j) = std::sqrt(std::max(out.covariance(k, k), 0.0));
+        }
+      if (cfg_.options.bias)
+        for (int a = 0; a < 3; ++a) {
+          const auto k = static_cast<Eigen::Index>(col_bias_) + a;
+          out.bias_sigma_rad_s2(a) = std::sqrt(std::max(out.covariance(k, k), 0.0));
+        }
+    }
   }
   const ScaledInverse inv_new = scaledInverse(Inew);
   out.relative_sigma_rad.assign(nh, Vec3::Zero());

@@ -122,7 +122,10 @@ void readPlatform(const YAML::Node& root, const std::string& path, bool overlay,
   if (heads && !heads.IsMap()) fail("heads", "expected a mapping (mounting, list, ...)", heads);
   if (heads) {
     checkKeys(heads, "heads", {"mounting", "unit_norm_tolerance", "list", "fusion_alignment",
-                               "relative_time_constant_s", "relative_min_epochs", "alignment_update_epochs"});
+                               "relative_time_constant_s", "relative_min_epochs", "alignment_update_epochs",
+                               "mounting_uncertainty_arcsec"});
+    if (heads["mounting_uncertainty_arcsec"])
+      out.mounting_uncertainty_arcsec = positive(heads["mounting_uncertainty_arcsec"], "heads.mounting_uncertainty_arcsec", 0.0);
     std::string mounting = out.mounting_from_qsa1b ? "qsa1b" : "explicit";
     if (heads["mounting"]) mounting = heads["mounting"].as<std::string>();
     if (mounting != "qsa1b" && mounting != "explicit") fail("heads.mounting", "expected qsa1b or explicit", heads["mounting"]);

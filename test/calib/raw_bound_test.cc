@@ -144,11 +144,27 @@ TEST(RawBound, OneExcitedAxisLeavesItsRotationUndeterminedTwoDetermineAll) {
     EXPECT_GT(std::abs(r.common_axes_B.col(2).dot(Vec3::UnitX())), 0.999);
     // The relative alignment needs no excitation: the heads see it directly.
     EXPECT_LT(r.relative_sigma_rad[1].maxCoeff(), 1e-5);
+    EXPECT_TRUE(r.unobservable_B.empty());  // no threshold: the weak direction is still counted
+    EXPECT_GT(r.head_sigma_rad[0].maxCoeff(), 1e3 * r.common_sigma_rad(1));  // and blurs the head axes
+  }
+  {
+    // With an observability threshold (calibrate's --unobservable-sigma, 3600"): the rotation about x is
+    // reported not observable and held at its nominal value, the other two common directions and every
+    // head axis keep their small sigmas.
+    RawBoundConfig ct = c;
+    ct.options.unobservable_sigma_rad = 3600 * kRadPerArcsec;
+    RawBound b(ct);
+    const RawBoundResult r = drive(b, {ox}, 1500, 2, orbit_rate);
+    ASSERT_EQ(r.unobservable_B.size(), 1u);
+    EXPECT_GT(std::abs(r.unobservable_B[0].dot(Vec3::UnitX())), 0.999);
+    for (std::size_t i = 0; i < 2; ++i) EXPECT_LT(r.head_sigma_rad[i].maxCoeff(), 1e-3) << "head " << i;
+    EXPECT_LT(r.common_sigma_rad(1), 1e-3);
   }
   {
     RawBound b(c);
     const RawBoundResult r = drive(b, {ox, oy}, 3000, 2, orbit_rate);
     EXPECT_LT(r.common_sigma_rad(2), 1e-3);
+    EXPECT_TRUE(r.unobservable_B.empty());
     for (std::size_t i = 0; i < 2; ++i) EXPECT_LT(r.head_sigma_rad[i].maxCoeff(), 1e-3);
   }
 }

@@ -65,6 +65,7 @@ TEST(PlatformConfig, CommittedFileLoads) {
   ASSERT_TRUE(io::loadPlatformConfig(kConfigDir + "/gracefo.yaml", pc, &err)) << err;
   EXPECT_EQ(pc.pipeline.heads.n_heads, 3);
   EXPECT_TRUE(pc.mounting_from_qsa1b);
+  EXPECT_EQ(pc.mounting_uncertainty_arcsec, 360.0);
   EXPECT_TRUE(pc.pipeline.C_B_A.isApprox(accToBodyDefault()));
   // The noise of the real excerpts: 2" across, 25" about the boresight, 5" per star direction; the
   // accelerometer's white levels per A axis.
@@ -279,6 +280,9 @@ TEST(PlatformConfig, BadValuesNameLineAndReason) {
   const std::string dup = writeTemp("dup.yaml", replaced(base, "    - id: 2", "    - id: 1"));
   EXPECT_FALSE(io::loadPlatformConfig(dup, pc, &err));
   EXPECT_NE(err.find("duplicate head id 1"), std::string::npos) << err;
+  const std::string neg = writeTemp("neg_unc.yaml", replaced(base, "mounting_uncertainty_arcsec: 360", "mounting_uncertainty_arcsec: -5"));
+  EXPECT_FALSE(io::loadPlatformConfig(neg, pc, &err));
+  EXPECT_NE(err.find("heads.mounting_uncertainty_arcsec"), std::string::npos) << err;
 }
 
 TEST(PlatformConfig, ThermalSectionReachesThePipeline) {

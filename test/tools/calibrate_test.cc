@@ -499,6 +499,21 @@ TEST(Calibrate, OneManoeuvreAxisLeavesThatBodyDirectionNotObservable) {
   EXPECT_GT(undetermined, 0) << j.dump();
   EXPECT_NE(r.out.find("not observable"), std::string::npos) << r.out;
   EXPECT_NE(testutil::slurp(d + "/rep/report.md").find("**Not observable**"), std::string::npos);
+  // The attitude-domain estimate says the same in body terms: the rotation about x is not observable
+  // (held at its nominal value), and with it held every head axis is determined (a sigma below the
+  // threshold, here a few arcseconds).
+  const CliRun w = run("calibrate --config " + kConfig + " " + glob1(d, "SCA1A") + " " + glob1(d, "ACC1A") + " " +
+                       glob1(d, "QSA1B") + " --time-offset --acc-scale --raw --json " + d + "/w.json");
+  ASSERT_EQ(w.status, 0) << w.out;
+  const auto ad = readJson(d + "/w.json")["attitude_domain"];
+  ASSERT_EQ(ad["unobservable_directions_B"].size(), 1u) << ad.dump();
+  EXPECT_GT(std::abs(ad["unobservable_directions_B"][0][0].get<double>()), 0.99) << ad.dump();
+  for (const auto& h : ad["heads"])
+    for (int a = 0; a < 3; ++a) {
+      ASSERT_TRUE(h["sigma_arcsec"][a].is_number()) << h.dump();
+      EXPECT_LT(h["sigma_arcsec"][a].get<double>(), 30.0) << h.dump();
+    }
+  EXPECT_NE(w.out.find("the common rotation about it is held at its nominal value"), std::string::npos) << w.out;
 }
 
 TEST(Calibrate, BadInputIsAClearErrorNotACrash) {

@@ -106,7 +106,9 @@ const char* kUsage =
     "                           platform's (e.g. 0.05 Hz, 100 s: the acceleration noise grows as B^5 while\n"
     "                           100 s manoeuvres pass any B above ~0.02 Hz; length x accelerometer rate\n"
     "                           <= 1023 taps)\n"
-    "  --unobservable-sigma A   an axis whose sigma would exceed A arcsec is not determined (default 3600)\n"
+    "  --unobservable-sigma A   an axis whose sigma would exceed A arcsec is not determined (default 3600;\n"
+    "                           --raw: the platform file's heads.mounting_uncertainty_arcsec when smaller,\n"
+    "                           and a common body direction above it is held at its nominal value)\n"
     "  --plan-excitation R      for a refused span: the excitation (rad/s^2 RMS per axis) assumed when\n"
     "                           saying what span the bound would need (default 4.9e-5: a 1 deg, 100 s\n"
     "                           calibration manoeuvre)\n"
@@ -631,6 +633,10 @@ int runCalibrate(int argc, char** argv) {
     ro.scale = acc_scale;
     ro.time_offset = time_offset;
     ro.fit_noise = raw_noise == "fit";
+    // Not determined: a sigma above what is known without the data (the platform file's
+    // heads.mounting_uncertainty_arcsec), else above --unobservable-sigma.
+    const double raw_unobs = pc.mounting_uncertainty_arcsec > 0 ? std::min(pc.mounting_uncertainty_arcsec, unobs) : unobs;
+    ro.unobservable_sigma_rad = raw_unobs * kRadPerArcsec;
     const calib::RawBoundConfig rc = calib::rawBoundConfig(pc.pipeline, pc.noise_in_use, ro);
     if (const std::string e = rc.validate(); !e.empty()) return fail("--raw: " + e);
     const Vec3 bias0 = raw_feed.n_acc ? Vec3(raw_feed.sum_A / static_cast<double>(raw_feed.n_acc)) : Vec3::Zero();
@@ -660,18 +666,19 @@ int runCalibrate(int argc, char** argv) {
       const auto o = static_cast<Eigen::Index>(3 * i);
       const Mat3 C_axes = est.bound.covariance.block<3, 3>(o, o);
       const Mat3 C_Si = A.transpose() * C_axes * A;
-      const bool determined = std::isfinite(est.bound.head_sigma_rad[i].maxCoeff());
+      const bool any = std::isfinite(est.bound.head_sigma_rad[i].maxCoeff());
       // The data's own covariance (score blocks) in the same frame.
       const bool have_r = est.robust_covariance.rows() >= o + 3;
       const Mat3 R_Si = have_r ? Mat3(A.transpose() * Mat3(est.robust_covariance.block<3, 3>(o, o)) * A) : Mat3::Zero();
       report::Json hj;
       hj["id"] = rc.heads[i].id;
       mounting.r_Si[i] = est.mounting_rad[i];
-      for (int a = 0; a < 3; ++a)
-        mounting.sigma_Si[i](a) = determined ? std::sqrt(std::max(0.0, C_Si(a, a))) : std::numeric_limits<double>::quiet_NaN();
       for (int a = 0; a < 3; ++a) {
         const double e = est.mounting_rad[i](a) * kArcsecPerRad;
         const double sg = std::sqrt(std::max(0.0, C_Si(a, a))) * kArcsecPerRad;
+        // An axis is determined when its sigma (the unobservable directions held) is below the threshold.
+        const bool determined = any && sg < raw_unobs;
+        mounting.sigma_Si[i](a) = determined ? sg * kRadPerArcsec : std::numeric_limits<double>::quiet_NaN();
         const double sr = std::sqrt(std::max(0.0, R_Si(a, a))) * kArcsecPerRad;
         hj["error_angles_arcsec"].push_back(e);
         hj["sigma_arcsec"].push_back(determined ? report::Json(sg) : report::Json(nullptr));
@@ -694,6 +701,12 @@ int runCalibrate(int argc, char** argv) {
       const double sg = est.bound.common_sigma_rad(k);
       jr["common_rotation"].push_back({{"direction_B", {u.x(), u.y(), u.z()}},
                                        {"sigma_arcsec", std::isfinite(sg) ? report::Json(sg * kArcsecPerRad) : report::Json(nullptr)}});
+    }
+    jr["unobservable_directions_B"] = report::Json::array();
+    for (const Vec3& d : est.bound.unobservable_B) {
+      jr["unobservable_directions_B"].push_back({d.x(), d.y(), d.z()});
+      raw_text += "  not observable: body direction (" + fmt("%.3f", d.x()) + ", " + fmt("%.3f", d.y()) + ", " + fmt("%.3f", d.z()) +
+                  ") - the common rotation about it is held at its nominal value (sigma above " + fmt("%.0f", raw_unobs) + "\")\n";
     }
     if (ro.bias) jr["acc_bias_rad_s2"] = {est.bias_rad_s2.x(), est.bias_rad_s2.y(), est.bias_rad_s2.z()};
     if (ro.scale) jr["acc_scale"] = {est.scale.x(), est.scale.y(), est.scale.z()};

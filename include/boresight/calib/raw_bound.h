@@ -48,6 +48,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -77,6 +78,11 @@ struct RawBoundOptions {
   int harmonics = 0;         ///< orbit harmonics 1..K of heads 2..n's alignment (cos and sin per axis)
   double orbit_rate_rad_s = 0;
   double gap_sigma_rad_s2 = 1e-3;  ///< angular acceleration where the accelerometer has no sample
+  /// A body direction of the common rotation whose sigma exceeds this is not observable: it is held at
+  /// its nominal value (projected out of the covariance and of estimateRaw's update) and listed in
+  /// RawBoundResult::unobservable_B, so that the other directions and every head axis keep the sigmas
+  /// they have given it. Infinite (the default): only directions without any information.
+  double unobservable_sigma_rad = std::numeric_limits<double>::infinity();
   /// estimateRaw: from its second pass on, a variance factor per head and group (cross-boresight axes
   /// e1 and e2 together, the boresight axis b) estimated from the data (model::estimateVarianceComponents
   /// on the groups' parameter information and residuals) and applied to that group's whole noise model
@@ -125,6 +131,9 @@ struct RawBoundResult {
   Mat3 common_axes_B = Mat3::Identity();
   Vec3 common_sigma_rad = Vec3::Zero();
   Vec3 bias_sigma_rad_s2 = Vec3::Zero();  ///< zero when the bias is not a parameter
+  /// Body directions of the common rotation held at their nominal value (options.unobservable_sigma_rad;
+  /// the covariance and the sigmas above are those given it).
+  std::vector<Vec3> unobservable_B;
   double span_s = 0;
   std::vector<std::uint64_t> head_samples;
   std::uint64_t acc_samples = 0, acc_gaps = 0, head_samples_before_acc = 0;

@@ -17,6 +17,10 @@ struct PlatformConfig {
   std::string file;              ///< the file loaded (its `base:` files are merged in)
   core::PipelineConfig pipeline;  ///< ready for Pipeline::configure()
   bool mounting_from_qsa1b = false;  ///< the heads' q_Si_B must come from a QSA1B file
+  /// heads.mounting_uncertainty_arcsec: how well the mountings are known before a calibration (1-sigma
+  /// per axis); a calibration's axis or body direction whose sigma is above it is not determined by the
+  /// data. 0: not given.
+  double mounting_uncertainty_arcsec = 0;
   /// Where each head slot's q_Si_B came from ("FILE heads.list[0].q_Si_B", "QSA1B FILE", "overlay FILE
   /// (datum ..., epoch ...)"); empty while a QSA1B mounting is still to come.
   std::array<std::string, core::kMaxHeads> mounting_source{};
