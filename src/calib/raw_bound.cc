@@ -386,12 +386,11 @@ void RawBound::observe(std::size_t i, int j, double t_s, double y) {
     const Eigen::VectorXd dvec = (u - hE).head(static_cast<Eigen::Index>(p_)).transpose();
     recorder_->observation(h, dvec, rw);
   }
-  info_.noalias() += u.transpose() * (u / F);
+  if (!data_) info_.noalias() += u.transpose() * (u / F);  // data mode: the sum of the groups' (finishData)
   if (data_) {
     double v = y - r.dot(x_.head<3>());
     for (Eigen::Index s2 = b; s2 < e; ++s2) v -= x_(s2);
     x_.noalias() += Ph * (v / F);
-    bvec_.noalias() += u.transpose() * (v / F);
     chi2_ += v * v / F;
     ++chi2_n_;
     const auto p = static_cast<Eigen::Index>(p_);
@@ -413,7 +412,7 @@ void RawBound::observe(std::size_t i, int j, double t_s, double y) {
         sr.y.push_back(v);
       }
     }
-    if (cfg_.options.score_block_s > 0) {
+    if (collect_blocks_ && cfg_.options.score_block_s > 0) {
       const auto k = static_cast<std::size_t>(std::max(0.0, std::floor((t_s - block_t0_) / cfg_.options.score_block_s)));
       if (k >= blocks_.size()) blocks_.resize(k + 1);
       add(blocks_[k]);
@@ -502,6 +501,19 @@ void RawBound::headData(double t_s, std::size_t index, const Quat& q_I_Si) {
   x_.head(6).setZero();
   ++head_samples_[index];
   last_t_ = std::max(last_t_, t_s);
+}
+
+void RawBound::finishData() {
+  // The trajectory start's columns are zero in data mode (enableData): the information and sum u^T v / F
+  // are those of the parameters, summed over the variance groups.
+  const auto p = static_cast<Eigen::Index>(p_);
+  info_.setZero();
+  bvec_.setZero();
+  for (const auto& g : groups_) {
+    if (g.n <= 0) continue;
+    info_.topLeftCorner(p, p) += g.N;
+    bvec_.head(p) += g.b;
+  }
 }
 
 Eigen::VectorXd RawBound::solveParameters(const RawBoundResult& r) const {
@@ -627,6 +639,7 @@ RawEstimate estimateRaw(const RawBoundConfig& cfg0, const RawData& data, const V
     b.gate_sigma_ = pass == 0 ? 0.0 : 6.0;
     const bool fit_now = cfg.options.fit_noise && pass == 1 && npass > 2;
     b.record_innovations_ = fit_now;
+    b.collect_blocks_ = pass + 1 == npass;  // the score blocks serve the last pass's covariance only
     for (const std::size_t k : order) {
       const auto& ev = data.events[k];
       if (ev.head < 0) {
@@ -642,6 +655,7 @@ RawEstimate estimateRaw(const RawBoundConfig& cfg0, const RawData& data, const V
         b.headData(ev.t_s, hi, ev.q_I_Si.normalized() * core::quatExp(-phi));
       }
     }
+    b.finishData();
     out.bound = b.result();
     const Eigen::VectorXd th = b.solveParameters(out.bound);
     for (std::size_t i = 0; i < nh; ++i) eps[i] -= cfg.heads[i].axes_Si.transpose() * Vec3(th.segment<3>(static_cast<Eigen::Index>(3 * i)));

@@ -34,3 +34,23 @@ struct QsaCodec {
 }  // namespace boresight::io
 
 BORESIGHT_IO_INSTANTIATE(boresight::io::QsaCodec)
+
+namespace boresight::io {
+
+ProductFile<QsaRecord> mountingsQsa1b(char satellite, TimeUs t, const std::vector<std::pair<std::int32_t, Quat>>& heads) {
+  auto f = makeProduct<QsaRecord>(Product::QSA1B, satellite);
+  f.header.style = HeaderStyle::Fixed;
+  for (const auto& [id, q] : heads) {
+    QsaRecord r;
+    r.t = (t / kUsPerSecond) * kUsPerSecond;
+    r.satellite = satellite;
+    r.sensor = id;
+    quatToScalarFirst(q, r.q);
+    r.zero = 0;
+    r.qualflg = Bits{0, 8};
+    f.records.push_back(r);
+  }
+  return f;
+}
+
+}  // namespace boresight::io

@@ -201,19 +201,9 @@ bool Level1Sink::close(std::string* error) {
 }
 
 bool writeQsa1b(const std::string& path, const Simulator& sim, std::string* error) {
-  auto f = io::makeProduct<io::QsaRecord>(io::Product::QSA1B, sim.scenario().satellite);
-  f.header.style = io::HeaderStyle::Fixed;  // GRACE-FO static products use the fixed header
-  for (const auto& h : sim.heads()) {
-    io::QsaRecord r;
-    r.t = (sim.scenario().start / kUsPerSecond) * kUsPerSecond;
-    r.satellite = sim.scenario().satellite;
-    r.sensor = h.config().id;
-    quatToScalarFirst(h.config().q_Si_B, r.q);
-    r.zero = 0;
-    r.qualflg = io::Bits{0, 8};
-    f.records.push_back(r);
-  }
-  return io::writeProduct(path, f, error);
+  std::vector<std::pair<std::int32_t, Quat>> heads;
+  for (const auto& h : sim.heads()) heads.emplace_back(h.config().id, h.config().q_Si_B);
+  return io::writeProduct(path, io::mountingsQsa1b(sim.scenario().satellite, sim.scenario().start, heads), error);
 }
 
 }  // namespace boresight::sim

@@ -291,20 +291,10 @@ Quat calibratedMounting(const io::PlatformConfig& pc, const MountingResult& m, s
 /// The calibrated mountings as a QSA1B file (--write-qsa1b).
 bool writeMountingsQsa1b(const std::string& path, const io::PlatformConfig& pc, const MountingResult& m, TimeUs t0, char satellite,
                          std::string* error) {
-  auto f = io::makeProduct<io::QsaRecord>(io::Product::QSA1B, satellite);
-  f.header.style = io::HeaderStyle::Fixed;  // GRACE-FO static products use the fixed header
-  for (int s = 0; s < pc.pipeline.heads.n_heads; ++s) {
-    const auto slot = static_cast<std::size_t>(s);
-    io::QsaRecord rec;
-    rec.t = (t0 / kUsPerSecond) * kUsPerSecond;
-    rec.satellite = satellite;
-    rec.sensor = pc.pipeline.heads.head[slot].id;
-    quatToScalarFirst(calibratedMounting(pc, m, slot), rec.q);
-    rec.zero = 0;
-    rec.qualflg = io::Bits{0, 8};
-    f.records.push_back(rec);
-  }
-  return io::writeProduct(path, f, error);
+  std::vector<std::pair<std::int32_t, Quat>> heads;
+  for (int s = 0; s < pc.pipeline.heads.n_heads; ++s)
+    heads.emplace_back(pc.pipeline.heads.head[static_cast<std::size_t>(s)].id, calibratedMounting(pc, m, static_cast<std::size_t>(s)));
+  return io::writeProduct(path, io::mountingsQsa1b(satellite, t0, heads), error);
 }
 
 model::Overlay resultOverlay(const calib::SolveResult& r, const io::PlatformConfig& pc, const calib::ThermalFitResult* tf,

@@ -226,6 +226,8 @@ class RawBound {
   void accelData(double t_s, const Vec3& z_A, const Vec3& jerk_A);
   void headData(double t_s, std::size_t index, const Quat& q_I_Si);
   Eigen::VectorXd solveParameters(const RawBoundResult& r) const;
+  /// Data mode, before result(): the information and sum u^T v / F from the variance groups.
+  void finishData();
   void stepAcc(double t_s, const Vec3& alpha_B);
   void advance(double t_s);
   void subStep(double h, bool gap);
@@ -261,7 +263,7 @@ class RawBound {
   std::vector<Mat3> C_Si_B_applied_;
   Vec3 bias_applied_ = Vec3::Zero(), scale_applied_ = Vec3::Zero();
   Quat q_nom_ = Quat::Identity();  ///< q_I_B of the reference trajectory (w_ is its rate)
-  Eigen::VectorXd x_, bvec_;       ///< the filter's error state; sum u^T v / F
+  Eigen::VectorXd x_, bvec_;       ///< the filter's error state; sum u^T v / F (data mode: finishData)
   double chi2_ = 0;
   std::uint64_t chi2_n_ = 0, rejected_ = 0;
   /// Variance groups (head i: 2 i cross, 2 i + 1 about) and score blocks: parameter information and
@@ -273,7 +275,7 @@ class RawBound {
   };
   std::vector<Acc> groups_, blocks_;
   double block_t0_ = 0;
-  bool record_innovations_ = false;
+  bool record_innovations_ = false, collect_blocks_ = false;
   std::vector<model::NoiseSeries> innovations_;  ///< per head axis 3 i + j: t, v (not normalised)
   double gate_sigma_ = 6;  ///< head samples with an innovation beyond this many sigma are rejected (0: none)
 };

@@ -21,6 +21,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 namespace boresight::io {
@@ -378,6 +379,10 @@ bool writeProduct(const std::string& path, const ProductFile<Rec>& f, std::strin
 /// A fresh, empty product of the given kind with a synthesised header (for simulators and converters).
 template <typename Rec>
 ProductFile<Rec> makeProduct(Product product, char satellite);
+
+/// A static QSA1B product of head mountings (the fixed header of GRACE-FO's static products): one record
+/// per head (sca_id, q_Si_B with R(q_Si_B) = C_Si_B, written scalar first) at the whole second of t.
+ProductFile<QsaRecord> mountingsQsa1b(char satellite, TimeUs t, const std::vector<std::pair<std::int32_t, Quat>>& heads);
 
 /// One record line (without its newline, not blank) into r; false with s.reason() when the line is
 /// malformed (every field is parsed and checked, and nothing may follow the last field). The
