@@ -24,7 +24,7 @@ namespace {
 const char* kUsage =
     "usage: boresight audit --config FILE INPUT... --out DIR [--truth truth.yaml] [--false-alarm P]\n"
     "                       [--overlay FILE] [--holdout-blocks N] [--max-harmonic N] [--lookahead S] [--strict]\n"
-    "                       [--quiet]\n"
+    "                       [--white-rows] [--quiet]\n"
     "\n"
     "The model audit: shows what the configured model gets wrong in measured data, names the cause from\n"
     "the effect catalogue (boresight simulate --list-effects), extends the model with it and measures\n"
@@ -60,6 +60,9 @@ const char* kUsage =
     "  --max-harmonic N       largest orbit harmonic tested, cycles per revolution (default 2)\n"
     "  --lookahead S          out-of-order tolerance of the inputs, seconds (default 2)\n"
     "  --strict               stop at the first malformed input line\n"
+    "  --white-rows           the relative and reference families' tests without the noise colour in time\n"
+    "                         (one lag-1 variance inflation per family, as before the colour was fitted;\n"
+    "                         to compare: slow noise is then read as steps, drifts and harmonics)\n"
     "  --quiet                print the findings and the rejected inputs only (no progress, no input summary)\n"
     "\n"
     "Exit status: 0 audited (whatever was found); 1 bad input (file:line: reason) or an output that\n"
@@ -146,9 +149,12 @@ int runAudit(int argc, char** argv) {
   app.add_option("--max-harmonic", req.options.max_harmonic)->check(finiteRange(0, 20));
   app.add_option("--lookahead", req.lookahead_s)->check(finiteRange(0.0, 3600.0));
   app.add_flag("--strict", req.strict);
+  bool white_rows = false;
+  app.add_flag("--white-rows", white_rows);
   app.add_flag("--quiet", quiet);
   app.add_option("inputs", req.inputs)->required();
   if (int st = parseCommandLine(app, argc, argv, "audit", kUsage); st >= 0) return st;
+  req.options.time_colour = !white_rows;
 
   // Outputs never destroy inputs; the output folder first (a run of hours must not end on an
   // unwritable folder), removed again when the run fails (OutputDir).

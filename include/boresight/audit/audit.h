@@ -63,6 +63,12 @@ struct AuditOptions {
   /// head is blind when the Sun, the Earth's limb or the Moon is within this angle of its boresight. A
   /// dropout run is explained by blinding when the geometry comes within the cone plus the margin.
   double sun_exclusion_deg = 35, earth_exclusion_deg = 15, moon_exclusion_deg = 10, blinding_margin_deg = 2;
+  /// The relative and reference families' noise colour in time: a model per component (white, or white
+  /// plus Gauss-Markov) fitted to the data under each test's null hypothesis, and the tests made on
+  /// rows whitened in time by it (generalised least squares); non-white noise is a finding of its own
+  /// (coloured_noise). False: the earlier rule, one lag-1 variance inflation per family from first
+  /// differences (kept to compare: `boresight audit --white-rows`).
+  bool time_colour = true;
 };
 
 /// One parameter of an estimated effect, in the unit of the catalogue.
