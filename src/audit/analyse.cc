@@ -1609,6 +1609,12 @@ void Analyser::spectra(const LinFam& f, const Fit& fin) {
       sp.freq.push_back(T_orb > 0 ? fr * T_orb : fr * 1e3);
       sp.before.push_back(amp(yb));
       sp.after.push_back(amp(ya));
+      if (f.time_colour && static_cast<std::size_t>(comp) < f.comp_noise.size()) {
+        const auto& cn = f.comp_noise[static_cast<std::size_t>(comp)];
+        const double dt = T / static_cast<double>(t.size() - 1);
+        const double S = cn.model.psdSampled(std::min(fr, 0.5 / dt), dt);
+        sp.noise.push_back(cn.unit_per_row * std::sqrt(2 * S / T));
+      }
     }
     R.spectra.push_back(sp);
   }

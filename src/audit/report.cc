@@ -192,10 +192,15 @@ std::vector<NamedPlot> plotsOf(const AuditResult& r) {
   for (const auto& fam : familiesOf<Spectrum>(r.spectra, nullptr)) {
     NamedPlot np;
     np.file = "spectrum_" + slug(fam) + ".svg";
-    np.caption = "Amplitude spectra of the " + fam + " residuals before and after the extension";
+    np.caption = "Amplitude spectra of the " + fam + " residuals before and after the extension (log-log), with the fitted "
+                 "noise model's expected amplitude where the family fits one (approximate: the rows' median scale) and the "
+                 "orbit harmonics marked";
     np.plot.title = fam + " residual spectra: before and after";
     np.plot.ylabel = "amplitude";
     np.plot.width = 1100;
+    np.plot.logx = np.plot.logy = true;
+    double ylo = 1e300, yhi = 0, fhi = 0;
+    bool per_rev = false;
     for (const auto& s : r.spectra) {
       if (s.family != fam) continue;
       np.plot.xlabel = "frequency [" + s.unit + "]";
@@ -204,6 +209,23 @@ std::vector<NamedPlot> plotsOf(const AuditResult& r) {
       np.plot.series.push_back({s.label + " before", s.freq, s.before, {}, report::Series::Style::kLine, 0.0, {}});
       if (s.after.size() == s.freq.size())
         np.plot.series.push_back({s.label + " after", s.freq, s.after, {}, report::Series::Style::kLine, 0.0, {}});
+      if (s.noise.size() == s.freq.size())
+        np.plot.series.push_back({s.label + " noise model", s.freq, s.noise, {}, report::Series::Style::kLine, 0.0, {}});
+      for (const auto* v : {&s.before, &s.after, &s.noise})
+        for (double y : *v)
+          if (std::isfinite(y) && y > 0) ylo = std::min(ylo, y), yhi = std::max(yhi, y);
+      for (double fq : s.freq) fhi = std::max(fhi, fq);
+      per_rev |= s.unit == "cycles/rev";
+    }
+    if (per_rev && yhi > ylo) {
+      // the orbit harmonics as vertical lines (gaps between them)
+      report::Series h;
+      h.name = "orbit harmonics";
+      for (int n = 1; n <= 10 && n <= fhi; ++n) {
+        h.x.insert(h.x.end(), {double(n), double(n), double(n)});
+        h.y.insert(h.y.end(), {ylo, yhi, kNaN});
+      }
+      if (!h.x.empty()) np.plot.series.push_back(std::move(h));
     }
     out.push_back(std::move(np));
   }

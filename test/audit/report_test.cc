@@ -89,10 +89,11 @@ AuditResult handMade(bool with_truth) {
   Spectrum sp;
   sp.family = "relative";
   sp.label = "pair 1-2 x_B";
-  sp.unit = "mHz";
-  sp.freq = {1, 2, 3, 4};
-  sp.before = {5, 1, 0.5, 0.2};
-  sp.after = {0.5, 0.4, 0.5, 0.2};
+  sp.unit = "cycles/rev";
+  sp.freq = {0.5, 1, 2, 3, 4};
+  sp.before = {8, 5, 1, 0.5, 0.2};
+  sp.after = {0.6, 0.5, 0.4, 0.5, 0.2};
+  sp.noise = {0.7, 0.5, 0.3, 0.3, 0.25};
   r.spectra = {sp};
   r.findings = {"the relative alignment of head 2 changed since QSA1B by 21.5\" about x"};
   return r;
@@ -171,6 +172,10 @@ TEST(AuditReport, WritesTheReportAndEveryPlot) {
   EXPECT_NE(res.find("pair 1-2 x_B after"), std::string::npos);
   EXPECT_EQ(res.find("iba 1-2"), std::string::npos);
   EXPECT_NE(testutil::slurp(dir + "/iba.svg").find("iba 1-2 before"), std::string::npos);
+  // The spectra: the fitted noise model beside the residuals, the orbit harmonics marked.
+  const std::string spec = testutil::slurp(dir + "/spectrum_relative.svg");
+  EXPECT_NE(spec.find("pair 1-2 x_B noise model"), std::string::npos);
+  EXPECT_NE(spec.find("orbit harmonics"), std::string::npos);
   // Estimates with their error bars: a parameter without a sigma is not drawn.
   const std::string est = testutil::slurp(dir + "/estimates_arcsec.svg");
   EXPECT_NE(est.find("relative_misalignment[2] x_arcsec"), std::string::npos);

@@ -131,6 +131,11 @@ struct Series {
 struct Spectrum {
   std::string family, label, unit;
   std::vector<double> freq, before, after;
+  /// The component's fitted noise model as the amplitude a least-squares sinusoid of pure noise has
+  /// at each frequency (rms, sqrt(2 S(f) / T)), in the family's unit; empty where no model was fitted
+  /// (AuditOptions::time_colour off, or a family without it). Approximate: whitened units are turned
+  /// into the family's unit with the rows' median scale.
+  std::vector<double> noise;
 };
 
 /// A parameter compared with the truth (given --truth).
