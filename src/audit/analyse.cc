@@ -1627,7 +1627,7 @@ void Analyser::notExplained(const LinFam& f, const Fit& fin) {
   const int nc = static_cast<int>(f.comp_label.size());
   const double T_orb = orbit.ok() ? orbit.orbitPeriod() : 0;
   const int nh = (T_orb > 0 && span_s > 0.5 * T_orb) ? 4 : 0;
-  const double alpha = opt.false_alarm / std::max(1, nc * static_cast<int>(fams.size()));
+  const double alpha = alpha_each;  // one test per component, counted in the family-wise budget (run())
   for (int comp = 0; comp < nc; ++comp) {
     std::vector<int> idx;
     for (int i = 0; i < rp.size(); ++i)
@@ -2073,7 +2073,9 @@ AuditResult Analyser::run() {
   buildReference();
   dataTests(side);
   tests = static_cast<int>(side.size());
-  for (const auto& f : fams) tests += static_cast<int>(f.cands.size()) + (f.time_colour ? 1 : 0);
+  // every candidate, the colour test of a family that fits one, and the "not explained" test of every
+  // component: one family-wise budget
+  for (const auto& f : fams) tests += static_cast<int>(f.cands.size() + f.comp_label.size()) + (f.time_colour ? 1 : 0);
   R.tests = tests;
   alpha_each = opt.false_alarm / std::max(1, tests);
   for (auto& f : fams) runFamily(f);
