@@ -158,9 +158,9 @@ struct LinFam {
   bool hac = false;
   /// Colour in time instead (relative, reference: rows whose noise is the heads' own, white or slow):
   /// per component a noise model of the block-whitened rows - white, or white plus a Gauss-Markov
-  /// part, chosen by BIC - fitted by restricted likelihood with every candidate's signature profiled
-  /// out (so neither a step, a drift nor a harmonic is taken for noise), and the Gram accumulated from
-  /// rows whitened in time by it (generalised least squares: slow noise is not read as an effect).
+  /// part, chosen by BIC - fitted by restricted likelihood with the columns of noiseProfile() profiled
+  /// out, and the Gram accumulated from rows whitened in time by it (generalised least squares: slow
+  /// noise is not read as an effect).
   bool time_colour = false;
   struct CompNoise {
     model::NoiseModel model;     ///< in block-whitened units
@@ -171,6 +171,7 @@ struct LinFam {
   };
   std::vector<CompNoise> comp_noise;
   std::vector<double> row_sd;  ///< physical standard deviation of each row (time_colour)
+  std::vector<int> colour_cols{-1};  ///< the profiled columns of the fit in comp_noise ({-1}: none yet)
 };
 
 /// Adds one candidate with `ncol` columns and returns its first column.
@@ -183,12 +184,16 @@ int addCand(LinFam& f, Cand c) {
 }
 
 /// LinFam::time_colour: fits each component's noise to the rows with a constant and the columns `cols`
-/// (the candidates selected so far) profiled out - the noise under the null hypothesis of the next
-/// tests, so that they are score tests with the noise estimated under the null: slow noise that no
-/// selected effect explains stays noise and is not read as a step or a drift - and replaces the Gram
-/// (and the lag-1 inflation) by those of the rows whitened in time. Held-out rows are gaps to the filter
-/// (nothing of them enters the fit); a component with fewer than 64 fitting rows keeps the white model.
+/// (noiseProfile(): the selected candidates' and the fixed-signature ones') profiled out - the noise
+/// under the null hypothesis of the next tests, so that they are score tests with the noise estimated
+/// under the null: slow noise that no selected effect explains stays noise and is not read as a step -
+/// and replaces the Gram (and the lag-1 inflation) by those of the rows whitened in time. Held-out rows
+/// are gaps to the filter (nothing of them enters the fit); a component with fewer than 64 fitting rows
+/// keeps the white model. Nothing is done when `cols` are those of the last fit (selecting a
+/// misalignment, a drift or a harmonic does not change them).
 void colourInTime(LinFam& f, const std::vector<int>& cols) {
+  if (cols == f.colour_cols) return;
+  f.colour_cols = cols;
   const int n = static_cast<int>(f.t.size()), p = f.ncols, nc = static_cast<int>(f.comp_label.size());
   std::vector<std::vector<int>> rows_of(static_cast<std::size_t>(nc));
   for (int i = 0; i < n; ++i)
@@ -1938,8 +1943,8 @@ void Analyser::colourTest(const LinFam& f) {
   const model::NoiseParam* gt = cb.gm.find("gm1.tau_s");
   e.params.push_back({"gm_" + f.unit, f.unit, gs ? gs->value * cb.unit_per_row : kNaN, gs ? gs->sigma * cb.unit_per_row : kNaN, kNaN});
   e.params.push_back({"tau_s", "s", gt ? gt->value : kNaN, gt && gt->determined ? gt->sigma : kNaN, kNaN});
-  e.note = "likelihood ratio of white + Gauss-Markov against white per component (restricted likelihood, every candidate's "
-           "signature profiled out), summed; the tests of this family whiten the rows in time with the chosen models; strongest: " +
+  e.note = "likelihood ratio of white + Gauss-Markov against white per component (restricted likelihood with the named "
+           "causes and every misalignment, drift and harmonic signature profiled out), summed; the tests of this family whiten the rows in time with the chosen models; strongest: " +
            f.comp_label[static_cast<std::size_t>(best)] + (note.empty() ? std::string() : "; coloured: " + note);
   e.named = e.detected;
   R.effects.push_back(e);

@@ -283,23 +283,6 @@ TEST(HiddenEffect, CleanDataRaiseNoAlarm) {
   }
 }
 
-/// Deterministic causes named in the star-sensor families (and residuals "not explained" there): what
-/// slow noise was read as before the audit fitted its colour.
-int deterministicCauses(const audit::AuditResult& r, std::string* list) {
-  int n = 0;
-  for (const auto& e : r.named)
-    if ((e.family == "relative" || e.family == "reference") && e.name != "coloured_noise") {
-      ++n;
-      *list += " " + e.name + "[" + e.sensor + "]";
-    }
-  for (const auto& ne : r.not_explained)
-    if (ne.family == "relative" || ne.family == "reference") {
-      ++n;
-      *list += " not_explained(" + ne.what + ")";
-    }
-  return n;
-}
-
 TEST(HiddenEffect, AGaussMarkovHeadErrorIsNamedAsColouredNoiseNotAsSteps) {
   // The case a new user tried first: white 2.5"/25" heads and beside it a Gauss-Markov error of 1" per
   // axis, 600 s, independent heads (test/audit/bench/sim_audit_gauss_markov.yaml). The audit must name
@@ -326,13 +309,13 @@ TEST(HiddenEffect, AGaussMarkovHeadErrorIsNamedAsColouredNoiseNotAsSteps) {
       EXPECT_TRUE(cn->params[0].value > 0 && cn->params[1].value > 0) << cn->note;
     }
     std::string list;
-    with_colour += deterministicCauses(a.result, &list);
+    with_colour += audittest::deterministicCauses(a.result, &list);
     o.audit.time_colour = false;
     const auto b = audit::auditSimulated(sc, o);
     expectAuditRan(b);
     EXPECT_FALSE(audittest::named(b.result, "coloured_noise")) << "the lag-1 rule has no colour finding";
     std::string list_b;
-    lag1_rule += deterministicCauses(b.result, &list_b);
+    lag1_rule += audittest::deterministicCauses(b.result, &list_b);
     std::printf("seed %d: with the colour%s; the lag-1 rule%s\n", static_cast<int>(seed), list.c_str(), list_b.c_str());
   }
   // three 6 h spans: the lag-1 rule names tens of deterministic causes, the colour a few (the bench over

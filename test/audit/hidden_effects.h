@@ -278,6 +278,23 @@ inline bool positiveGain(const audit::Gain& g) {
 }
 
 /// "name[sensor]" list of the named causes, for messages.
+/// Deterministic causes named in the star-sensor families (and residuals "not explained" there): what
+/// slow noise was read as before the audit fitted its colour.
+inline int deterministicCauses(const audit::AuditResult& r, std::string* list = nullptr) {
+  int n = 0;
+  for (const auto& e : r.named)
+    if ((e.family == "relative" || e.family == "reference") && e.name != "coloured_noise") {
+      ++n;
+      if (list) *list += " " + e.name + "[" + e.sensor + "]";
+    }
+  for (const auto& ne : r.not_explained)
+    if (ne.family == "relative" || ne.family == "reference") {
+      ++n;
+      if (list) *list += " not_explained(" + ne.what + ")";
+    }
+  return n;
+}
+
 inline std::string namedList(const audit::AuditResult& r) {
   std::string s;
   for (const auto& e : r.named) s += (s.empty() ? "" : ", ") + e.name + "[" + e.sensor + "]";

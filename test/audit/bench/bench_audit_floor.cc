@@ -134,10 +134,8 @@ RunResult runOne(const sim::Scenario& clean, const std::vector<audittest::Inject
   r.analyse_s = a.analyse_wall_s;
   r.alarm = audittest::alarm(a.result);
   // a deterministic cause in the star-sensor families (what slow noise used to be read as)
-  for (const auto& e : a.result.named)
-    if ((e.family == "relative" || e.family == "reference") && e.name != "coloured_noise") r.det_alarm = true, ++r.det_causes;
-  for (const auto& n : a.result.not_explained)
-    if (n.family == "relative" || n.family == "reference") r.det_alarm = true, ++r.det_causes;
+  r.det_causes = audittest::deterministicCauses(a.result);
+  r.det_alarm = r.det_causes > 0;
   for (const auto& e : a.result.named) r.named.push_back(e.name + "[" + e.sensor + "]");
   for (const auto& n : a.result.not_explained) r.named.push_back("not_explained(" + n.family + ")");
   for (const auto& e : a.result.effects) {
