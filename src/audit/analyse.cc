@@ -172,7 +172,21 @@ struct LinFam {
   std::vector<CompNoise> comp_noise;
   std::vector<double> row_sd;  ///< physical standard deviation of each row (time_colour)
   std::vector<int> colour_cols{-1};  ///< the profiled columns of the fit in comp_noise ({-1}: none yet)
+  /// Lines at orbit harmonics 1..line_orders of period line_period_s (0: none), per component: the
+  /// "not explained" test's regressors, also profiled out of the noise fit (a line that no candidate
+  /// carries is a finding, not red noise).
+  double line_period_s = 0;
+  int line_orders = 0;
 };
+
+/// Writes the 2 line_orders regressors of LinFam's lines at time t (cos, sin per order) to out.
+void lineRegressors(const LinFam& f, double t, double* out) {
+  for (int h = 1; h <= f.line_orders; ++h) {
+    const double ph = 2 * kPi * h * t / f.line_period_s;
+    out[2 * (h - 1)] = std::cos(ph);
+    out[2 * (h - 1) + 1] = std::sin(ph);
+  }
+}
 
 /// Adds one candidate with `ncol` columns and returns its first column.
 int addCand(LinFam& f, Cand c) {
@@ -207,8 +221,9 @@ void colourInTime(LinFam& f, const std::vector<int>& cols) {
     if (r.size() < 64) continue;
     const int m = static_cast<int>(r.size());
     // a constant and the selected candidates' signatures in this component, as an orthonormal basis
-    const int q = static_cast<int>(cols.size());
-    MatrixXd X(m, q + 1);
+    const int q = static_cast<int>(cols.size()), nl = 2 * f.line_orders;
+    MatrixXd X(m, q + 1 + nl);
+    std::vector<double> lines(static_cast<std::size_t>(nl));
     model::NoiseSeries s;
     s.t_s.resize(r.size());
     s.y.resize(r.size());
@@ -217,6 +232,8 @@ void colourInTime(LinFam& f, const std::vector<int>& cols) {
       const int i = r[static_cast<std::size_t>(k)];
       X(k, 0) = 1.0;
       for (int j = 0; j < q; ++j) X(k, j + 1) = f.Xw(i, cols[static_cast<std::size_t>(j)]);
+      if (nl > 0) lineRegressors(f, f.t[static_cast<std::size_t>(i)], lines.data());
+      for (int j = 0; j < nl; ++j) X(k, q + 1 + j) = lines[static_cast<std::size_t>(j)];  // unweighted: the rows' own scale
       s.t_s[static_cast<std::size_t>(k)] = f.t[static_cast<std::size_t>(i)];
       s.y[static_cast<std::size_t>(k)] = f.yw[i];
       unit[static_cast<std::size_t>(k)] = f.row_sd[static_cast<std::size_t>(i)] * f.unit_scale;
@@ -224,11 +241,11 @@ void colourInTime(LinFam& f, const std::vector<int>& cols) {
     std::nth_element(unit.begin(), unit.begin() + m / 2, unit.end());
     cn.unit_per_row = unit[static_cast<std::size_t>(m / 2)];
     VectorXd norm = X.colwise().norm().transpose();
-    for (int j = 0; j <= q; ++j) X.col(j) /= norm[j] > 0 ? norm[j] : 1.0;
+    for (int j = 0; j <= q + nl; ++j) X.col(j) /= norm[j] > 0 ? norm[j] : 1.0;
     const Eigen::SelfAdjointEigenSolver<MatrixXd> es(X.transpose() * X);
     const double emax = es.eigenvalues().maxCoeff();
     std::vector<int> keep;
-    for (int j = 0; j <= q; ++j)
+    for (int j = 0; j <= q + nl; ++j)
       if (es.eigenvalues()[j] > 1e-9 * emax) keep.push_back(j);
     MatrixXd B(m, static_cast<int>(keep.size()));
     for (std::size_t j = 0; j < keep.size(); ++j)
@@ -600,6 +617,7 @@ struct Analyser {
   void rateRoute(std::vector<EffectTest>& out);
   void dataTests(std::vector<EffectTest>& out);
   bool blindAt(int k, double t) const;
+  void lineOrders(LinFam& f) const;
   void runFamily(LinFam& f);
   void notExplained(const LinFam& f, const Fit& fin);
   void colourTest(const LinFam& f);
@@ -641,12 +659,31 @@ void Analyser::views() {
     v.w = model::quatLog(bv[static_cast<std::size_t>(a)].q.conjugate() * bv[static_cast<std::size_t>(b)].q) / dt;
     v.has_w = true;
   }
+  // held-out data (AuditOptions::holdout_blocks): whole orbits when there are three
+  const double T_orb = orbit.ok() ? orbit.orbitPeriod() : 0;
+  const int orbits = T_orb > 0 ? static_cast<int>(std::floor(span_s / T_orb)) : 0;
   const int nb = 2 * opt.holdout_blocks;
+  if (orbits >= 3) {
+    const int fitted = (orbits - 1) / 2 + 1;
+    R.baseline.holdout = "whole orbits (" + fmt("%.0f", T_orb) + " s): " + std::to_string(fitted) + " of " +
+                         std::to_string(orbits) + " fitted, alternately, with the first and the last; the rest (" +
+                         fmt("%.0f", span_s - fitted * T_orb) + " s) held out";
+  } else {
+    R.baseline.holdout = std::to_string(opt.holdout_blocks - 1) + " of " + std::to_string(nb) + " blocks of " +
+                         fmt("%.0f", span_s / nb) + " s held out (alternately; both ends fitted)" +
+                         (T_orb > 0 ? "; fewer than three orbits: blocks mix orbit harmonics into each other" : "");
+  }
   for (auto& v : bv) {
-    // odd blocks are held out, except the last one: both ends of the span are fitted (a step late in
-    // the span keeps fitting rows after it)
-    const int blk = std::min(nb - 1, static_cast<int>(std::floor(v.t / std::max(span_s, 1e-9) * nb)));
-    v.held = (blk % 2) == 1 && blk != nb - 1;
+    if (orbits >= 3) {
+      // orbits j = 0, 2, 4 ... up to orbits - 2 from the start, and the last whole orbit of the span
+      const int j = static_cast<int>(std::floor(v.t / T_orb));
+      v.held = !(v.t >= span_s - T_orb || (j % 2 == 0 && j <= orbits - 2));
+    } else {
+      // odd blocks are held out, except the last one: both ends of the span are fitted (a step late in
+      // the span keeps fitting rows after it)
+      const int blk = std::min(nb - 1, static_cast<int>(std::floor(v.t / std::max(span_s, 1e-9) * nb)));
+      v.held = (blk % 2) == 1 && blk != nb - 1;
+    }
     v.has_ctx = orbit.at(v.t, v.ctx);
     if (!v.has_ctx) v.ctx.t_s = v.t;
   }
@@ -836,6 +873,7 @@ void Analyser::buildRelative() {
     return;
   }
   f.time_colour = opt.time_colour;
+  lineOrders(f);
   finishFamily(f);
   R.baseline.families.push_back("relative");
   if (!ctx) R.baseline.missing.push_back("thermal_periodic, aberration: no orbit context (give GNI1B or GNV1B)");
@@ -1068,6 +1106,7 @@ void Analyser::buildReference() {
     row += 3;
   }
   f.time_colour = opt.time_colour;
+  lineOrders(f);
   finishFamily(f);
   R.baseline.families.push_back("reference");
   fams.push_back(std::move(f));
@@ -1625,13 +1664,23 @@ void Analyser::spectra(const LinFam& f, const Fit& fin) {
   }
 }
 
+/// The lines the "not explained" test looks for: orbit harmonics 1..max(4, 2 max_harmonic), when the
+/// span has half an orbit.
+void Analyser::lineOrders(LinFam& f) const {
+  const double T_orb = orbit.ok() ? orbit.orbitPeriod() : 0;
+  f.line_period_s = T_orb;
+  f.line_orders = (T_orb > 0 && span_s > 0.5 * T_orb) ? std::max(4, 2 * opt.max_harmonic) : 0;
+}
+
 void Analyser::notExplained(const LinFam& f, const Fit& fin) {
-  // Per component: low-order time polynomial and orbit harmonics 1..4 on the final residual.
+  // Per component: low-order time polynomial and the family's lines (lineOrders: beyond the catalogue's
+  // harmonic orders, so that such a line is found here, not spread over its candidates) on the final
+  // residual.
   VectorXd rp = f.yw;
   for (std::size_t i = 0; i < fin.cols.size(); ++i) rp -= f.Xw.col(fin.cols[i]) * fin.beta[static_cast<int>(i)];
   const int nc = static_cast<int>(f.comp_label.size());
-  const double T_orb = orbit.ok() ? orbit.orbitPeriod() : 0;
-  const int nh = (T_orb > 0 && span_s > 0.5 * T_orb) ? 4 : 0;
+  const int nh = f.line_orders;
+  std::vector<double> lines(static_cast<std::size_t>(2 * nh));
   const double alpha = alpha_each;  // one test per component, counted in the family-wise budget (run())
   for (int comp = 0; comp < nc; ++comp) {
     std::vector<int> idx;
@@ -1649,11 +1698,8 @@ void Analyser::notExplained(const LinFam& f, const Fit& fin) {
       X(r, 1) = x;
       X(r, 2) = 0.5 * (3 * x * x - 1);
       X(r, 3) = 0.5 * (5 * x * x * x - 3 * x);
-      for (int h = 1; h <= nh; ++h) {
-        const double ph = 2 * kPi * h * f.t[static_cast<std::size_t>(i)] / T_orb;
-        X(r, 2 + 2 * h) = std::cos(ph);
-        X(r, 3 + 2 * h) = std::sin(ph);
-      }
+      if (nh > 0) lineRegressors(f, f.t[static_cast<std::size_t>(i)], lines.data());
+      for (int j = 0; j < 2 * nh; ++j) X(r, 4 + j) = lines[static_cast<std::size_t>(j)];
       y[r] = rp[i];
     }
     double infl = 1;
@@ -1892,7 +1938,8 @@ void Analyser::runFamily(LinFam& f) {
       if (m.family == f.name && m.name == e.name && m.sensor == e.sensor && m.params.size() == e.params.size()) {
         bool same = true;
         for (std::size_t q = 0; q < m.params.size(); ++q)
-          if (m.params[q].key == "at_s" && m.params[q].value != e.params[q].value) same = false;
+          if ((m.params[q].key == "at_s" || m.params[q].key == "harmonic") && m.params[q].value != e.params[q].value)
+            same = false;  // steps at other times, other harmonic orders
         if (same) m.named = true;
       }
   }

@@ -67,6 +67,7 @@ Json resultJson(const AuditResult& r) {
                    {"orbit_samples", b.orbit_samples},
                    {"families", b.families},
                    {"missing", b.missing},
+                   {"holdout", b.holdout},
                    {"values", values}};
   j["tests"] = r.tests;
   j["effects"] = Json::array();
@@ -325,6 +326,7 @@ std::string reportText(const AuditResult& r, const ReportContext* ctx, const std
   }
   for (const auto& m : b.missing) o << "- not formed: " << m << "\n";
   if (!b.missing.empty()) o << "\n";
+  if (!b.holdout.empty()) o << "Held out (not used to fit; the gain is measured on them): " << b.holdout << ".\n\n";
   if (!b.values.empty()) {
     o << "| model value | |\n|---|---|\n";
     for (const auto& [k, v] : b.values) o << "| " << cell(k) << " | " << fmt(v, "%.4g") << " |\n";

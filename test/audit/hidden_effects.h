@@ -297,7 +297,11 @@ inline int deterministicCauses(const audit::AuditResult& r, std::string* list = 
 
 inline std::string namedList(const audit::AuditResult& r) {
   std::string s;
-  for (const auto& e : r.named) s += (s.empty() ? "" : ", ") + e.name + "[" + e.sensor + "]";
+  for (const auto& e : r.named) {
+    s += (s.empty() ? "" : ", ") + e.name + "[" + e.sensor + "]";
+    for (const auto& p : e.params)
+      if (p.key == "harmonic" || p.key == "at_s") s += "(" + p.key + "=" + num(p.value) + ")";
+  }
   for (const auto& n : r.not_explained) s += (s.empty() ? "" : ", ") + std::string("not explained: ") + n.what;
   return s.empty() ? "none" : s;
 }

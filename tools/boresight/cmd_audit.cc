@@ -56,8 +56,11 @@ const char* kUsage =
     "  --truth FILE           a simulator's truth.yaml: parameter errors before and after the extension\n"
     "  --false-alarm P        family-wise false-alarm probability over every test (default 0.01)\n"
     "  --holdout-blocks N     the span is cut into 2N blocks; every other block is held out to measure\n"
-    "                         the gain (default 4)\n"
-    "  --max-harmonic N       largest orbit harmonic tested, cycles per revolution (default 2)\n"
+    "                         the gain (default 4); with an orbit context and three orbits or more,\n"
+    "                         whole orbits are held out instead (every other one; first and last fitted)\n"
+    "  --max-harmonic N       largest orbit harmonic tested, cycles per revolution (default 4);\n"
+    "                         every order is a candidate of its own; the not-explained test looks\n"
+    "                         for lines up to twice this order\n"
     "  --lookahead S          out-of-order tolerance of the inputs, seconds (default 2)\n"
     "  --strict               stop at the first malformed input line\n"
     "  --white-rows           the relative and reference families' tests without the noise colour in time\n"
@@ -114,6 +117,7 @@ void printResult(const audit::AuditResult& r) {
   }
   if (!r.gains.empty()) {
     std::printf("\ngain of the extended model (held out: data not used to fit; delta BIC < 0: better):\n");
+    if (!r.baseline.holdout.empty()) std::printf("  held out: %s\n", r.baseline.holdout.c_str());
     std::printf("  %-22s %-10s %11s %11s %13s %13s %11s\n", "family", "unit", "RMS before", "RMS after",
                 "held-out bef.", "held-out aft.", "delta BIC");
     for (const auto& g : r.gains)

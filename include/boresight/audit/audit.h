@@ -51,11 +51,19 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 struct AuditOptions {
   double false_alarm = 0.01;  ///< family-wise false-alarm probability over the whole catalogue
   int max_bins = 16384;       ///< time bins kept; the bin length doubles when the span needs more
-  /// Held-out data: the span is cut into 2 * holdout_blocks blocks; odd blocks are not used to fit and
-  /// measure the gain.
+  /// Held-out data, not used to fit, to measure the gain. With an orbit context and at least three
+  /// orbits: whole orbits, alternately fitted and held out, the first and the last orbit fitted, the
+  /// remainder of the span held out (on whole orbits the orbit harmonics stay orthogonal on the fitting
+  /// rows; alternate shorter blocks mix a line at n cycles/rev into others, e.g. blocks of 900 s turn
+  /// 6 cycles/rev into 3). Otherwise the span is cut into 2 * holdout_blocks blocks and the odd ones are
+  /// held out, except the last (both ends fitted).
   int holdout_blocks = 4;
-  /// Largest thermal harmonic tested (cycles per revolution); needs an orbit context.
-  int max_harmonic = 2;
+  /// Largest thermal harmonic tested (cycles per revolution); needs an orbit context. Every order
+  /// 1..max_harmonic of every head is a candidate of its own in the family-wise selection, so the order
+  /// named is the one the data supports at the family-wise rate; the "not explained" test looks for
+  /// lines up to twice this order (at least 4), so a line beyond the catalogue is reported, not spread
+  /// over the candidates.
+  int max_harmonic = 4;
   /// Outlier threshold on a sample's whitened pair residual (chi-square, 3 dof) is set from the
   /// false-alarm rate and the number of samples; this is the smallest allowed (sigma units).
   double outlier_min_sigma = 6.0;
@@ -155,6 +163,7 @@ struct Baseline {
   std::vector<std::string> families;  ///< families with data
   std::vector<std::string> missing;   ///< families without (and why), e.g. "angular_acceleration: span 16 s < CRN 70.7 s"
   std::map<std::string, double> values;  ///< model parameters used (sigma_cross_arcsec, ...)
+  std::string holdout;  ///< which data were held out (whole orbits, or blocks of the span), in words
 };
 
 struct AuditResult {
