@@ -1233,11 +1233,16 @@ NoiseLevels noiseLevels(const Collector::Impl& c, const std::array<PairNoiseSum,
 void Analyser::estimateNoise(std::vector<EffectTest>& out) {
   const int H = c.n_heads;
   if (H < 2) return;
+  // the fitting bins only: the levels are part of the extended model, whose gain is measured on the
+  // held-out bins
+  std::vector<int> fit_bins;
+  for (std::size_t i = 0; i < c.bins.size(); ++i)
+    if (!(i < bv.size() && bv[i].held)) fit_bins.push_back(static_cast<int>(i));
   std::array<PairNoiseSum, kMaxPairs> tot{};
-  for (const auto& b : c.bins)
+  for (int i : fit_bins)
     for (int p = 0; p < kMaxPairs; ++p) {
-      tot[p].n += b.noise[p].n;
-      tot[p].sdd += b.noise[p].sdd;
+      tot[p].n += c.bins[static_cast<std::size_t>(i)].noise[p].n;
+      tot[p].sdd += c.bins[static_cast<std::size_t>(i)].noise[p].sdd;
     }
   const NoiseLevels L = noiseLevels(c, tot);
   if (!L.ok) {
@@ -1250,16 +1255,17 @@ void Analyser::estimateNoise(std::vector<EffectTest>& out) {
   // heads, and on clean simulated spans its about-boresight z scattered with sd 1.25-1.48 instead of 1
   // (head 3, blinded by the Sun a third of the time, worst; every clean false alarm was that test). The
   // jackknife also takes the noise's colour and tails as they are.
-  const int nbins = static_cast<int>(c.bins.size());
+  const int nbins = static_cast<int>(fit_bins.size());
   const int K = std::min(32, nbins);
   std::array<std::vector<double>, kMaxHeads> jk_c, jk_a;
   if (K >= 8) {
     std::vector<std::array<PairNoiseSum, kMaxPairs>> blk(static_cast<std::size_t>(K));
     for (int i = 0; i < nbins; ++i) {
       auto& bk = blk[static_cast<std::size_t>(static_cast<long>(i) * K / nbins)];
+      const Bin& b = c.bins[static_cast<std::size_t>(fit_bins[static_cast<std::size_t>(i)])];
       for (int p = 0; p < kMaxPairs; ++p) {
-        bk[p].n += c.bins[static_cast<std::size_t>(i)].noise[p].n;
-        bk[p].sdd += c.bins[static_cast<std::size_t>(i)].noise[p].sdd;
+        bk[p].n += b.noise[p].n;
+        bk[p].sdd += b.noise[p].sdd;
       }
     }
     for (int k = 0; k < K; ++k) {
@@ -1591,10 +1597,45 @@ Gain familyGain(const LinFam& f, const Fit& base, const Fit& fin) {
   g.rms_after = rms(rp, false);
   g.heldout_rms_before = rms(f.yp, true);
   g.heldout_rms_after = rms(rp, true);
-  g.whiteness_before = lag1(f, f.yw, false);
-  g.whiteness_after = lag1(f, rw, false);
-  const double n = std::max(2.0, fin.n_eff);
-  g.delta_bic = n * std::log(fin.rss / std::max(base.rss, 1e-300)) + fin.rank * std::log(n);
+  g.whiteness_before = lag1(f, f.yw, true);
+  g.whiteness_after = lag1(f, rw, true);
+  // held-out log-likelihood, conditional on the fitting rows: per component a noise filter runs through
+  // every row in time, and the held-out rows' terms are summed
+  const int nc = static_cast<int>(f.comp_label.size());
+  auto m2ll = [&](const VectorXd& r, bool extended) {
+    std::vector<model::KalmanWhitener> kw;
+    kw.reserve(static_cast<std::size_t>(nc));
+    for (int c = 0; c < nc; ++c) {
+      const bool fitted = extended && f.time_colour && static_cast<std::size_t>(c) < f.comp_noise.size();
+      kw.emplace_back(fitted ? f.comp_noise[static_cast<std::size_t>(c)].model : model::NoiseModel::white(1.0));
+    }
+    double sum = 0, n = 0;
+    for (int i = 0; i < r.size(); ++i) {
+      auto& w = kw[static_cast<std::size_t>(f.comp[static_cast<std::size_t>(i)])];
+      const double before = w.minusTwoLogLikelihood();
+      w.whiten(f.t[static_cast<std::size_t>(i)], r[i]);
+      if (f.held[static_cast<std::size_t>(i)]) sum += w.minusTwoLogLikelihood() - before, n += 1;
+    }
+    g.heldout_rows = n;
+    return sum;
+  };
+  if (f.hac) {
+    // rows of unknown scale (the angular-acceleration family): the held-out whitened sums of squares under
+    // the fitting rows' residual variance
+    const double s2 = std::max(fin.rss / std::max(1.0, f.n_fit - static_cast<double>(fin.rank)), 1e-300);
+    double rb = 0, ra = 0, n = 0;
+    for (int i = 0; i < rw.size(); ++i)
+      if (f.held[static_cast<std::size_t>(i)]) rb += f.yw[i] * f.yw[i], ra += rw[i] * rw[i], n += 1;
+    g.heldout_rows = n;
+    g.heldout_loglik_gain = 0.5 * (rb - ra) / s2;
+  } else {
+    g.heldout_loglik_gain = 0.5 * (m2ll(f.yw, false) - m2ll(rw, true));
+  }
+  int k = fin.rank;
+  if (f.time_colour)
+    for (const auto& cn : f.comp_noise) k += cn.model.empty() ? 0 : (cn.coloured ? 3 : 1);
+  g.delta_bic = g.heldout_rows > 1 ? -2 * g.heldout_loglik_gain + k * std::log(g.heldout_rows) : kNaN;
+  (void)base;
   return g;
 }
 
@@ -2209,14 +2250,17 @@ AuditResult Analyser::run() {
             if (nll) *nll += (2.0 / 3.0) * 0.5 * (ns.n * std::log(M.determinant()) + tr);
           }
       }
-      if (held == false && nll == &nll_cfg) n_all += n;
+      if (held && nll == &nll_cfg) n_all += n;
       return n > 0 ? std::sqrt(sum / n) : kNaN;
     };
-    g.rms_before = chi(false, c.cov_model_B, &nll_cfg);
-    g.rms_after = chi(false, cov_ext, &nll_ext);
-    g.heldout_rms_before = chi(true, c.cov_model_B, nullptr);
-    g.heldout_rms_after = chi(true, cov_ext, nullptr);
-    g.delta_bic = 2 * (nll_ext - nll_cfg) + k_named * std::log(std::max(2.0, (2.0 / 3.0) * n_all));
+    g.rms_before = chi(false, c.cov_model_B, nullptr);
+    g.rms_after = chi(false, cov_ext, nullptr);
+    g.heldout_rms_before = chi(true, c.cov_model_B, &nll_cfg);
+    g.heldout_rms_after = chi(true, cov_ext, &nll_ext);
+    // on the held-out rows (the levels were estimated on the fitting rows)
+    g.heldout_rows = (2.0 / 3.0) * n_all;
+    g.heldout_loglik_gain = nll_cfg - nll_ext;
+    g.delta_bic = 2 * (nll_ext - nll_cfg) + k_named * std::log(std::max(2.0, g.heldout_rows));
     R.gains.push_back(g);
   }
   // the headline gain: the family whose held-out RMS dropped the most (relative to before)

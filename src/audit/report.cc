@@ -49,6 +49,8 @@ Json gainJson(const Gain& g) {
               {"heldout_rms_after", num(g.heldout_rms_after)},
               {"whiteness_before", num(g.whiteness_before)},
               {"whiteness_after", num(g.whiteness_after)},
+              {"heldout_loglik_gain", num(g.heldout_loglik_gain)},
+              {"heldout_rows", num(g.heldout_rows)},
               {"delta_bic", num(g.delta_bic)}};
 }
 
@@ -376,16 +378,20 @@ std::string reportText(const AuditResult& r, const ReportContext* ctx, const std
   }
   if (r.gains.empty()) o << "No residual family to compare.\n\n";
   else {
-    o << "RMS on the fitting data and on the held-out data (not used to fit), lag-1 autocorrelation (whiteness), "
-         "and the change of the information criterion on the held-out data (negative: the extended model is "
-         "better).\n\n";
+    o << "RMS on the fitting data and on the held-out data (not used to fit), lag-1 autocorrelation of the "
+         "held-out residuals (whiteness), the held-out log-likelihood gain (nats, conditional on the fitting "
+         "data; the extended model's noise models count here) and the change of the information criterion on "
+         "the held-out data (negative: the extended model is better).";
+    if (!r.baseline.holdout.empty()) o << " Held out: " << r.baseline.holdout << ".";
+    o << "\n\n";
     o << "| family | unit | RMS before | RMS after | held-out RMS before | held-out RMS after | whiteness before | "
-         "whiteness after | delta BIC |\n|---|---|---|---|---|---|---|---|---|\n";
+         "whiteness after | held-out log-likelihood gain | delta BIC |\n|---|---|---|---|---|---|---|---|---|---|\n";
     for (const auto& g : r.gains)
       o << "| " << cell(g.family) << (g.family == r.gain.family ? " (largest gain)" : "") << " | " << cell(g.unit)
         << " | " << fmt(g.rms_before) << " | " << fmt(g.rms_after) << " | " << fmt(g.heldout_rms_before) << " | "
         << fmt(g.heldout_rms_after) << " | " << fmt(g.whiteness_before, "%.2f") << " | "
-        << fmt(g.whiteness_after, "%.2f") << " | " << fmt(g.delta_bic, "%.4g") << " |\n";
+        << fmt(g.whiteness_after, "%.2f") << " | " << fmt(g.heldout_loglik_gain, "%.4g") << " | "
+        << fmt(g.delta_bic, "%.4g") << " |\n";
     o << "\n";
   }
 

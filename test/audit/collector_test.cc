@@ -95,18 +95,20 @@ TEST(AuditCollector, BinDoublingLeavesTheAnalysisUnchangedAndSeamsAreCounted) {
     EXPECT_EQ(named(res[run], "outliers", "1"), nullptr);
     EXPECT_EQ(named(res[run], "cross_noise", "1"), nullptr);
   }
-  // The noise sums merge exactly (to rounding), so the noise levels agree; the misalignment agrees within
-  // its sigma (0.1"): the held-out blocks follow bin boundaries, so the fitting epochs differ slightly.
+  // The held-out blocks follow bin boundaries, so the fitting epochs differ slightly between the runs:
+  // the misalignment agrees within its sigma (0.1"), and the noise levels (estimated on the fitting bins:
+  // the sums merge exactly, but a 512 s bin moves whole into or out of a held-out block) within theirs.
   const auto* a = named(res[0], "relative_misalignment", "2");
   const auto* b = named(res[1], "relative_misalignment", "2");
   ASSERT_TRUE(a && b);
   for (int q = 0; q < 3; ++q) EXPECT_NEAR(a->params[static_cast<std::size_t>(q)].value, b->params[static_cast<std::size_t>(q)].value, 0.3);
-  double lvl[2] = {0, 0};
+  double lvl[2] = {0, 0}, sig[2] = {0, 0};
   for (int run = 0; run < 2; ++run)
     for (const auto& e : res[run].effects)
-      if (e.name == "cross_noise" && e.sensor == "2") lvl[run] = e.params[0].value;
+      if (e.name == "cross_noise" && e.sensor == "2") lvl[run] = e.params[0].value, sig[run] = e.params[0].sigma;
   EXPECT_GT(lvl[0], 0);
-  EXPECT_NEAR(lvl[0], lvl[1], 1e-9 * lvl[0]);
+  EXPECT_GT(sig[0], 0);
+  EXPECT_NEAR(lvl[0], lvl[1], 2 * sig[0]) << "sigma " << sig[0];
 }
 
 /// Accelerometer samples far outside the star data (files of another day) are counted, said, and kept out

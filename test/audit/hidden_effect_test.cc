@@ -308,6 +308,10 @@ TEST(HiddenEffect, AGaussMarkovHeadErrorIsNamedAsColouredNoiseNotAsSteps) {
       EXPECT_EQ(cn->params[1].key, "tau_s");
       EXPECT_TRUE(cn->params[0].value > 0 && cn->params[1].value > 0) << cn->note;
     }
+    // the noise model's gain: held-out log-likelihood, conditional on the fitting data
+    const audit::Gain* g = audittest::gainOf(a.result, "relative");
+    ASSERT_NE(g, nullptr);
+    EXPECT_TRUE(audittest::positiveGain(*g)) << "held-out log-likelihood gain " << g->heldout_loglik_gain;
     std::string list;
     with_colour += audittest::deterministicCauses(a.result, &list);
     o.audit.time_colour = false;

@@ -265,16 +265,13 @@ inline const audit::Gain* gainOf(const audit::AuditResult& r, const std::string&
     if (g.family == family) return &g;
   return nullptr;
 }
-/// The extension helps on held-out data: smaller held-out RMS or a negative BIC change. The noise
-/// family's "RMS" is normalised (chi-square per degree of freedom of the pair first differences
-/// under the model's noise levels, see its unit): a right model gives 1, so there the gain is the
-/// held-out value moving towards 1 (a quieter head than configured gives less than 1 before).
+/// The extension helps on held-out data: its held-out log-likelihood (every parameter and noise model
+/// fitted on the fitting data, the held-out terms conditional on them) is larger than the baseline's.
+/// An RMS would not do: a noise cause cannot change it, and on fitting rows a named effect nearly
+/// always lowers it.
 inline bool positiveGain(const audit::Gain& g) {
-  const bool finite = std::isfinite(g.heldout_rms_after) && std::isfinite(g.heldout_rms_before);
-  const bool rms_better = g.family == "noise"
-                              ? finite && std::abs(g.heldout_rms_after - 1) < std::abs(g.heldout_rms_before - 1)
-                              : finite && g.heldout_rms_after < g.heldout_rms_before;
-  return rms_better || (std::isfinite(g.delta_bic) && g.delta_bic < 0);
+  // the held-out log-likelihood, conditional on the fitting data (every family has it)
+  return std::isfinite(g.heldout_loglik_gain) && g.heldout_loglik_gain > 0;
 }
 
 /// "name[sensor]" list of the named causes, for messages.

@@ -118,13 +118,14 @@ void printResult(const audit::AuditResult& r) {
   if (!r.gains.empty()) {
     std::printf("\ngain of the extended model (held out: data not used to fit; delta BIC < 0: better):\n");
     if (!r.baseline.holdout.empty()) std::printf("  held out: %s\n", r.baseline.holdout.c_str());
-    std::printf("  %-22s %-10s %11s %11s %13s %13s %11s\n", "family", "unit", "RMS before", "RMS after",
-                "held-out bef.", "held-out aft.", "delta BIC");
+    std::printf("  %-22s %-10s %11s %11s %13s %13s %12s %11s\n", "family", "unit", "RMS before", "RMS after",
+                "held-out bef.", "held-out aft.", "held-out dLL", "delta BIC");
     for (const auto& g : r.gains)
-      std::printf("  %-22s %-10s %11s %11s %13s %13s %11s%s\n", g.family.c_str(),
+      std::printf("  %-22s %-10s %11s %11s %13s %13s %12s %11s%s\n", g.family.c_str(),
                   g.unit.substr(0, g.unit.find(" (")).c_str(),  // the explanation is in report.md
                   fmt(g.rms_before).c_str(), fmt(g.rms_after).c_str(), fmt(g.heldout_rms_before).c_str(),
-                  fmt(g.heldout_rms_after).c_str(), fmt(g.delta_bic, "%.4g").c_str(),
+                  fmt(g.heldout_rms_after).c_str(), fmt(g.heldout_loglik_gain, "%.4g").c_str(),
+                  fmt(g.delta_bic, "%.4g").c_str(),
                   g.family == r.gain.family ? "  <- largest gain" : "");
   }
   if (!r.truth.empty()) {

@@ -123,8 +123,17 @@ struct Gain {
   std::string unit;
   double rms_before = kNaN, rms_after = kNaN;  ///< on the fitting data
   double heldout_rms_before = kNaN, heldout_rms_after = kNaN;
-  double whiteness_before = kNaN, whiteness_after = kNaN;  ///< lag-1 autocorrelation of the residuals
-  double delta_bic = kNaN;  ///< BIC(extended) - BIC(baseline) on the held-out data; negative: better
+  /// lag-1 autocorrelation of the residuals (linear families: of the held-out rows)
+  double whiteness_before = kNaN, whiteness_after = kNaN;
+  /// Linear families: log-likelihood of the held-out rows under the extended model (named effects and the
+  /// fitted noise models, every parameter fitted on the fitting rows) minus under the baseline (no effect,
+  /// the rows' white unit noise), each conditional on the fitting rows (the noise filter runs through
+  /// them); nats, positive: better. A noise cause's gain shows here only (it cannot change an RMS).
+  double heldout_loglik_gain = kNaN;
+  double heldout_rows = 0;
+  /// BIC(extended) - BIC(baseline) on the held-out data: -2 heldout_loglik_gain + k ln(heldout_rows), k
+  /// the extended model's parameters (effects and noise); negative: better
+  double delta_bic = kNaN;
 };
 
 /// A residual series for the report (bin means), one per family component.
