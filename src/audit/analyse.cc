@@ -1420,13 +1420,14 @@ bool Analyser::blindAt(int k, double t) const {
   const Vec3 b = bv[j].q * (c.C_B_S[k] * c.cfg.heads.head[k].boresight_Si.normalized());
   const double tg = orbit.t0_gps + t;
   const double m = opt.blinding_margin_deg * kRadPerDeg;
+  const auto& hc = c.cfg.heads.head[static_cast<std::size_t>(k)];
   const Vec3 sun = sim::sunPosition(tg) - r;
-  if (std::acos(std::clamp(b.dot(sun.normalized()), -1.0, 1.0)) < opt.sun_exclusion_deg * kRadPerDeg + m) return true;
+  if (std::acos(std::clamp(b.dot(sun.normalized()), -1.0, 1.0)) < hc.sun_exclusion_rad + m) return true;
   const double rn = r.norm();
   const double limb = std::asin(std::min(1.0, sim::kEarthRadius_m / rn));
-  if (std::acos(std::clamp(b.dot(-r / rn), -1.0, 1.0)) < limb + opt.earth_exclusion_deg * kRadPerDeg + m) return true;
+  if (std::acos(std::clamp(b.dot(-r / rn), -1.0, 1.0)) < limb + hc.earth_exclusion_rad + m) return true;
   const Vec3 moon = sim::moonPosition(tg) - r;
-  return std::acos(std::clamp(b.dot(moon.normalized()), -1.0, 1.0)) < opt.moon_exclusion_deg * kRadPerDeg + m;
+  return std::acos(std::clamp(b.dot(moon.normalized()), -1.0, 1.0)) < hc.moon_exclusion_rad + m;
 }
 
 void Analyser::dataTests(std::vector<EffectTest>& out) {

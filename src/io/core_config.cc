@@ -54,6 +54,25 @@ Vec3 vec3(const YAML::Node& n, const std::string& key, const Vec3& def) {
   return v;
 }
 
+/// Blinding cones {sun, earth, moon} in degrees (each optional over `def`, radians) -> radians.
+std::array<double, 3> blindingCones(const YAML::Node& n, const std::string& key, std::array<double, 3> def) {
+  if (!n.IsMap()) fail(key, "expected a mapping {sun: deg, earth: deg, moon: deg}", n);
+  checkKeys(n, key, {"sun", "earth", "moon"});
+  const char* names[3] = {"sun", "earth", "moon"};
+  const double lo[3] = {0, -90, 0}, hi[3] = {180, 90, 180};
+  for (int i = 0; i < 3; ++i) {
+    const YAML::Node v = n[names[i]];
+    if (!v) continue;
+    const double d = num(v, key + "." + names[i], 0, true);
+    if (!(d >= lo[i] && d <= hi[i]))
+      fail(key + "." + names[i], "must be within " + std::to_string(static_cast<int>(lo[i])) + ".." +
+                                     std::to_string(static_cast<int>(hi[i])) + " deg",
+           v);
+    def[static_cast<std::size_t>(i)] = d * kRadPerDeg;
+  }
+  return def;
+}
+
 void crn(const YAML::Node& n, const std::string& key, core::CrnConfig& c) {
   if (!n) return;
   if (!n.IsMap()) fail(key, "expected a mapping", n);
@@ -123,7 +142,7 @@ void readPlatform(const YAML::Node& root, const std::string& path, bool overlay,
   if (heads) {
     checkKeys(heads, "heads", {"mounting", "unit_norm_tolerance", "list", "fusion_alignment",
                                "relative_time_constant_s", "relative_min_epochs", "alignment_update_epochs",
-                               "mounting_uncertainty_arcsec"});
+                               "mounting_uncertainty_arcsec", "blinding_deg"});
     if (heads["mounting_uncertainty_arcsec"])
       out.mounting_uncertainty_arcsec = positive(heads["mounting_uncertainty_arcsec"], "heads.mounting_uncertainty_arcsec", 0.0);
     std::string mounting = out.mounting_from_qsa1b ? "qsa1b" : "explicit";
@@ -148,6 +167,12 @@ void readPlatform(const YAML::Node& root, const std::string& path, bool overlay,
     if (p.alignment_update_epochs < 1)
       fail("heads.alignment_update_epochs", "must be >= 1", heads["alignment_update_epochs"]);
   }
+  // blinding cones: heads.blinding_deg for every head, a head's own blinding_deg over it
+  std::array<double, 3> cones = {p.heads.head[0].sun_exclusion_rad, p.heads.head[0].earth_exclusion_rad,
+                                 p.heads.head[0].moon_exclusion_rad};
+  if (!overlay) cones = {core::HeadConfig{}.sun_exclusion_rad, core::HeadConfig{}.earth_exclusion_rad, core::HeadConfig{}.moon_exclusion_rad};
+  const bool cones_given = heads && heads["blinding_deg"];
+  if (cones_given) cones = blindingCones(heads["blinding_deg"], "heads.blinding_deg", cones);
   const bool list_given = heads && heads["list"];
   const YAML::Node list = list_given ? heads["list"] : root["heads"];
   if (list_given || !overlay) {  // a list given replaces the base's
@@ -165,9 +190,13 @@ void readPlatform(const YAML::Node& root, const std::string& path, bool overlay,
                std::string("the head noise levels moved to the noise section: ") + moved +
                    " (a noise model per axis, e.g. [{kind: white, sigma_arcsec: 6.0}]; per head: noise.heads[{id: N, ...}])",
                kv.first);
-      checkKeys(h, k, {"id", "boresight", "q_Si_B"});
+      checkKeys(h, k, {"id", "boresight", "q_Si_B", "blinding_deg"});
       auto& hc = p.heads.head[i];
       hc = core::HeadConfig{};
+      const auto own = h["blinding_deg"] ? blindingCones(h["blinding_deg"], k + ".blinding_deg", cones) : cones;
+      hc.sun_exclusion_rad = own[0];
+      hc.earth_exclusion_rad = own[1];
+      hc.moon_exclusion_rad = own[2];
       out.mounting_source[i].clear();
       hc.id = integer(h["id"], k + ".id", 0);
       if (hc.id <= 0) fail(k + ".id", "missing or not > 0", h["id"] ? h["id"] : h);
@@ -190,6 +219,12 @@ void readPlatform(const YAML::Node& root, const std::string& path, bool overlay,
       }
     }
   }
+  if (cones_given && !list_given)  // an overlay's cones for the base's heads
+    for (int s = 0; s < p.heads.n_heads; ++s) {
+      p.heads.head[static_cast<std::size_t>(s)].sun_exclusion_rad = cones[0];
+      p.heads.head[static_cast<std::size_t>(s)].earth_exclusion_rad = cones[1];
+      p.heads.head[static_cast<std::size_t>(s)].moon_exclusion_rad = cones[2];
+    }
   if (!out.mounting_from_qsa1b)
     for (int s = 0; s < p.heads.n_heads; ++s)
       if (out.mounting_source[static_cast<std::size_t>(s)].empty())

@@ -252,9 +252,14 @@ TEST(SimulatedFeed, TheBaselineIsTheNominalModel) {
   // heads are the scenario's all the same
   core::PipelineConfig pf;
   ASSERT_TRUE(audit::pipelineConfigFor(sc, audittest::platformBase(), pf, &err)) << err;
-  for (int k = 0; k < 3; ++k)
-    EXPECT_TRUE(pf.heads.head[static_cast<std::size_t>(k)].q_Si_B.coeffs() ==
-                cfg.heads.head[static_cast<std::size_t>(k)].q_Si_B.coeffs());
+  for (int k = 0; k < 3; ++k) {
+    const auto& h = pf.heads.head[static_cast<std::size_t>(k)];
+    EXPECT_TRUE(h.q_Si_B.coeffs() == cfg.heads.head[static_cast<std::size_t>(k)].q_Si_B.coeffs());
+    // the blinding cones the audit explains dropouts by are the scenario's (those that blinded the heads)
+    EXPECT_EQ(h.sun_exclusion_rad, sc.heads[static_cast<std::size_t>(k)].sun_exclusion_rad);
+    EXPECT_EQ(h.earth_exclusion_rad, sc.heads[static_cast<std::size_t>(k)].earth_exclusion_rad);
+    EXPECT_EQ(h.moon_exclusion_rad, sc.heads[static_cast<std::size_t>(k)].moon_exclusion_rad);
+  }
   EXPECT_EQ(pf.crn_attitude.length_s, audittest::platformBase().crn_attitude.length_s);
   EXPECT_EQ(pf.heads.relative_time_constant_s, audittest::platformBase().heads.relative_time_constant_s);
 }

@@ -285,6 +285,36 @@ TEST(PlatformConfig, BadValuesNameLineAndReason) {
   EXPECT_NE(err.find("heads.mounting_uncertainty_arcsec"), std::string::npos) << err;
 }
 
+TEST(PlatformConfig, BlindingConesForEveryHeadAndPerHead) {
+  const std::string base = slurp(kConfigDir + "/gracefo.yaml");
+  io::PlatformConfig pc;
+  std::string err;
+  ASSERT_TRUE(io::loadPlatformConfig(kConfigDir + "/gracefo.yaml", pc, &err)) << err;
+  for (int s = 0; s < 3; ++s) {
+    const auto& h = pc.pipeline.heads.head[static_cast<std::size_t>(s)];
+    EXPECT_NEAR(h.sun_exclusion_rad / kRadPerDeg, 35.0, 1e-12);
+    EXPECT_NEAR(h.earth_exclusion_rad / kRadPerDeg, 15.0, 1e-12);
+    EXPECT_NEAR(h.moon_exclusion_rad / kRadPerDeg, 10.0, 1e-12);
+  }
+  // a head's own cones over the common ones (the keys it leaves out keep the common values)
+  const std::string own = replaced(base, "    - id: 2\n", "    - id: 2\n      blinding_deg: {sun: 50}\n");
+  ASSERT_NE(own, base);
+  ASSERT_TRUE(io::loadPlatformConfig(writeTemp("own_cones.yaml", own), pc, &err)) << err;
+  EXPECT_NEAR(pc.pipeline.heads.head[1].sun_exclusion_rad / kRadPerDeg, 50.0, 1e-12);
+  EXPECT_NEAR(pc.pipeline.heads.head[1].earth_exclusion_rad / kRadPerDeg, 15.0, 1e-12);
+  EXPECT_NEAR(pc.pipeline.heads.head[0].sun_exclusion_rad / kRadPerDeg, 35.0, 1e-12);
+  // out of range and unknown keys: file, line, reason
+  const std::string bad = replaced(base, "blinding_deg: {sun: 35,", "blinding_deg: {sun: 235,");
+  ASSERT_NE(bad, base);
+  EXPECT_FALSE(io::loadPlatformConfig(writeTemp("bad_cones.yaml", bad), pc, &err));
+  EXPECT_NE(err.find("heads.blinding_deg.sun"), std::string::npos) << err;
+  EXPECT_NE(err.find(":" + std::to_string(lineOfText(bad, "blinding_deg: {sun: 235")) + ":"), std::string::npos) << err;
+  EXPECT_NE(err.find("0..180"), std::string::npos) << err;
+  const std::string typo = replaced(base, "blinding_deg: {sun: 35,", "blinding_deg: {sunn: 35,");
+  EXPECT_FALSE(io::loadPlatformConfig(writeTemp("typo_cones.yaml", typo), pc, &err));
+  EXPECT_NE(err.find("sunn"), std::string::npos) << err;
+}
+
 TEST(PlatformConfig, ThermalSectionReachesThePipeline) {
   const std::string base = slurp(kConfigDir + "/gracefo.yaml");
   const std::string changed = replaced(replaced(base, "wahba_correction: filtered_three_axis", "wahba_correction: iba_one_axis"),

@@ -67,10 +67,10 @@ struct AuditOptions {
   /// Outlier threshold on a sample's whitened pair residual (chi-square, 3 dof) is set from the
   /// false-alarm rate and the number of samples; this is the smallest allowed (sigma units).
   double outlier_min_sigma = 6.0;
-  /// The heads' blinding cones (the baseline predicts these dropouts from the orbit and the attitude): a
-  /// head is blind when the Sun, the Earth's limb or the Moon is within this angle of its boresight. A
-  /// dropout run is explained by blinding when the geometry comes within the cone plus the margin.
-  double sun_exclusion_deg = 35, earth_exclusion_deg = 15, moon_exclusion_deg = 10, blinding_margin_deg = 2;
+  /// A dropout run is explained by blinding when the Sun, the Earth's limb or the Moon comes within a
+  /// head's blinding cone (the platform file's heads.blinding_deg; the scenario's for simulated data)
+  /// plus this margin, deg.
+  double blinding_margin_deg = 2;
   /// The relative and reference families' noise colour in time: a model per component (white, or white
   /// plus Gauss-Markov) fitted to the data under each test's null hypothesis, and the tests made on
   /// rows whitened in time by it (generalised least squares); non-white noise is a finding of its own

@@ -24,6 +24,12 @@ struct HeadConfig {
   double sigma_cross_rad = 6.0 * kRadPerArcsec;  ///< 1-sigma attitude error about cross-boresight axes, rad
   double sigma_roll_rad = 48.0 * kRadPerArcsec;  ///< 1-sigma attitude error about the boresight, rad
   double sigma_star_rad = 5.0 * kRadPerArcsec;   ///< 1-sigma error of one star direction, rad (Wahba)
+  /// Blinding cones (platform file heads.blinding_deg): the head delivers nothing while the Sun, the
+  /// Earth's limb or the Moon is within this angle of its boresight (the simulator blinds the heads by
+  /// them; the audit explains dropouts by them).
+  double sun_exclusion_rad = 30 * kRadPerDeg;
+  double earth_exclusion_rad = 20 * kRadPerDeg;  ///< beyond the limb; negative: the limb may enter the field
+  double moon_exclusion_rad = 10 * kRadPerDeg;
 };
 
 /// The set of heads of one spacecraft.

@@ -68,9 +68,8 @@ struct HeadConfig : core::HeadConfig {
   double tag_drift_ppm = 0;                ///< linear drift of the tags relative to the truth (receiver clock)
   double fov_half_angle_rad = 10 * kRadPerDeg;
   double limiting_mag = 6.0;               ///< faintest Hp counted as a tracked star
-  double sun_exclusion_rad = 30 * kRadPerDeg;    ///< blind when the Sun is within this of the boresight
-  double earth_exclusion_rad = 20 * kRadPerDeg;  ///< blind when the bright limb is within this of the boresight
-  double moon_exclusion_rad = 10 * kRadPerDeg;   ///< blind when the Moon is within this of the boresight
+  // the blinding cones (sun/earth/moon_exclusion_rad) are the core's: one definition for the simulator,
+  // the platform file and the audit
   char desig = 'P';
   const core::HeadConfig& core() const { return *this; }
 };

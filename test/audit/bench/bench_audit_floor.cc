@@ -50,6 +50,7 @@ const char* kHelp =
     "  --false-alarm P    family-wise false-alarm rate of the audit (default: AuditOptions, 0.01)\n"
     "  --full             run every seed of every magnitude (no early stop)\n"
     "  --white-rows       the audit without the noise colour in time (boresight audit --white-rows), to compare\n"
+    "  --max-harmonic N   largest thermal harmonic the audit tests (default: AuditOptions, 4)\n"
     "  --out PREFIX       write PREFIX.md and PREFIX.csv (default audit_floor)\n"
     "  --scenario FILE    the clean scenario (default config/sim_audit.yaml)\n"
     "  --single ARG       one audit of the effect ARG (NAME:key=value,..., or 'clean') at --first-seed,\n"
@@ -65,6 +66,7 @@ struct Options {
   double false_alarm = -1;
   bool full = false;
   bool white_rows = false;  ///< the audit without the noise colour in time (AuditOptions::time_colour)
+  int max_harmonic = -1;    ///< AuditOptions::max_harmonic (-1: its default)
   std::vector<std::string> effects;
   std::vector<double> ladder;  ///< --ladder: replaces the (one) effect's ladder
   std::string out = "audit_floor", scenario, single;
@@ -124,6 +126,7 @@ RunResult runOne(const sim::Scenario& clean, const std::vector<audittest::Inject
   so.base = audittest::platformBase();
   if (o.false_alarm > 0) so.audit.false_alarm = o.false_alarm;
   so.audit.time_colour = !o.white_rows;
+  if (o.max_harmonic >= 0) so.audit.max_harmonic = o.max_harmonic;
   const audit::SimulatedAudit a = audit::auditSimulated(sc, so);
   if (!a.run.ok) {
     r.error = a.run.error;
@@ -279,6 +282,12 @@ int parseArgs(int argc, char** argv, Options& o) {
       o.full = true;
     } else if (a == "--white-rows") {
       o.white_rows = true;
+    } else if (a == "--max-harmonic") {
+      o.max_harmonic = static_cast<int>(number("an order 0..10"));
+      if (o.max_harmonic < 0 || o.max_harmonic > 10) {
+        std::cerr << "bench_audit_floor: --max-harmonic must be 0..10\n";
+        return 2;
+      }
     } else if (a == "--out") {
       o.out = val("a prefix");
     } else if (a == "--scenario") {
