@@ -671,7 +671,7 @@ void Analyser::views() {
   } else {
     R.baseline.holdout = std::to_string(opt.holdout_blocks - 1) + " of " + std::to_string(nb) + " blocks of " +
                          fmt("%.0f", span_s / nb) + " s held out (alternately; both ends fitted)" +
-                         (T_orb > 0 ? "; fewer than three orbits: blocks mix orbit harmonics into each other" : "");
+                         (T_orb > 0 && span_s >= 0.5 * T_orb ? "; fewer than three orbits: blocks mix orbit harmonics into each other" : "");
   }
   for (auto& v : bv) {
     if (orbits >= 3) {

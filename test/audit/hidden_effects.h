@@ -130,7 +130,8 @@ inline const std::vector<Testable>& testables() {
        [](double m, Draws& d, double) { return inj("relative_misalignment", headId(d), crossVec(m, d), m); }},
       {"anisotropic_noise", "1", "relative change of one head's noise about the boresight (48\"), random sign",
        {0.5, 0.25, 0.12, 0.06}, 0.06,
-       "[d22942b] detection and naming floor 0.06 (100/100, 0.03: 35/41; 54b0370: 0.06 too, 97/100)",
+       "[d22942b] detection and naming floor 0.06 (100/100, 0.03: 35/41; 54b0370: 0.06 too, 97/100; f48d1df, "
+       "levels on the fitting data only: 0.06 83/100, 0.12 100/100)",
        [](double m, Draws& d, double) {
          const std::string h = headId(d);
          return inj("anisotropic_noise", h, "about_arcsec=" + num(48.0 * (1 + d.sign() * m)), m);
