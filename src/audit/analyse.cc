@@ -1447,8 +1447,19 @@ void Analyser::dataTests(std::vector<EffectTest>& out) {
       const auto cnt = static_cast<double>(c.outliers[k]);
       e.statistic = cnt;
       e.p_value = stats::poissonSfGe(cnt, lambda);
+      // the gate in the data's noise: the pairs' measured scale against the configured one
+      std::string scale;
+      for (int o = 0; o < H; ++o) {
+        if (o == k) continue;
+        const int p = pairOf(std::min(k, o), std::max(k, o), H);
+        if (c.chi2_count[static_cast<std::size_t>(p)] == 0) continue;
+        scale += (scale.empty() ? "" : ", ") + std::to_string(c.ids[std::min(k, o)]) + "-" + std::to_string(c.ids[std::max(k, o)]) +
+                 " " + fmt("%.2f", std::sqrt(c.chi2_median[static_cast<std::size_t>(p)] / c.chi2_median0));
+      }
       e.note = "samples whose pair residuals jump above chi2(3) = " + fmt("%.1f", c.outlier_chi2) +
-               " in every pair of the head (expected by chance: " + fmt("%.2g", lambda) + ")";
+               " in the pairs' own noise in every pair of the head (expected by chance: " + fmt("%.2g", lambda) +
+               "; the pairs' second-difference noise over the configured, from their running median: " +
+               (scale.empty() ? std::string("none") : scale) + ")";
       e.params.push_back({"rate", "1/sample", n > 0 ? cnt / n : kNaN, n > 0 ? std::sqrt(std::max(cnt, 1.0)) / n : kNaN, kNaN});
       e.params.push_back({"expected_by_chance", "samples", lambda, kNaN, kNaN});
       out.push_back(e);

@@ -112,6 +112,9 @@ bool Collector::configure(const core::PipelineConfig& cfg, const AuditOptions& o
       const int p = pairOf(i, j, n);
       m.pair_cov_inv[p] = (1.5 * (m.cov_model_B[i] + m.cov_model_B[j])).inverse();
     }
+  m.chi2_median0 = stats::chi2Quantile(0.5, 3);
+  m.chi2_median.fill(m.chi2_median0);
+  m.chi2_count.fill(0);
   const double p_sample = stats::normalSf2(std::max(3.0, opt.outlier_min_sigma));
   m.outlier_chi2 = stats::chi2Quantile(p_sample, 3);
   m.configured = true;
@@ -204,7 +207,10 @@ void Collector::Impl::pushEpoch(const EpochRecord& e) {
           if ((a.mask & pm) != pm || (b.mask & pm) != pm || (c.mask & pm) != pm) continue;
           const int p = pairOf(i, j, n_heads);
           const Vec3 d = b.rho[p] - 0.5 * (a.rho[p] + c.rho[p]);
-          b.chi2[p] = d.dot(pair_cov_inv[p] * d);
+          const double raw = d.dot(pair_cov_inv[p] * d);
+          b.chi2[p] = raw * (chi2_median0 / chi2_median[p]);
+          chi2_median[p] *= raw > chi2_median[p] ? 1.02 : 1.0 / 1.02;
+          ++chi2_count[p];
         }
     }
     // ring[0]'s own chi2 was computed when it was the middle; finalise it once its successor's is known.
