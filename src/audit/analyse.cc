@@ -1452,7 +1452,7 @@ void Analyser::dataTests(std::vector<EffectTest>& out) {
       for (int o = 0; o < H; ++o) {
         if (o == k) continue;
         const int p = pairOf(std::min(k, o), std::max(k, o), H);
-        if (c.chi2_count[static_cast<std::size_t>(p)] == 0) continue;
+        if (c.chi2_count[static_cast<std::size_t>(p)] < static_cast<std::uint64_t>(Collector::Impl::kGateWarmup)) continue;
         scale += (scale.empty() ? "" : ", ") + std::to_string(c.ids[std::min(k, o)]) + "-" + std::to_string(c.ids[std::max(k, o)]) +
                  " " + fmt("%.2f", std::sqrt(c.chi2_median[static_cast<std::size_t>(p)] / c.chi2_median0));
       }
@@ -1590,7 +1590,7 @@ EffectTest toTest(const LinFam& f, int k, const Fit& fit, const TestOut& t) {
   return e;
 }
 
-Gain familyGain(const LinFam& f, const Fit& base, const Fit& fin) {
+Gain familyGain(const LinFam& f, const Fit& fin) {
   Gain g;
   g.family = f.name;
   g.unit = f.unit;
@@ -1647,7 +1647,6 @@ Gain familyGain(const LinFam& f, const Fit& base, const Fit& fin) {
   if (f.time_colour)
     for (const auto& cn : f.comp_noise) k += cn.model.empty() ? 0 : (cn.coloured ? 3 : 1);
   g.delta_bic = g.heldout_rows > 1 ? -2 * g.heldout_loglik_gain + k * std::log(g.heldout_rows) : kNaN;
-  (void)base;
   return g;
 }
 
@@ -1996,7 +1995,7 @@ void Analyser::runFamily(LinFam& f) {
         if (same) m.named = true;
       }
   }
-  R.gains.push_back(familyGain(f, base, fin));
+  R.gains.push_back(familyGain(f, fin));
   spectra(f, fin);
   notExplained(f, fin);
   if (f.time_colour) colourTest(f);

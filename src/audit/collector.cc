@@ -208,6 +208,15 @@ void Collector::Impl::pushEpoch(const EpochRecord& e) {
           const int p = pairOf(i, j, n_heads);
           const Vec3 d = b.rho[p] - 0.5 * (a.rho[p] + c.rho[p]);
           const double raw = d.dot(pair_cov_inv[p] * d);
+          auto& w = chi2_warmup[static_cast<std::size_t>(p)];
+          if (chi2_count[p] < static_cast<std::uint64_t>(kGateWarmup)) {
+            w[static_cast<std::size_t>(chi2_count[p]++)] = raw;  // b.chi2 stays 0: not decided
+            if (chi2_count[p] == static_cast<std::uint64_t>(kGateWarmup)) {
+              std::nth_element(w.begin(), w.begin() + kGateWarmup / 2, w.end());
+              chi2_median[p] = std::max(w[kGateWarmup / 2], 1e-12);
+            }
+            continue;
+          }
           b.chi2[p] = raw * (chi2_median0 / chi2_median[p]);
           chi2_median[p] *= raw > chi2_median[p] ? 1.02 : 1.0 / 1.02;
           ++chi2_count[p];

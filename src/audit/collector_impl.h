@@ -98,14 +98,18 @@ struct Collector::Impl {
   EpochRecord prev_final{};  ///< the last finalised epoch (outlier mask applied)
   bool have_prev_final = false;
   std::array<Mat3, kMaxPairs> pair_cov_inv{};  ///< inverse of the 1.5 x pair covariance for the outlier test
-  /// The outlier gate from the data's noise: per pair a running median of the second differences' chi2
-  /// under the configured covariance (stochastic approximation in the logarithm, steps of 2 %, from the
-  /// median of chi2(3): the configured noise); each chi2 is divided by it over that median, so the gate
-  /// stands at outlier_min_sigma of the noise the data have (real heads 2.5x quieter than configured
-  /// made it about 15 sigma), and an outlier barely moves a median.
+  /// The outlier gate from the data's noise: per pair the median of the second differences' chi2 under
+  /// the configured covariance - exact over the pair's first kGateWarmup, then followed by a stochastic
+  /// approximation in the logarithm (steps of 2 %); each chi2 is divided by it over the median of chi2(3),
+  /// so the gate stands at outlier_min_sigma of the noise the data have (real heads 2.5x quieter than
+  /// configured made it about 15 sigma; 2.5x noisier, 2.4 sigma), and an outlier barely moves a median.
+  /// The warm-up epochs are not decided (as the first and last epochs): starting from the configured
+  /// median instead called clean samples of noisier heads outliers while the estimate climbed.
+  static constexpr int kGateWarmup = 64;
   std::array<double, kMaxPairs> chi2_median{};
   double chi2_median0 = 2.366;  ///< the median of chi2(3), set at configuration
   std::array<std::uint64_t, kMaxPairs> chi2_count{};
+  std::array<std::array<double, kGateWarmup>, kMaxPairs> chi2_warmup{};
   std::array<PairNoiseSum, kMaxPairs> noise_total{};
   double outlier_chi2 = 1e300;
 

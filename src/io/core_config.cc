@@ -54,6 +54,15 @@ Vec3 vec3(const YAML::Node& n, const std::string& key, const Vec3& def) {
   return v;
 }
 
+/// A head's blinding cones {sun, earth, moon}, radians.
+using Cones = std::array<double, 3>;
+Cones conesOf(const core::HeadConfig& h) { return {h.sun_exclusion_rad, h.earth_exclusion_rad, h.moon_exclusion_rad}; }
+void setCones(core::HeadConfig& h, const Cones& c) {
+  h.sun_exclusion_rad = c[0];
+  h.earth_exclusion_rad = c[1];
+  h.moon_exclusion_rad = c[2];
+}
+
 /// Blinding cones {sun, earth, moon} in degrees (each optional over `def`, radians) -> radians.
 std::array<double, 3> blindingCones(const YAML::Node& n, const std::string& key, std::array<double, 3> def) {
   if (!n.IsMap()) fail(key, "expected a mapping {sun: deg, earth: deg, moon: deg}", n);
@@ -168,9 +177,8 @@ void readPlatform(const YAML::Node& root, const std::string& path, bool overlay,
       fail("heads.alignment_update_epochs", "must be >= 1", heads["alignment_update_epochs"]);
   }
   // blinding cones: heads.blinding_deg for every head, a head's own blinding_deg over it
-  std::array<double, 3> cones = {p.heads.head[0].sun_exclusion_rad, p.heads.head[0].earth_exclusion_rad,
-                                 p.heads.head[0].moon_exclusion_rad};
-  if (!overlay) cones = {core::HeadConfig{}.sun_exclusion_rad, core::HeadConfig{}.earth_exclusion_rad, core::HeadConfig{}.moon_exclusion_rad};
+  // (an overlay starts from the base's first head, a platform file from the defaults)
+  Cones cones = conesOf(overlay ? p.heads.head[0] : core::HeadConfig{});
   const bool cones_given = heads && heads["blinding_deg"];
   if (cones_given) cones = blindingCones(heads["blinding_deg"], "heads.blinding_deg", cones);
   const bool list_given = heads && heads["list"];
@@ -193,10 +201,7 @@ void readPlatform(const YAML::Node& root, const std::string& path, bool overlay,
       checkKeys(h, k, {"id", "boresight", "q_Si_B", "blinding_deg"});
       auto& hc = p.heads.head[i];
       hc = core::HeadConfig{};
-      const auto own = h["blinding_deg"] ? blindingCones(h["blinding_deg"], k + ".blinding_deg", cones) : cones;
-      hc.sun_exclusion_rad = own[0];
-      hc.earth_exclusion_rad = own[1];
-      hc.moon_exclusion_rad = own[2];
+      setCones(hc, h["blinding_deg"] ? blindingCones(h["blinding_deg"], k + ".blinding_deg", cones) : cones);
       out.mounting_source[i].clear();
       hc.id = integer(h["id"], k + ".id", 0);
       if (hc.id <= 0) fail(k + ".id", "missing or not > 0", h["id"] ? h["id"] : h);
@@ -220,11 +225,7 @@ void readPlatform(const YAML::Node& root, const std::string& path, bool overlay,
     }
   }
   if (cones_given && !list_given)  // an overlay's cones for the base's heads
-    for (int s = 0; s < p.heads.n_heads; ++s) {
-      p.heads.head[static_cast<std::size_t>(s)].sun_exclusion_rad = cones[0];
-      p.heads.head[static_cast<std::size_t>(s)].earth_exclusion_rad = cones[1];
-      p.heads.head[static_cast<std::size_t>(s)].moon_exclusion_rad = cones[2];
-    }
+    for (int s = 0; s < p.heads.n_heads; ++s) setCones(p.heads.head[static_cast<std::size_t>(s)], cones);
   if (!out.mounting_from_qsa1b)
     for (int s = 0; s < p.heads.n_heads; ++s)
       if (out.mounting_source[static_cast<std::size_t>(s)].empty())

@@ -313,6 +313,13 @@ TEST(PlatformConfig, BlindingConesForEveryHeadAndPerHead) {
   const std::string typo = replaced(base, "blinding_deg: {sun: 35,", "blinding_deg: {sunn: 35,");
   EXPECT_FALSE(io::loadPlatformConfig(writeTemp("typo_cones.yaml", typo), pc, &err));
   EXPECT_NE(err.find("sunn"), std::string::npos) << err;
+  // an overlay without a head list: its cones for every head of the base, the keys it leaves out kept
+  const std::string over = writeTemp("over_cones.yaml", "base: " + kConfigDir + "/gracefo.yaml\nheads:\n  blinding_deg: {moon: 20}\n");
+  ASSERT_TRUE(io::loadPlatformConfig(over, pc, &err)) << err;
+  for (int s = 0; s < 3; ++s) {
+    EXPECT_NEAR(pc.pipeline.heads.head[static_cast<std::size_t>(s)].moon_exclusion_rad / kRadPerDeg, 20.0, 1e-12);
+    EXPECT_NEAR(pc.pipeline.heads.head[static_cast<std::size_t>(s)].sun_exclusion_rad / kRadPerDeg, 35.0, 1e-12);
+  }
 }
 
 TEST(PlatformConfig, ThermalSectionReachesThePipeline) {
