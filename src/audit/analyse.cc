@@ -2,6 +2,7 @@
 // linear model extensions, tests at a family-wise false-alarm rate, forward selection with a backward
 // check, ambiguity groups, the extended model and its gain on held-out blocks.
 #include "collector_impl.h"
+#include "head_colour.h"
 #include "stats.h"
 
 #include <boresight/io/time_format.h>
@@ -177,6 +178,15 @@ struct LinFam {
   /// carries is a finding, not red noise).
   double line_period_s = 0;
   int line_orders = 0;
+  /// Colour of the heads instead (relative family with time_colour): the slow part of every head's
+  /// error in one filter over the pair rows (head_colour.h), so that a head's slow error, which is in
+  /// every pair of that head, is counted once. comp_noise stays empty.
+  bool head_colour = false;
+  std::vector<detail::PairBlock> pair_blocks;  ///< the blocks with their heads and white covariances
+  detail::HeadColourFit hc;                   ///< the last fit (hc.model: the noise the tests use)
+  bool hc_coloured = false;                   ///< the coloured model chosen (BIC)
+  double hc_rows = 0;                         ///< merged rows of the fit
+  double superbin_s = 0;
 };
 
 /// Writes the 2 line_orders regressors of LinFam's lines at time t (cos, sin per order) to out.
@@ -205,9 +215,75 @@ int addCand(LinFam& f, Cand c) {
 /// are gaps to the filter (nothing of them enters the fit); a component with fewer than 64 fitting rows
 /// keeps the white model. Nothing is done when `cols` are those of the last fit (selecting a
 /// misalignment, a drift or a harmonic does not change them).
+/// The head noise model the relative family's tests use: the coloured fit when chosen, else white.
+const detail::HeadColourModel& headNoise(const LinFam& f) { return f.hc_coloured ? f.hc.model : f.hc.white; }
+
+/// LinFam::head_colour: fits the heads' slow noise (head_colour.h) to the fitting rows with the columns
+/// `cols`, a constant per component and the family's lines per component profiled out (the same null
+/// as colourInTime's), keeps it when BIC prefers it to white, and replaces the Gram by that of the
+/// rows whitened jointly across pairs and in time.
+void headColourInTime(LinFam& f, const std::vector<int>& cols) {
+  const int p = f.ncols, nc = static_cast<int>(f.comp_label.size());
+  const int q = static_cast<int>(cols.size()), nl = 2 * f.line_orders, qt = q + nc * (1 + nl);
+  std::vector<double> lines(static_cast<std::size_t>(nl));
+  const auto fill = [&](const detail::PairBlock& b, MatrixXd& v) {
+    v.setZero();
+    for (int r = 0; r < b.n; ++r) {
+      const int i = b.row0 + r;
+      for (int j = 0; j < q; ++j) v(r, j) = f.Xp(i, cols[static_cast<std::size_t>(j)]);
+      const int c0 = q + f.comp[static_cast<std::size_t>(i)] * (1 + nl);
+      v(r, c0) = 1e-5;  // a constant per component (about the rows' scale, rad; the basis is normalised)
+      if (nl > 0) lineRegressors(f, f.t[static_cast<std::size_t>(i)], lines.data());
+      for (int j = 0; j < nl; ++j) v(r, c0 + 1 + j) = 1e-5 * lines[static_cast<std::size_t>(j)];
+      v(r, qt) = f.yp[i];
+    }
+  };
+  const detail::HeadColourData d = detail::mergeForFit(f.pair_blocks, qt, fill, f.superbin_s);
+  f.hc_rows = d.rows;
+  detail::HeadColourModel start = f.hc.model.coloured() ? f.hc.model : f.hc.white;
+  start.heads = f.hc.model.heads;
+  start.C_B_S = f.hc.model.C_B_S;
+  if (!f.hc.model.coloured()) start.tau_s = 600;
+  if (d.rows < std::max(64, static_cast<int>(d.B.cols()) + 32)) {
+    f.hc_coloured = false;
+    f.hc.white = start;
+    f.hc.white.sigma_cross.fill(0);
+    f.hc.white.sigma_about.fill(0);
+    f.hc.white.white_factor = 1;
+    f.hc.model = f.hc.white;
+    f.hc.m2ll = f.hc.m2ll_white = 0;
+    f.hc.params = 0;
+  } else {
+    f.hc = detail::fitHeadColour(d, start);
+    f.hc_coloured = f.hc.model.coloured() && f.hc.m2ll_white - f.hc.m2ll > f.hc.params * std::log(static_cast<double>(d.rows));
+  }
+  // the Gram of the rows whitened by the chosen model
+  detail::HeadColourFilter kf(headNoise(f), p + 1);
+  f.G = MatrixXd::Zero(p + 1, p + 1);
+  MatrixXd rows;
+  for (const auto& b : f.pair_blocks) {
+    if (b.held) {
+      kf.skip(b.t);
+      continue;
+    }
+    rows.resize(b.n, p + 1);
+    rows.leftCols(p) = f.Xp.middleRows(b.row0, b.n);
+    rows.col(p) = f.yp.segment(b.row0, b.n);
+    kf.whiten(b, rows);
+    f.G.selfadjointView<Eigen::Lower>().rankUpdate(rows.transpose());
+  }
+  f.G = f.G.selfadjointView<Eigen::Lower>();
+  f.rho = 0;
+  f.infl = 1;
+}
+
 void colourInTime(LinFam& f, const std::vector<int>& cols) {
   if (cols == f.colour_cols) return;
   f.colour_cols = cols;
+  if (f.head_colour) {
+    headColourInTime(f, cols);
+    return;
+  }
   const int n = static_cast<int>(f.t.size()), p = f.ncols, nc = static_cast<int>(f.comp_label.size());
   std::vector<std::vector<int>> rows_of(static_cast<std::size_t>(nc));
   for (int i = 0; i < n; ++i)
@@ -848,6 +924,14 @@ void Analyser::buildRelative() {
       Block blk;
       blk.row0 = row;
       blk.n = nb;
+      detail::PairBlock pb;
+      pb.t = v.t;
+      pb.mask = mu;
+      pb.row0 = row;
+      pb.n = nb;
+      pb.S = S;
+      pb.held = v.held;
+      f.pair_blocks.push_back(std::move(pb));
       const Eigen::LLT<MatrixXd> llt(S);
       blk.W = llt.matrixL().solve(MatrixXd::Identity(nb, nb));
       f.blocks.push_back(blk);
@@ -873,6 +957,10 @@ void Analyser::buildRelative() {
     return;
   }
   f.time_colour = opt.time_colour;
+  f.head_colour = opt.time_colour;
+  f.superbin_s = std::max(static_cast<double>(c.bin_us) * 1e-6, span_s / 400);
+  f.hc.model.heads = H;
+  for (int k = 0; k < H; ++k) f.hc.model.C_B_S[static_cast<std::size_t>(k)] = c.C_B_S[k];
   lineOrders(f);
   finishFamily(f);
   R.baseline.families.push_back("relative");
@@ -1631,7 +1719,26 @@ Gain familyGain(const LinFam& f, const Fit& fin) {
     g.heldout_rows = n;
     return sum;
   };
-  if (f.hac) {
+  // the same through the heads' filter (head_colour): every block in time, the held-out ones' terms
+  auto m2llHeads = [&](const VectorXd& r, const detail::HeadColourModel& m) {
+    detail::HeadColourFilter kf(m, 1);
+    double sum = 0, n = 0;
+    MatrixXd rows;
+    for (const auto& b : f.pair_blocks) {
+      rows = r.segment(b.row0, b.n);
+      const double ld = kf.whiten(b, rows);
+      if (b.held) sum += ld + b.n * 1.8378770664093453 + rows.squaredNorm(), n += b.n;
+    }
+    g.heldout_rows = n;
+    return sum;
+  };
+  if (f.head_colour) {
+    detail::HeadColourModel white = f.hc.white;
+    white.sigma_cross.fill(0);
+    white.sigma_about.fill(0);
+    white.white_factor = 1;  // the configured (or estimated) white noise: the baseline
+    g.heldout_loglik_gain = 0.5 * (m2llHeads(f.yp, white) - m2llHeads(rp, headNoise(f)));
+  } else if (f.hac) {
     // rows of unknown scale (the angular-acceleration family): the held-out whitened sums of squares under
     // the fitting rows' residual variance
     const double s2 = std::max(fin.rss / std::max(1.0, f.n_fit - static_cast<double>(fin.rank)), 1e-300);
@@ -1644,7 +1751,8 @@ Gain familyGain(const LinFam& f, const Fit& fin) {
     g.heldout_loglik_gain = 0.5 * (m2ll(f.yw, false) - m2ll(rw, true));
   }
   int k = fin.rank;
-  if (f.time_colour)
+  if (f.head_colour) k += f.hc_coloured ? f.hc.params + 1 : 1;
+  else if (f.time_colour)
     for (const auto& cn : f.comp_noise) k += cn.model.empty() ? 0 : (cn.coloured ? 3 : 1);
   g.delta_bic = g.heldout_rows > 1 ? -2 * g.heldout_loglik_gain + k * std::log(g.heldout_rows) : kNaN;
   return g;
@@ -1734,28 +1842,69 @@ void Analyser::notExplained(const LinFam& f, const Fit& fin) {
   const int nh = f.line_orders;
   std::vector<double> lines(static_cast<std::size_t>(2 * nh));
   const double alpha = alpha_each;  // one test per component, counted in the family-wise budget (run())
+  VectorXd rphys;  // head_colour: the physical residual, whitened with each component's regressors below
+  if (f.head_colour) {
+    rphys = f.yp;
+    for (std::size_t i = 0; i < fin.cols.size(); ++i) rphys -= f.Xp.col(fin.cols[i]) * fin.beta[static_cast<int>(i)];
+  }
+  const auto regressors = [&](int i, double* out) {
+    const double x = 2 * f.t[static_cast<std::size_t>(i)] / std::max(span_s, 1e-9) - 1;
+    out[0] = 1;
+    out[1] = x;
+    out[2] = 0.5 * (3 * x * x - 1);
+    out[3] = 0.5 * (5 * x * x * x - 3 * x);
+    if (nh > 0) lineRegressors(f, f.t[static_cast<std::size_t>(i)], lines.data());
+    for (int j = 0; j < 2 * nh; ++j) out[4 + j] = lines[static_cast<std::size_t>(j)];
+  };
   for (int comp = 0; comp < nc; ++comp) {
     std::vector<int> idx;
     for (int i = 0; i < rp.size(); ++i)
       if (f.comp[static_cast<std::size_t>(i)] == comp && !f.held[static_cast<std::size_t>(i)]) idx.push_back(i);
-    const int n = static_cast<int>(idx.size());
+    int n = static_cast<int>(idx.size());
     const int p = 3 + 2 * nh;
     if (n < 3 * p + 8) continue;
     MatrixXd X(n, p + 1);
     VectorXd y(n);
-    for (int r = 0; r < n; ++r) {
-      const int i = idx[static_cast<std::size_t>(r)];
-      const double x = 2 * f.t[static_cast<std::size_t>(i)] / std::max(span_s, 1e-9) - 1;
-      X(r, 0) = 1;
-      X(r, 1) = x;
-      X(r, 2) = 0.5 * (3 * x * x - 1);
-      X(r, 3) = 0.5 * (5 * x * x * x - 3 * x);
-      if (nh > 0) lineRegressors(f, f.t[static_cast<std::size_t>(i)], lines.data());
-      for (int j = 0; j < 2 * nh; ++j) X(r, 4 + j) = lines[static_cast<std::size_t>(j)];
-      y[r] = rp[i];
-    }
     double infl = 1;
-    if (f.time_colour && static_cast<std::size_t>(comp) < f.comp_noise.size()) {
+    if (f.head_colour) {
+      // generalised least squares through the heads' filter: this component's regressors (zero on the
+      // other components' rows) and the residual, every fitting row of the family
+      n = f.n_fit;
+      X.resize(n, p + 1);
+      y.resize(n);
+      detail::HeadColourFilter kf(headNoise(f), p + 2);
+      MatrixXd rows;
+      int k = 0;
+      for (const auto& b : f.pair_blocks) {
+        if (b.held) {
+          kf.skip(b.t);
+          continue;
+        }
+        rows = MatrixXd::Zero(b.n, p + 2);
+        for (int r = 0; r < b.n; ++r) {
+          const int i = b.row0 + r;
+          if (f.comp[static_cast<std::size_t>(i)] == comp) {
+            std::vector<double> v(static_cast<std::size_t>(p + 1));
+            regressors(i, v.data());
+            for (int j = 0; j <= p; ++j) rows(r, j) = v[static_cast<std::size_t>(j)];
+          }
+          rows(r, p + 1) = rphys[i];
+        }
+        kf.whiten(b, rows);
+        X.middleRows(k, b.n) = rows.leftCols(p + 1);
+        y.segment(k, b.n) = rows.col(p + 1);
+        k += b.n;
+      }
+    } else {
+      for (int r = 0; r < n; ++r) {
+        const int i = idx[static_cast<std::size_t>(r)];
+        std::vector<double> v(static_cast<std::size_t>(p + 1));
+        regressors(i, v.data());
+        for (int j = 0; j <= p; ++j) X(r, j) = v[static_cast<std::size_t>(j)];
+        y[r] = rp[i];
+      }
+    }
+    if (!f.head_colour && f.time_colour && static_cast<std::size_t>(comp) < f.comp_noise.size()) {
       // generalised least squares: the rows whitened in time by the component's noise model
       model::KalmanWhitener kw(f.comp_noise[static_cast<std::size_t>(comp)].model);
       std::vector<double> in(static_cast<std::size_t>(p + 2)), out(in.size());
@@ -2012,6 +2161,42 @@ void Analyser::colourTest(const LinFam& f) {
   e.name = "coloured_noise";
   e.sensor = "all";
   e.family = f.name;
+  if (f.head_colour) {
+    if (f.hc.params == 0) {
+      e.note = "not testable with these data (too few merged rows beyond the profiled columns)";
+      R.effects.push_back(e);
+      return;
+    }
+    const auto& m = f.hc.model;
+    e.dof = f.hc.params;
+    e.statistic = std::max(0.0, f.hc.m2ll_white - f.hc.m2ll);
+    e.p_value = stats::chi2Sf(e.statistic, e.dof);
+    e.threshold = stats::chi2Quantile(alpha_each, e.dof);
+    e.detected = e.p_value < alpha_each;
+    double top = 0;
+    for (int k = 0; k < m.heads; ++k)
+      top = std::max({top, m.sigma_cross[static_cast<std::size_t>(k)], m.sigma_about[static_cast<std::size_t>(k)]});
+    e.params.push_back({"gm_arcsec", "arcsec", top * kArcsecPerRad, kNaN, kNaN});
+    e.params.push_back({"tau_s", "s", m.tau_s, kNaN, kNaN});
+    for (int k = 0; k < m.heads; ++k) {
+      const std::string id = std::to_string(c.ids[k]);
+      e.params.push_back({"head" + id + "_cross_arcsec", "arcsec", m.sigma_cross[static_cast<std::size_t>(k)] * kArcsecPerRad, kNaN, kNaN});
+      e.params.push_back({"head" + id + "_about_arcsec", "arcsec", m.sigma_about[static_cast<std::size_t>(k)] * kArcsecPerRad, kNaN, kNaN});
+    }
+    e.note = "likelihood ratio of the heads' slow noise (per head a Gauss-Markov error on each sensor axis, cross-boresight and "
+             "about the boresight levels, one correlation time, in one filter over the pair rows) against white, restricted "
+             "likelihood on " + fmt("%.0f", f.hc_rows) + " rows merged into " + fmt("%.0f", f.superbin_s) +
+             " s, with the named causes, every misalignment, drift and harmonic signature and the lines profiled out; fitted: " +
+             m.describe(std::vector<int>(c.ids.begin(), c.ids.begin() + c.n_heads)) + (f.hc_coloured ? "; chosen by BIC: the tests of this family whiten the rows with it"
+                                            : "; not chosen by BIC: the tests use white rows");
+    e.named = e.detected;
+    R.effects.push_back(e);
+    if (e.named) {
+      R.named.push_back(e);
+      R.extended.push_back(e);
+    }
+    return;
+  }
   double lr = 0;
   int dof = 0, best = -1;
   double best_lr = -1;

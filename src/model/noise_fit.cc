@@ -3,6 +3,7 @@
 // the model's spectrum to the data's Welch spectrum; uncertainties from the observed information
 // (a finite-difference Hessian of -2 log L on the fitting scale) or, on long series fitted by the
 // scorer's steps, from the information of the data's own gaps (scoreLikelihood); model choice by BIC.
+#include <boresight/model/minimise.h>
 #include <boresight/model/noise.h>
 
 #include <Eigen/Eigenvalues>
@@ -102,7 +103,6 @@ Eigen::VectorXd project(NoiseStructure s, const Box& box, const Eigen::VectorXd&
 
 // --- minimisers ------------------------------------------------------------------------------
 
-using Objective = std::function<double(const Eigen::VectorXd&)>;
 
 Eigen::VectorXd nelderMead(const Objective& f, const Eigen::VectorXd& x0, double step, int max_eval, double* fbest) {
   const auto n = x0.size();
@@ -160,73 +160,6 @@ Eigen::VectorXd nelderMead(const Objective& f, const Eigen::VectorXd& x0, double
     if (v[i] < v[b]) b = i;
   if (fbest) *fbest = v[b];
   return p[b];
-}
-
-Eigen::VectorXd gradient(const Objective& f, const Eigen::VectorXd& x, double h) {
-  Eigen::VectorXd g(x.size());
-  for (Eigen::Index i = 0; i < x.size(); ++i) {
-    Eigen::VectorXd a = x, b = x;
-    a[i] += h;
-    b[i] -= h;
-    g[i] = (f(a) - f(b)) / (2 * h);
-  }
-  return g;
-}
-
-/// BFGS with a step capped at one unit of the fitting scale and an Armijo backtracking line search.
-Eigen::VectorXd bfgs(const Objective& f, Eigen::VectorXd x, int max_iter, bool* converged, std::string* why) {
-  const auto n = x.size();
-  double fx = f(x);
-  Eigen::VectorXd g = gradient(f, x, 1e-4);
-  Eigen::MatrixXd H = Eigen::MatrixXd::Identity(n, n);
-  *converged = false;
-  for (int it = 0; it < max_iter; ++it) {
-    Eigen::VectorXd d = -H * g;
-    if (g.dot(d) >= 0) {
-      H.setIdentity();
-      d = -g;
-    }
-    const double dmax = d.cwiseAbs().maxCoeff();
-    if (dmax > 1.0) d /= dmax;
-    double t = 1.0, fn = kInf;
-    Eigen::VectorXd xn = x;
-    const double slope = g.dot(d);
-    int k = 0;
-    for (; k < 40; ++k) {
-      xn = x + t * d;
-      fn = f(xn);
-      if (std::isfinite(fn) && fn <= fx + 1e-4 * t * slope) break;
-      t *= 0.5;
-    }
-    if (k == 40) {
-      // no decrease along the search direction: a minimum to the precision of the gradient
-      *converged = g.cwiseAbs().maxCoeff() < 1e-2 * std::max(1.0, std::sqrt(std::abs(fx)));
-      if (!*converged && why) *why = "the line search found no decrease";
-      return x;
-    }
-    const Eigen::VectorXd s = xn - x;
-    const Eigen::VectorXd gn = gradient(f, xn, 1e-4);
-    const Eigen::VectorXd y = gn - g;
-    const double sy = s.dot(y);
-    const double df = fx - fn;
-    x = xn;
-    fx = fn;
-    g = gn;
-    if (sy > 1e-12) {
-      if (it == 0) H *= sy / y.squaredNorm();
-      const double rho = 1.0 / sy;
-      const Eigen::MatrixXd I = Eigen::MatrixXd::Identity(n, n);
-      H = (I - rho * s * y.transpose()) * H * (I - rho * y * s.transpose()) + rho * s * s.transpose();
-    }
-    // Converged when the quasi-Newton decrement g^T H g (the expected further decrease of -2 log L,
-    // times two) is far below the one unit of -2 log L that a standard error spans.
-    if ((it >= 1 && g.dot(H * g) < 1e-3) || (df < 1e-7 && s.cwiseAbs().maxCoeff() < 1e-6)) {
-      *converged = true;
-      return x;
-    }
-  }
-  if (why) *why = "no convergence in " + std::to_string(max_iter) + " iterations";
-  return x;
 }
 
 /// Central finite-difference Hessian of f at x; g (optional) receives the central-difference gradient
@@ -324,7 +257,7 @@ Eigen::VectorXd newton(const Objective& f, Eigen::VectorXd x, int max_iter, bool
       if (H_out) *H_out = H;
       exact = scored = true;
     } else {
-      g = gradient(f, x, 1e-4);
+      g = centralGradient(f, x, 1e-4);
       if (mode == Mode::Scoring) {
         H = info(x);
       } else {
@@ -877,7 +810,7 @@ NoiseFit fitNoise(const NoiseSeries& s, NoiseStructure structure, const Eigen::M
     double wf = kInf;
     for (const auto& x0 : x0s) {
       bool conv = false;
-      const Eigen::VectorXd x1 = project(structure, box, bfgs(w, x0, opt.max_iterations, &conv, nullptr));
+      const Eigen::VectorXd x1 = project(structure, box, minimiseBfgs(w, x0, opt.max_iterations, &conv, nullptr));
       const double v = w(x1);
       if (v < wf) {
         wf = v;
@@ -907,14 +840,14 @@ NoiseFit fitNoise(const NoiseSeries& s, NoiseStructure structure, const Eigen::M
       return minusTwoLogLikelihood(modelOf(structure, project(structure, box, x), pl_terms, &opt.fixed), c, Xc, opt.reml);
     };
     bool conv = false;
-    return Eigen::VectorXd(project(structure, box, bfgs(coarse, x0, opt.max_iterations, &conv, nullptr)));
+    return Eigen::VectorXd(project(structure, box, minimiseBfgs(coarse, x0, opt.max_iterations, &conv, nullptr)));
   };
   if (!whittle && !started && s.size() > 2 * kCoarse) best = coarseFrom(best);
   // 4. Newton on the whole series from there (its last matrix is the information below: the
   // finite-difference Hessian, or the scorer's information on long series).
   if (whittle || s.size() <= 2 * kCoarse) {
     bool conv = false;
-    best = project(structure, box, bfgs(nll, best, opt.max_iterations, &conv, &why));
+    best = project(structure, box, minimiseBfgs(nll, best, opt.max_iterations, &conv, &why));
   }
   Eigen::MatrixXd H_final;
   Eigen::VectorXd x = project(structure, box, newton(nll, best, 16, &fit.converged, &H_final, info, scorer));
