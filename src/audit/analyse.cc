@@ -14,6 +14,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <map>
 #include <numeric>
 #include <set>
 #include <sstream>
@@ -1943,6 +1944,7 @@ void Analyser::notExplained(const LinFam& f, const Fit& fin) {
       }
       std::string term = best == 0 ? "a constant offset" : best <= 3 ? "a slow trend (polynomial in time)"
                                                                     : "a line at " + std::to_string((best - 2) / 2) + " cycles/rev";
+      if (best > 3 && f.name == "relative") term += " (an orbit harmonic beyond the catalogue's orders, or a field-of-view error repeating with the orbit)";
       ne.what = f.comp_label[static_cast<std::size_t>(comp)] + ": " + term + " remains after the extended model";
       ne.statistic = F;
       ne.threshold = thr;
@@ -2120,6 +2122,24 @@ void Analyser::runFamily(LinFam& f) {
       }
       am.separate_by = "a span of at least half an orbit: on " + fmt("%.0f", span_s) +
                        " s a constant and an orbit-periodic deformation look the same (thermal_periodic was not tested)";
+      R.ambiguous.push_back(am);
+    }
+  }
+  // A field-of-view error repeats with the star field, which an Earth-pointing head sees again every
+  // orbit: in these rows it is orbit harmonics of that head's attitude (and its mean, a rotation), so
+  // every thermal harmonic named on a head is reported as ambiguous with it.
+  if (f.name == "relative" && thermal_testable) {
+    std::map<std::string, Ambiguity> by_head;
+    for (int k : S)
+      if (f.cands[static_cast<std::size_t>(k)].name == "thermal_periodic") {
+        auto& am = by_head[f.cands[static_cast<std::size_t>(k)].sensor];
+        am.causes.push_back(causeName(marg[static_cast<std::size_t>(k)]));
+      }
+    for (auto& [sensor, am] : by_head) {
+      am.causes.push_back("fov_error[" + sensor + "]");
+      am.separate_by = "an attitude that moves the star field against the orbit (inertial pointing, manoeuvres) or the star vectors "
+                       "(SCV1A: a field-of-view error is a function of the focal-plane position): with an Earth-pointing head a "
+                       "field-of-view error repeats with the orbit and is orbit harmonics of its attitude";
       R.ambiguous.push_back(am);
     }
   }

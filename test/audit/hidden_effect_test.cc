@@ -399,6 +399,28 @@ TEST(HiddenEffect, ALineBeyondTheCatalogueIsLeftNotExplained) {
   EXPECT_FALSE(audittest::named(a.result, "coloured_noise")) << "named: " << audittest::namedList(a.result);
 }
 
+TEST(HiddenEffect, AFieldOfViewErrorIsReportedBesideTheHarmonicsItLooksLike) {
+  // A field-of-view error on head 2 (5" RMS, order 3; the realistic preset's): the head sees the same
+  // star fields every orbit, so the error repeats with the orbit. Whatever orbit harmonics the audit
+  // names on head 2 must come with fov_error[2] as a look-alike, and nothing may be named on the heads
+  // without it.
+  const std::string arg = "fov_error:sensor=2,arcsec=5,order=3";
+  SCOPED_TRACE("--effect " + arg);
+  const auto a = runAudit(scenario({arg}), 431, 21600);
+  expectAuditRan(a);
+  int harmonics = 0;
+  for (const auto& e : a.result.named) {
+    if (e.family != "relative") continue;
+    EXPECT_EQ(e.sensor, "2") << "named: " << audittest::namedList(a.result);
+    harmonics += e.name == "thermal_periodic";
+  }
+  bool grouped = harmonics == 0;
+  for (const auto& am : a.result.ambiguous)
+    for (const auto& c : am.causes) grouped |= c == "fov_error[2]";
+  EXPECT_TRUE(grouped) << "named: " << audittest::namedList(a.result);
+  std::printf("named: %s\n", audittest::namedList(a.result).c_str());
+}
+
 /// The testable effects with a measured floor, in an order drawn by a seeded generator.
 std::vector<const audittest::Testable*> drawnOrder() {
   std::vector<const audittest::Testable*> v;
