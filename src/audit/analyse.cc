@@ -14,6 +14,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <map>
 #include <numeric>
 #include <set>
@@ -439,6 +440,42 @@ void finishFamily(LinFam& f) {
   }
 }
 
+/// The Gram over the fitting rows of m physical columns (fill(row, out) writes a row's m values), whitened
+/// as the family's tests whiten: through the heads' filter (head_colour), else per block by the white
+/// covariance (the family's lag-1 inflation or per-component colour is not applied: use for ratios).
+MatrixXd whitenedGram(const LinFam& f, int m, const std::function<void(int, double*)>& fill) {
+  MatrixXd G = MatrixXd::Zero(m, m);
+  MatrixXd rows;
+  std::vector<double> v(static_cast<std::size_t>(m));
+  const auto load = [&](int row0, int n) {
+    rows.resize(n, m);
+    for (int r = 0; r < n; ++r) {
+      fill(row0 + r, v.data());
+      for (int j = 0; j < m; ++j) rows(r, j) = v[static_cast<std::size_t>(j)];
+    }
+  };
+  if (f.head_colour) {
+    detail::HeadColourFilter kf(headNoise(f), m);
+    for (const auto& b : f.pair_blocks) {
+      if (b.held) {
+        kf.skip(b.t);
+        continue;
+      }
+      load(b.row0, b.n);
+      kf.whiten(b, rows);
+      G.selfadjointView<Eigen::Lower>().rankUpdate(rows.transpose());
+    }
+  } else {
+    for (const auto& b : f.blocks) {
+      if (f.held[static_cast<std::size_t>(b.row0)]) continue;
+      load(b.row0, b.n);
+      rows = (b.W * rows).eval();
+      G.selfadjointView<Eigen::Lower>().rankUpdate(rows.transpose());
+    }
+  }
+  return G.selfadjointView<Eigen::Lower>();
+}
+
 std::vector<int> colsOf(const LinFam& f, const std::vector<int>& set) {
   std::vector<int> c;
   for (int k : set)
@@ -696,6 +733,7 @@ struct Analyser {
   bool blindAt(int k, double t) const;
   void lineOrders(LinFam& f) const;
   void runFamily(LinFam& f);
+  double refineStep(LinFam& f, const std::vector<int>& S, int k);
   void notExplained(const LinFam& f, const Fit& fin);
   void colourTest(const LinFam& f);
   void truthCompare();
@@ -1953,6 +1991,80 @@ void Analyser::notExplained(const LinFam& f, const Fit& fin) {
   }
 }
 
+/// A step is tested on a grid of 8 times per head (each a candidate of the family-wise count); once the
+/// selection names one, its time is refined: a scan of 24 times between the grid's neighbours of the
+/// named one (within 2 % of the span's ends), each step's reduction of the residual given the other
+/// named causes, through the same whitening as the tests; the best time replaces the candidate's
+/// columns. The decision was made at the grid time, so the scan does not enter the false-alarm rate;
+/// it moves the estimate to where the data put the change (a step half-way between two grid times was
+/// named as two steps, the residual of both as harmonics). Returns the new time.
+double Analyser::refineStep(LinFam& f, const std::vector<int>& S, int k) {
+  Cand& cd = f.cands[static_cast<std::size_t>(k)];
+  int mis = -1;
+  for (const auto& o : f.cands)
+    if (o.name == "relative_misalignment" && o.sensor == cd.sensor) mis = o.col0;
+  double at = kNaN;
+  for (const auto& p : cd.fixed)
+    if (p.key == "at_s") at = p.value;
+  if (mis < 0 || !std::isfinite(at)) return at;
+  const double grid = span_s / 9, lo = std::max(at - grid, 0.02 * span_s), hi = std::min(at + grid, 0.98 * span_s);
+  constexpr int kScan = 24;
+  std::vector<double> taus;
+  for (int j = 0; j < kScan; ++j) taus.push_back(lo + (hi - lo) * (j + 0.5) / kScan);
+  const std::vector<int> base = colsOf(f, without(S, k));
+  const int nb = static_cast<int>(base.size()), m = nb + 1 + 3 * kScan;
+  const MatrixXd G = whitenedGram(f, m, [&](int i, double* out) {
+    for (int j = 0; j < nb; ++j) out[j] = f.Xp(i, base[static_cast<std::size_t>(j)]);
+    out[nb] = f.yp[i];
+    const double t = f.t[static_cast<std::size_t>(i)];
+    for (int j = 0; j < kScan; ++j)
+      for (int a = 0; a < 3; ++a) out[nb + 1 + 3 * j + a] = t >= taus[static_cast<std::size_t>(j)] ? f.Xp(i, mis + a) : 0.0;
+  });
+  // the named causes' part of every step column and of the data, once: P = Gbb^+ [Gbc Gby]
+  MatrixXd P;
+  if (nb > 0) P = G.topLeftCorner(nb, nb).completeOrthogonalDecomposition().solve(G.topRightCorner(nb, m - nb));
+  double best = -1;
+  int jb = -1;
+  std::vector<double> red(static_cast<std::size_t>(kScan), 0.0);
+  for (int j = 0; j < kScan; ++j) {
+    const int col = nb + 1 + 3 * j;
+    MatrixXd M = G.block(col, col, 3, 3);
+    VectorXd g = G.block(col, nb, 3, 1);
+    if (nb > 0) {
+      const MatrixXd Gbc = G.block(0, col, nb, 3);
+      M -= Gbc.transpose() * P.middleCols(col - nb, 3);
+      g -= Gbc.transpose() * P.col(0);
+    }
+    red[static_cast<std::size_t>(j)] = g.dot(M.completeOrthogonalDecomposition().solve(g));
+    if (red[static_cast<std::size_t>(j)] > best) best = red[static_cast<std::size_t>(j)], jb = j;
+  }
+  if (jb < 0) return at;
+  // times the fitting rows cannot tell apart (a change inside a held-out block: the same reduction at
+  // every time there) are a tie: the middle of the tied run is taken, not its first time
+  int j0 = jb, j1 = jb;
+  const double tol = 1e-9 * std::max(best, 1e-300);
+  while (j0 > 0 && best - red[static_cast<std::size_t>(j0 - 1)] <= tol) --j0;
+  while (j1 + 1 < kScan && best - red[static_cast<std::size_t>(j1 + 1)] <= tol) ++j1;
+  const double tau = 0.5 * (taus[static_cast<std::size_t>(j0)] + taus[static_cast<std::size_t>(j1)]);
+  for (auto& p : cd.fixed)
+    if (p.key == "at_s") p.value = tau;
+  for (int i = 0; i < static_cast<int>(f.t.size()); ++i)
+    for (int a = 0; a < 3; ++a) f.Xp(i, cd.col0 + a) = f.t[static_cast<std::size_t>(i)] >= tau ? f.Xp(i, mis + a) : 0.0;
+  for (const auto& b : f.blocks)
+    f.Xw.block(b.row0, cd.col0, b.n, 3) = b.W * f.Xp.block(b.row0, cd.col0, b.n, 3);
+  // the Gram again: through the noise fit (its profile is the selection's) or from the white rows
+  if (f.time_colour) {
+    f.colour_cols = {-1};
+  } else {
+    const int p = f.ncols;
+    f.G = whitenedGram(f, p + 1, [&](int i, double* out) {
+      for (int j = 0; j < p; ++j) out[j] = f.Xp(i, j);
+      out[p] = f.yp[i];
+    });
+  }
+  return tau;
+}
+
 void Analyser::runFamily(LinFam& f) {
   const int nc = static_cast<int>(f.cands.size());
   const Fit base = fitSet(f, {});
@@ -2002,6 +2114,21 @@ void Analyser::runFamily(LinFam& f) {
     if (best < 0) break;
     S.push_back(best);
     cur = bfit;
+    if (f.cands[static_cast<std::size_t>(best)].name == "step" && f.name == "relative") {
+      // the scan's whitening is the noise fitted without the step (slow noise and a step look alike), so
+      // the time and the noise are refined in turn: scan, refit the noise with the step profiled, scan
+      // again under it (twice at most)
+      double tau = refineStep(f, S, best);
+      if (f.time_colour) {
+        colourInTime(f, noiseProfile(f, S));
+        const double t2 = refineStep(f, S, best);
+        if (t2 != tau) colourInTime(f, noiseProfile(f, S));
+        tau = t2;
+      }
+      for (auto& p : marg[static_cast<std::size_t>(best)].params)
+        if (p.key == "at_s") p.value = tau;
+      cur = fitSet(f, S);
+    }
     if (f.time_colour) {  // the noise under the new null
       colourInTime(f, noiseProfile(f, S));
       cur = fitSet(f, S);

@@ -434,6 +434,19 @@ std::vector<const audittest::Testable*> drawnOrder() {
 /// Checks that the audit names `i` (name and sensor) and that the family carrying it gains on
 /// held-out data. Sample-level events (family "data": outliers, sign flips, gaps, dropouts) are flagged,
 /// not modelled: the audit gives no gain for them, and only the naming is checked.
+/// A step inside a held-out block (spans under three orbits: alternate blocks, the odd ones held out
+/// except the last): the fitting rows place it anywhere in that block, and the rows of the block between
+/// the true and the fitted time count against the gain, which then is not a measure of the extension.
+bool stepInHeldOutBlock(const audit::AuditResult& r, const Injected& i) {
+  if (i.name != "step" || r.baseline.holdout.find("whole orbits") != std::string::npos) return false;
+  const auto p = i.arg.find("at_s=");
+  if (p == std::string::npos) return false;
+  const double at = std::stod(i.arg.substr(p + 5));
+  const int blocks = 2 * audit::AuditOptions{}.holdout_blocks;
+  const int b = static_cast<int>(at / (r.baseline.span_s / blocks));
+  return b % 2 == 1 && b < blocks - 1;
+}
+
 void expectNamedWithGain(const audit::AuditResult& r, const Injected& i) {
   const audit::EffectTest* t = audittest::testOf(r, i);
   ASSERT_NE(t, nullptr) << i.arg << ": the audit has no test of " << i.name << "[" << i.sensor << "]";
@@ -446,29 +459,65 @@ void expectNamedWithGain(const audit::AuditResult& r, const Injected& i) {
   }
   const audit::Gain* g = audittest::gainOf(r, t->family);
   ASSERT_NE(g, nullptr) << i.arg << ": no gain for family " << t->family;
-  EXPECT_TRUE(audittest::positiveGain(*g)) << i.arg << ": family " << g->family << " held-out RMS "
+  if (stepInHeldOutBlock(r, i)) {
+    std::printf("%s: the step lies in a held-out block; its held-out gain (%g) is not checked\n", i.arg.c_str(), g->heldout_loglik_gain);
+    return;
+  }
+  EXPECT_TRUE(audittest::positiveGain(*g)) << i.arg << ": named " << audittest::namedList(r) << "; family " << g->family
+                                           << " held-out log-likelihood gain " << g->heldout_loglik_gain << ", RMS "
                                            << g->heldout_rms_before << " -> " << g->heldout_rms_after
                                            << ", delta BIC " << g->delta_bic;
 }
 
-constexpr int kDraws = 11;  // every testable effect once (eleven have a floor)
+constexpr int kEffects = 11;       // every testable effect with a measured floor
+constexpr int kSeedsPerEffect = 5;  // fixed seeds per effect (the bench takes 100)
+
+/// Causes named besides the injected one (anything but i's name on i's sensor), and residuals not
+/// explained: "name[sensor]" / "not_explained(family: what)" each.
+std::vector<std::string> othersNamed(const audit::AuditResult& r, const Injected& i) {
+  std::vector<std::string> v;
+  for (const auto& e : r.named) {
+    if (e.name == i.name && e.sensor == i.sensor) continue;
+    if (i.name == "gaps" && i.sensor == "all" && e.name == "gaps") continue;  // every sensor's: the accelerometer's too
+    v.push_back(e.name + "[" + e.sensor + "]");
+  }
+  for (const auto& ne : r.not_explained) v.push_back("not_explained(" + ne.family + ": " + ne.what + ")");
+  return v;
+}
 
 class OneHiddenEffect : public ::testing::TestWithParam<int> {};
 
-TEST_P(OneHiddenEffect, IsNamedWithAHeldOutGain) {
+TEST_P(OneHiddenEffect, IsNamedAloneWithAHeldOutGain) {
+  // Each testable effect at twice its measured floor on five seeds: the right cause on the right sensor
+  // named with a held-out gain, and nothing else named that the same span without the effect does not
+  // name too (those are the span's own false alarms, at the family-wise rate: the bench counts them).
   const auto order = drawnOrder();
   ASSERT_FALSE(order.empty()) << "no testable effect has a measured floor (hidden_effects.h)";
-  const int k = GetParam();
+  const int k = GetParam() / kSeedsPerEffect, seed = GetParam() % kSeedsPerEffect;
   const audittest::Testable& t = *order[static_cast<std::size_t>(k) % order.size()];
-  auto d = audittest::drawsFor(static_cast<std::uint64_t>(700 + k), t.name);
+  auto d = audittest::drawsFor(static_cast<std::uint64_t>(700 + k + 100 * seed), t.name);
   const Injected i = t.make(2 * t.floor, d, kSpanS);  // twice the measured floor
   SCOPED_TRACE("--effect " + i.arg + " (floor " + audittest::num(t.floor) + " " + t.unit + ")");
-  const auto a = runAudit(scenario({i.arg}), static_cast<std::uint64_t>(200 + k));
+  const auto a = runAudit(scenario({i.arg}), static_cast<std::uint64_t>(200 + k + 100 * seed));
   expectAuditRan(a);
   expectNamedWithGain(a.result, i);
+  const auto others = othersNamed(a.result, i);
+  if (!others.empty()) {
+    const auto clean = runAudit(scenario(), static_cast<std::uint64_t>(200 + k + 100 * seed));
+    expectAuditRan(clean);
+    const auto own = othersNamed(clean.result, i);
+    std::string caused;
+    for (const auto& w : others)
+      if (std::find(own.begin(), own.end(), w) == own.end()) caused += " " + w;
+    std::printf("named besides %s[%s]:", i.name.c_str(), i.sensor.c_str());
+    for (const auto& w : others) std::printf(" %s", w.c_str());
+    std::printf(" (on the span without the effect too: %d of them)\n", static_cast<int>(others.size()) - static_cast<int>(std::count(caused.begin(), caused.end(), ' ')));
+    EXPECT_EQ(caused, "") << "named: " << audittest::namedList(a.result) << "; on the span without the effect: "
+                          << audittest::namedList(clean.result);
+  }
 }
 
-INSTANTIATE_TEST_SUITE_P(Draws, OneHiddenEffect, ::testing::Range(0, kDraws));
+INSTANTIATE_TEST_SUITE_P(Draws, OneHiddenEffect, ::testing::Range(0, kEffects * kSeedsPerEffect));
 
 TEST(HiddenEffect, TwoEffectsAtOnceAreBothNamed) {
   const audittest::Testable* th = audittest::findTestable("thermal_periodic");
