@@ -1835,6 +1835,38 @@ void Analyser::spectra(const LinFam& f, const Fit& fin) {
     sp.unit = T_orb > 0 ? "cycles/rev" : "mHz";
     const int nf = std::min<int>(200, static_cast<int>(t.size()) / 2);
     const double fmin = 1.0 / T, fmax = 0.5 * static_cast<double>(t.size()) / T;
+    // the heads' noise model of this component (physical, one-sided PSD): every head state's
+    // Gauss-Markov spectrum through the pair's row of D, and the rows' white variance (median) as a
+    // white spectrum at the rows' spacing
+    std::function<double(double)> head_psd;
+    if (f.head_colour) {
+      const auto& m = headNoise(f);
+      int ref = -1, oth = -1, pi = 0;
+      for (int i = 0; i < m.heads; ++i)
+        for (int j = i + 1; j < m.heads; ++j, ++pi)
+          if (pi == comp / 3) ref = i, oth = j;
+      std::vector<double> wv;
+      for (const auto& b : f.pair_blocks)
+        for (int r = 0; r < b.n; ++r)
+          if (f.comp[static_cast<std::size_t>(b.row0 + r)] == comp) wv.push_back(b.S(r, r));
+      if (ref >= 0 && !wv.empty()) {
+        std::nth_element(wv.begin(), wv.begin() + static_cast<long>(wv.size() / 2), wv.end());
+        const double white = m.white_factor * wv[wv.size() / 2], dt = T / static_cast<double>(t.size() - 1);
+        const int ax = comp % 3;
+        std::vector<double> w2;  // D^2 per state: pair row ax of (ref, oth)
+        for (int k : {ref, oth})
+          for (int j = 0; j < 3; ++j) {
+            const double d = m.C_B_S[static_cast<std::size_t>(k)](ax, j);
+            const double sg = j < 2 ? m.sigma_cross[static_cast<std::size_t>(k)] : m.sigma_about[static_cast<std::size_t>(k)];
+            w2.push_back(d * d * sg * sg);
+          }
+        head_psd = [w2, white, dt, tau = m.tau_s](double fq) {
+          double S = 2 * white * dt;
+          for (double v : w2) S += 4 * v * tau / (1 + std::pow(2 * kPi * fq * tau, 2));
+          return S;
+        };
+      }
+    }
     for (int k = 0; k < nf; ++k) {
       const double fr = fmin * std::pow(fmax / fmin, nf > 1 ? static_cast<double>(k) / (nf - 1) : 0.0);
       auto amp = [&](const std::vector<double>& y) {
@@ -1852,7 +1884,9 @@ void Analyser::spectra(const LinFam& f, const Fit& fin) {
       sp.freq.push_back(T_orb > 0 ? fr * T_orb : fr * 1e3);
       sp.before.push_back(amp(yb));
       sp.after.push_back(amp(ya));
-      if (f.time_colour && static_cast<std::size_t>(comp) < f.comp_noise.size()) {
+      if (f.head_colour && head_psd) {
+        sp.noise.push_back(f.unit_scale * std::sqrt(2 * head_psd(fr) / T));
+      } else if (f.time_colour && static_cast<std::size_t>(comp) < f.comp_noise.size()) {
         const auto& cn = f.comp_noise[static_cast<std::size_t>(comp)];
         const double dt = T / static_cast<double>(t.size() - 1);
         const double S = cn.model.psdSampled(std::min(fr, 0.5 / dt), dt);
