@@ -117,8 +117,8 @@ TEST(HeadColour, ARestrictedFitDoesNotTakeAProfiledOffsetForSlowNoise) {
 
 TEST(HeadColour, TheFitFindsTheSlowErrorOnTheHeadThatHasIt) {
   HeadColourModel truth = threeHeads();
-  truth.sigma_cross[1] = 1.0 * kAs;  // head 2 only: 1" on every axis, 600 s
-  truth.sigma_about[1] = 1.0 * kAs;
+  truth.sigma_cross[1] = 1.0 * kAs;  // head 2 only: 1" on the cross-boresight axes, none about, 600 s
+  truth.sigma_about[1] = 0.0;         // (not isotropic: the head's axes must map right)
   truth.tau_s = 600;
   const HeadColourData d = merged(simulate(truth, 21600, Vec3::Zero(), 7), 54);
   const auto fit = audit::detail::fitHeadColour(d, threeHeads());
@@ -126,6 +126,7 @@ TEST(HeadColour, TheFitFindsTheSlowErrorOnTheHeadThatHasIt) {
   SCOPED_TRACE(m.describe());
   EXPECT_GT(fit.m2ll_white - fit.m2ll, 100.0);
   EXPECT_NEAR(m.sigma_cross[1] / kAs, 1.0, 0.35);
+  EXPECT_LT(m.sigma_about[1] / kAs, 0.5);
   EXPECT_LT(m.sigma_cross[0] / kAs, 0.3);
   EXPECT_LT(m.sigma_cross[2] / kAs, 0.3);
   EXPECT_GT(m.tau_s, 250.0);
@@ -191,6 +192,60 @@ TEST(HeadColour, TwoHeadsFitTheirPairsSlowNoise) {
   EXPECT_TRUE(std::isfinite(fit.m2ll) && std::isfinite(fit.m2ll_white));
   EXPECT_GT(fit.m2ll_white - fit.m2ll, 100.0) << fit.model.describe();
   EXPECT_EQ(fit.params, 5);
+}
+
+TEST(HeadColour, FourHeadsFindTheSlowErrorOnTheFourth) {
+  // Four heads (the core's capacity), every one present: pairs (1, o) for o = 2..4, nine rows a bin; a
+  // 1" slow error on head 4 only.
+  HeadColourModel truth = threeHeads();
+  truth.heads = 4;
+  truth.C_B_S[3] = model::quatExp(Vec3(0.3, -1.1, 0.6)).toRotationMatrix();
+  truth.sigma_cross[3] = 1.0 * kAs;
+  truth.sigma_about[3] = 1.0 * kAs;
+  std::mt19937_64 rng(11);
+  std::normal_distribution<double> n01;
+  const Vec3 white_S(2.5 * kAs / 2, 2.5 * kAs / 2, 25 * kAs / 2);
+  std::vector<PairBlock> blocks;
+  std::vector<double> y;
+  Vec3 x = Vec3::Zero();
+  for (double t = 0; t < 21600; t += 2) {
+    const double phi = std::exp(-2.0 / truth.tau_s);
+    for (int a = 0; a < 3; ++a) x[a] = phi * x[a] + std::sqrt(1 - phi * phi) * kAs * n01(rng);
+    std::array<Vec3, 4> e;
+    std::array<Mat3, 4> cov;
+    for (int k = 0; k < 4; ++k) {
+      const Vec3 w(white_S[0] * n01(rng), white_S[1] * n01(rng), white_S[2] * n01(rng));
+      e[k] = truth.C_B_S[k] * ((k == 3 ? x : Vec3::Zero()) + w);
+      cov[k] = truth.C_B_S[k] * white_S.cwiseAbs2().asDiagonal() * truth.C_B_S[k].transpose();
+    }
+    PairBlock b;
+    b.t = t;
+    b.mask = 15u;
+    b.n = 9;
+    b.row0 = static_cast<int>(y.size());
+    b.S = Eigen::MatrixXd::Zero(9, 9);
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) b.S.block<3, 3>(3 * i, 3 * j) = cov[0] + (i == j ? cov[static_cast<std::size_t>(i + 1)] : Mat3::Zero());
+    for (int i = 1; i < 4; ++i)
+      for (int a = 0; a < 3; ++a) y.push_back(e[static_cast<std::size_t>(i)][a] - e[0][a]);
+    blocks.push_back(b);
+  }
+  const HeadColourData d = audit::detail::mergeForFit(
+      blocks, 9,
+      [&](const PairBlock& b, Eigen::MatrixXd& v) {
+        v.leftCols(9).setIdentity();  // a constant per pair component
+        for (int r = 0; r < b.n; ++r) v(r, 9) = y[static_cast<std::size_t>(b.row0 + r)];
+      },
+      54);
+  HeadColourModel start = truth;
+  start.sigma_cross.fill(0);
+  start.sigma_about.fill(0);
+  const auto fit = audit::detail::fitHeadColour(d, start);
+  SCOPED_TRACE(fit.model.describe());
+  EXPECT_EQ(fit.params, 9);
+  EXPECT_GT(fit.m2ll_white - fit.m2ll, 100.0);
+  EXPECT_NEAR(fit.model.sigma_cross[3] / kAs, 1.0, 0.35);
+  for (int k = 0; k < 3; ++k) EXPECT_LT(fit.model.sigma_cross[static_cast<std::size_t>(k)] / kAs, 0.3);
 }
 
 }  // namespace
