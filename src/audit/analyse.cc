@@ -220,6 +220,42 @@ int addCand(LinFam& f, Cand c) {
 /// The head noise model the relative family's tests use: the coloured fit when chosen, else white.
 const detail::HeadColourModel& headNoise(const LinFam& f) { return f.hc_coloured ? f.hc.model : f.hc.white; }
 
+/// The Gram over the fitting rows of m physical columns (fill(row, out) writes a row's m values), whitened
+/// as the family's tests whiten: through the heads' filter (head_colour), else per block by the white
+/// covariance (the family's lag-1 inflation or per-component colour is not applied: use for ratios).
+MatrixXd whitenedGram(const LinFam& f, int m, const std::function<void(int, double*)>& fill) {
+  MatrixXd G = MatrixXd::Zero(m, m);
+  MatrixXd rows;
+  std::vector<double> v(static_cast<std::size_t>(m));
+  const auto load = [&](int row0, int n) {
+    rows.resize(n, m);
+    for (int r = 0; r < n; ++r) {
+      fill(row0 + r, v.data());
+      for (int j = 0; j < m; ++j) rows(r, j) = v[static_cast<std::size_t>(j)];
+    }
+  };
+  if (f.head_colour) {
+    detail::HeadColourFilter kf(headNoise(f), m);
+    for (const auto& b : f.pair_blocks) {
+      if (b.held) {
+        kf.skip(b.t);
+        continue;
+      }
+      load(b.row0, b.n);
+      kf.whiten(b, rows);
+      G.selfadjointView<Eigen::Lower>().rankUpdate(rows.transpose());
+    }
+  } else {
+    for (const auto& b : f.blocks) {
+      if (f.held[static_cast<std::size_t>(b.row0)]) continue;
+      load(b.row0, b.n);
+      rows = (b.W * rows).eval();
+      G.selfadjointView<Eigen::Lower>().rankUpdate(rows.transpose());
+    }
+  }
+  return G.selfadjointView<Eigen::Lower>();
+}
+
 /// LinFam::head_colour: fits the heads' slow noise (head_colour.h) to the fitting rows with the columns
 /// `cols`, a constant per component and the family's lines per component profiled out (the same null
 /// as colourInTime's), keeps it when BIC prefers it to white, and replaces the Gram by that of the
@@ -260,21 +296,10 @@ void headColourInTime(LinFam& f, const std::vector<int>& cols) {
     f.hc_coloured = f.hc.model.coloured() && f.hc.m2ll_white - f.hc.m2ll > f.hc.params * std::log(static_cast<double>(d.rows));
   }
   // the Gram of the rows whitened by the chosen model
-  detail::HeadColourFilter kf(headNoise(f), p + 1);
-  f.G = MatrixXd::Zero(p + 1, p + 1);
-  MatrixXd rows;
-  for (const auto& b : f.pair_blocks) {
-    if (b.held) {
-      kf.skip(b.t);
-      continue;
-    }
-    rows.resize(b.n, p + 1);
-    rows.leftCols(p) = f.Xp.middleRows(b.row0, b.n);
-    rows.col(p) = f.yp.segment(b.row0, b.n);
-    kf.whiten(b, rows);
-    f.G.selfadjointView<Eigen::Lower>().rankUpdate(rows.transpose());
-  }
-  f.G = f.G.selfadjointView<Eigen::Lower>();
+  f.G = whitenedGram(f, p + 1, [&](int i, double* out) {
+    for (int j = 0; j < p; ++j) out[j] = f.Xp(i, j);
+    out[p] = f.yp[i];
+  });
   f.rho = 0;
   f.infl = 1;
 }
@@ -438,42 +463,6 @@ void finishFamily(LinFam& f) {
     f.row_sd = std::move(sd);
     colourInTime(f, noiseProfile(f, {}));
   }
-}
-
-/// The Gram over the fitting rows of m physical columns (fill(row, out) writes a row's m values), whitened
-/// as the family's tests whiten: through the heads' filter (head_colour), else per block by the white
-/// covariance (the family's lag-1 inflation or per-component colour is not applied: use for ratios).
-MatrixXd whitenedGram(const LinFam& f, int m, const std::function<void(int, double*)>& fill) {
-  MatrixXd G = MatrixXd::Zero(m, m);
-  MatrixXd rows;
-  std::vector<double> v(static_cast<std::size_t>(m));
-  const auto load = [&](int row0, int n) {
-    rows.resize(n, m);
-    for (int r = 0; r < n; ++r) {
-      fill(row0 + r, v.data());
-      for (int j = 0; j < m; ++j) rows(r, j) = v[static_cast<std::size_t>(j)];
-    }
-  };
-  if (f.head_colour) {
-    detail::HeadColourFilter kf(headNoise(f), m);
-    for (const auto& b : f.pair_blocks) {
-      if (b.held) {
-        kf.skip(b.t);
-        continue;
-      }
-      load(b.row0, b.n);
-      kf.whiten(b, rows);
-      G.selfadjointView<Eigen::Lower>().rankUpdate(rows.transpose());
-    }
-  } else {
-    for (const auto& b : f.blocks) {
-      if (f.held[static_cast<std::size_t>(b.row0)]) continue;
-      load(b.row0, b.n);
-      rows = (b.W * rows).eval();
-      G.selfadjointView<Eigen::Lower>().rankUpdate(rows.transpose());
-    }
-  }
-  return G.selfadjointView<Eigen::Lower>();
 }
 
 std::vector<int> colsOf(const LinFam& f, const std::vector<int>& set) {

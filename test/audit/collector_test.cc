@@ -111,6 +111,16 @@ TEST(AuditCollector, BinDoublingLeavesTheAnalysisUnchangedAndSeamsAreCounted) {
   EXPECT_NEAR(lvl[0], lvl[1], 2 * sig[0]) << "sigma " << sig[0];
 }
 
+/// The configuration with every head's noise (cross and about the boresight) times `factor`.
+core::PipelineConfig scaledNoise(core::PipelineConfig cfg, double factor) {
+  for (int k = 0; k < 3; ++k) {
+    auto& h = cfg.heads.head[static_cast<std::size_t>(k)];
+    h.sigma_cross_rad *= factor;
+    h.sigma_roll_rad *= factor;
+  }
+  return cfg;
+}
+
 /// The outlier gate stands in the data's noise, not the configured one: heads 2.5x quieter than the
 /// configuration (as the real GRACE-FO heads are against the ideal preset), and 40 samples of head 1
 /// off by 90" about its x axis. The pairs' second differences carry the other head's about-boresight
@@ -118,12 +128,7 @@ TEST(AuditCollector, BinDoublingLeavesTheAnalysisUnchangedAndSeamsAreCounted) {
 /// configured gate (a temporary build) none of the 40 was found (and 0 of 40 at 140"), with the data's all 40.
 TEST(AuditCollector, OutlierGateFollowsTheDataNoise) {
   const auto cfg = threeHeads();
-  auto quiet = cfg;
-  for (int k = 0; k < 3; ++k) {
-    auto& h = quiet.heads.head[static_cast<std::size_t>(k)];
-    h.sigma_cross_rad *= 0.4;
-    h.sigma_roll_rad *= 0.4;
-  }
+  const auto quiet = scaledNoise(cfg, 0.4);
   for (const int n_out : {0, 40}) {
     SCOPED_TRACE(n_out);
     audit::AuditOptions opt;
@@ -169,12 +174,7 @@ TEST(AuditCollector, OutlierGateFollowsTheDataNoise) {
 /// outlier on the way (with the configured gate, 6 sigma of it is 2.4 sigma of these data: thousands).
 TEST(AuditCollector, OutlierGateOnNoisierDataRaisesNoAlarmFromTheFirstEpoch) {
   const auto cfg = threeHeads();
-  auto loud = cfg;
-  for (int k = 0; k < 3; ++k) {
-    auto& h = loud.heads.head[static_cast<std::size_t>(k)];
-    h.sigma_cross_rad *= 2.5;
-    h.sigma_roll_rad *= 2.5;
-  }
+  const auto loud = scaledNoise(cfg, 2.5);
   for (const std::uint64_t seed : {11, 12, 13}) {
     SCOPED_TRACE(seed);
     audit::AuditOptions opt;
