@@ -187,6 +187,9 @@ struct LinFam {
   std::vector<detail::PairBlock> pair_blocks;  ///< the blocks with their heads and white covariances
   detail::HeadColourFit hc;                   ///< the last fit (hc.model: the noise the tests use)
   bool hc_coloured = false;                   ///< the coloured model chosen (BIC)
+  /// The configured slow noise (AuditOptions::configured_gm_*): the colour test's null and the tests'
+  /// whitening unless a free fit beats it by BIC; not coloured(): none configured (white null).
+  detail::HeadColourModel hc_configured;
   double hc_rows = 0;                         ///< merged rows of the fit
   double superbin_s = 0;
 };
@@ -291,9 +294,24 @@ void headColourInTime(LinFam& f, const std::vector<int>& cols) {
     f.hc.model = f.hc.white;
     f.hc.m2ll = f.hc.m2ll_white = 0;
     f.hc.params = 0;
+    if (f.hc_configured.coloured()) {  // too few rows to test: the configured colour whitens
+      f.hc.model = f.hc_configured;
+      f.hc_coloured = true;
+    }
   } else {
     f.hc = detail::fitHeadColour(d, start);
-    f.hc_coloured = f.hc.model.coloured() && f.hc.m2ll_white - f.hc.m2ll > f.hc.params * std::log(static_cast<double>(d.rows));
+    const double bic = f.hc.params * std::log(static_cast<double>(d.rows));
+    f.hc_coloured = f.hc.model.coloured() && f.hc.m2ll_white - f.hc.m2ll > bic;
+    if (f.hc_configured.coloured()) {
+      // The configured colour is the null: the free fit whitens only when BIC prefers it to that.
+      f.hc.configured_null = true;
+      f.hc.configured = detail::fitWhiteFactor(d, f.hc_configured, &f.hc.m2ll_configured);
+      if (!(f.hc.m2ll_configured - f.hc.m2ll > bic)) {
+        f.hc.model = f.hc.configured;
+        f.hc.m2ll = f.hc.m2ll_configured;
+      }
+      f.hc_coloured = true;
+    }
   }
   // the Gram of the rows whitened by the chosen model
   f.G = whitenedGram(f, p + 1, [&](int i, double* out) {
@@ -989,6 +1007,14 @@ void Analyser::buildRelative() {
   f.superbin_s = std::max(static_cast<double>(c.bin_us) * 1e-6, span_s / 400);
   f.hc.model.heads = H;
   for (int k = 0; k < H; ++k) f.hc.model.C_B_S[static_cast<std::size_t>(k)] = c.C_B_S[k];
+  if (std::isfinite(opt.configured_gm_tau_s) && opt.configured_gm_tau_s > 0) {
+    f.hc_configured = f.hc.model;
+    f.hc_configured.tau_s = opt.configured_gm_tau_s;
+    for (int k = 0; k < H; ++k) {
+      f.hc_configured.sigma_cross[static_cast<std::size_t>(k)] = opt.configured_gm_cross[static_cast<std::size_t>(k)];
+      f.hc_configured.sigma_about[static_cast<std::size_t>(k)] = opt.configured_gm_about[static_cast<std::size_t>(k)];
+    }
+  }
   lineOrders(f);
   finishFamily(f);
   R.baseline.families.push_back("relative");
@@ -1420,7 +1446,8 @@ void Analyser::estimateNoise(std::vector<EffectTest>& out) {
       if (which == 0) cross_done = true;
       const double est = which == 0 ? L.cross2[k] : L.about2[k];
       const double se = which == 0 ? L.se_cross2[k] : L.se_about2[k];
-      const double mod = std::pow(which == 0 ? hcfg.sigma_cross_rad : hcfg.sigma_roll_rad, 2);
+      const double diff2 = which == 0 ? opt.configured_diff_cross2[static_cast<std::size_t>(k)] : opt.configured_diff_about2[static_cast<std::size_t>(k)];
+      const double mod = std::isfinite(diff2) && diff2 > 0 ? diff2 : std::pow(which == 0 ? hcfg.sigma_cross_rad : hcfg.sigma_roll_rad, 2);
       EffectTest t;
       t.name = which == 0 ? "cross_noise" : "anisotropic_noise";
       t.sensor = (which == 0 && L.common_cross) ? "all" : std::to_string(c.ids[k]);
@@ -1693,6 +1720,12 @@ EffectTest toTest(const LinFam& f, int k, const Fit& fit, const TestOut& t) {
       e.params.push_back({cd.params[static_cast<std::size_t>(a)].key, "arcsec", proj * kArcsecPerRad, s * kArcsecPerRad, kNaN});
     }
     e.params.push_back({"phase_deg", "deg", phase / kRadPerDeg, kNaN, kNaN});
+    // the fitted cos and sin coefficients themselves (head axes, delta = c cos(n u) + s sin(n u)): what
+    // the model overlay carries (audit/extension.h)
+    for (int a = 0; a < 3; ++a)
+      for (int q = 0; q < 2; ++q)
+        e.params.push_back({std::string(1, "xyz"[a]) + (q == 0 ? "_cos_arcsec" : "_sin_arcsec"), "arcsec",
+                            val[static_cast<std::size_t>(2 * a + q)] * kArcsecPerRad, sig[static_cast<std::size_t>(2 * a + q)] * kArcsecPerRad, kNaN});
   } else {
     for (int j = 0; j < cd.ncol; ++j)
       e.params.push_back({cd.params[static_cast<std::size_t>(j)].key, cd.params[static_cast<std::size_t>(j)].unit,
@@ -2339,7 +2372,8 @@ void Analyser::colourTest(const LinFam& f) {
     }
     const auto& m = f.hc.model;
     e.dof = f.hc.params;
-    e.statistic = std::max(0.0, f.hc.m2ll_white - f.hc.m2ll);
+    const double null_m2ll = f.hc.configured_null ? f.hc.m2ll_configured : f.hc.m2ll_white;
+    e.statistic = std::max(0.0, null_m2ll - f.hc.m2ll);
     e.p_value = stats::chi2Sf(e.statistic, e.dof);
     e.threshold = stats::chi2Quantile(alpha_each, e.dof);
     e.detected = e.p_value < alpha_each;
@@ -2354,7 +2388,9 @@ void Analyser::colourTest(const LinFam& f) {
       e.params.push_back({"head" + id + "_about_arcsec", "arcsec", m.sigma_about[static_cast<std::size_t>(k)] * kArcsecPerRad, kNaN, kNaN});
     }
     e.note = "likelihood ratio of the heads' slow noise (per head a Gauss-Markov error on each sensor axis, cross-boresight and "
-             "about the boresight levels, one correlation time, in one filter over the pair rows) against white, restricted "
+             "about the boresight levels, one correlation time, in one filter over the pair rows) against " +
+             std::string(f.hc.configured_null ? "the configured slow noise (" + f.hc.configured.describe(std::vector<int>(c.ids.begin(), c.ids.begin() + c.n_heads)) + ")"
+                                              : std::string("white")) + ", restricted "
              "likelihood on " + fmt("%.0f", f.hc_rows) + " rows merged into " + fmt("%.0f", f.superbin_s) +
              " s, with the named causes, every misalignment, drift and harmonic signature and the lines profiled out; fitted: " +
              m.describe(std::vector<int>(c.ids.begin(), c.ids.begin() + c.n_heads)) + (f.hc_coloured ? "; chosen by BIC: the tests of this family whiten the rows with it"

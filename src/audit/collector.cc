@@ -1,5 +1,6 @@
 // The audit's Collector: every input reduced to time-bin sums (collector_impl.h), plus sample-level
 // events (sign flips, outliers, missing runs).
+#include <boresight/core/rotation.h>
 #include "collector_impl.h"
 #include "stats.h"
 
@@ -161,6 +162,29 @@ void Collector::onHeads(const core::HeadEpoch& e, core::Status) {
     ++m.samples[slot];
     r.mask |= 1u << slot;
     r.q_B[slot] = q * m.cfg.heads.head[slot].q_Si_B;
+  }
+  // Applied thermal terms: the heads' mountings at this epoch's argument of latitude.
+  if (m.opt.applied_thermal && r.mask != 0) {
+    double u = 0;
+    if (!m.argumentOfLatitude(e.t, u)) {
+      ++m.thermal_no_orbit;
+    } else {
+      const core::ThermalHarmonicModel& th = *m.opt.applied_thermal;
+      const int d = th.datum_slot;
+      for (int k = 0; k < m.n_heads; ++k) {
+        const core::ThermalHeadModel& hm = th.head[static_cast<std::size_t>(k)];
+        if (!((r.mask >> k) & 1u) || k == d || !hm.valid || d < 0 || d >= m.n_heads) continue;
+        Vec3 delta = hm.constant_rad;
+        for (int n = 0; n < th.n_harmonics; ++n) {
+          const double a = th.order[static_cast<std::size_t>(n)] * u;
+          delta += hm.cos_rad[static_cast<std::size_t>(n)] * std::cos(a) + hm.sin_rad[static_cast<std::size_t>(n)] * std::sin(a);
+        }
+        const Mat3 C0_kd = m.C_B_S[k].transpose() * m.C_B_S[d];  // C_Sk_B C_B_Sd
+        const Quat q_I_Sk = r.q_B[k] * m.cfg.heads.head[k].q_Si_B.conjugate();
+        r.q_B[k] = q_I_Sk * (core::quatExp(-C0_kd * delta) * m.cfg.heads.head[k].q_Si_B);
+      }
+      ++m.thermal_applied;
+    }
   }
   if (r.mask == 0) return;
   if (m.have_epoch) {
@@ -429,9 +453,28 @@ bool Collector::write(const core::PipelineRow& row) {
   return true;
 }
 
+bool Collector::Impl::argumentOfLatitude(TimeUs t, double& u) const {
+  if (orbit.empty()) return false;
+  auto it = std::lower_bound(orbit.begin(), orbit.end(), t, [](const model::OrbitSample& o, TimeUs x) { return o.t < x; });
+  const model::OrbitSample* best = nullptr;
+  if (it != orbit.end()) best = &*it;
+  if (it != orbit.begin() && (!best || t - std::prev(it)->t < best->t - t)) best = &*std::prev(it);
+  if (!best || std::llabs(best->t - t) > 60 * kUsPerSecond) return false;
+  u = best->u_rad + best->u_rate_rad_s * static_cast<double>(t - best->t) * 1e-6;
+  return true;
+}
+
 void Collector::addOrbit(const model::OrbitSample& o) {
   Impl& m = *impl_;
   if (!m.orbit.empty() && std::llabs(o.t - m.orbit.back().t) < 10 * kUsPerSecond) return;
+  if (!m.orbit.empty() && o.t < m.orbit.back().t) {  // out of order (several files): kept sorted
+    const auto it = std::lower_bound(m.orbit.begin(), m.orbit.end(), o.t, [](const model::OrbitSample& a, TimeUs x) { return a.t < x; });
+    if ((it != m.orbit.end() && std::llabs(it->t - o.t) < 10 * kUsPerSecond) ||
+        (it != m.orbit.begin() && std::llabs(std::prev(it)->t - o.t) < 10 * kUsPerSecond))
+      return;
+    m.orbit.insert(it, o);
+    return;
+  }
   m.orbit.push_back(o);
 }
 

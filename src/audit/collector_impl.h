@@ -148,6 +148,10 @@ struct Collector::Impl {
 
   // orbit
   std::vector<model::OrbitSample> orbit;
+  /// AuditOptions::applied_thermal: epochs corrected, epochs without an orbit sample near them.
+  std::uint64_t thermal_applied = 0, thermal_no_orbit = 0;
+  /// The argument of latitude at t from the nearest orbit sample (within 60 s); false without one.
+  bool argumentOfLatitude(TimeUs t, double& u) const;
 
   void finalizeEpoch(int k);
   void pushEpoch(const EpochRecord& e);

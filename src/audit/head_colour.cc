@@ -189,6 +189,22 @@ double remlM2ll(const HeadColourModel& m, const HeadColourData& d) {
   return m2ll;
 }
 
+HeadColourModel fitWhiteFactor(const HeadColourData& d, HeadColourModel m, double* m2ll) {
+  const double lo = std::log(0.05), hi = std::log(20.0);
+  const model::Objective fw = [&](const Eigen::VectorXd& x) {
+    const double c = std::clamp(x[0], lo, hi);
+    HeadColourModel t = m;
+    t.white_factor = std::exp(c);
+    return remlM2ll(t, d) + 1e3 * (x[0] - c) * (x[0] - c);
+  };
+  bool conv = false;
+  Eigen::VectorXd xw = Eigen::VectorXd::Constant(1, std::log(std::max(m.white_factor, 0.05)));
+  xw = model::minimiseBfgs(fw, xw, 30, &conv, nullptr);
+  m.white_factor = std::exp(std::clamp(xw[0], lo, hi));
+  if (m2ll) *m2ll = remlM2ll(m, d);
+  return m;
+}
+
 HeadColourFit fitHeadColour(const HeadColourData& d, const HeadColourModel& start) {
   HeadColourFit out;
   const int H = start.heads;
@@ -202,19 +218,9 @@ HeadColourFit fitHeadColour(const HeadColourData& d, const HeadColourModel& star
     pen += 1e3 * (x - c) * (x - c);
     return c;
   };
-  const model::Objective fw = [&](const Eigen::VectorXd& x) {
-    double pen = 0;
-    HeadColourModel m = w;
-    m.white_factor = std::exp(clampLog(x[0], std::log(0.05), std::log(20.0), pen));
-    ++evals;
-    return remlM2ll(m, d) + pen;
-  };
   bool conv = false;
-  Eigen::VectorXd xw = Eigen::VectorXd::Constant(1, std::log(std::max(start.white_factor, 0.05)));
-  xw = model::minimiseBfgs(fw, xw, 30, &conv, nullptr);
-  w.white_factor = std::exp(std::clamp(xw[0], std::log(0.05), std::log(20.0)));
+  w = fitWhiteFactor(d, w, &out.m2ll_white);
   out.white = w;
-  out.m2ll_white = remlM2ll(w, d);
   // coloured: [log white factor, log sigma_cross per head, log sigma_about per head, log tau]
   double s_ref = 0;  // typical white standard deviation of a merged row
   {

@@ -103,7 +103,16 @@ struct HeadColourFit {
   int params = 0;             ///< free parameters of the coloured model beyond the white one's
   int evaluations = 0;
   bool converged = false;
+  /// The configured slow noise as the null (the platform file's or the overlay's Gauss-Markov parts):
+  /// its levels and time fixed, the white factor fitted; the colour test then asks whether the data
+  /// depart from it, not from white.
+  bool configured_null = false;
+  HeadColourModel configured;
+  double m2ll_configured = 0;
 };
+
+/// The white factor alone fitted, the model's slow part as given; -2 log L at it in *m2ll.
+HeadColourModel fitWhiteFactor(const HeadColourData& d, HeadColourModel m, double* m2ll);
 
 /// Fits the white factor alone and the coloured model (heads' levels, one time) from `start`.
 HeadColourFit fitHeadColour(const HeadColourData& d, const HeadColourModel& start);

@@ -139,12 +139,16 @@ std::vector<std::string> familiesOf(const std::vector<T>& v, bool (*skip)(const 
 
 const std::vector<EffectTest>& estimatesOf(const AuditResult& r) { return r.extended.empty() ? r.named : r.extended; }
 
+/// A harmonic's cos/sin coefficients (what the model overlay takes): the plots show its amplitude and
+/// phase instead.
+bool coefficientOnly(const ParamValue& p) { return p.key.find("_cos_") != std::string::npos || p.key.find("_sin_") != std::string::npos; }
+
 /// Units of the estimated parameters with a sigma (one estimates plot per unit), in order of appearance.
 std::vector<std::string> estimateUnits(const AuditResult& r) {
   std::vector<std::string> units;
   for (const auto& e : estimatesOf(r))
     for (const auto& p : e.params) {
-      if (!std::isfinite(p.value) || !std::isfinite(p.sigma)) continue;
+      if (!std::isfinite(p.value) || !std::isfinite(p.sigma) || coefficientOnly(p)) continue;
       bool seen = false;
       for (const auto& u : units) seen |= u == p.unit;
       if (!seen) units.push_back(p.unit);
@@ -248,7 +252,7 @@ std::vector<NamedPlot> plotsOf(const AuditResult& r) {
     bool any_truth = false;
     for (const auto& e : estimatesOf(r))
       for (const auto& p : e.params) {
-        if (p.unit != unit || !std::isfinite(p.value) || !std::isfinite(p.sigma)) continue;
+        if (p.unit != unit || !std::isfinite(p.value) || !std::isfinite(p.sigma) || coefficientOnly(p)) continue;
         const double x = double(np.plot.xcategories.size());
         np.plot.xcategories.push_back(e.name + "[" + e.sensor + "] " + p.key);
         est.x.push_back(x);
@@ -392,6 +396,12 @@ std::string reportText(const AuditResult& r, const ReportContext* ctx, const std
         << fmt(g.heldout_rms_after) << " | " << fmt(g.whiteness_before, "%.2f") << " | "
         << fmt(g.whiteness_after, "%.2f") << " | " << fmt(g.heldout_loglik_gain, "%.4g") << " | "
         << fmt(g.delta_bic, "%.4g") << " |\n";
+    o << "\n";
+  }
+
+  if (ctx && !ctx->extension.empty()) {
+    o << "## The extended model, applied\n\n";
+    for (const auto& l : ctx->extension) o << "- " << l << "\n";
     o << "\n";
   }
 

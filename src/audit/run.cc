@@ -1,6 +1,7 @@
 // The audit over recorded telemetry: see include/boresight/audit/run.h.
 #include <boresight/audit/reference.h>
 #include <boresight/audit/run.h>
+#include "collector_impl.h"
 #include <boresight/io/core_config.h>
 #include <boresight/io/product_stream.h>
 #include <boresight/model/effects.h>
@@ -89,7 +90,10 @@ bool runAudit(const RunRequest& req, RunOutput& out, std::string* error) {
   out = RunOutput{};
   io::PlatformConfig pc;
   if (!io::loadPlatformConfig(req.config, pc, error)) return false;
-  if (!req.overlay.empty() && !io::applyOverlay(req.overlay, "boresight audit", {}, pc, out.overlay, error)) return false;
+  io::OverlayUses uses;
+  uses.accelerometer = true;  // the angular-acceleration family then sees the corrected accelerometer
+  uses.thermal = true;        // the heads' mountings follow the thermal terms (AuditOptions::applied_thermal)
+  if (!req.overlay.empty() && !io::applyOverlay(req.overlay, "boresight audit", uses, pc, out.overlay, error)) return false;
   Truth truth;
   if (!req.truth.empty()) {
     if (!readTruthFile(req.truth, truth, error)) return false;
@@ -137,8 +141,51 @@ bool runAudit(const RunRequest& req, RunOutput& out, std::string* error) {
   acfg.lookahead_us = static_cast<TimeUs>(std::llround(req.lookahead_s * 1e6));
   stream::Engine engine(acfg);
   if (!engine.configure(pc.pipeline, error) || !stream::addSources(in, opt, true, engine, error)) return false;
+  AuditOptions options = req.options;
+  bool thermal_terms = false;
+  if (out.overlay.thermal_model)
+    for (const auto& h : out.overlay.thermal_model->head) thermal_terms = thermal_terms || h.valid;
+  if (thermal_terms) {
+    if (orbit.empty()) {
+      if (error) *error = req.overlay + ": thermal terms need the orbit among the inputs (GNI1B or GNV1B files)";
+      return false;
+    }
+    options.applied_thermal = out.overlay.thermal_model;
+  }
+  // The noise-level tests compare first differences with the configured model's (a coloured part of
+  // the noise in use adds little to them): per head var - autocovariance(head epoch interval).
+  if (pc.pipeline.crn_attitude.fs_hz > 0)
+    for (int s = 0; s < pc.noise_in_use.n_heads && s < pc.pipeline.heads.n_heads; ++s) {
+      const auto k = static_cast<std::size_t>(s);
+      const auto& h = pc.noise_in_use.head[k];
+      if (!h[0].set || !h[1].set || !h[2].set) continue;
+      const double dt = 1.0 / pc.pipeline.crn_attitude.fs_hz;
+      auto diff2 = [&](const model::NoiseModel& m) { return m.variance() - m.autocovariance(dt); };
+      options.configured_diff_cross2[k] = 0.5 * (diff2(h[0].noise.model) + diff2(h[1].noise.model));
+      options.configured_diff_about2[k] = diff2(h[2].noise.model);
+    }
+  {  // the configured slow noise (Gauss-Markov terms; a power law's slow part is not carried here)
+    double wsum = 0, tsum = 0;
+    for (int s = 0; s < pc.noise_in_use.n_heads && s < core::kMaxHeads; ++s) {
+      const auto k = static_cast<std::size_t>(s);
+      double v[3] = {0, 0, 0};
+      for (int a = 0; a < 3; ++a) {
+        const auto& ax = pc.noise_in_use.head[k][static_cast<std::size_t>(a)];
+        if (!ax.set) continue;
+        for (const auto& t : ax.noise.model.terms)
+          if (t.kind == model::NoiseKind::GaussMarkov && t.sigma > 0 && t.tau_s > 0) {
+            v[a] += t.sigma * t.sigma;
+            wsum += t.sigma * t.sigma;
+            tsum += t.sigma * t.sigma * t.tau_s;
+          }
+      }
+      options.configured_gm_cross[k] = std::sqrt(0.5 * (v[0] + v[1]));
+      options.configured_gm_about[k] = std::sqrt(v[2]);
+    }
+    if (wsum > 0) options.configured_gm_tau_s = tsum / wsum;
+  }
   Collector collector;
-  if (!collector.configure(pc.pipeline, req.options, error)) return false;
+  if (!collector.configure(pc.pipeline, options, error)) return false;
   if (!feedOrbit(orbit, opt, collector, out.orbit_samples, out.orbit_rejected, out.notes, error)) return false;
 
   ClockMap clock;
@@ -180,6 +227,8 @@ bool runAudit(const RunRequest& req, RunOutput& out, std::string* error) {
   out.epochs = engine.epochs();
   out.rows = engine.rows();
   out.span_s = toSeconds(engine.lastEpoch() - engine.firstEpoch());
+  out.first_epoch = engine.firstEpoch();
+  out.last_epoch = engine.lastEpoch();
   out.reference_samples = reference.fed();
   out.reference_dropped = reference.dropped();
   if (out.counters.used_heads == 0) {
@@ -198,7 +247,13 @@ bool runAudit(const RunRequest& req, RunOutput& out, std::string* error) {
                         (out.orbit_rejected ? ", " + std::to_string(out.orbit_rejected) + " rejected" : std::string()));
   else
     out.notes.push_back("no orbit context (GNI1B / GNV1B): no orbit-harmonic tests");
-  out.result = analyse(collector, req.options, out.truth_given ? &truth : nullptr);
+  if (options.applied_thermal) {
+    const auto& ci = collector.impl();
+    out.notes.push_back("thermal terms of " + req.overlay + " applied to " + std::to_string(ci.thermal_applied) + " head epochs" +
+                        (ci.thermal_no_orbit ? " (" + std::to_string(ci.thermal_no_orbit) + " without an orbit sample within 60 s: plain mountings)"
+                                             : std::string()));
+  }
+  out.result = analyse(collector, options, out.truth_given ? &truth : nullptr);
   out.platform = pc;
   out.model_in_use = io::modelInUseLines(pc, out.overlay);
   for (const auto& w : io::validityWarnings(out.overlay, engine.firstEpoch(), engine.lastEpoch()))

@@ -34,6 +34,8 @@ Status Pipeline::configure(const PipelineConfig& cfg) {
   }
   if (s != Status::kOk) return s;
   if (cfg.crn_attitude.output_period_us <= 0 || cfg.alignment_update_epochs < 1) return Status::kInvalidConfig;
+  if (cfg.acc_correction.on && !(cfg.acc_correction.M.allFinite() && cfg.acc_correction.bias_A.allFinite()))
+    return Status::kInvalidConfig;
   cfg_ = cfg;
   head_dt_us_ = rates_.stream().samplingIntervalUs();
   gain_w_ = rates_.noiseGain(1);
@@ -211,7 +213,9 @@ Status Pipeline::stepAcc(TimeUs t, const Vec3& a_A) {
     health_.record(Status::kImplausible);
     return Status::kImplausible;
   }
-  const Status s = acc_.step(t, a_A);
+  // The calibration of the accelerometer (an overlay's terms): 9 multiply-adds, no allocation.
+  const Status s = cfg_.acc_correction.on ? acc_.step(t, Vec3(cfg_.acc_correction.M * (a_A - cfg_.acc_correction.bias_A)))
+                                          : acc_.step(t, a_A);
   // only when the oldest row waiting for the accelerometer may have become ready (or a gap changed it)
   if (accepted(s) && (s != Status::kOk || t >= acc_next_check_)) resolve();
   return s;

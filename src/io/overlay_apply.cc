@@ -1,7 +1,10 @@
 // A model overlay laid over a platform configuration (io/overlay_apply.h).
+#include <boresight/core/rotation.h>
 #include <boresight/io/overlay_apply.h>
 #include <boresight/io/overlay_yaml.h>
 #include <boresight/io/time_format.h>
+
+#include <Eigen/LU>
 
 #include <algorithm>
 #include <cmath>
@@ -133,22 +136,70 @@ bool applyOverlay(const model::Overlay& ov, const std::string& path, const std::
       for (int n = 0; n < m.n_harmonics; ++n) orders += (n ? ", " : "") + std::to_string(m.order[static_cast<std::size_t>(n)]);
       use.applied.push_back("thermal: " + which + " (harmonics " + (orders.empty() ? std::string("none") : orders) + " per revolution" +
                             (m.beta_terms ? ", beta modulation" : "") +
-                            "): predicts the relative corrections of pairs not seen, from the orbit (GNI1B / GNV1B, ORBIT)");
+                            "): functions of the argument of latitude from the orbit (GNI1B / GNV1B files, ORBIT messages)");
       use.thermal_model = m;
     } else {
       use.not_applied.push_back("thermal: " + program + " does not apply thermal terms (" + which + ")");
     }
   }
 
+  // Accelerometer terms.
+  if (ov.accelerometer) {
+    const model::AccelerometerTerms& a = *ov.accelerometer;
+    std::string which;
+    auto part = [&](const std::optional<model::Uncertain3>& u, const char* name) {
+      if (u) which += std::string(which.empty() ? "" : ", ") + name;
+    };
+    part(a.bias_rad_s2, "bias");
+    part(a.scale, "scale");
+    part(a.misalignment_rad, "misalignment");
+    part(a.nonorthogonality_rad, "non-orthogonality");
+    if (uses.accelerometer) {
+      core::AccCorrection c;
+      std::string why;
+      if (!accCorrectionFromOverlay(a, c, &why)) {
+        if (error) *error = path + ": accelerometer: " + why;
+        return false;
+      }
+      pc.pipeline.acc_correction = c;
+      use.applied.push_back("accelerometer: " + (which.empty() ? std::string("no term") : which) +
+                            " (every accelerometer sample corrected before the core)");
+    } else {
+      use.not_applied.push_back("accelerometer: " + program + " does not apply accelerometer terms (" + which + ")");
+    }
+  }
+
   // What no program applies yet.
-  if (ov.accelerometer)
-    use.not_applied.push_back("accelerometer: " + program +
-                              " does not apply accelerometer terms (bias, scale, misalignment, non-orthogonality)");
   for (const auto& t : ov.time_offsets)
     use.not_applied.push_back("time_offsets: " + program + " does not apply time offsets (" + t.sensor + " against " +
                               t.relative_to + ")");
   if (ov.published_frame)
     use.not_applied.push_back("published_frame: boresightd's state (its state_file); " + program + " does not read it");
+  return true;
+}
+
+bool accCorrectionFromOverlay(const model::AccelerometerTerms& t, core::AccCorrection& out, std::string* error) {
+  auto value = [](const std::optional<model::Uncertain3>& u) { return u ? u->value : Vec3(Vec3::Zero()); };
+  const Vec3 b = value(t.bias_rad_s2), s = value(t.scale), m = value(t.misalignment_rad), n = value(t.nonorthogonality_rad);
+  if (!(b.allFinite() && s.allFinite() && m.allFinite() && n.allFinite())) {
+    if (error) *error = "a term that is not a number";
+    return false;
+  }
+  Mat3 K = Mat3::Identity();
+  K.diagonal() += s;
+  K(0, 1) = K(1, 0) = n[2];
+  K(0, 2) = K(2, 0) = n[1];
+  K(1, 2) = K(2, 1) = n[0];
+  const Eigen::FullPivLU<Mat3> lu(K);
+  if (!lu.isInvertible() || std::abs(lu.determinant()) < 1e-6) {
+    if (error) *error = "the scale and non-orthogonality make a singular matrix (scale near -1?)";
+    return false;
+  }
+  const Mat3 R = core::quatExp(m).toRotationMatrix();  // as model::AccelModel turns A
+  out = core::AccCorrection{};
+  out.on = true;
+  out.bias_A = b;
+  out.M = R.transpose() * lu.inverse();
   return true;
 }
 

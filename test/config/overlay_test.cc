@@ -3,7 +3,9 @@
 // nearest), keys given twice, NaN/Inf and out-of-range values, each as FILE:LINE: key 'k': reason; the
 // noise section has one form for overlays and platform files; the noise table layers an overlay over a
 // platform file and derives the core's sigmas.
+#include <boresight/core/rotation.h>
 #include <boresight/io/core_config.h>
+#include <boresight/model/sensors.h>
 #include <boresight/io/overlay_apply.h>
 #include <boresight/io/overlay_yaml.h>
 #include <boresight/io/time_format.h>
@@ -486,6 +488,72 @@ TEST(Overlay, ApplyingItNamesWhatWasNotApplied) {
   EXPECT_NE(all.find("the mounting of head 1 valid 2023-06-01 00:00:00.000000 to 2023-06-02 00:00:00.000001"), std::string::npos) << all;
   EXPECT_NE(all.find("noise.heads[id 3]"), std::string::npos) << all;
   EXPECT_EQ(all.find("the mounting of head 2"), std::string::npos) << all;  // open-ended
+}
+
+// The accelerometer terms as the core's correction: the simulator's accelerometer (model::AccelModel:
+// bias, scale, misalignment) measured and corrected gives back C_A_B a_B; with a non-orthogonality the
+// solver's K (calib/solver.h). Applied only for a program that takes them (process, audit).
+TEST(Overlay, AccelerometerTermsCorrectWhatTheSimulatorsAccelerometerMeasures) {
+  model::AccelerometerTerms t;
+  model::Uncertain3 b, sc, mis, n;
+  b.value = Vec3(3e-6, -2e-6, 1e-6);
+  sc.value = Vec3(0.05, -0.04, 0.03);
+  mis.value = Vec3(300, -200, 100) * kRadPerArcsec;
+  t.bias_rad_s2 = b;
+  t.scale = sc;
+  t.misalignment_rad = mis;
+  core::AccCorrection c;
+  std::string err;
+  ASSERT_TRUE(io::accCorrectionFromOverlay(t, c, &err)) << err;
+  EXPECT_TRUE(c.on);
+  model::AccelConfig acfg;
+  acfg.C_A_B = accToBodyDefault().transpose();
+  model::AccEffects eff;
+  eff.bias_rad_s2 = b.value;
+  eff.scale = sc.value;
+  eff.misalignment_rad = mis.value;
+  const model::AccelModel acc(acfg, eff);
+  for (const Vec3& a_B : {Vec3(1e-5, 2e-5, -3e-5), Vec3(-4e-5, 0, 1e-6), Vec3(0, 0, 0)}) {
+    const Vec3 corrected = c.M * (acc.predict(a_B) - c.bias_A);
+    EXPECT_LT((corrected - acfg.C_A_B * a_B).norm(), 1e-12 * std::max(1.0, 1e5 * a_B.norm())) << a_B.transpose();
+  }
+  // the solver's non-orthogonality: K = I + diag(s) + N(n), N = [0 n2 n1; n2 0 n0; n1 n0 0]
+  n.value = Vec3(1e-3, -2e-3, 5e-4);
+  t.nonorthogonality_rad = n;
+  t.misalignment_rad.reset();
+  ASSERT_TRUE(io::accCorrectionFromOverlay(t, c, &err)) << err;
+  Mat3 K = Mat3::Identity();
+  K.diagonal() += sc.value;
+  K(0, 1) = K(1, 0) = n.value[2];
+  K(0, 2) = K(2, 0) = n.value[1];
+  K(1, 2) = K(2, 1) = n.value[0];
+  const Vec3 a_A(2e-5, -1e-5, 3e-5);
+  EXPECT_LT((c.M * (K * a_A + b.value - c.bias_A) - a_A).norm(), 1e-17);
+  // a singular K is refused
+  sc.value = Vec3(-1, 0, 0);
+  t.scale = sc;
+  t.nonorthogonality_rad.reset();
+  EXPECT_FALSE(io::accCorrectionFromOverlay(t, c, &err));
+  EXPECT_NE(err.find("singular"), std::string::npos) << err;
+  // applied for a program that takes them, named as not applied otherwise
+  io::PlatformConfig pc;
+  ASSERT_TRUE(io::loadPlatformConfig(kConfigDir + "/gracefo.yaml", pc, &err)) << err;
+  model::Overlay o;
+  sc.value = Vec3(0.05, -0.04, 0.03);
+  t.scale = sc;
+  o.accelerometer = t;
+  io::OverlayUse use;
+  ASSERT_TRUE(io::applyOverlay(o, "o.yaml", "test", {}, pc, use, &err)) << err;
+  EXPECT_FALSE(pc.pipeline.acc_correction.on);
+  ASSERT_EQ(use.not_applied.size(), 1u);
+  EXPECT_EQ(use.not_applied[0], "accelerometer: test does not apply accelerometer terms (bias, scale)");
+  io::OverlayUses uses;
+  uses.accelerometer = true;
+  ASSERT_TRUE(io::applyOverlay(o, "o.yaml", "test", uses, pc, use, &err)) << err;
+  EXPECT_TRUE(pc.pipeline.acc_correction.on);
+  EXPECT_EQ(pc.pipeline.acc_correction.bias_A, b.value);
+  ASSERT_EQ(use.applied.size(), 1u);
+  EXPECT_EQ(use.applied[0].rfind("accelerometer: bias, scale", 0), 0u) << use.applied[0];
 }
 
 }  // namespace

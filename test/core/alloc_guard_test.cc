@@ -107,6 +107,9 @@ TEST(AllocGuard, EveryComponentStepIsAllocationFree) {
   ASSERT_EQ(wahba->configure(wc), Status::kOk);
   PipelineConfig pc;
   pc.heads = heads;
+  pc.acc_correction.on = true;  // an overlay's accelerometer terms: the corrected path is the one guarded
+  pc.acc_correction.bias_A = Vec3(1e-7, -2e-7, 3e-7);
+  pc.acc_correction.M = Mat3::Identity() * 0.999;
   ASSERT_EQ(pipe->configure(pc), Status::kOk);
 
   // inputs prepared outside the guard (the test's own data may allocate)

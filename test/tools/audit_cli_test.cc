@@ -2,6 +2,10 @@
 // reason), and a few simulated minutes through `boresight simulate` then `boresight audit` (Level-1 and
 // the LCM log) writing report.md, audit.json with the issue's keys, and the plots.
 #include <boresight/audit/run.h>
+#include <boresight/core/rotation.h>
+#include <boresight/io/core_config.h>
+#include <boresight/io/overlay_yaml.h>
+#include <boresight/stream/replay.h>
 
 #include "test_files.h"
 
@@ -11,6 +15,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <sstream>
 #include <string>
 
 namespace {
@@ -31,6 +36,25 @@ const std::string& simulated() {
     return d;
   }();
   return dir;
+}
+
+/// Simulates `duration_s` of `scenario` (with `effects`: " --effect ..." arguments) into DIR/sim and returns
+/// the audit's four Level-1 inputs there (heads, accelerometer, QSA1B, GNV1B), space-separated.
+std::string simulatedInputs(const std::string& dir, const std::string& scenario, int seed, int duration_s,
+                            const std::string& effects = "") {
+  CliRun s = run("simulate --scenario " + scenario + " --seed " + std::to_string(seed) + " --duration " + std::to_string(duration_s) +
+                 " --out " + dir + "/sim --no-lcm --quiet" + effects);
+  EXPECT_EQ(s.status, 0) << s.out;
+  const std::string d = dir + "/sim/";
+  return d + "SCA1A_2023-06-01_C_04.txt " + d + "ACC1A_2023-06-01_C_04.txt " + d + "QSA1B_2023-06-01_C_04.txt " + d +
+         "GNV1B_2023-06-01_C_04.txt";
+}
+
+/// "name[sensor]" of every named cause in an audit.json.
+std::vector<std::string> namedCauses(const nlohmann::json& j) {
+  std::vector<std::string> v;
+  for (const auto& e : j["named_causes"]) v.push_back(e["name"].get<std::string>() + "[" + e["sensor"].get<std::string>() + "]");
+  return v;
 }
 
 }  // namespace
@@ -224,7 +248,7 @@ TEST(AuditCli, TheOverlaysNoiseIsTheLevelTheNoiseTestsCompareWith) {
   const nlohmann::json jb = nlohmann::json::parse(testutil::slurp(dir + "/ov/audit.json"));
   EXPECT_EQ(noiseNamed(jb), 0) << "with the data's own levels from the overlay, nothing to name";
   EXPECT_NE(b.out.find("head 1: cross_x white 6\", cross_y white 6\", about_boresight white 48\" ("), std::string::npos) << b.out;
-  EXPECT_NE(b.out.find("not applied: thermal: boresight audit does not apply thermal terms"), std::string::npos) << b.out;
+  EXPECT_NE(b.out.find("applied: thermal: heads  relative to head 1 (harmonics none"), std::string::npos) << b.out;  // no terms
   const auto& m = jb["model_in_use"];
   EXPECT_EQ(m["overlay"]["file"], dir + "/ideal.yaml");
   for (const auto& n : m["noise"]) {
@@ -234,4 +258,208 @@ TEST(AuditCli, TheOverlaysNoiseIsTheLevelTheNoiseTestsCompareWith) {
   }
   for (const auto& h : m["heads"]) EXPECT_NEAR(h["sigma_about_arcsec"].get<double>(), 48.0, 1e-9);
   EXPECT_NE(testutil::slurp(dir + "/ov/report.md").find("overlay " + dir + "/ideal.yaml"), std::string::npos);
+}
+
+/// --write-model closes the loop (issue 20 item 4): two simulated hours with a hidden relative
+/// misalignment of head 2 and an accelerometer bias, audited once; the named causes are written as a
+/// model overlay (head 2's mounting, the accelerometer's bias) and the same files audited again with it
+/// applied: nothing is named any more, and on the held-out blocks the configured model's residuals
+/// shrink to what the first pass's fit left. The overlay's mounting is Exp(r) q_Si_B(nominal) with the
+/// estimate r, and its bias the injected one within a few sigma.
+TEST(AuditCli, WriteModelWritesTheNamedCausesAndTheSecondPassNamesNothing) {
+  const std::string dir = testutil::makeTempDir("audit_cli_extension");
+  const std::string in = simulatedInputs(dir, BORESIGHT_SOURCE_DIR "/config/sim_audit.yaml", 7, 7200,
+                                         " --effect relative_misalignment:sensor=2,x_arcsec=6,y_arcsec=-4"
+                                         " --effect acc_bias:sensor=acc,x=3e-6,y=-2e-6,z=1e-6");
+  const std::string d = dir + "/sim/";
+  CliRun a = run("audit" + kConfig + in + " --out " + dir + "/out --write-model " + dir + "/model.yaml --quiet");
+  ASSERT_EQ(a.status, 0) << a.out;
+  std::printf("%s", a.out.substr(a.out.find("the extended model, applied")).c_str());
+  const nlohmann::json j = nlohmann::json::parse(testutil::slurp(dir + "/out/audit.json"));
+  // the first pass names both causes
+  EXPECT_EQ(namedCauses(j), (std::vector<std::string>{"relative_misalignment[2]", "acc_bias[acc]"}));
+  // the overlay carries them
+  boresight::model::Overlay o;
+  std::string err;
+  ASSERT_TRUE(boresight::io::readOverlay(dir + "/model.yaml", o, &err)) << err;
+  ASSERT_EQ(o.mountings.size(), 1u);
+  EXPECT_EQ(o.mountings[0].head, 2);
+  EXPECT_EQ(o.mountings[0].datum, boresight::model::MountingDatum::Ground);
+  const auto& est = j["extended"];
+  boresight::Vec3 r = boresight::Vec3::Zero();
+  for (const auto& e : est)
+    if (e["name"] == "relative_misalignment")
+      for (int k = 0; k < 3; ++k) r[k] = e["params"][std::string(1, "xyz"[k]) + "_arcsec"]["value"].get<double>() * boresight::kRadPerArcsec;
+  ASSERT_GT(r.norm(), 0);
+  boresight::io::PlatformConfig pc;
+  ASSERT_TRUE(boresight::io::loadPlatformConfig(BORESIGHT_SOURCE_DIR "/config/gracefo_ideal.yaml", pc, &err)) << err;
+  // head 2's nominal mounting from the simulated QSA1B (the platform file's mounting: qsa1b)
+  boresight::stream::ReplayInputs ri;
+  ASSERT_TRUE(boresight::stream::classifyInputs({d + "SCA1A_2023-06-01_C_04.txt", d + "QSA1B_2023-06-01_C_04.txt"}, ri, &err)) << err;
+  ASSERT_TRUE(boresight::stream::prepareConfig(ri, {}, pc, &err)) << err;
+  const boresight::Quat q_nominal = pc.pipeline.heads.head[1].q_Si_B;
+  const boresight::Quat q_expected = boresight::core::quatExp(r) * q_nominal;
+  EXPECT_LT(q_expected.angularDistance(o.mountings[0].q_Si_B) * boresight::kArcsecPerRad, 1e-6);
+  EXPECT_GT(q_nominal.angularDistance(o.mountings[0].q_Si_B) * boresight::kArcsecPerRad, 6.5);  // |(6, -4)| = 7.2"
+  ASSERT_TRUE(o.accelerometer && o.accelerometer->bias_rad_s2);
+  const auto& b = *o.accelerometer->bias_rad_s2;
+  const boresight::Vec3 truth(3e-6, -2e-6, 1e-6);
+  for (int k = 0; k < 3; ++k) EXPECT_LT(std::abs(b.value[k] - truth[k]), 5 * b.sigma[k]) << k;
+  // the second pass applied both and names nothing
+  const auto& x = j["extension"];
+  EXPECT_TRUE(x["still_named"].empty()) << x.dump(1);
+  std::string applied;
+  for (const auto& l : x["second_pass_model_in_use"]) applied += l.get<std::string>() + "\n";
+  EXPECT_NE(applied.find("applied: mountings: head 2"), std::string::npos) << applied;
+  EXPECT_NE(applied.find("applied: accelerometer: bias"), std::string::npos) << applied;
+  // held out: the configured model's residuals shrink to the fitted ones (angular acceleration: the
+  // bias is most of them)
+  bool seen_acc = false, seen_rel = false;
+  for (const auto& f : x["families"]) {
+    const double conf = f["heldout_rms_configured"], appl = f["heldout_rms_applied"], fit = f["heldout_rms_fitted"];
+    if (f["family"] == "angular_acceleration") {
+      seen_acc = true;
+      EXPECT_LT(appl, 0.7 * conf);
+      EXPECT_NEAR(appl / fit, 1.0, 0.02);
+    }
+    if (f["family"] == "relative") {
+      seen_rel = true;
+      EXPECT_LT(appl, conf);
+      EXPECT_NEAR(appl / fit, 1.0, 0.01);
+    }
+  }
+  EXPECT_TRUE(seen_acc && seen_rel) << x.dump(1);
+  EXPECT_NE(testutil::slurp(dir + "/out/report.md").find("## The extended model, applied"), std::string::npos);
+}
+
+/// The configured slow noise is the colour test's null: six simulated hours with a Gauss-Markov head
+/// error (test/audit/bench/sim_audit_gauss_markov.yaml) have coloured_noise named against the white
+/// platform file; its --write-model overlay carries the fitted Gauss-Markov part, and the second pass
+/// (that overlay applied) names nothing. The same overlay with the slow part's levels set 6x too small
+/// or 3x too large is named again: the null is the configured colour, not whatever was fitted.
+TEST(AuditCli, AnAppliedSlowNoiseModelIsTheNullAndAWrongOneIsNamed) {
+  const std::string dir = testutil::makeTempDir("audit_cli_colour");
+  const std::string in = simulatedInputs(dir, BORESIGHT_SOURCE_DIR "/test/audit/bench/sim_audit_gauss_markov.yaml", 9, 21600) + " --quiet";
+  CliRun a = run("audit" + kConfig + in + " --out " + dir + "/out --write-model " + dir + "/model.yaml");
+  ASSERT_EQ(a.status, 0) << a.out;
+  const nlohmann::json j = nlohmann::json::parse(testutil::slurp(dir + "/out/audit.json"));
+  bool coloured = false;
+  for (const auto& e : j["named_causes"]) coloured = coloured || e["name"] == "coloured_noise";
+  EXPECT_TRUE(coloured) << a.out;
+  EXPECT_TRUE(j["extension"]["still_named"].empty()) << j["extension"].dump(1);
+  // the same overlay with every slow level scaled
+  const std::string m = testutil::slurp(dir + "/model.yaml");
+  for (const double scale : {1.0 / 6, 3.0}) {
+    std::string t = m;
+    const std::string key = "kind: gauss_markov, sigma_arcsec: ";
+    for (std::size_t p = t.find(key); p != std::string::npos; p = t.find(key, p + 1)) {
+      const std::size_t v0 = p + key.size(), v1 = t.find(',', v0);
+      t.replace(v0, v1 - v0, std::to_string(std::stod(t.substr(v0, v1 - v0)) * scale));
+    }
+    ASSERT_NE(t, m);
+    const std::string ov = dir + "/scaled.yaml";
+    ASSERT_TRUE(testutil::writeFile(ov, t));
+    CliRun b = run("audit" + kConfig + in + " --overlay " + ov + " --out " + dir + "/scaled");
+    ASSERT_EQ(b.status, 0) << b.out;
+    const nlohmann::json jb = nlohmann::json::parse(testutil::slurp(dir + "/scaled/audit.json"));
+    bool named = false;
+    std::string note;
+    for (const auto& e : jb["named_causes"])
+      if (e["name"] == "coloured_noise") named = true, note = e["note"];
+    EXPECT_TRUE(named) << "slow levels x" << scale << ":\n" << b.out;
+    EXPECT_NE(note.find("against the configured slow noise"), std::string::npos) << note;
+  }
+}
+
+/// A thermal harmonic closes the loop too: six simulated hours with a once-per-revolution deformation
+/// of head 2 (6", -4" at 30 deg); the overlay's thermal terms (relative to the datum head, in its frame)
+/// applied on the second pass as mountings that follow the argument of latitude leave nothing to name,
+/// and the relative family's held-out residuals shrink to what the first pass's fit left.
+TEST(AuditCli, WriteModelCarriesAThermalHarmonicAndTheSecondPassNamesNothing) {
+  const std::string dir = testutil::makeTempDir("audit_cli_thermal");
+  const std::string in = simulatedInputs(dir, BORESIGHT_SOURCE_DIR "/config/sim_audit.yaml", 12, 21600,
+                                         " --effect thermal_periodic:sensor=2,harmonic=1,x_arcsec=6,y_arcsec=-4,phase_deg=30") +
+                         " --quiet";
+  CliRun a = run("audit" + kConfig + in + " --out " + dir + "/out --write-model " + dir + "/model.yaml");
+  ASSERT_EQ(a.status, 0) << a.out;
+  std::printf("%s", a.out.substr(a.out.find("the extended model, applied")).c_str());
+  const nlohmann::json j = nlohmann::json::parse(testutil::slurp(dir + "/out/audit.json"));
+  EXPECT_EQ(namedCauses(j), (std::vector<std::string>{"thermal_periodic[2]"}));
+  boresight::model::Overlay o;
+  std::string err;
+  ASSERT_TRUE(boresight::io::readOverlay(dir + "/model.yaml", o, &err)) << err;
+  ASSERT_TRUE(o.thermal.has_value());
+  EXPECT_EQ(o.thermal->datum_head, 1);
+  ASSERT_EQ(o.thermal->heads.size(), 1u);
+  EXPECT_EQ(o.thermal->heads[0].head, 2);
+  ASSERT_EQ(o.thermal->heads[0].harmonics.size(), 1u);
+  const auto& h = o.thermal->heads[0].harmonics[0];
+  EXPECT_EQ(h.harmonic, 1);
+  // |C0 (c, s)| keeps the injected amplitude: sqrt(6^2 + 4^2) = 7.2"
+  const double amp = std::sqrt(h.cos_rad.value.squaredNorm() + h.sin_rad.value.squaredNorm()) * boresight::kArcsecPerRad;
+  EXPECT_NEAR(amp, 7.21, 0.5);
+  const auto& x = j["extension"];
+  EXPECT_TRUE(x["still_named"].empty()) << x.dump(1);
+  bool seen = false;
+  for (const auto& f : x["families"])
+    if (f["family"] == "relative") {
+      seen = true;
+      const double conf = f["heldout_rms_configured"], appl = f["heldout_rms_applied"], fit = f["heldout_rms_fitted"];
+      EXPECT_LT(appl, conf);
+      EXPECT_NEAR(appl / fit, 1.0, 0.01);
+    }
+  EXPECT_TRUE(seen);
+  std::string notes;
+  for (const auto& l : x["second_pass_model_in_use"]) notes += l.get<std::string>() + "\n";
+  EXPECT_NE(notes.find("applied: thermal: head 2 relative to head 1 (harmonics 1 per revolution)"), std::string::npos) << notes;
+}
+
+/// The audit's thermal terms mean what method A's thermal fit means (two implementations, one overlay
+/// form): four simulated hours of the calibration scenario (manoeuvres, a once-per-revolution
+/// deformation of head 2; its aberration, head 3's harmonic and the beta modulation left out, which the
+/// calibrate fit does not separate) through `boresight calibrate --write-model` and `boresight audit
+/// --write-model`: head 2's first harmonic agrees within 3 sigma on every axis (cos and sin), in the
+/// datum head's frame. With the audit's conversion sign flipped they differ by twice the amplitude.
+TEST(AuditCli, TheAuditsThermalTermsAgreeWithCalibratesThermalFit) {
+  const std::string dir = testutil::makeTempDir("audit_cli_thermal_cal");
+  std::string sc;
+  {
+    std::istringstream in(testutil::slurp(BORESIGHT_SOURCE_DIR "/config/sim_gracefo_calibration.yaml"));
+    for (std::string line; std::getline(in, line);) {
+      if (line.find("name: aberration") != std::string::npos || line.find("sensor: 3, harmonic: 2") != std::string::npos) continue;
+      if (line.rfind("base: ", 0) == 0) line = "base: " BORESIGHT_SOURCE_DIR "/config/" + line.substr(6);
+      const auto b = line.find(", beta_gain: 0.3");
+      if (b != std::string::npos) line.erase(b, std::string(", beta_gain: 0.3").size());
+      sc += line + "\n";
+    }
+  }
+  ASSERT_TRUE(testutil::writeFile(dir + "/scenario.yaml", sc));
+  const std::string in = simulatedInputs(dir, dir + "/scenario.yaml", 1, 14400);
+  CliRun c = run("calibrate" + kConfig + in + " --json " + dir + "/c.json --write-model " + dir + "/cal.yaml");
+  ASSERT_EQ(c.status, 0) << c.out;
+  CliRun a = run("audit" + kConfig + in + " --quiet --out " + dir + "/out --write-model " + dir + "/aud.yaml");
+  ASSERT_EQ(a.status, 0) << a.out;
+  auto harmonic1 = [](const std::string& path, int head) {
+    boresight::model::Overlay o;
+    std::string err;
+    EXPECT_TRUE(boresight::io::readOverlay(path, o, &err)) << err;
+    boresight::model::ThermalHarmonicEntry h;
+    if (o.thermal)
+      for (const auto& e : o.thermal->heads)
+        if (e.head == head)
+          for (const auto& x : e.harmonics)
+            if (x.harmonic == 1) h = x;
+    return h;
+  };
+  const auto hc = harmonic1(dir + "/cal.yaml", 2), ha = harmonic1(dir + "/aud.yaml", 2);
+  ASSERT_GT(hc.cos_rad.value.norm() * boresight::kArcsecPerRad, 5.0) << "calibrate's fit has no first harmonic on head 2";
+  for (int k = 0; k < 3; ++k) {
+    const double sc_ = std::hypot(hc.cos_rad.sigma[k], ha.cos_rad.sigma[k]), ss = std::hypot(hc.sin_rad.sigma[k], ha.sin_rad.sigma[k]);
+    EXPECT_LT(std::abs(hc.cos_rad.value[k] - ha.cos_rad.value[k]), 3 * sc_)
+        << "cos axis " << k << ": calibrate " << hc.cos_rad.value[k] * boresight::kArcsecPerRad << "\", audit "
+        << ha.cos_rad.value[k] * boresight::kArcsecPerRad << "\"";
+    EXPECT_LT(std::abs(hc.sin_rad.value[k] - ha.sin_rad.value[k]), 3 * ss)
+        << "sin axis " << k << ": calibrate " << hc.sin_rad.value[k] * boresight::kArcsecPerRad << "\", audit "
+        << ha.sin_rad.value[k] * boresight::kArcsecPerRad << "\"";
+  }
 }

@@ -1,7 +1,9 @@
 // boresight audit --config FILE INPUT... --out DIR: the model audit (METHODS 4). Option parsing and
 // printing only: audit::runAudit() replays the inputs into the audit's collector and analyses them,
 // audit::writeAuditJson / writeAuditReport write the result.
+#include <boresight/audit/extension.h>
 #include <boresight/audit/report.h>
+#include <boresight/io/overlay_yaml.h>
 #include <boresight/report/text.h>
 #include <boresight/io/files.h>
 #include <boresight/audit/run.h>
@@ -24,7 +26,7 @@ namespace {
 const char* kUsage =
     "usage: boresight audit --config FILE INPUT... --out DIR [--truth truth.yaml] [--false-alarm P]\n"
     "                       [--overlay FILE] [--holdout-blocks N] [--max-harmonic N] [--lookahead S] [--strict]\n"
-    "                       [--white-rows] [--quiet]\n"
+    "                       [--write-model FILE] [--white-rows] [--quiet]\n"
     "\n"
     "The model audit: shows what the configured model gets wrong in measured data, names the cause from\n"
     "the effect catalogue (boresight simulate --list-effects), extends the model with it and measures\n"
@@ -49,11 +51,22 @@ const char* kUsage =
     "                         with the ideal noise preset)\n"
     "  --overlay FILE         a model overlay (README \"The model overlay\"): its noise models replace the\n"
     "                         platform file's (the levels the noise tests compare with), its mountings the\n"
-    "                         nominal ones; the parts the audit does not use are listed as not applied\n"
+    "                         nominal ones, its thermal terms make the heads' mountings follow the argument\n"
+    "                         of latitude (needs GNI1B / GNV1B), its accelerometer terms correct every\n"
+    "                         accelerometer sample; the parts the audit does not use are listed as not applied\n"
     "  --out DIR              writes DIR/report.md (findings, evidence, gain table, plots), DIR/audit.json\n"
     "                         (keys: baseline, effects[], named_causes[], not_explained[], ambiguous[],\n"
     "                         extended, gain, gains[], truth[] with --truth) and the SVG plots\n"
     "  --truth FILE           a simulator's truth.yaml: parameter errors before and after the extension\n"
+    "  --write-model FILE     the extended model as a model overlay (README \"The model overlay\"; the --overlay's\n"
+    "                         content extended): relative misalignments as mountings (datum: the body frame of\n"
+    "                         the other heads' mountings in use), thermal harmonics (relative to the datum\n"
+    "                         head), accelerometer bias / scale / misalignment, head noise levels and a\n"
+    "                         Gauss-Markov part, time offsets; what it cannot carry (steps, drifts, ...) is\n"
+    "                         listed. The audit then runs again on the same inputs with that overlay\n"
+    "                         applied (the pipeline re-run) and reports, per family, the held-out RMS with\n"
+    "                         the configured model against the extension applied, and what is still named\n"
+    "                         (audit.json key extension, report.md section)\n"
     "  --false-alarm P        family-wise false-alarm probability over every test (default 0.01)\n"
     "  --holdout-blocks N     the span is cut into 2N blocks; every other block is held out to measure\n"
     "                         the gain (default 4); with an orbit context and three orbits or more,\n"
@@ -149,6 +162,8 @@ int runAudit(int argc, char** argv) {
   app.add_option("--out", out_dir)->required();
   app.add_option("--truth", req.truth);
   app.add_option("--overlay", req.overlay);
+  std::string write_model;
+  app.add_option("--write-model", write_model);
   app.add_option("--false-alarm", req.options.false_alarm)->check(finiteRange(1e-12, 0.5));
   app.add_option("--holdout-blocks", req.options.holdout_blocks)->check(finiteRange(1, 1000));
   app.add_option("--max-harmonic", req.options.max_harmonic)->check(finiteRange(0, 20));
@@ -169,7 +184,7 @@ int runAudit(int argc, char** argv) {
     ins.push_back(req.config);
     if (!req.truth.empty()) ins.push_back(req.truth);
     if (!req.overlay.empty()) ins.push_back(req.overlay);
-    if (!io::checkOutputs(ins, {{"--out", out_dir, true}}, &err)) return fail(err);
+    if (!io::checkOutputs(ins, {{"--out", out_dir, true}, {"--write-model", write_model}}, &err)) return fail(err);
   }
   io::OutputDir dir;
   if (!dir.open(out_dir, &err)) return fail(err);
@@ -197,12 +212,54 @@ int runAudit(int argc, char** argv) {
   for (const auto& s : out.model_in_use) std::printf("%s\n", s.c_str());
   printResult(out.result);
 
+  // --write-model: the extension as an overlay, applied on a second pass over the same inputs.
+  nlohmann::ordered_json jext;
+  std::vector<std::string> ext_lines;
+  if (!write_model.empty()) {
+    audit::ExtensionContext ec;
+    ec.t0 = out.first_epoch;
+    ec.t1 = out.last_epoch;
+    ec.written_by = std::string("boresight audit ") + BORESIGHT_VERSION;
+    ec.note = "the model audit's extended model over " + fmt(out.span_s, "%.1f") + " s of data (platform file " + req.config +
+              (req.overlay.empty() ? std::string() : ", over the overlay " + req.overlay) + ")";
+    const audit::Extension ext = audit::extensionOverlay(out.result, out.platform, out.overlay, ec);
+    if (!io::writeOverlay(write_model, ext.overlay, &err)) return fail(err);
+    ext_lines.push_back("overlay written: " + write_model);
+    for (const auto& c : ext.carried) ext_lines.push_back("carried: " + c);
+    for (const auto& c : ext.not_carried) ext_lines.push_back("not carried: " + c);
+    if (!quiet) std::fprintf(stderr, "audit: second pass with %s applied\n", write_model.c_str());
+    audit::RunRequest again = req;
+    again.overlay = write_model;
+    audit::RunOutput out2;
+    if (!audit::runAudit(again, out2, &err)) return fail("the second pass with " + write_model + ": " + err);
+    const audit::AppliedExtension applied = audit::compareApplied(out.result, out2.result);
+    for (const auto& l : out2.model_in_use)
+      if (l.find("applied: ") != std::string::npos || l.rfind("warning", 0) == 0) ext_lines.push_back("second pass, " + l.substr(l.find_first_not_of(' ')));
+    for (const auto& l : applied.lines()) ext_lines.push_back(l);
+    std::printf("\nthe extended model, applied (--write-model):\n");
+    for (const auto& l : ext_lines) std::printf("  %s\n", l.c_str());
+    jext["model"] = write_model;
+    jext["carried"] = ext.carried;
+    jext["not_carried"] = ext.not_carried;
+    for (const auto& f : applied.families)
+      jext["families"].push_back({{"family", f.family},
+                                  {"unit", f.unit},
+                                  {"heldout_rms_configured", f.heldout_rms_configured},
+                                  {"heldout_rms_applied", f.heldout_rms_applied},
+                                  {"heldout_rms_fitted", f.heldout_rms_fitted}});
+    jext["still_named"] = applied.still_named;
+    jext["newly_named"] = applied.newly_named;
+    jext["second_pass_model_in_use"] = out2.model_in_use;
+  }
+
   audit::ReportContext ctx;
+  ctx.extension = ext_lines;
   ctx.command = "boresight audit --config " + req.config;
   if (!req.overlay.empty()) ctx.command += " --overlay " + req.overlay;
   for (const auto& f : req.inputs) ctx.command += " " + f;
   ctx.command += " --out " + out_dir;
   if (!req.truth.empty()) ctx.command += " --truth " + req.truth;
+  if (!write_model.empty()) ctx.command += " --write-model " + write_model;
   ctx.inputs = out.inputs;
   ctx.notes = out.notes;
   ctx.notes.insert(ctx.notes.end(), out.model_in_use.begin(), out.model_in_use.end());
@@ -210,11 +267,13 @@ int runAudit(int argc, char** argv) {
   {  // the audit's keys, then the model it ran with
     nlohmann::ordered_json j = nlohmann::ordered_json::parse(audit::auditJsonText(out.result));
     j["model_in_use"] = modelInUseJson(out.platform, out.overlay);
+    if (!jext.is_null()) j["extension"] = jext;
     if (!io::writeFileAtomic(json, j.dump(2) + "\n", &err)) return fail(err);
   }
   if (!audit::writeAuditReport(out.result, out_dir, &err, &ctx)) return fail(err);
   dir.keep();
   std::printf("-> %s/report.md, %s", out_dir.c_str(), json.c_str());
+  if (!write_model.empty()) std::printf(", model overlay %s", write_model.c_str());
   for (const auto& f : audit::auditPlotFiles(out.result)) std::printf(", %s", f.c_str());
   std::printf("\n");
   return 0;

@@ -54,7 +54,8 @@ const char* kUsage =
     "                        platform file's (fusion weights), its mountings the platform file's or QSA1B's,\n"
     "                        its thermal terms predict the relative corrections of head pairs a head epoch\n"
     "                        does not see (with the orbit: GNI1B / GNV1B files or ORBIT messages among the\n"
-    "                        inputs); the parts process does not use are listed as not applied\n"
+    "                        inputs), its accelerometer terms correct every accelerometer sample; the parts\n"
+    "                        process does not use are listed as not applied\n"
     "  --compare-sca1b FILE  compare the fused attitude with the official SCA1B product: per-axis mean\n"
     "                        and scatter of the difference (arcsec, body axes)\n"
     "  --clk1b FILE          receiver-to-GPS clock offsets for that comparison (Level-1A tags are\n"
@@ -149,6 +150,7 @@ int runProcess(int argc, char** argv) {
   io::OverlayUse ovu;
   io::OverlayUses uses;
   uses.thermal = true;
+  uses.accelerometer = true;
   if (!overlay.empty() && !io::applyOverlay(overlay, "boresight process", uses, pc, ovu, &err)) {
     std::fprintf(stderr, "boresight process: %s\n", err.c_str());
     return 1;

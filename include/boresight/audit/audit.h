@@ -41,6 +41,7 @@
 #include <limits>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -77,6 +78,30 @@ struct AuditOptions {
   /// (coloured_noise). False: the earlier rule, one lag-1 variance inflation per family from first
   /// differences (kept to compare: `boresight audit --white-rows`).
   bool time_colour = true;
+  /// The configured noise as the noise-level tests see it: per head slot half the mean square of the
+  /// first difference at the head epoch interval dt, var - autocovariance(dt) of the configured model
+  /// (cross-boresight: the mean of x and y; about the boresight), rad^2. For white noise that is the
+  /// core's sigma squared (the default, NaN); a slow coloured part adds little to it, so the level the
+  /// tests compare with is not the total variance then (audit::runAudit fills it from the noise in use).
+  std::array<double, core::kMaxHeads> configured_diff_cross2 = nanHeads(), configured_diff_about2 = nanHeads();
+  /// The configured slow noise of the heads (the Gauss-Markov parts of the noise in use): per head slot
+  /// the stationary 1-sigma cross-boresight (RMS of x and y) and about the boresight, rad, and one
+  /// correlation time (variance-weighted over the heads' terms), s; 0 / NaN: none (white, the default).
+  /// With it the relative family's colour test takes it as the null (coloured_noise is then named
+  /// only when the data depart from it) and its tests whiten with it unless a free fit beats it by BIC.
+  std::array<double, core::kMaxHeads> configured_gm_cross{}, configured_gm_about{};
+  double configured_gm_tau_s = std::numeric_limits<double>::quiet_NaN();
+  /// Thermal terms applied (a model overlay's, io::OverlayUse::thermal_model): every head epoch's
+  /// mountings follow them, C_Sk_B(u) = Exp(-C0_kd delta_dk(u)) C0_Sk_B (the datum head d keeps its
+  /// mounting; delta in S_d, core/thermal_harmonics.h; the constant and the harmonics of the argument of
+  /// latitude u from the orbit context, the beta modulation not applied), so the relative family sees
+  /// what the terms leave. Epochs without an orbit sample within 60 s keep the plain mountings (counted).
+  std::optional<core::ThermalHarmonicModel> applied_thermal;
+  static std::array<double, core::kMaxHeads> nanHeads() {
+    std::array<double, core::kMaxHeads> a{};
+    a.fill(std::numeric_limits<double>::quiet_NaN());
+    return a;
+  }
 };
 
 /// One parameter of an estimated effect, in the unit of the catalogue.

@@ -34,6 +34,9 @@ struct ReportContext {
   std::string command;                ///< how it was run, e.g. "boresight audit --config ..."
   std::vector<std::string> inputs;    ///< files used, with their role ("SCA1A_...: heads")
   std::vector<std::string> notes;     ///< e.g. the reference's time base, ignored files
+  /// --write-model: the overlay written, what it carries and not, and the second pass's comparison
+  /// (audit/extension.h), one line each; a section of its own after the gain.
+  std::vector<std::string> extension;
 };
 
 /// The result as JSON text (pretty-printed, keys in the order above).

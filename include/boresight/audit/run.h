@@ -48,6 +48,7 @@ struct RunOutput {
   std::uint64_t epochs = 0, rows = 0, orbit_samples = 0, orbit_rejected = 0, reference_samples = 0,
                 reference_dropped = 0;
   double span_s = 0;
+  TimeUs first_epoch = 0, last_epoch = 0;  ///< the head epochs' span (GPS)
   bool truth_given = false;
   io::PlatformConfig platform;        ///< the configuration the audit ran with (noise and mountings in use)
   io::OverlayUse overlay;             ///< what was taken from --overlay (empty file: none)

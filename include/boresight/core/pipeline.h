@@ -34,6 +34,17 @@ enum class FusionAlignment : std::uint8_t {
   kRunningMeans = 1,  ///< the running relative means (forgetting: heads.relative_time_constant_s)
 };
 
+/// A calibration of the accelerometer's angular acceleration, applied to every sample before the CRN:
+/// a_A <- M (a_A - bias_A). For a sensor that measures a_A = K R(Exp(m)) C_A_B a_B + b (K = I + diag(s)
+/// + N(n): scale s, symmetric non-orthogonality n; m the rotation of A from the configured C_B_A; the
+/// conventions of model/effects.h and calib/solver.h), M = R(Exp(m))^T K^-1 and bias_A = b. Set from a
+/// model overlay's accelerometer terms (io/overlay_apply.h); off by default.
+struct AccCorrection {
+  bool on = false;
+  Vec3 bias_A = Vec3::Zero();
+  Mat3 M = Mat3::Identity();
+};
+
 struct PipelineConfig {
   HeadSetConfig heads{};
   /// CRN of the fused attitude: fs_hz = head epoch rate (GRACE-FO 2 Hz); output_period_us = row period.
@@ -42,6 +53,7 @@ struct PipelineConfig {
   CrnConfig crn_acc = CrnConfig::at(10.0).outputEvery(0).bridging(20);
   Mat3 C_B_A = accToBodyDefault();  ///< accelerometer frame A to body B
   bool use_accelerometer = true;    ///< false: rows do not wait for accelerometer values
+  AccCorrection acc_correction{};   ///< applied to every accelerometer sample (off: as measured)
   int wahba_reference_slot = 0;     ///< frame of the star-vector solution
   /// Relative matrices for the star-vector solution and the deformation filter behind them (thermal.h).
   RelativeCorrection wahba_correction = RelativeCorrection::kFilteredThreeAxis;

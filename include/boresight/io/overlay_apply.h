@@ -8,7 +8,9 @@
 //   - thermal (for programs that take it: process, boresightd): the terms as the core's thermal model
 //     (OverlayUse::thermal_model), which predicts the relative corrections of pairs a head epoch does
 //     not see from the orbit (Engine::setThermalModel);
-//   - every other part (accelerometer terms, time offsets, noise or mountings of heads
+//   - accelerometer (for programs that take it: process, audit): the bias, scale, misalignment and
+//     non-orthogonality correct every accelerometer sample before the core (core::AccCorrection);
+//   - every other part (accelerometer terms for the other programs, time offsets, noise or mountings of heads
 //     the platform does not configure, and parts the program does not use) is named as not applied,
 //     with the reason: never silently ignored.
 // Call before stream::prepareConfig (which applies QSA1B to the heads the overlay leaves).
@@ -28,7 +30,15 @@ struct OverlayUses {
   bool noise = true;
   bool mountings = true;
   bool thermal = false;  ///< the program runs the core's thermal prediction (needs the orbit among its inputs)
+  /// The accelerometer terms correct every accelerometer sample before the core's CRN
+  /// (core::AccCorrection: bias, scale, misalignment, non-orthogonality; a term not given is zero).
+  bool accelerometer = false;
 };
+
+/// The core's correction (core::AccCorrection) for an overlay's accelerometer terms: M = R(Exp(m))^T
+/// K^-1, K = I + diag(s) + N(n) (calib/solver.h), bias b. False with *error when K is singular or a value
+/// is not finite.
+bool accCorrectionFromOverlay(const model::AccelerometerTerms& t, core::AccCorrection& out, std::string* error);
 
 /// What a program did with an overlay (for its terminal output and its JSON / report).
 struct OverlayUse {

@@ -1,0 +1,70 @@
+// The audit's extension as a model: the named causes with their estimates written as a model overlay
+// (model/overlay.h, the schema every program reads), so that the extended model can be applied - by the
+// audit itself on a second pass (`boresight audit --write-model`), by process, calibrate, simulate.
+//
+// What is carried, and how (estimates from the extended model's joint fit on the fitting blocks):
+//   relative_misalignment[k] (relative family) -> the mounting of head k: q_Si_B = Exp(r) q_Si_B(in use),
+//       r the estimate in the head frame (model/effects.h: C_Si_B(true) = R(Exp(r)) C_Si_B(nominal)), sigma
+//       per head axis; datum: the body frame of the mountings in use (the heads without a named
+//       misalignment define it: "ground" when they came from the platform file or QSA1B);
+//   acc_bias, acc_scale, acc_misalignment -> the accelerometer terms (A frame; a_A = (I + diag(s))
+//       R(Exp(m)) C_A_B a_B + b), added to the overlay's own when the audit ran with one (first order);
+//   cross_noise / anisotropic_noise[k] -> the white term of head k's cross-boresight (x and y) or
+//       about-boresight model set to the estimated level; coloured_noise (relative family, per head
+//       levels) -> a Gauss-Markov term of each head axis with a level, the estimated correlation time;
+//   time_offset[acc] (angular-acceleration family) -> an accelerometer time offset against the heads;
+//       time_offset[k] (relative family) -> head k's against the other heads (t_tag = t_true + offset,
+//       positive: late).
+// Everything else that was named (steps, drifts, clock drifts, harmonics, the reference family's
+// findings, events) is listed as not carried, with the reason. The overlay starts from the one the
+// audit ran with (--overlay), so a second extension builds on the first.
+#pragma once
+
+#include <boresight/audit/audit.h>
+#include <boresight/io/core_config.h>
+#include <boresight/io/overlay_apply.h>
+#include <boresight/model/overlay.h>
+
+#include <string>
+#include <vector>
+
+namespace boresight::audit {
+
+struct Extension {
+  model::Overlay overlay;
+  std::vector<std::string> carried;      ///< "relative_misalignment[2] -> mountings: head 2 ..."
+  std::vector<std::string> not_carried;  ///< "step[1] at 2400 s: the overlay has no steps ..."
+};
+
+struct ExtensionContext {
+  TimeUs t0 = 0, t1 = 0;     ///< the data's span: the items' validity and the mountings' epoch
+  std::string written_by;    ///< e.g. "boresight audit 0.9"
+  std::string note;          ///< what the overlay was made from
+};
+
+/// The extended model of `r` (an audit run with the configuration `pc` and the overlay `base`, empty
+/// file: none) as a model overlay. Pure: reads nothing, writes nothing.
+Extension extensionOverlay(const AuditResult& r, const io::PlatformConfig& pc, const io::OverlayUse& base,
+                           const ExtensionContext& ctx);
+
+/// The extension applied end to end: the same data audited again with the overlay in place (the
+/// pipeline re-run with its mountings, accelerometer correction and noise), per residual family the
+/// held-out RMS of the configured model (first pass, no effect) against that of the applied extension
+/// (second pass, no effect: nothing fitted to the held-out blocks on either pass), and what the second
+/// pass still names.
+struct AppliedFamily {
+  std::string family, unit;
+  double heldout_rms_configured = kNaN;  ///< first pass, baseline
+  double heldout_rms_applied = kNaN;     ///< second pass, baseline (the overlay applied)
+  double heldout_rms_fitted = kNaN;      ///< first pass, the extended model fitted (the in-audit gain)
+};
+struct AppliedExtension {
+  std::vector<AppliedFamily> families;
+  std::vector<std::string> still_named;    ///< "name[sensor] (family)" of the second pass
+  std::vector<std::string> newly_named;    ///< ... of those, the ones the first pass did not name
+  /// Lines for people (terminal and report).
+  std::vector<std::string> lines() const;
+};
+AppliedExtension compareApplied(const AuditResult& first, const AuditResult& second);
+
+}  // namespace boresight::audit

@@ -1,0 +1,351 @@
+// The audit's extended model as a model overlay: see include/boresight/audit/extension.h.
+#include <boresight/audit/extension.h>
+#include <boresight/core/rotation.h>
+#include <boresight/io/time_format.h>
+
+#include <cmath>
+#include <cstdio>
+
+namespace boresight::audit {
+namespace {
+
+std::string num(double v, const char* f = "%.3g") {
+  char b[48];
+  std::snprintf(b, sizeof b, f, v);
+  return b;
+}
+
+/// The estimate of a named cause: its entry in the extended model (every named effect re-estimated
+/// together), else the test's own.
+const EffectTest& estimateOf(const AuditResult& r, const EffectTest& named) {
+  for (const auto& e : r.extended)
+    if (e.name == named.name && e.sensor == named.sensor && e.family == named.family && !e.params.empty()) return e;
+  return named;
+}
+
+const ParamValue* param(const EffectTest& e, const std::string& key) {
+  for (const auto& p : e.params)
+    if (p.key == key) return &p;
+  return nullptr;
+}
+
+/// Three parameters "x<suffix>", "y<suffix>", "z<suffix>" times `scale`: value and sigma (NaN: none).
+bool vec3(const EffectTest& e, const std::string& suffix, double scale, model::Uncertain3& out) {
+  const char* ax[3] = {"x", "y", "z"};
+  for (int a = 0; a < 3; ++a) {
+    const ParamValue* p = param(e, ax[a] + suffix);
+    if (!p || !std::isfinite(p->value)) return false;
+    out.value[a] = p->value * scale;
+    out.sigma[a] = std::isfinite(p->sigma) ? p->sigma * scale : std::numeric_limits<double>::quiet_NaN();
+  }
+  return true;
+}
+
+std::string label(const EffectTest& e) { return e.name + "[" + e.sensor + "]"; }
+
+/// Adds `add` to an optional term (first order: small terms of one accelerometer compose by addition).
+void addTo(std::optional<model::Uncertain3>& term, const model::Uncertain3& add) {
+  if (!term) {
+    term = add;
+    return;
+  }
+  term->value += add.value;
+  term->sigma = add.sigma;  // the new estimate's uncertainty (it was made with the old terms applied)
+}
+
+/// The head-noise entry of `id` in the overlay's section (made when missing).
+model::HeadNoise& headEntry(model::NoiseSection& s, int id) {
+  for (auto& h : s.heads)
+    if (h.id == id) return h;
+  s.heads.push_back(model::HeadNoise{});
+  s.heads.back().id = id;
+  return s.heads.back();
+}
+
+/// The model of one head axis in use, with its white term set to `white` (rad; < 0: kept) and a
+/// Gauss-Markov term (gm_sigma rad, gm_tau s; gm_sigma <= 0: none) appended.
+model::AxisNoise axisWith(const model::NoiseModel& in_use, double white, double gm_sigma, double gm_tau) {
+  model::AxisNoise a;
+  bool white_set = false;
+  for (const auto& t : in_use.terms) {
+    if (t.kind == model::NoiseKind::White && white >= 0) {
+      if (!white_set) a.model.add(model::NoiseTerm::white(white));
+      white_set = true;
+      continue;
+    }
+    a.model.add(t);
+  }
+  if (white >= 0 && !white_set) a.model.add(model::NoiseTerm::white(white));
+  if (gm_sigma > 0 && gm_tau > 0) a.model.add(model::NoiseTerm::gaussMarkov(gm_sigma, gm_tau));
+  return a;
+}
+
+}  // namespace
+
+Extension extensionOverlay(const AuditResult& r, const io::PlatformConfig& pc, const io::OverlayUse& base,
+                           const ExtensionContext& ctx) {
+  Extension x;
+  model::Overlay& o = x.overlay;
+  if (!base.file.empty()) o = base.overlay;  // the model the audit ran with, extended
+  o.version = model::kOverlayVersion;
+  o.written_by = ctx.written_by;
+  o.platform = pc.platform;
+  o.note = ctx.note;
+  model::Validity span;
+  span.from = ctx.t0;
+  span.to = ctx.t1;
+  const core::HeadSetConfig& heads = pc.pipeline.heads;
+  auto slotOf = [&](const std::string& sensor) {
+    for (int s = 0; s < heads.n_heads; ++s)
+      if (std::to_string(heads.head[static_cast<std::size_t>(s)].id) == sensor) return s;
+    return -1;
+  };
+  // Head noise: per slot the white level per kind (cross, about; < 0 none) and the Gauss-Markov levels.
+  std::vector<double> white_cross(static_cast<std::size_t>(heads.n_heads), -1), white_about = white_cross,
+                                                                                 gm_cross(white_cross.size(), 0),
+                                                                                 gm_about(white_cross.size(), 0);
+  double gm_tau = 0;
+  bool noise_named = false;
+  struct HeadHarmonic {
+    int slot, n;
+    model::Uncertain3 cos_rad, sin_rad;  ///< the head's own mounting rotation, head axes
+  };
+  std::vector<HeadHarmonic> thermal;
+
+  for (const EffectTest& named : r.named) {
+    const EffectTest& e = estimateOf(r, named);
+    const std::string what = label(named) + " (" + named.family + ")";
+    if (named.name == "relative_misalignment" && named.family == "relative") {
+      const int s = slotOf(named.sensor);
+      model::Uncertain3 rv;
+      if (s < 0 || !vec3(e, "_arcsec", kRadPerArcsec, rv)) {
+        x.not_carried.push_back(what + ": no estimate for a configured head");
+        continue;
+      }
+      const auto& h = heads.head[static_cast<std::size_t>(s)];
+      model::MountingEntry m;
+      m.head = h.id;
+      m.q_Si_B = (core::quatExp(rv.value) * h.q_Si_B).normalized();
+      m.datum = model::MountingDatum::Ground;
+      m.epoch = ctx.t0 + (ctx.t1 - ctx.t0) / 2;
+      m.sigma_rad = rv.sigma;
+      m.valid = span;
+      bool replaced = false;
+      for (auto& old : o.mountings)
+        if (old.head == m.head) old = m, replaced = true;
+      if (!replaced) o.mountings.push_back(m);
+      x.carried.push_back(what + " -> mountings: head " + std::to_string(h.id) + " rotated by (" + num(rv.value.x() * kArcsecPerRad) +
+                          ", " + num(rv.value.y() * kArcsecPerRad) + ", " + num(rv.value.z() * kArcsecPerRad) +
+                          ")\" about its axes (datum: the body frame of the other heads' mountings in use)");
+    } else if (named.name == "acc_bias" || named.name == "acc_scale" || named.name == "acc_misalignment") {
+      model::Uncertain3 v;
+      const bool mis = named.name == "acc_misalignment";
+      if (!vec3(e, mis ? "_arcsec" : "", mis ? kRadPerArcsec : 1.0, v)) {
+        x.not_carried.push_back(what + ": no estimate");
+        continue;
+      }
+      if (!o.accelerometer) o.accelerometer = model::AccelerometerTerms{};
+      model::AccelerometerTerms& a = *o.accelerometer;
+      addTo(named.name == "acc_bias" ? a.bias_rad_s2 : named.name == "acc_scale" ? a.scale : a.misalignment_rad, v);
+      a.valid = span;
+      x.carried.push_back(what + " -> accelerometer: " + (named.name == "acc_bias" ? "bias" : named.name == "acc_scale" ? "scale" : "misalignment") +
+                          (base.overlay.accelerometer ? " (added to the overlay's)" : ""));
+    } else if ((named.name == "cross_noise" || named.name == "anisotropic_noise") && named.family == "noise") {
+      const bool cross = named.name == "cross_noise";
+      const ParamValue* p = param(e, cross ? "cross_arcsec" : "about_arcsec");
+      if (!p || !(p->value > 0)) {
+        x.not_carried.push_back(what + ": no level");
+        continue;
+      }
+      for (int s = 0; s < heads.n_heads; ++s)
+        if (named.sensor == "all" || slotOf(named.sensor) == s)
+          (cross ? white_cross : white_about)[static_cast<std::size_t>(s)] = p->value * kRadPerArcsec;
+      noise_named = true;
+      x.carried.push_back(what + " -> noise: the white " + (cross ? "cross-boresight" : "about-boresight") + " level " + num(p->value) +
+                          "\" of head" + (named.sensor == "all" ? "s all" : " " + named.sensor));
+    } else if (named.name == "coloured_noise" && named.family == "relative") {
+      const ParamValue* tau = param(e, "tau_s");
+      if (!tau || !(tau->value > 0)) {
+        x.not_carried.push_back(what + ": no correlation time");
+        continue;
+      }
+      gm_tau = tau->value;
+      std::string levels;
+      for (int s = 0; s < heads.n_heads; ++s) {
+        const std::string id = std::to_string(heads.head[static_cast<std::size_t>(s)].id);
+        const ParamValue* c = param(e, "head" + id + "_cross_arcsec");
+        const ParamValue* b = param(e, "head" + id + "_about_arcsec");
+        gm_cross[static_cast<std::size_t>(s)] = c && c->value > 0 ? c->value * kRadPerArcsec : 0;
+        gm_about[static_cast<std::size_t>(s)] = b && b->value > 0 ? b->value * kRadPerArcsec : 0;
+        levels += (levels.empty() ? "" : "; ") + std::string("head ") + id + " " + num(c ? c->value : 0) + "\"/" + num(b ? b->value : 0) + "\"";
+      }
+      noise_named = true;
+      x.carried.push_back(what + " -> noise: a Gauss-Markov term of " + num(gm_tau, "%.0f") + " s on every head axis (cross/about: " + levels + ")");
+    } else if (named.name == "time_offset" && (named.family == "angular_acceleration" || named.family == "relative")) {
+      const ParamValue* p = param(e, "offset_ms");
+      if (!p || !std::isfinite(p->value)) {
+        x.not_carried.push_back(what + ": no estimate");
+        continue;
+      }
+      model::TimeOffsetEntry t;
+      t.sensor = named.sensor == "acc" ? "accelerometer" : "head" + named.sensor;
+      t.relative_to = "heads";
+      t.offset_s = p->value * 1e-3;
+      t.sigma_s = std::isfinite(p->sigma) ? p->sigma * 1e-3 : std::numeric_limits<double>::quiet_NaN();
+      t.valid = span;
+      o.time_offsets.push_back(t);
+      x.carried.push_back(what + " -> time_offsets: " + t.sensor + " against the heads, " + num(p->value) + " ms");
+    } else if (named.name == "thermal_periodic" && named.family == "relative") {
+      const int s = slotOf(named.sensor);
+      const ParamValue* n = param(e, "harmonic");
+      model::Uncertain3 cs, sn;
+      if (s < 0 || !n || !(n->value >= 1) || !vec3(e, "_cos_arcsec", kRadPerArcsec, cs) || !vec3(e, "_sin_arcsec", kRadPerArcsec, sn)) {
+        x.not_carried.push_back(what + ": no cos/sin estimates");
+        continue;
+      }
+      thermal.push_back({s, static_cast<int>(std::lround(n->value)), cs, sn});
+      x.carried.push_back(what + " -> thermal: harmonic " + std::to_string(static_cast<int>(std::lround(n->value))) + " of head " +
+                          named.sensor + " (as a deformation relative to the datum head)");
+    } else {
+      std::string why;
+      if (named.name == "step" || named.name == "drift")
+        why = "the overlay has no " + named.name + "s (a mounting per validity span would carry a step; not written yet)";
+      else if (named.family == "reference")
+        why = "a finding against the outside reference (SCA1B), not a property of the instruments";
+      else if (named.family == "data")
+        why = "an event of the data, not a model term";
+      else
+        why = "the overlay has no item for it";
+      x.not_carried.push_back(what + ": not carried: " + why);
+    }
+  }
+
+  if (!thermal.empty()) {
+    // The overlay's form (core/thermal_harmonics.h): per head k the deformation relative to the datum
+    // head d in S_d, C_Sd_Sk = Exp(delta_k) C0_dk. A rotation phi of each head's own mounting
+    // (C_Si_B = Exp(phi_i) C0_Si_B) gives, to first order, delta_k = phi_d - C0_dk phi_k.
+    if (!o.thermal) {
+      o.thermal = model::ThermalTerms{};
+      o.thermal->datum_head = heads.head[0].id;
+    }
+    model::ThermalTerms& th = *o.thermal;
+    th.valid = span;
+    int d = -1;
+    for (int s = 0; s < heads.n_heads; ++s)
+      if (heads.head[static_cast<std::size_t>(s)].id == th.datum_head) d = s;
+    const Mat3 C_Sd_B = heads.head[static_cast<std::size_t>(std::max(d, 0))].q_Si_B.toRotationMatrix();
+    auto term = [&](int k, const HeadHarmonic& h, bool cos) -> std::pair<Vec3, Vec3> {  // contribution to head k, value and variance
+      const model::Uncertain3& u = cos ? h.cos_rad : h.sin_rad;
+      Vec3 var;
+      for (int a = 0; a < 3; ++a) var[a] = std::isfinite(u.sigma[a]) ? u.sigma[a] * u.sigma[a] : 0.0;
+      if (h.slot == d) return {u.value, var};  // phi_d enters every other head's delta
+      if (h.slot != k) return {Vec3::Zero(), Vec3::Zero()};
+      const Mat3 C0 = C_Sd_B * heads.head[static_cast<std::size_t>(k)].q_Si_B.toRotationMatrix().transpose();
+      return {-C0 * u.value, Vec3((C0 * var.asDiagonal() * C0.transpose()).diagonal())};
+    };
+    for (int k = 0; k < heads.n_heads && d >= 0; ++k) {
+      if (k == d) continue;
+      const int id = heads.head[static_cast<std::size_t>(k)].id;
+      for (const HeadHarmonic& h : thermal) {
+        if (h.slot != d && h.slot != k) continue;
+        model::ThermalHeadEntry* entry = nullptr;
+        for (auto& he : th.heads)
+          if (he.head == id) entry = &he;
+        if (!entry) {
+          th.heads.push_back(model::ThermalHeadEntry{});
+          th.heads.back().head = id;
+          th.heads.back().constant_rad.sigma = Vec3::Zero();
+          entry = &th.heads.back();
+        }
+        model::ThermalHarmonicEntry* he = nullptr;
+        for (auto& x2 : entry->harmonics)
+          if (x2.harmonic == h.n) he = &x2;
+        if (!he) {
+          entry->harmonics.push_back(model::ThermalHarmonicEntry{});
+          entry->harmonics.back().harmonic = h.n;
+          entry->harmonics.back().cos_rad.sigma = entry->harmonics.back().sin_rad.sigma = Vec3::Zero();
+          he = &entry->harmonics.back();
+        }
+        for (const bool cos : {true, false}) {
+          const auto [v, var] = term(k, h, cos);
+          model::Uncertain3& u = cos ? he->cos_rad : he->sin_rad;
+          Vec3 var0 = u.sigma.array().isFinite().select(u.sigma.cwiseProduct(u.sigma), Vec3::Zero());
+          u.value += v;
+          u.sigma = (var0 + var).cwiseSqrt();
+        }
+      }
+    }
+    if (d < 0) x.not_carried.push_back("thermal: the overlay's datum head " + std::to_string(th.datum_head) + " is not configured");
+  }
+
+  if (noise_named) {
+    for (int s = 0; s < heads.n_heads; ++s) {
+      const auto k = static_cast<std::size_t>(s);
+      if (white_cross[k] < 0 && white_about[k] < 0 && gm_cross[k] <= 0 && gm_about[k] <= 0) continue;
+      const int id = heads.head[k].id;
+      model::HeadNoise& hn = headEntry(o.noise, id);
+      hn.valid = span;
+      for (int a = 0; a < 3; ++a) {  // cross_x, cross_y, about_boresight (the star direction keeps its model)
+        const bool cross = a < 2;
+        const auto& in_use = pc.noise_in_use.head[k][static_cast<std::size_t>(a)];
+        const bool changed = cross ? (white_cross[k] >= 0 || gm_cross[k] > 0) : (white_about[k] >= 0 || gm_about[k] > 0);
+        if (!in_use.set || !changed) continue;
+        hn.axis[static_cast<std::size_t>(a)] =
+            axisWith(in_use.noise.model, cross ? white_cross[k] : white_about[k], cross ? gm_cross[k] : gm_about[k], gm_tau);
+      }
+    }
+  }
+  return x;
+}
+
+AppliedExtension compareApplied(const AuditResult& first, const AuditResult& second) {
+  AppliedExtension a;
+  for (const Gain& g : first.gains) {
+    AppliedFamily f;
+    f.family = g.family;
+    f.unit = g.unit;
+    f.heldout_rms_configured = g.heldout_rms_before;
+    f.heldout_rms_fitted = g.heldout_rms_after;
+    for (const Gain& h : second.gains)
+      if (h.family == g.family) f.heldout_rms_applied = h.heldout_rms_before;
+    a.families.push_back(f);
+  }
+  for (const EffectTest& e : second.named) {
+    const std::string l = label(e) + " (" + e.family + ")";
+    a.still_named.push_back(l);
+    bool before = false;
+    for (const EffectTest& f : first.named) before = before || (f.name == e.name && f.sensor == e.sensor && f.family == e.family);
+    if (!before) a.newly_named.push_back(l);
+  }
+  return a;
+}
+
+std::vector<std::string> AppliedExtension::lines() const {
+  std::vector<std::string> out;
+  for (const auto& f : families) {
+    if (f.unit.rfind("1 (normalised", 0) == 0) {  // a ratio to the model's level: 1 is right, not 0
+      out.push_back(f.family + ": held-out scatter over the model's " + num(f.heldout_rms_configured, "%.4g") +
+                    " with the configured model, " + num(f.heldout_rms_applied, "%.4g") +
+                    " with the extension applied (1: the data at the model's level; the first pass's fit: " +
+                    num(f.heldout_rms_fitted, "%.4g") + ")");
+      continue;
+    }
+    out.push_back(f.family + ": held-out RMS " + num(f.heldout_rms_configured, "%.4g") + " with the configured model, " +
+                  num(f.heldout_rms_applied, "%.4g") + " with the extension applied (" +
+                  (f.heldout_rms_configured > 0 && std::isfinite(f.heldout_rms_applied)
+                       ? num(100.0 * (f.heldout_rms_applied / f.heldout_rms_configured - 1.0), "%+.1f") + " %"
+                       : std::string("-")) +
+                  "; the first pass's fit: " + num(f.heldout_rms_fitted, "%.4g") + ") " + f.unit.substr(0, f.unit.find(" (")));
+  }
+  std::string s;
+  for (const auto& n : still_named) s += (s.empty() ? "" : ", ") + n;
+  out.push_back("named on the second pass: " + (s.empty() ? std::string("none") : s));
+  if (!newly_named.empty()) {
+    std::string t;
+    for (const auto& n : newly_named) t += (t.empty() ? "" : ", ") + n;
+    out.push_back("named on the second pass only: " + t);
+  }
+  return out;
+}
+
+}  // namespace boresight::audit
