@@ -349,9 +349,13 @@ void Collector::Impl::finalizeEpoch(int k) {
   have_prev_final = true;
 }
 
-void Collector::onAcc(TimeUs t, const Vec3& a_A, core::Status) {
+void Collector::onAcc(TimeUs t, const Vec3& a_in, core::Status) {
   Impl& m = *impl_;
-  if (!m.configured || !a_A.allFinite()) return;
+  if (!m.configured || !a_in.allFinite()) return;
+  // The engine hands the samples as measured; the core corrects them (an overlay's accelerometer terms,
+  // core::AccCorrection) and so does the audit's own use of them (the short-span rate route).
+  const core::AccCorrection& ac = m.cfg.acc_correction;
+  const Vec3 a_A = ac.on ? Vec3(ac.M * (a_in - ac.bias_A)) : a_in;
   if (!m.have_acc_span) {
     m.have_acc_span = true;
     m.acc_first = t;

@@ -216,7 +216,7 @@ Extension extensionOverlay(const AuditResult& r, const io::PlatformConfig& pc, c
         why = "an event of the data, not a model term";
       else
         why = "the overlay has no item for it";
-      x.not_carried.push_back(what + ": not carried: " + why);
+      x.not_carried.push_back(what + ": " + why);
     }
   }
 

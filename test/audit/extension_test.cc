@@ -56,7 +56,7 @@ TEST(Extension, EveryNamedCauseIsCarriedOrListedWithTheReason) {
   EXPECT_EQ(model::validate(x.overlay), "");
   EXPECT_EQ(x.carried.size(), 4u);
   ASSERT_EQ(x.not_carried.size(), 1u);
-  EXPECT_EQ(x.not_carried[0].rfind("step[1] (relative): not carried: the overlay has no steps", 0), 0u) << x.not_carried[0];
+  EXPECT_EQ(x.not_carried[0].rfind("step[1] (relative): the overlay has no steps", 0), 0u) << x.not_carried[0];
   // noise: head 1 gets a Gauss-Markov term on every axis beside its white level; head 2 a new white
   // cross level and nothing about the boresight; head 3 a cross term only
   const auto& heads = x.overlay.noise.heads;
