@@ -247,14 +247,17 @@ mountings): it forms the residual families (head pairs and inter-boresight angle
 star sensors against the accelerometer, the fused attitude against SCA1B when given), tests every effect
 of the simulator's catalogue against a threshold at a family-wise false-alarm rate of 1 %, names the
 causes the evidence supports, says which it cannot tell apart and what would, extends the model with
-them and measures the gain on held-out data. First the simulated day above (its hidden mounting errors,
+them and measures the gain on held-out data; with `--write-model` it writes that extension as a model
+overlay (mountings, thermal terms, accelerometer terms, noise) and audits the same data again with it
+applied, so the gain is that of the extended model end to end. First the simulated day above (its hidden mounting errors,
 thermal deformation and accelerometer misalignment, compared with truth.yaml), then the real GRACE-FO
 sample with SCA1B and CLK1B as the outside reference. The full reports, with plots, are in
 audit_sim/report.md and audit_real/report.md.
 TXT
   if [[ -f "$out/e2e/truth.yaml" ]]; then
     run audit --config "$root/config/gracefo_ideal.yaml" "$out"/e2e/SCA1A_*.txt "$out"/e2e/ACC1A_*.txt \
-      "$out"/e2e/QSA1B_*.txt "$out"/e2e/GNV1B_*.txt --truth "$out/e2e/truth.yaml" --out "$out/audit_sim"
+      "$out"/e2e/QSA1B_*.txt "$out"/e2e/GNV1B_*.txt --truth "$out/e2e/truth.yaml" --out "$out/audit_sim" \
+      --write-model "$out/audit_sim_model.yaml"
     printf '\nFull report: [audit_sim/report.md](audit_sim/report.md)\n' >>"$report"
     rm -f "$out"/e2e/*1A_*.txt "$out"/e2e/GNV1B_*.txt
   fi
@@ -262,7 +265,8 @@ TXT
     l1a="$real/gracefo/2023-06-01_L1A"; l1b="$real/gracefo/2023-06-01_L1B"
     run audit --config "$root/config/gracefo.yaml" "$l1a/SCA1A_2023-06-01_C_04.txt" "$l1a/ACC1A_2023-06-01_C_04.txt" \
       "$real/gracefo/static_2018-05-22/QSA1B_2018-05-22_C_04.txt" "$l1b/GNI1B_2023-06-01_C_04.txt" \
-      "$l1b/SCA1B_2023-06-01_C_04.txt" "$l1b/CLK1B_2023-06-01_C_04.txt" --out "$out/audit_real" || true
+      "$l1b/SCA1B_2023-06-01_C_04.txt" "$l1b/CLK1B_2023-06-01_C_04.txt" --out "$out/audit_real" \
+      --write-model "$out/audit_real_model.yaml" || true
     printf '\nFull report: [audit_real/report.md](audit_real/report.md)\n' >>"$report"
   fi
 fi

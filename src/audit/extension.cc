@@ -3,6 +3,9 @@
 #include <boresight/core/rotation.h>
 #include <boresight/io/time_format.h>
 
+#include <Eigen/Cholesky>
+
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -18,8 +21,21 @@ std::string num(double v, const char* f = "%.3g") {
 /// The estimate of a named cause: its entry in the extended model (every named effect re-estimated
 /// together), else the test's own.
 const EffectTest& estimateOf(const AuditResult& r, const EffectTest& named) {
+  // the same candidate: name, sensor, family and its fixed parameters (a harmonic's order, a step's time)
+  auto fixedOf = [](const EffectTest& e, const char* key) {
+    for (const auto& p : e.params)
+      if (p.key == key) return p.value;
+    return kNaN;
+  };
+  auto same = [&](const EffectTest& a, const EffectTest& b) {
+    for (const char* key : {"harmonic", "at_s", "start_s"}) {
+      const double x = fixedOf(a, key), y = fixedOf(b, key);
+      if (std::isfinite(x) != std::isfinite(y) || (std::isfinite(x) && x != y)) return false;
+    }
+    return true;
+  };
   for (const auto& e : r.extended)
-    if (e.name == named.name && e.sensor == named.sensor && e.family == named.family && !e.params.empty()) return e;
+    if (e.name == named.name && e.sensor == named.sensor && e.family == named.family && !e.params.empty() && same(e, named)) return e;
   return named;
 }
 
@@ -111,6 +127,9 @@ Extension extensionOverlay(const AuditResult& r, const io::PlatformConfig& pc, c
     model::Uncertain3 cos_rad, sin_rad;  ///< the head's own mounting rotation, head axes
   };
   std::vector<HeadHarmonic> thermal;
+  // Relative misalignments per slot (head axes) as estimated: their datum is the heads without one.
+  std::vector<model::Uncertain3> misalignment(static_cast<std::size_t>(heads.n_heads));
+  std::vector<bool> named_mis(static_cast<std::size_t>(heads.n_heads), false);
 
   for (const EffectTest& named : r.named) {
     const EffectTest& e = estimateOf(r, named);
@@ -122,21 +141,11 @@ Extension extensionOverlay(const AuditResult& r, const io::PlatformConfig& pc, c
         x.not_carried.push_back(what + ": no estimate for a configured head");
         continue;
       }
-      const auto& h = heads.head[static_cast<std::size_t>(s)];
-      model::MountingEntry m;
-      m.head = h.id;
-      m.q_Si_B = (core::quatExp(rv.value) * h.q_Si_B).normalized();
-      m.datum = model::MountingDatum::Ground;
-      m.epoch = ctx.t0 + (ctx.t1 - ctx.t0) / 2;
-      m.sigma_rad = rv.sigma;
-      m.valid = span;
-      bool replaced = false;
-      for (auto& old : o.mountings)
-        if (old.head == m.head) old = m, replaced = true;
-      if (!replaced) o.mountings.push_back(m);
-      x.carried.push_back(what + " -> mountings: head " + std::to_string(h.id) + " rotated by (" + num(rv.value.x() * kArcsecPerRad) +
-                          ", " + num(rv.value.y() * kArcsecPerRad) + ", " + num(rv.value.z() * kArcsecPerRad) +
-                          ")\" about its axes (datum: the body frame of the other heads' mountings in use)");
+      misalignment[static_cast<std::size_t>(s)] = rv;
+      named_mis[static_cast<std::size_t>(s)] = true;
+      x.carried.push_back(what + " -> mountings: head " + named.sensor + " rotated by (" + num(rv.value.x() * kArcsecPerRad) + ", " +
+                          num(rv.value.y() * kArcsecPerRad) + ", " + num(rv.value.z() * kArcsecPerRad) +
+                          ")\" about its axes, before the datum (below)");
     } else if (named.name == "acc_bias" || named.name == "acc_scale" || named.name == "acc_misalignment") {
       model::Uncertain3 v;
       const bool mis = named.name == "acc_misalignment";
@@ -218,6 +227,46 @@ Extension extensionOverlay(const AuditResult& r, const io::PlatformConfig& pc, c
         why = "the overlay has no item for it";
       x.not_carried.push_back(what + ": " + why);
     }
+  }
+
+  if (std::find(named_mis.begin(), named_mis.end(), true) != named_mis.end()) {
+    // Datum: the body frame the heads define together. The fused attitude is (to first order) the
+    // information-weighted mean of the heads' attitudes, so rotating the mountings by corrections of
+    // zero weighted mean leaves it where it was - and with it what the accelerometer's terms (estimated
+    // against the fused attitude with the mountings in use) refer to. Every head gets a mounting.
+    Mat3 W_sum = Mat3::Zero();
+    Vec3 Wr_sum = Vec3::Zero();
+    std::vector<Mat3> C_B_S(static_cast<std::size_t>(heads.n_heads));
+    for (int k = 0; k < heads.n_heads; ++k) {
+      const auto& h = heads.head[static_cast<std::size_t>(k)];
+      C_B_S[static_cast<std::size_t>(k)] = h.q_Si_B.toRotationMatrix().transpose();
+      const Vec3 b = h.boresight_Si.normalized();
+      const double ic = 1.0 / std::max(h.sigma_cross_rad * h.sigma_cross_rad, 1e-30), ia = 1.0 / std::max(h.sigma_roll_rad * h.sigma_roll_rad, 1e-30);
+      const Mat3 W_S = ic * (Mat3::Identity() - b * b.transpose()) + ia * b * b.transpose();
+      const Mat3 W_B = C_B_S[static_cast<std::size_t>(k)] * W_S * C_B_S[static_cast<std::size_t>(k)].transpose();
+      W_sum += W_B;
+      Wr_sum += W_B * (C_B_S[static_cast<std::size_t>(k)] * misalignment[static_cast<std::size_t>(k)].value);
+    }
+    const Vec3 rho_B = W_sum.ldlt().solve(Wr_sum);
+    for (int k = 0; k < heads.n_heads; ++k) {
+      const auto ks = static_cast<std::size_t>(k);
+      const auto& h = heads.head[ks];
+      model::MountingEntry m;
+      m.head = h.id;
+      const Vec3 r_k = misalignment[ks].value - C_B_S[ks].transpose() * rho_B;
+      m.q_Si_B = (core::quatExp(r_k) * h.q_Si_B).normalized();
+      m.datum = model::MountingDatum::StarCameras;
+      m.epoch = ctx.t0 + (ctx.t1 - ctx.t0) / 2;
+      m.sigma_rad = named_mis[ks] ? misalignment[ks].sigma : Vec3::Constant(std::numeric_limits<double>::quiet_NaN());
+      m.valid = span;
+      bool replaced = false;
+      for (auto& old : o.mountings)
+        if (old.head == m.head) old = m, replaced = true;
+      if (!replaced) o.mountings.push_back(m);
+    }
+    x.carried.push_back("datum of the mountings: the body frame the heads define together (information-weighted mean "
+                        "correction zero: the fused attitude stays); common rotation removed (" + num(rho_B.x() * kArcsecPerRad) + ", " +
+                        num(rho_B.y() * kArcsecPerRad) + ", " + num(rho_B.z() * kArcsecPerRad) + ")\" about the body axes");
   }
 
   if (!thermal.empty()) {

@@ -282,9 +282,9 @@ TEST(AuditCli, WriteModelWritesTheNamedCausesAndTheSecondPassNamesNothing) {
   boresight::model::Overlay o;
   std::string err;
   ASSERT_TRUE(boresight::io::readOverlay(dir + "/model.yaml", o, &err)) << err;
-  ASSERT_EQ(o.mountings.size(), 1u);
-  EXPECT_EQ(o.mountings[0].head, 2);
-  EXPECT_EQ(o.mountings[0].datum, boresight::model::MountingDatum::Ground);
+  // every head's mounting, in the datum the heads define together (the fused attitude stays)
+  ASSERT_EQ(o.mountings.size(), 3u);
+  for (const auto& m : o.mountings) EXPECT_EQ(m.datum, boresight::model::MountingDatum::StarCameras);
   const auto& est = j["extended"];
   boresight::Vec3 r = boresight::Vec3::Zero();
   for (const auto& e : est)
@@ -293,14 +293,25 @@ TEST(AuditCli, WriteModelWritesTheNamedCausesAndTheSecondPassNamesNothing) {
   ASSERT_GT(r.norm(), 0);
   boresight::io::PlatformConfig pc;
   ASSERT_TRUE(boresight::io::loadPlatformConfig(BORESIGHT_SOURCE_DIR "/config/gracefo_ideal.yaml", pc, &err)) << err;
-  // head 2's nominal mounting from the simulated QSA1B (the platform file's mounting: qsa1b)
+  // the nominal mountings from the simulated QSA1B (the platform file's mounting: qsa1b)
   boresight::stream::ReplayInputs ri;
   ASSERT_TRUE(boresight::stream::classifyInputs({d + "SCA1A_2023-06-01_C_04.txt", d + "QSA1B_2023-06-01_C_04.txt"}, ri, &err)) << err;
   ASSERT_TRUE(boresight::stream::prepareConfig(ri, {}, pc, &err)) << err;
-  const boresight::Quat q_nominal = pc.pipeline.heads.head[1].q_Si_B;
-  const boresight::Quat q_expected = boresight::core::quatExp(r) * q_nominal;
-  EXPECT_LT(q_expected.angularDistance(o.mountings[0].q_Si_B) * boresight::kArcsecPerRad, 1e-6);
-  EXPECT_GT(q_nominal.angularDistance(o.mountings[0].q_Si_B) * boresight::kArcsecPerRad, 6.5);  // |(6, -4)| = 7.2"
+  auto written = [&](int id) {
+    for (const auto& m : o.mountings)
+      if (m.head == id) return m.q_Si_B;
+    ADD_FAILURE() << "no mounting for head " << id;
+    return boresight::Quat::Identity();
+  };
+  // head 2 relative to heads 1 and 3 (which were not named) turned by Exp(r): C_S2_Sk = Exp(r) C0_S2_Sk
+  const boresight::Quat q2_nominal = pc.pipeline.heads.head[1].q_Si_B;
+  for (const int k : {0, 2}) {
+    const boresight::Quat qk_nominal = pc.pipeline.heads.head[static_cast<std::size_t>(k)].q_Si_B;
+    const boresight::Quat expected = boresight::core::quatExp(r) * q2_nominal * qk_nominal.conjugate();
+    const boresight::Quat got = written(2) * written(k + 1).conjugate();
+    EXPECT_LT(expected.angularDistance(got) * boresight::kArcsecPerRad, 0.01) << "head " << k + 1;
+    EXPECT_GT((q2_nominal * qk_nominal.conjugate()).angularDistance(got) * boresight::kArcsecPerRad, 6.5);  // |(6, -4)| = 7.2"
+  }
   ASSERT_TRUE(o.accelerometer && o.accelerometer->bias_rad_s2);
   const auto& b = *o.accelerometer->bias_rad_s2;
   const boresight::Vec3 truth(3e-6, -2e-6, 1e-6);
@@ -310,7 +321,7 @@ TEST(AuditCli, WriteModelWritesTheNamedCausesAndTheSecondPassNamesNothing) {
   EXPECT_TRUE(x["still_named"].empty()) << x.dump(1);
   std::string applied;
   for (const auto& l : x["second_pass_model_in_use"]) applied += l.get<std::string>() + "\n";
-  EXPECT_NE(applied.find("applied: mountings: head 2"), std::string::npos) << applied;
+  EXPECT_NE(applied.find("applied: mountings: heads 1, 2, 3"), std::string::npos) << applied;
   EXPECT_NE(applied.find("applied: accelerometer: bias"), std::string::npos) << applied;
   // held out: the configured model's residuals shrink to the fitted ones (angular acceleration: the
   // bias is most of them)

@@ -3,10 +3,11 @@
 // audit itself on a second pass (`boresight audit --write-model`), by process, calibrate, simulate.
 //
 // What is carried, and how (estimates from the extended model's joint fit on the fitting blocks):
-//   relative_misalignment[k] (relative family) -> the mounting of head k: q_Si_B = Exp(r) q_Si_B(in use),
-//       r the estimate in the head frame (model/effects.h: C_Si_B(true) = R(Exp(r)) C_Si_B(nominal)), sigma
-//       per head axis; datum: the body frame of the mountings in use (the heads without a named
-//       misalignment define it: "ground" when they came from the platform file or QSA1B);
+//   relative_misalignment[k] (relative family) -> every head's mounting: q_Si_B = Exp(r_k - C_Sk_B rho)
+//       q_Si_B(in use), r_k the estimate in the head frame (model/effects.h: C_Si_B(true) = R(Exp(r))
+//       C_Si_B(nominal); zero for heads not named), rho the information-weighted mean of C_B_Sk r_k over
+//       the heads: datum star_cameras, the fused attitude stays (and with it what the accelerometer's
+//       terms were estimated against); sigma per head axis for the named heads;
 //   acc_bias, acc_scale, acc_misalignment -> the accelerometer terms (A frame; a_A = (I + diag(s))
 //       R(Exp(m)) C_A_B a_B + b), added to the overlay's own when the audit ran with one (first order);
 //   cross_noise / anisotropic_noise[k] -> the white term of head k's cross-boresight (x and y) or
