@@ -249,7 +249,9 @@ of the simulator's catalogue against a threshold at a family-wise false-alarm ra
 causes the evidence supports, says which it cannot tell apart and what would, extends the model with
 them and measures the gain on held-out data; with `--write-model` it writes that extension as a model
 overlay (mountings, thermal terms, accelerometer terms, noise) and audits the same data again with it
-applied, so the gain is that of the extended model end to end. First the simulated day above (its hidden mounting errors,
+applied, so the gain is that of the extended model end to end; with `--simulate-model` it simulates
+that extended model and audits the simulation the same way: where the data's residuals and the
+simulation's differ, the model still lacks something. First the simulated day above (its hidden mounting errors,
 thermal deformation and accelerometer misalignment, compared with truth.yaml), then the real GRACE-FO
 sample with SCA1B and CLK1B as the outside reference. The full reports, with plots, are in
 audit_sim/report.md and audit_real/report.md.
@@ -257,9 +259,9 @@ TXT
   if [[ -f "$out/e2e/truth.yaml" ]]; then
     run audit --config "$root/config/gracefo_ideal.yaml" "$out"/e2e/SCA1A_*.txt "$out"/e2e/ACC1A_*.txt \
       "$out"/e2e/QSA1B_*.txt "$out"/e2e/GNV1B_*.txt --truth "$out/e2e/truth.yaml" --out "$out/audit_sim" \
-      --write-model "$out/audit_sim_model.yaml"
+      --write-model "$out/audit_sim_model.yaml" --simulate-model "$root/config/sim_gracefo_node_demo.yaml"
     printf '\nFull report: [audit_sim/report.md](audit_sim/report.md)\n' >>"$report"
-    rm -f "$out"/e2e/*1A_*.txt "$out"/e2e/GNV1B_*.txt
+    rm -f "$out"/e2e/*1A_*.txt "$out"/e2e/GNV1B_*.txt "$out"/audit_sim/model_simulation/*.txt
   fi
   if [[ -d "$real/gracefo" ]]; then
     l1a="$real/gracefo/2023-06-01_L1A"; l1b="$real/gracefo/2023-06-01_L1B"

@@ -2,10 +2,12 @@
 #include <boresight/audit/extension.h>
 #include <boresight/core/rotation.h>
 #include <boresight/io/time_format.h>
+#include <boresight/model/stats.h>
 
 #include <Eigen/Cholesky>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 
@@ -393,6 +395,190 @@ std::vector<std::string> AppliedExtension::lines() const {
     std::string t;
     for (const auto& n : newly_named) t += (t.empty() ? "" : ", ") + n;
     out.push_back("named on the second pass only: " + t);
+  }
+  return out;
+}
+
+namespace {
+
+std::string namedLabel(const EffectTest& e) { return label(e) + " (" + e.family + ")"; }
+
+struct Band {
+  std::string name;
+  double lo, hi;
+};
+
+std::vector<Band> bandsFor(const Spectrum& s) {
+  if (s.unit == "cycles/rev")
+    return {{"<0.8/rev", 0, 0.8},  {"1/rev", 0.8, 1.2}, {"1.2-1.8/rev", 1.2, 1.8}, {"2/rev", 1.8, 2.2},
+            {"2.2-5/rev", 2.2, 5}, {"5-20/rev", 5, 20}, {">20/rev", 20, 1e300}};
+  std::vector<Band> b;
+  if (s.freq.empty()) return b;
+  double lo = std::pow(10.0, std::floor(std::log10(s.freq.front())));
+  while (lo <= s.freq.back()) {
+    b.push_back({num(lo, "%g") + "-" + num(10 * lo, "%g") + " " + s.unit, lo, 10 * lo});
+    lo *= 10;
+  }
+  return b;
+}
+
+}  // namespace
+
+SimulatedCheck compareWithSimulation(const AuditResult& data, const AuditResult& simulation) {
+  SimulatedCheck c;
+  for (const Gain& g : data.gains)
+    for (const Gain& h : simulation.gains) {
+      if (h.family != g.family) continue;
+      SimulatedFamily f;
+      f.family = g.family;
+      f.unit = g.unit;
+      f.heldout_rms_data = g.heldout_rms_before;
+      f.heldout_rms_sim = h.heldout_rms_before;
+      f.ratio = f.heldout_rms_sim > 0 ? f.heldout_rms_data / f.heldout_rms_sim : kNaN;
+      // an RMS of n rows of noise has a relative sigma of about 1/sqrt(2n); rows are not independent
+      // (bin means of coloured noise), so the tolerance is not smaller than 5 %
+      const double n = std::max(1.0, std::min(g.heldout_rows, h.heldout_rows));
+      f.tolerance = std::max(0.05, 3.0 / std::sqrt(2.0 * n));
+      f.agrees = !std::isfinite(f.ratio) || std::abs(f.ratio - 1.0) <= f.tolerance;
+      c.families.push_back(f);
+    }
+  for (const Spectrum& a : data.spectra)
+    for (const Spectrum& b : simulation.spectra) {
+      if (a.family != b.family || a.label != b.label || a.unit != b.unit || a.freq.empty() || b.freq.empty()) continue;
+      c.data_spectra.push_back(a);
+      c.sim_spectra.push_back(b);
+      const double df = std::max(a.freq.front(), b.freq.front());  // 1 / span: the independent spacing
+      // base bands, then merged from low to high until each has kMinK independent frequencies
+      struct Acc {
+        double lo, hi, sa = 0, sb = 0;
+        int pa = 0, pb = 0;
+        std::string name, first;
+      };
+      std::vector<Acc> base;
+      for (const Band& band : bandsFor(a)) {
+        Acc x{band.lo, std::min(band.hi, std::min(a.freq.back(), b.freq.back())), 0, 0, 0, 0, band.name, band.name};
+        for (std::size_t i = 0; i < a.freq.size() && i < a.before.size(); ++i)
+          if (a.freq[i] >= band.lo && a.freq[i] < band.hi && std::isfinite(a.before[i])) x.sa += a.before[i] * a.before[i], ++x.pa;
+        for (std::size_t i = 0; i < b.freq.size() && i < b.before.size(); ++i)
+          if (b.freq[i] >= band.lo && b.freq[i] < band.hi && std::isfinite(b.before[i])) x.sb += b.before[i] * b.before[i], ++x.pb;
+        if (x.pa > 0 && x.pb > 0) base.push_back(x);
+      }
+      auto kOf = [&](const Acc& x) {
+        const double width = std::max(0.0, x.hi - std::max(x.lo, df));
+        return std::max(1, std::min(std::min(x.pa, x.pb), static_cast<int>(std::floor(width / df))));
+      };
+      constexpr int kMinK = 5;
+      std::vector<Acc> merged;
+      for (const Acc& x : base) {
+        if (!merged.empty() && kOf(merged.back()) < kMinK) {
+          Acc& m = merged.back();
+          m.hi = x.hi, m.sa += x.sa, m.sb += x.sb, m.pa += x.pa, m.pb += x.pb;
+          m.name = m.first + " .. " + x.name;
+        } else {
+          merged.push_back(x);
+        }
+      }
+      if (merged.size() > 1 && kOf(merged.back()) < kMinK) {  // a short last band joins the one before
+        Acc last = merged.back();
+        merged.pop_back();
+        Acc& m = merged.back();
+        m.hi = last.hi, m.sa += last.sa, m.sb += last.sb, m.pa += last.pa, m.pb += last.pb;
+        m.name = m.first + " .. " + last.name;
+      }
+      for (const Acc& x : merged) {
+        SimulatedBand sb;
+        sb.family = a.family;
+        sb.label = a.label;
+        sb.band = x.name;
+        sb.lo = x.lo;
+        sb.hi = x.hi;
+        sb.k = kOf(x);
+        sb.power_data = x.sa / x.pa;
+        sb.power_sim = x.sb / x.pb;
+        sb.ratio = sb.power_sim > 0 ? sb.power_data / sb.power_sim : kNaN;
+        c.bands.push_back(sb);
+      }
+    }
+  // Under the null the ratio of two means of k exponential ordinates is F(2k, 2k): two-sided, at a
+  // family-wise 1 % over the bands; plus ln 1.28 for what is not noise (the data's and the simulation's
+  // excitation - thruster pulses, attitude - are different draws; the spectra are of bin means).
+  for (SimulatedBand& b : c.bands) {
+    const double p = 0.01 / (2.0 * static_cast<double>(c.bands.size()));
+    b.tolerance = std::log(model::stats::fQuantile(p, 2.0 * b.k, 2.0 * b.k)) + 0.25;
+    b.agrees = std::isfinite(b.ratio) && std::abs(std::log(b.ratio)) <= b.tolerance;
+  }
+  for (const EffectTest& e : data.named) c.named_data.push_back(namedLabel(e));
+  for (const EffectTest& e : simulation.named) c.named_sim.push_back(namedLabel(e));
+  return c;
+}
+
+std::vector<std::string> SimulatedCheck::namedOnDataOnly() const {
+  std::vector<std::string> v;
+  for (const auto& n : named_data)
+    if (std::find(named_sim.begin(), named_sim.end(), n) == named_sim.end()) v.push_back(n);
+  return v;
+}
+
+bool SimulatedCheck::agrees() const {
+  if (!namedOnDataOnly().empty()) return false;
+  for (const auto& f : families)
+    if (!f.agrees) return false;
+  for (const auto& b : bands)
+    if (!b.agrees) return false;
+  return true;
+}
+
+std::vector<std::string> SimulatedCheck::lines() const {
+  std::vector<std::string> out;
+  for (const auto& f : families)
+    out.push_back(f.family + ": held-out RMS with the extended model " + num(f.heldout_rms_data, "%.4g") + " (data), " +
+                  num(f.heldout_rms_sim, "%.4g") + " (its simulation): ratio " + num(f.ratio, "%.3f") +
+                  (f.agrees ? " - agrees" : " - DIFFERS") + " (tolerance " + num(100 * f.tolerance, "%.0f") + " %)");
+  int n_bands = 0, n_differ = 0;
+  for (const auto& b : bands) {
+    ++n_bands;
+    if (b.agrees) continue;
+    ++n_differ;
+    out.push_back(b.family + " " + b.label + ", band " + b.band + ": residual power data/simulation " + num(b.ratio, "%.3g") +
+                  " - DIFFERS (|ln ratio| " + num(std::abs(std::log(b.ratio)), "%.2f") + " > " + num(b.tolerance, "%.2f") + ", " +
+                  std::to_string(b.k) + " independent frequencies)");
+  }
+  out.push_back("spectra: " + std::to_string(n_bands - n_differ) + " of " + std::to_string(n_bands) +
+                " bands agree between the data's and the simulation's residuals");
+  auto list = [](const std::vector<std::string>& v) {
+    std::string s;
+    for (const auto& x : v) s += (s.empty() ? "" : ", ") + x;
+    return s.empty() ? std::string("none") : s;
+  };
+  out.push_back("named with the extended model: data " + list(named_data) + "; its simulation " + list(named_sim));
+  if (!namedOnDataOnly().empty())
+    out.push_back("named on the data and not on the simulation of the model - the model lacks it: " + list(namedOnDataOnly()));
+  out.push_back(agrees() ? "the simulation of the extended model reproduces the data's residual statistics"
+                         : "the simulation of the extended model does NOT reproduce the data's residual statistics (above)");
+  return out;
+}
+
+std::vector<std::pair<std::string, report::Plot>> SimulatedCheck::plots() const {
+  std::vector<std::pair<std::string, report::Plot>> out;
+  std::vector<std::string> fams;
+  for (const auto& s : data_spectra)
+    if (std::find(fams.begin(), fams.end(), s.family) == fams.end()) fams.push_back(s.family);
+  for (const auto& fam : fams) {
+    report::Plot p;
+    p.title = fam + " residual spectra with the extended model: the data and its simulation";
+    p.width = 1100;
+    p.logx = p.logy = true;
+    p.ylabel = "amplitude";
+    for (std::size_t i = 0; i < data_spectra.size(); ++i) {
+      if (data_spectra[i].family != fam) continue;
+      p.xlabel = "frequency [" + data_spectra[i].unit + "]";
+      p.series.push_back({data_spectra[i].label + " data", data_spectra[i].freq, data_spectra[i].before, {}, report::Series::Style::kLine, 0.0, {}});
+      p.series.push_back({data_spectra[i].label + " simulation", sim_spectra[i].freq, sim_spectra[i].before, {}, report::Series::Style::kLine, 0.0, {}});
+    }
+    std::string slug = fam;
+    for (char& ch : slug)
+      if (!std::isalnum(static_cast<unsigned char>(ch))) ch = '_';
+    out.emplace_back("model_simulation_spectrum_" + slug + ".svg", std::move(p));
   }
   return out;
 }

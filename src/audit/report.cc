@@ -403,6 +403,7 @@ std::string reportText(const AuditResult& r, const ReportContext* ctx, const std
     o << "## The extended model, applied\n\n";
     for (const auto& l : ctx->extension) o << "- " << l << "\n";
     o << "\n";
+    for (const auto& [file, caption] : ctx->extension_figures) o << "![" << caption << "](" << file << ")\n\n*" << caption << "*\n\n";
   }
 
   if (!r.truth.empty()) {

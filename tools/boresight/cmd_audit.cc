@@ -7,6 +7,12 @@
 #include <boresight/report/text.h>
 #include <boresight/io/files.h>
 #include <boresight/audit/run.h>
+#include <boresight/io/time_format.h>
+#include <boresight/report/svg_plot.h>
+#include <boresight/sim/output.h>
+#include <boresight/sim/overlay.h>
+#include <boresight/sim/scenario.h>
+#include <boresight/sim/simulator.h>
 #include <boresight/stream/source.h>
 
 #include "cli_common.h"
@@ -67,6 +73,13 @@ const char* kUsage =
     "                         applied (the pipeline re-run) and reports, per family, the held-out RMS with\n"
     "                         the configured model against the extension applied, and what is still named\n"
     "                         (audit.json key extension, report.md section)\n"
+    "  --simulate-model SCENARIO  with --write-model: closes the loop. The extended model is simulated\n"
+    "                         (the scenario's orbit, attitude and stars; the overlay as its truth, sim/overlay.h;\n"
+    "                         the data's span; files in DIR/model_simulation) and audited with the overlay\n"
+    "                         applied, as the data were on the second pass: the held-out RMS and the residual\n"
+    "                         spectra (in bands) of the data and of the simulation are compared, side by side\n"
+    "                         in the report (audit.json key extension.simulation)\n"
+    "  --simulate-seed N      seed of that simulation (default 1)\n"
     "  --false-alarm P        family-wise false-alarm probability over every test (default 0.01)\n"
     "  --holdout-blocks N     the span is cut into 2N blocks; every other block is held out to measure\n"
     "                         the gain (default 4); with an orbit context and three orbits or more,\n"
@@ -151,6 +164,109 @@ void printResult(const audit::AuditResult& r) {
   for (const auto& m : r.baseline.missing) std::printf("not formed: %s\n", m.c_str());
 }
 
+/// --simulate-model: the extended model simulated over the data's span with the scenario's orbit,
+/// attitude and stars, audited with the overlay applied, and compared with the data's second pass.
+bool simulateModel(const std::string& scenario, unsigned long long seed, const std::string& model_file, const model::Overlay& model,
+                   const audit::RunOutput& first, const audit::RunOutput& second, const audit::RunRequest& req,
+                   const std::string& out_dir, bool quiet, nlohmann::ordered_json& jext, std::vector<std::string>& lines,
+                   std::vector<std::pair<std::string, std::string>>& figures, std::string* error) {
+  sim::Scenario sc;
+  if (!sim::loadScenario(scenario, sc, error)) return false;
+  const double duration = std::max(1.0, std::ceil(first.span_s));
+  // The model is the platform file with the overlay, nothing else: the scenario gives the orbit, the
+  // attitude, the stars, the heads' nominal mountings and rates; its effects and mounting errors (the
+  // data's hidden truth, when the data were simulated from it) are not part of the model.
+  const std::size_t n_effects = sc.effects.size();
+  sc.effects.clear();
+  sc.mounting_error_sigma_rad = 0;
+  for (auto& h : sc.heads) h.mounting_error_rad = Vec3::Zero();
+  model::Overlay full = model;
+  {  // every head and accelerometer axis's noise as the second pass ran with it (platform, then overlay)
+    const model::NoiseInUse& niu = second.platform.noise_in_use;
+    full.noise = model::NoiseSection{};
+    for (int s = 0; s < niu.n_heads; ++s) {
+      model::HeadNoise hn;
+      hn.id = niu.head_id[static_cast<std::size_t>(s)];
+      for (int a = 0; a < model::kHeadAxes; ++a)
+        if (niu.head[static_cast<std::size_t>(s)][static_cast<std::size_t>(a)].set)
+          hn.axis[static_cast<std::size_t>(a)] = niu.head[static_cast<std::size_t>(s)][static_cast<std::size_t>(a)].noise;
+      full.noise.heads.push_back(hn);
+    }
+    model::AccNoise an;
+    for (int a = 0; a < 3; ++a)
+      if (niu.acc[static_cast<std::size_t>(a)].set) an.axis[static_cast<std::size_t>(a)] = niu.acc[static_cast<std::size_t>(a)].noise;
+    full.noise.accelerometer = an;
+  }
+  sim::ScenarioOverlayUse use;
+  if (!sim::applyOverlay(full, model_file, duration, sc, use, error)) return false;
+  const std::string dir = out_dir + "/model_simulation";
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) {
+    *error = dir + ": " + ec.message();
+    return false;
+  }
+  sim::Simulator simulator;
+  if (!simulator.init(sc, seed, duration, error)) return false;
+  if (!quiet) std::fprintf(stderr, "audit: simulating the extended model (%s, seed %llu, %.0f s) into %s\n", scenario.c_str(), seed, duration, dir.c_str());
+  std::vector<std::string> files;
+  if (!sim::simulateIntoFolder(simulator, dir, false, {}, {}, files, error)) return false;
+  audit::RunRequest r = req;
+  r.inputs = files;
+  r.overlay = model_file;
+  r.truth.clear();
+  r.progress = nullptr;
+  audit::RunOutput out3;
+  if (!audit::runAudit(r, out3, error)) {
+    *error = "the audit of the simulation: " + *error;
+    return false;
+  }
+  const audit::SimulatedCheck check = audit::compareWithSimulation(second.result, out3.result);
+  lines.push_back("simulation of the extended model: " + scenario + " seed " + std::to_string(seed) + ", " + fmt(duration, "%.0f") +
+                  " s from " + io::formatTime(sc.start) + " (the scenario's orbit and attitude), files in " + dir);
+  if (std::llabs(sc.start - first.first_epoch) > 60'000'000)
+    lines.push_back("simulation: the data start at " + io::formatTime(first.first_epoch) +
+                    "; the simulation keeps the scenario's start (orbit phase and Sun geometry differ)");
+  lines.push_back("simulation: the model is the platform file's noise and the overlay; the scenario's " + std::to_string(n_effects) +
+                  " effect(s) and its mounting errors are not used");
+  int noise_items = 0;
+  for (const auto& l : use.applied)
+    if (l.rfind("noise:", 0) == 0) ++noise_items;
+    else lines.push_back("simulation, applied: " + l);
+  lines.push_back("simulation, applied: the noise of every head and accelerometer axis as the second pass ran with it (" +
+                  std::to_string(noise_items) + " items: audit.json extension.simulation.applied)");
+  for (const auto& l : use.replaced) lines.push_back("simulation, replaced in the scenario: " + l);
+  for (const auto& l : use.notes) lines.push_back("simulation, note: " + l);
+  for (const auto& l : use.not_applied) lines.push_back("simulation, not applied: " + l);
+  for (const auto& l : check.lines()) lines.push_back(l);
+  nlohmann::ordered_json js;
+  js["scenario"] = scenario;
+  js["seed"] = seed;
+  js["folder"] = dir;
+  js["applied"] = use.applied;
+  js["replaced"] = use.replaced;
+  js["not_applied"] = use.not_applied;
+  js["notes"] = use.notes;
+  for (const auto& f : check.families)
+    js["families"].push_back({{"family", f.family}, {"unit", f.unit}, {"heldout_rms_data", f.heldout_rms_data},
+                              {"heldout_rms_simulation", f.heldout_rms_sim}, {"ratio", f.ratio}, {"tolerance", f.tolerance},
+                              {"agrees", f.agrees}});
+  for (const auto& b : check.bands)
+    js["bands"].push_back({{"family", b.family}, {"component", b.label}, {"band", b.band}, {"lo", b.lo}, {"hi", b.hi}, {"k", b.k},
+                           {"power_data", b.power_data}, {"power_simulation", b.power_sim}, {"ratio", b.ratio},
+                           {"tolerance_ln", b.tolerance}, {"agrees", b.agrees}});
+  js["named_data"] = check.named_data;
+  js["named_simulation"] = check.named_sim;
+  js["agrees"] = check.agrees();
+  jext["simulation"] = js;
+  for (const auto& [file, plot] : check.plots()) {
+    if (!report::writeSvgPlot(out_dir + "/" + file, plot, error)) return false;
+    figures.emplace_back(file, "Residual spectra with the extended model applied: the data and the simulation of the extended model (" +
+                                   plot.title.substr(0, plot.title.find(' ')) + ")");
+  }
+  return true;
+}
+
 }  // namespace
 
 int runAudit(int argc, char** argv) {
@@ -164,6 +280,9 @@ int runAudit(int argc, char** argv) {
   app.add_option("--overlay", req.overlay);
   std::string write_model;
   app.add_option("--write-model", write_model);
+  std::string simulate_model, simulate_seed_s = "1";
+  app.add_option("--simulate-model", simulate_model);
+  app.add_option("--simulate-seed", simulate_seed_s);
   app.add_option("--false-alarm", req.options.false_alarm)->check(finiteRange(1e-12, 0.5));
   app.add_option("--holdout-blocks", req.options.holdout_blocks)->check(finiteRange(1, 1000));
   app.add_option("--max-harmonic", req.options.max_harmonic)->check(finiteRange(0, 20));
@@ -175,6 +294,12 @@ int runAudit(int argc, char** argv) {
   app.add_option("inputs", req.inputs)->required();
   if (int st = parseCommandLine(app, argc, argv, "audit", kUsage); st >= 0) return st;
   req.options.time_colour = !white_rows;
+  if (!simulate_model.empty() && write_model.empty()) {
+    std::fprintf(stderr, "boresight audit: --simulate-model needs --write-model (it simulates the model written)\n");
+    return 2;
+  }
+  unsigned long long simulate_seed = 1;
+  if (!parseSeed("audit", simulate_seed_s, simulate_seed)) return 2;
 
   // Outputs never destroy inputs; the output folder first (a run of hours must not end on an
   // unwritable folder), removed again when the run fails (OutputDir).
@@ -184,6 +309,7 @@ int runAudit(int argc, char** argv) {
     ins.push_back(req.config);
     if (!req.truth.empty()) ins.push_back(req.truth);
     if (!req.overlay.empty()) ins.push_back(req.overlay);
+    if (!simulate_model.empty()) ins.push_back(simulate_model);
     if (!io::checkOutputs(ins, {{"--out", out_dir, true}, {"--write-model", write_model}}, &err)) return fail(err);
   }
   io::OutputDir dir;
@@ -215,6 +341,7 @@ int runAudit(int argc, char** argv) {
   // --write-model: the extension as an overlay, applied on a second pass over the same inputs.
   nlohmann::ordered_json jext;
   std::vector<std::string> ext_lines;
+  std::vector<std::pair<std::string, std::string>> figures;
   if (!write_model.empty()) {
     audit::ExtensionContext ec;
     ec.t0 = out.first_epoch;
@@ -236,8 +363,6 @@ int runAudit(int argc, char** argv) {
     for (const auto& l : out2.model_in_use)
       if (l.find("applied: ") != std::string::npos || l.rfind("warning", 0) == 0) ext_lines.push_back("second pass, " + l.substr(l.find_first_not_of(' ')));
     for (const auto& l : applied.lines()) ext_lines.push_back(l);
-    std::printf("\nthe extended model, applied (--write-model):\n");
-    for (const auto& l : ext_lines) std::printf("  %s\n", l.c_str());
     jext["model"] = write_model;
     jext["carried"] = ext.carried;
     jext["not_carried"] = ext.not_carried;
@@ -250,16 +375,25 @@ int runAudit(int argc, char** argv) {
     jext["still_named"] = applied.still_named;
     jext["newly_named"] = applied.newly_named;
     jext["second_pass_model_in_use"] = out2.model_in_use;
+    if (!simulate_model.empty()) {
+      if (!simulateModel(simulate_model, simulate_seed, write_model, ext.overlay, out, out2, req, out_dir, quiet, jext, ext_lines,
+                         figures, &err))
+        return fail("--simulate-model: " + err);
+    }
+    std::printf("\nthe extended model, applied (--write-model):\n");
+    for (const auto& l : ext_lines) std::printf("  %s\n", l.c_str());
   }
 
   audit::ReportContext ctx;
   ctx.extension = ext_lines;
+  ctx.extension_figures = figures;
   ctx.command = "boresight audit --config " + req.config;
   if (!req.overlay.empty()) ctx.command += " --overlay " + req.overlay;
   for (const auto& f : req.inputs) ctx.command += " " + f;
   ctx.command += " --out " + out_dir;
   if (!req.truth.empty()) ctx.command += " --truth " + req.truth;
   if (!write_model.empty()) ctx.command += " --write-model " + write_model;
+  if (!simulate_model.empty()) ctx.command += " --simulate-model " + simulate_model + " --simulate-seed " + simulate_seed_s;
   ctx.inputs = out.inputs;
   ctx.notes = out.notes;
   ctx.notes.insert(ctx.notes.end(), out.model_in_use.begin(), out.model_in_use.end());

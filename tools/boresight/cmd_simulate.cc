@@ -4,7 +4,9 @@
 #include "commands.h"
 
 #include <boresight/model/effects.h>
+#include <boresight/io/overlay_yaml.h>
 #include <boresight/sim/output.h>
+#include <boresight/sim/overlay.h>
 #include <boresight/sim/scenario.h>
 #include <boresight/sim/simulator.h>
 
@@ -32,7 +34,12 @@ const char* kFooter =
     "--effect SPEC: NAME[:key=value,...], repeatable, e.g.\n"
     "  thermal_periodic:sensor=2,harmonic=1,x_arcsec=5\n"
     "  time_offset:sensor=acc,offset_ms=30\n"
-    "`boresight simulate --list-effects` prints the catalogue.\n";
+    "`boresight simulate --list-effects` prints the catalogue.\n"
+    "\n"
+    "--overlay FILE: a model overlay (audit --write-model, calibrate --write-model) as the truth: its\n"
+    "mountings, noise models, thermal, accelerometer terms and time offsets replace what the scenario\n"
+    "says about the same items (include/boresight/sim/overlay.h); --effect specs come on top. Every item\n"
+    "is printed as applied or not applied, with the reason.\n";
 
 bool makeDirs(const std::string& dir, std::string* error) {
   std::string cur;
@@ -59,7 +66,7 @@ int runSimulate(int argc, char** argv) {
   CLI::App app{"Simulates GRACE-FO-like telemetry (real Level-1 formats, an LCM log, truth.yaml) from a scenario\n"
                "(config/sim_gracefo.yaml) with named physical effects.",
                "boresight simulate"};
-  std::string scenario, out, seed_s;
+  std::string scenario, out, seed_s, overlay;
   std::vector<std::string> effects;
   double duration = 0;
   bool list_effects = false, no_lcm = false, quiet = false;
@@ -70,6 +77,7 @@ int runSimulate(int argc, char** argv) {
       ->type_name("S");
   app.add_option("--out", out, "output folder (created)")->type_name("DIR");
   app.add_option("--effect", effects, "add an effect SPEC, repeatable (below)")->take_all()->expected(1)->allow_extra_args(false)->type_name("SPEC");
+  app.add_option("--overlay", overlay, "a model overlay laid over the scenario as the truth (below)")->type_name("FILE");
   app.add_flag("--no-lcm", no_lcm, "do not write the LCM log");
   app.add_flag("--quiet", quiet, "no progress bar or summary");
   app.add_flag("--list-effects", list_effects, "print the effect catalogue and exit");
@@ -88,38 +96,41 @@ int runSimulate(int argc, char** argv) {
   if (!parseSeed("simulate", seed_s, seed)) return 2;
   std::string err;
   sim::Scenario sc;
-  if (!sim::loadScenario(scenario, sc, &err) || !sim::addEffectArgs(sc, effects, &err)) {
+  if (!sim::loadScenario(scenario, sc, &err)) {
+    std::fprintf(stderr, "boresight simulate: %s\n", err.c_str());
+    return 1;
+  }
+  if (!overlay.empty()) {
+    model::Overlay ov;
+    sim::ScenarioOverlayUse use;
+    if (!io::readOverlay(overlay, ov, &err) || !sim::applyOverlay(ov, overlay, duration > 0 ? duration : sc.duration_s, sc, use, &err)) {
+      std::fprintf(stderr, "boresight simulate: %s\n", err.c_str());
+      return 1;
+    }
+    if (!quiet) {
+      std::printf("overlay %s laid over the scenario:\n", overlay.c_str());
+      for (const auto& s : use.applied) std::printf("  applied: %s\n", s.c_str());
+      for (const auto& s : use.replaced) std::printf("  replaced: %s\n", s.c_str());
+      for (const auto& s : use.notes) std::printf("  note: %s\n", s.c_str());
+    }
+    for (const auto& s : use.not_applied) std::fprintf(stderr, "boresight simulate: overlay %s: not applied: %s\n", overlay.c_str(), s.c_str());
+  }
+  if (!sim::addEffectArgs(sc, effects, &err)) {
     std::fprintf(stderr, "boresight simulate: %s\n", err.c_str());
     return 1;
   }
   sim::Simulator simulator;
   io::OutputDir out_dir;  // removed again when the run fails and it is empty
-  if (!io::checkOutputs({scenario}, {{"--out", out, true}}, &err) || !out_dir.open(out, &err) ||
+  if (!io::checkOutputs(overlay.empty() ? std::vector<std::string>{scenario} : std::vector<std::string>{scenario, overlay}, {{"--out", out, true}}, &err) || !out_dir.open(out, &err) ||
       !makeDirs(out, &err) || !simulator.init(sc, seed, duration, &err)) {
     std::fprintf(stderr, "boresight simulate: %s\n", err.c_str());
     return 1;
   }
   const bool lcm = sc.output.lcm_log && !no_lcm;
-  sim::Level1Sink l1;
-  sim::LcmSink log;
-  sim::TeeSink tee;
   std::vector<std::string> files;
-  if (!l1.open(out, sc, &err) || (lcm && (!log.open(out + "/sim.lcmlog", &err) || !log.writeMountings(simulator)))) {
-    if (err.empty()) err = out + "/sim.lcmlog: cannot write the NOMINAL_MOUNTINGS message";
-    std::fprintf(stderr, "boresight simulate: %s\n", err.c_str());
-    return 1;
-  }
-  tee.add(&l1);
-  if (lcm) tee.add(&log);
   const auto t0 = std::chrono::steady_clock::now();
   ProgressBar bar(!quiet && ::isatty(::fileno(stderr)), "simulating");
-  simulator.run(tee, [&](double f) { bar(f); });
-  files = l1.files();
-  const std::string qsa = out + "/" + sim::productFileName("QSA1B", sc);
-  files.push_back(qsa);
-  if (lcm) files.push_back(out + "/sim.lcmlog");
-  if (!l1.close(&err) || (lcm && !log.close(&err)) || !sim::writeQsa1b(qsa, simulator, &err) ||
-      !sim::writeTruthYaml(out + "/truth.yaml", simulator, effects, files, &err)) {
+  if (!sim::simulateIntoFolder(simulator, out, lcm, effects, [&](double f) { bar(f); }, files, &err)) {
     std::fprintf(stderr, "boresight simulate: %s\n", err.c_str());
     return 1;
   }

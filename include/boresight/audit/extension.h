@@ -22,6 +22,7 @@
 #pragma once
 
 #include <boresight/audit/audit.h>
+#include <boresight/report/svg_plot.h>
 #include <boresight/io/core_config.h>
 #include <boresight/io/overlay_apply.h>
 #include <boresight/model/overlay.h>
@@ -67,5 +68,45 @@ struct AppliedExtension {
   std::vector<std::string> lines() const;
 };
 AppliedExtension compareApplied(const AuditResult& first, const AuditResult& second);
+
+/// Closing the loop: the data audited with the extended model applied (the second pass) against a
+/// simulation of the extended model audited the same way (the overlay as the simulation's truth,
+/// sim/overlay.h). When the model is right both residuals are what the model leaves (its noise), so
+/// their statistics agree; a line or a colour the model lacks shows in the data's residual only.
+/// Compared: the causes each audit names (one named on the data only is what the model lacks: the
+/// audit's own calibrated tests, the most powerful check of a line); per family the held-out RMS of the baseline (here: the extended model); per residual
+/// component: the mean power of the amplitude spectrum in frequency bands (cycles/rev: below the
+/// orbit, the 1/rev and 2/rev lines, between them, 2.2-5, 5-20 and above; other units: decades). A band
+/// agrees when the power ratio lies inside the two-sided F(2k, 2k) interval at a family-wise 1 % over
+/// all bands, widened by a factor 1.28: k is the band's independent frequencies (its width times the
+/// span, at most its points), a periodogram ordinate of noise is exponential so the ratio of two means of
+/// k is F(2k, 2k); the factor is for what is not noise (the excitation - thruster pulses, attitude - is
+/// another draw in the simulation) and the spectra's approximations (bin means, Lomb-Scargle).
+struct SimulatedBand {
+  std::string family, label, band;  ///< band: "<0.8", "1/rev", "0.8-1.2" ...
+  double lo = 0, hi = 0;            ///< in the spectrum's unit
+  int k = 0;                        ///< independent frequencies
+  double power_data = kNaN, power_sim = kNaN, ratio = kNaN, tolerance = kNaN;
+  bool agrees = true;
+};
+struct SimulatedFamily {
+  std::string family, unit;
+  double heldout_rms_data = kNaN, heldout_rms_sim = kNaN, ratio = kNaN, tolerance = kNaN;
+  bool agrees = true;
+};
+struct SimulatedCheck {
+  std::vector<SimulatedFamily> families;
+  std::vector<SimulatedBand> bands;
+  std::vector<std::string> named_data, named_sim;  ///< "name[sensor] (family)" of each audit
+  /// Causes the audit names on the data but not on the simulation of the model: what the model lacks.
+  std::vector<std::string> namedOnDataOnly() const;
+  /// Every family and band agrees and nothing is named on the data only.
+  bool agrees() const;
+  std::vector<std::string> lines() const;
+  /// Per family with spectra in both: one plot of every component's spectrum, data and simulation.
+  std::vector<std::pair<std::string, report::Plot>> plots() const;
+  std::vector<Spectrum> data_spectra, sim_spectra;  ///< as compared (the baselines' "before")
+};
+SimulatedCheck compareWithSimulation(const AuditResult& data, const AuditResult& simulation);
 
 }  // namespace boresight::audit

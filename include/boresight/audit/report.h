@@ -37,6 +37,8 @@ struct ReportContext {
   /// --write-model: the overlay written, what it carries and not, and the second pass's comparison
   /// (audit/extension.h), one line each; a section of its own after the gain.
   std::vector<std::string> extension;
+  /// Figures the caller wrote into the report's folder for that section: file name and caption.
+  std::vector<std::pair<std::string, std::string>> extension_figures;
 };
 
 /// The result as JSON text (pretty-printed, keys in the order above).

@@ -15,6 +15,7 @@
 
 #include <cstdio>
 #include <memory>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -132,5 +133,12 @@ class TeeSink : public SimSink {
 bool writeQsa1b(const std::string& path, const Simulator& sim, std::string* error);
 
 // writeTruthYaml: sim/truth.h.
+
+/// A whole simulation into a folder (which must exist), as `boresight simulate` writes it: the Level-1
+/// text products, QSA1B, the LCM log when `lcm` (and the scenario's output.lcm_log), truth.yaml.
+/// `simulator` must be initialised; `effect_args` go to truth.yaml; `files` receives every product
+/// written but truth.yaml. False with *error naming the file that could not be written.
+bool simulateIntoFolder(Simulator& simulator, const std::string& dir, bool lcm, const std::vector<std::string>& effect_args,
+                        const std::function<void(double)>& progress, std::vector<std::string>& files, std::string* error);
 
 }  // namespace boresight::sim
