@@ -9,7 +9,7 @@
 #include <boresight/model/noise.h>
 #include <boresight/model/rotation.h>
 #include <boresight/model/sensors.h>
-#include <boresight/sim/ephemeris.h>
+#include <boresight/model/ephemeris.h>
 
 #include <algorithm>
 #include <cmath>
@@ -80,7 +80,7 @@ struct OrbitTrack {
     c.arg_lat_rad = a.u_rad + f * du + (tb == ta ? a.u_rate_rad_s * (t - ta) : 0.0);
     c.beta_rad = a.beta_rad + f * (b.beta_rad - a.beta_rad);
     c.v_sat_I = a.v_I + f * (b.v_I - a.v_I);
-    c.v_earth_I = sim::earthVelocity(t);  // the simulator's ephemeris: one model of the Earth's motion
+    c.v_earth_I = model::earthVelocity(t);  // the simulator's ephemeris: one model of the Earth's motion
     return true;
   }
   /// Inertial position at t (s since the first epoch), linear between samples.
@@ -1564,12 +1564,12 @@ bool Analyser::blindAt(int k, double t) const {
   const double tg = orbit.t0_gps + t;
   const double m = opt.blinding_margin_deg * kRadPerDeg;
   const auto& hc = c.cfg.heads.head[static_cast<std::size_t>(k)];
-  const Vec3 sun = sim::sunPosition(tg) - r;
+  const Vec3 sun = model::sunPosition(tg) - r;
   if (std::acos(std::clamp(b.dot(sun.normalized()), -1.0, 1.0)) < hc.sun_exclusion_rad + m) return true;
   const double rn = r.norm();
-  const double limb = std::asin(std::min(1.0, sim::kEarthRadius_m / rn));
+  const double limb = std::asin(std::min(1.0, model::kEarthRadius_m / rn));
   if (std::acos(std::clamp(b.dot(-r / rn), -1.0, 1.0)) < limb + hc.earth_exclusion_rad + m) return true;
-  const Vec3 moon = sim::moonPosition(tg) - r;
+  const Vec3 moon = model::moonPosition(tg) - r;
   return std::acos(std::clamp(b.dot(moon.normalized()), -1.0, 1.0)) < hc.moon_exclusion_rad + m;
 }
 

@@ -6,7 +6,6 @@
 #include <boresight/io/product_stream.h>
 #include <boresight/model/effects.h>
 #include <boresight/model/orbit_context.h>
-#include <boresight/sim/truth.h>
 #include <boresight/stream/engine.h>
 #include <boresight/stream/replay.h>
 
@@ -77,15 +76,6 @@ bool feedOrbit(const std::vector<std::string>& files, const io::ReadOptions& opt
 
 }  // namespace
 
-bool readTruthFile(const std::string& path, Truth& out, std::string* error) {
-  out = Truth{};
-  sim::TruthFile tf;
-  if (!sim::readTruthYaml(path, tf, error)) return false;
-  out.effects = tf.effects;
-  for (const auto& h : tf.heads) out.mounting_error_rad[h.config.id] = h.config.mounting_error_rad;
-  return true;
-}
-
 bool runAudit(const RunRequest& req, RunOutput& out, std::string* error) {
   out = RunOutput{};
   io::PlatformConfig pc;
@@ -94,11 +84,7 @@ bool runAudit(const RunRequest& req, RunOutput& out, std::string* error) {
   uses.accelerometer = true;  // the angular-acceleration family then sees the corrected accelerometer
   uses.thermal = true;        // the heads' mountings follow the thermal terms (AuditOptions::applied_thermal)
   if (!req.overlay.empty() && !io::applyOverlay(req.overlay, "boresight audit", uses, pc, out.overlay, error)) return false;
-  Truth truth;
-  if (!req.truth.empty()) {
-    if (!readTruthFile(req.truth, truth, error)) return false;
-    out.truth_given = true;
-  }
+  out.truth_given = req.truth.has_value();
   stream::ReplayInputs in;
   if (!stream::classifyInputs(req.inputs, in, error)) return false;
   // Sort what the replay does not read: outside reference, its clock, the orbit; the rest is ignored.
@@ -253,7 +239,7 @@ bool runAudit(const RunRequest& req, RunOutput& out, std::string* error) {
                         (ci.thermal_no_orbit ? " (" + std::to_string(ci.thermal_no_orbit) + " without an orbit sample within 60 s: plain mountings)"
                                              : std::string()));
   }
-  out.result = analyse(collector, options, out.truth_given ? &truth : nullptr);
+  out.result = analyse(collector, options, req.truth ? &*req.truth : nullptr);
   out.platform = pc;
   out.model_in_use = io::modelInUseLines(pc, out.overlay);
   for (const auto& w : io::validityWarnings(out.overlay, engine.firstEpoch(), engine.lastEpoch()))

@@ -5,6 +5,7 @@
 #include <boresight/model/orbit_context.h>
 #include <boresight/sim/output.h>
 #include <boresight/sim/simulator.h>
+#include <boresight/sim/truth.h>
 #include <boresight/stream/engine.h>
 
 #include <chrono>
@@ -286,6 +287,15 @@ SimulatedAudit auditSimulated(const sim::Scenario& sc, const SimulatedOptions& o
   a.result = analyse(c, opt.audit, opt.compare_truth ? &a.run.truth : nullptr);
   a.analyse_wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return a;
+}
+
+bool readTruthFile(const std::string& path, Truth& out, std::string* error) {
+  out = Truth{};
+  sim::TruthFile tf;
+  if (!sim::readTruthYaml(path, tf, error)) return false;
+  out.effects = tf.effects;
+  for (const auto& h : tf.heads) out.mounting_error_rad[h.config.id] = h.config.mounting_error_rad;
+  return true;
 }
 
 }  // namespace boresight::audit

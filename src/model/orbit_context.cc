@@ -1,12 +1,11 @@
 #include <boresight/model/orbit_context.h>
+#include <boresight/model/ephemeris.h>
 
 #include <algorithm>
 #include <cmath>
 
 namespace boresight::model {
 namespace {
-constexpr double kAu_m = 1.495978707e11;
-constexpr double kTtMinusGps = 51.184;
 constexpr double kSecondsPerDay = 86400.0;
 inline double deg(double d) { return d * kRadPerDeg; }
 

@@ -1,6 +1,6 @@
 #include <boresight/io/level1.h>
 #include <boresight/model/orbit_context.h>
-#include <boresight/sim/ephemeris.h>
+#include <boresight/model/ephemeris.h>
 #include <boresight/sim/orbit.h>
 
 #include <algorithm>
@@ -12,22 +12,22 @@ OrbitState Orbit::state(double t) const {
   OrbitState s;
   posVel(t, s.r_I, s.v_I);
   s.arg_lat_rad = model::argumentOfLatitude(s.r_I, s.v_I);
-  s.sun_I = sunDirection(t);
+  s.sun_I = model::sunDirection(t);
   s.beta_rad = model::betaAngle(s.r_I, s.v_I, s.sun_I);
   return s;
 }
 
 CircularOrbit::CircularOrbit(const OrbitConfig& cfg, double t0)
-    : a_(kEarthRadius_m + cfg.altitude_m),
-      n_(std::sqrt(kEarthMu_m3_s2 / (a_ * a_ * a_))),
+    : a_(model::kEarthRadius_m + cfg.altitude_m),
+      n_(std::sqrt(model::kEarthMu_m3_s2 / (a_ * a_ * a_))),
       inc_(cfg.inclination_rad),
       raan0_(cfg.raan_rad),
       raan_rate_(0),
       u0_(cfg.arg_lat0_rad),
       t0_(t0) {
   if (cfg.j2_nodal_precession) {
-    const double p = kEarthRadius_m / a_;
-    raan_rate_ = -1.5 * n_ * kJ2 * p * p * std::cos(inc_);
+    const double p = model::kEarthRadius_m / a_;
+    raan_rate_ = -1.5 * n_ * model::kJ2 * p * p * std::cos(inc_);
   }
 }
 
@@ -68,14 +68,14 @@ std::unique_ptr<Orbit> makeOrbit(const OrbitConfig& cfg, double t0, double durat
   }
   std::vector<TabulatedOrbit::Node> nodes;
   nodes.reserve(f.records.size());
-  const Vec3 w(0, 0, kEarthRate_rad_s);
+  const Vec3 w(0, 0, model::kEarthRate_rad_s);
   for (const auto& g : f.records) {
     const double t = toSeconds(g.t);
     const Vec3 r(g.pos[0], g.pos[1], g.pos[2]), v(g.vel[0], g.vel[1], g.vel[2]);
     if (g.coord_ref == 'I') {
       nodes.push_back({t, r, v});
     } else {
-      const Mat3 C_I_E = C_E_I(t).transpose();
+      const Mat3 C_I_E = model::C_E_I(t).transpose();
       nodes.push_back({t, C_I_E * r, C_I_E * (v + w.cross(r))});
     }
   }

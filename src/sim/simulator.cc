@@ -2,7 +2,7 @@
 #include <boresight/model/random.h>
 #include <boresight/model/rotation.h>
 #include <boresight/model/stochastic.h>
-#include <boresight/sim/ephemeris.h>
+#include <boresight/model/ephemeris.h>
 #include <boresight/sim/simulator.h>
 
 #include <algorithm>
@@ -122,7 +122,7 @@ model::OrbitContext Simulator::context(double t_rel) const {
   c.arg_lat_rad = os.arg_lat_rad;
   c.beta_rad = os.beta_rad;
   c.v_sat_I = os.v_I;
-  c.v_earth_I = earthVelocity(t);
+  c.v_earth_I = model::earthVelocity(t);
   return c;
 }
 
@@ -191,12 +191,12 @@ void Simulator::run(SimSink& sink, const std::function<void(double)>& progress) 
     const double t = t0 + tau;
     if (std::abs(t - sun_t) > 10.0) {
       sun_t = t;
-      sun_I = sunDirection(t);
-      v_earth = earthVelocity(t);
+      sun_I = model::sunDirection(t);
+      v_earth = model::earthVelocity(t);
     }
     if (std::abs(t - moon_t) > 30.0) {
       moon_t = t;
-      moon_I = moonPosition(t);
+      moon_I = model::moonPosition(t);
     }
     orbit_->posVel(t, r_I, v_I);
     ctx.t_s = tau;
@@ -237,9 +237,9 @@ void Simulator::run(SimSink& sink, const std::function<void(double)>& progress) 
       o.t = tmin;
       const double t = toSeconds(tmin);
       orbit_->posVel(t, o.r_I, o.v_I);
-      const Mat3 C = C_E_I(t);
+      const Mat3 C = model::C_E_I(t);
       o.r_E = C * o.r_I;
-      o.v_E = C * (o.v_I - Vec3(0, 0, kEarthRate_rad_s).cross(o.r_I));
+      o.v_E = C * (o.v_I - Vec3(0, 0, model::kEarthRate_rad_s).cross(o.r_I));
       sink.orbit(o);
       ++stats_.orbit_samples;
       gnv_next += gnv_period;

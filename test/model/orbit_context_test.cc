@@ -2,7 +2,7 @@
 // route against the inertial one, and the real GRACE-FO GNI1B / GNV1B sample (same epochs, both frames).
 #include <boresight/io/level1.h>
 #include <boresight/model/orbit_context.h>
-#include <boresight/sim/ephemeris.h>
+#include <boresight/model/ephemeris.h>
 #include <boresight/sim/orbit.h>
 
 #include <gtest/gtest.h>
@@ -41,7 +41,7 @@ TEST(OrbitContext, ArgumentOfLatitudeAndBetaMatchTheSimulatorsOrbit) {
   }
   std::printf("sim orbit: max |du| %.2e rad, max |dbeta| %.2e rad, max |rate/n - 1| %.2e\n", max_du, max_db, max_rate);
   EXPECT_LT(max_du, 1e-9);
-  EXPECT_LT(max_db, 1e-12);  // the simulator's Sun is this one (sim::sunPosition delegates)
+  EXPECT_LT(max_db, 1e-12);  // the simulator's Sun is this one (model::sunPosition delegates)
   EXPECT_LT(max_rate, 1e-6);  // J2 nodal precession changes du/dt by ~1e-7 of n
 }
 
@@ -78,7 +78,7 @@ TEST(OrbitContext, EarthFixedRouteGivesTheSameArgumentOfLatitude) {
     EXPECT_NEAR(me.beta_rad, mi.beta_rad, 1e-9);
     // the simulator's Earth-fixed frame (mean sidereal angle): u does not depend on a rotation about z,
     // beta moves by the angle between the two (precession in right ascension, ~0.3 deg in 2023)
-    const Mat3 C = sim::C_E_I(t);
+    const Mat3 C = model::C_E_I(t);
     const Vec3 rG = C * r, vG = C * v - w.cross(rG);
     ASSERT_TRUE(model::orbitSampleFromEarthFixed(tu, rG, vG, mg));
     EXPECT_NEAR(wrap(mg.u_rad - mi.u_rad), 0.0, 1e-9);
@@ -108,7 +108,7 @@ TEST(OrbitContext, EarthRotationAngleAndLeapSeconds) {
   EXPECT_NEAR(model::earthRotationAngle(13.0), 2 * kPi * 0.7790572732640, 1e-9);
   // GMST - ERA is the accumulated precession in right ascension plus the equation of the origins
   // (~0.33 deg in 2023; 0 at J2000 within the terms GMST's short formula drops)
-  const double d = wrap(sim::gmst(kT0) - model::earthRotationAngle(kT0)) / kRadPerDeg;
+  const double d = wrap(model::gmst(kT0) - model::earthRotationAngle(kT0)) / kRadPerDeg;
   std::printf("GMST - ERA at 2023-06-01: %.3f deg\n", d);
   EXPECT_GT(d, 0.25);
   EXPECT_LT(d, 0.40);

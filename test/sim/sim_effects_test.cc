@@ -5,7 +5,7 @@
 // the affected sensor must differ exactly by the effect's model.
 #include "sim_test_util.h"
 
-#include <boresight/sim/ephemeris.h>
+#include <boresight/model/ephemeris.h>
 
 #include <algorithm>
 #include <numeric>

@@ -4,7 +4,7 @@
 #include "test_files.h"
 
 #include <boresight/model/orbit_context.h>
-#include <boresight/sim/ephemeris.h>
+#include <boresight/model/ephemeris.h>
 #include <boresight/sim/output.h>
 
 #include <filesystem>
@@ -24,14 +24,14 @@ TEST(SimOrbit, CircularOrbitHasTheConfiguredGeometry) {
   const double t0 = 738849600.0;
   sim::CircularOrbit o(c, t0);
   const auto s = o.state(t0);
-  EXPECT_NEAR(s.r_I.norm(), sim::kEarthRadius_m + 490e3, 1e-6);
+  EXPECT_NEAR(s.r_I.norm(), model::kEarthRadius_m + 490e3, 1e-6);
   EXPECT_NEAR(s.arg_lat_rad, 10 * kRadPerDeg, 1e-12);
   EXPECT_NEAR(o.state(t0 + 1000).arg_lat_rad, 10 * kRadPerDeg + 1000 * o.meanMotion(), 1e-12);
   const Vec3 h = s.r_I.cross(s.v_I).normalized();
   EXPECT_NEAR(std::acos(h.z()), 89 * kRadPerDeg, 1e-6);
   // Period about 94.4 min at 490 km.
   EXPECT_NEAR(2 * kPi / o.meanMotion(), 5664, 10);
-  EXPECT_NEAR(s.v_I.norm(), std::sqrt(sim::kEarthMu_m3_s2 / (sim::kEarthRadius_m + 490e3)), 1e-6);
+  EXPECT_NEAR(s.v_I.norm(), std::sqrt(model::kEarthMu_m3_s2 / (model::kEarthRadius_m + 490e3)), 1e-6);
   EXPECT_NEAR(s.v_I.norm(), 7618.1, 0.1);
 }
 
@@ -101,7 +101,7 @@ TEST(SimOrbit, RealGnv1bExcerptDrivesTheSimulator) {
   ASSERT_TRUE(r.sim.init(sc, 1, 90, &err)) << err;
   r.sim.run(r.cap);
   ASSERT_EQ(r.cap.orb.size(), 90u);
-  const double alt = r.cap.orb[0].r_I.norm() - sim::kEarthRadius_m;
+  const double alt = r.cap.orb[0].r_I.norm() - model::kEarthRadius_m;
   std::printf("real GNV1B: altitude above the equatorial radius %.1f km, speed %.1f m/s, beta %.1f deg\n", alt / 1e3,
               r.cap.orb[0].v_I.norm(), r.sim.context(0).beta_rad / kRadPerDeg);
   EXPECT_GT(alt, 350e3);

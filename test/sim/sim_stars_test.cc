@@ -3,7 +3,7 @@
 #include "sim_test_util.h"
 #include "test_files.h"
 
-#include <boresight/sim/ephemeris.h>
+#include <boresight/model/ephemeris.h>
 #include <boresight/sim/output.h>
 #include <boresight/sim/stars.h>
 
@@ -110,7 +110,7 @@ TEST(SimStars, SunAndMoonDirectionsAreRight) {
   TimeUs eq, sol;
   ASSERT_TRUE(io::parseGpsCalendar("2023-03-20T21:24:18", eq));
   ASSERT_TRUE(io::parseGpsCalendar("2023-06-21T14:58:18", sol));
-  const Vec3 se = sim::sunDirection(toSeconds(eq)), ss = sim::sunDirection(toSeconds(sol));
+  const Vec3 se = model::sunDirection(toSeconds(eq)), ss = model::sunDirection(toSeconds(sol));
   EXPECT_NEAR(std::asin(se.z()) / kRadPerDeg, 0.0, 0.02);
   EXPECT_NEAR(std::atan2(se.y(), se.x()) / kRadPerDeg, 0.0, 0.05);
   EXPECT_NEAR(std::asin(ss.z()) / kRadPerDeg, 23.44, 0.02);
@@ -119,10 +119,10 @@ TEST(SimStars, SunAndMoonDirectionsAreRight) {
   ASSERT_TRUE(io::parseGpsCalendar("2023-06-01T00:00:00", t));
   EXPECT_EQ(t, 738849600LL * 1000000);
   EXPECT_EQ(io::formatDate(t), "2023-06-01");
-  EXPECT_NEAR(sim::earthVelocity(toSeconds(t)).norm(), 29.4e3, 0.3e3);
+  EXPECT_NEAR(model::earthVelocity(toSeconds(t)).norm(), 29.4e3, 0.3e3);
   // The Moon stays between perigee and apogee distances.
   for (int d = 0; d < 30; ++d) {
-    const double r = sim::moonPosition(toSeconds(t) + d * 86400.0).norm();
+    const double r = model::moonPosition(toSeconds(t) + d * 86400.0).norm();
     EXPECT_GT(r, 355e6);
     EXPECT_LT(r, 408e6);
   }
@@ -138,10 +138,10 @@ TEST(SimStars, ExclusionConesBlindHeadsWhenTheSunEarthOrMoonIsInside) {
     Vec3 rI, vI;
     r->sim.orbit().posVel(t, rI, vI);
     const Vec3 b = s.q_I_Si_expected * hc.boresight_Si;
-    const double sun = std::acos(std::clamp(b.dot(sim::sunDirection(t)), -1.0, 1.0));
+    const double sun = std::acos(std::clamp(b.dot(model::sunDirection(t)), -1.0, 1.0));
     const double earth = std::acos(std::clamp(b.dot(-rI.normalized()), -1.0, 1.0)) -
-                         std::asin(sim::kEarthRadius_m / rI.norm());
-    const double moon = std::acos(std::clamp(b.dot((sim::moonPosition(t) - rI).normalized()), -1.0, 1.0));
+                         std::asin(model::kEarthRadius_m / rI.norm());
+    const double moon = std::acos(std::clamp(b.dot((model::moonPosition(t) - rI).normalized()), -1.0, 1.0));
     const double margin = 0.02 * kRadPerDeg;  // the simulator caches Sun/Moon directions for 10/30 s
     if (s.blind) {
       ++blinded;

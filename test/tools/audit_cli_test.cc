@@ -3,6 +3,7 @@
 // the LCM log) writing report.md, audit.json with the keys, and the plots.
 #include <boresight/audit/extension.h>
 #include <boresight/audit/run.h>
+#include <boresight/audit/simulated.h>
 #include <boresight/core/rotation.h>
 #include <boresight/io/core_config.h>
 #include <boresight/io/overlay_yaml.h>

@@ -7,6 +7,7 @@
 #include <boresight/report/text.h>
 #include <boresight/io/files.h>
 #include <boresight/audit/run.h>
+#include <boresight/audit/simulated.h>
 #include <boresight/io/time_format.h>
 #include <boresight/report/svg_plot.h>
 #include <boresight/sim/output.h>
@@ -214,7 +215,7 @@ bool simulateModel(const std::string& scenario, unsigned long long seed, const s
   audit::RunRequest r = req;
   r.inputs = files;
   r.overlay = model_file;
-  r.truth.clear();
+  r.truth.reset();
   r.progress = nullptr;
   audit::RunOutput out3;
   if (!audit::runAudit(r, out3, error)) {
@@ -276,7 +277,8 @@ int runAudit(int argc, char** argv) {
   bool quiet = false;
   app.add_option("--config", req.config)->required();
   app.add_option("--out", out_dir)->required();
-  app.add_option("--truth", req.truth);
+  std::string truth_file;
+  app.add_option("--truth", truth_file);
   app.add_option("--overlay", req.overlay);
   std::string write_model;
   app.add_option("--write-model", write_model);
@@ -307,7 +309,7 @@ int runAudit(int argc, char** argv) {
   {
     std::vector<std::string> ins = req.inputs;
     ins.push_back(req.config);
-    if (!req.truth.empty()) ins.push_back(req.truth);
+    if (!truth_file.empty()) ins.push_back(truth_file);
     if (!req.overlay.empty()) ins.push_back(req.overlay);
     if (!simulate_model.empty()) ins.push_back(simulate_model);
     if (!io::checkOutputs(ins, {{"--out", out_dir, true}, {"--write-model", write_model}}, &err)) return fail(err);
@@ -316,6 +318,11 @@ int runAudit(int argc, char** argv) {
   if (!dir.open(out_dir, &err)) return fail(err);
   if (!quiet) req.progress = [](const std::string& s) { std::fprintf(stderr, "%s\n", s.c_str()); };
 
+  if (!truth_file.empty()) {
+    audit::Truth t;
+    if (!audit::readTruthFile(truth_file, t, &err)) return fail(err);
+    req.truth = std::move(t);
+  }
   audit::RunOutput out;
   if (!audit::runAudit(req, out, &err)) return fail(err);
 
@@ -391,7 +398,7 @@ int runAudit(int argc, char** argv) {
   if (!req.overlay.empty()) ctx.command += " --overlay " + req.overlay;
   for (const auto& f : req.inputs) ctx.command += " " + f;
   ctx.command += " --out " + out_dir;
-  if (!req.truth.empty()) ctx.command += " --truth " + req.truth;
+  if (!truth_file.empty()) ctx.command += " --truth " + truth_file;
   if (!write_model.empty()) ctx.command += " --write-model " + write_model;
   if (!simulate_model.empty()) ctx.command += " --simulate-model " + simulate_model + " --simulate-seed " + simulate_seed_s;
   ctx.inputs = out.inputs;

@@ -17,6 +17,7 @@
 #include <boresight/stream/source.h>
 
 #include <functional>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -30,7 +31,9 @@ struct RunRequest {
   std::string overlay;
   std::vector<std::string> inputs;  ///< Level-1 files or LCM logs, recognised by content
   AuditOptions options;
-  std::string truth;                ///< a simulator's truth.yaml (empty: none)
+  /// The truth to compare the estimates with (a simulation's: audit/simulated.h readTruthFile reads a
+  /// truth.yaml); none: no comparison. The audit library does not read the simulator's files.
+  std::optional<Truth> truth;
   double lookahead_s = 2.0;         ///< out-of-order tolerance of the inputs
   bool strict = false;              ///< stop at the first malformed input line
   /// Progress while replaying (every `progress_every_s` of data time), e.g. to stderr; may be empty.
@@ -58,10 +61,5 @@ struct RunOutput {
 /// Runs the audit. False with *error (file:line: reason) on bad input; the analysis' own limits (too
 /// short a span for a family, ...) are in the result, not errors.
 bool runAudit(const RunRequest& req, RunOutput& out, std::string* error);
-
-/// Reads what the audit compares with from a simulator's truth.yaml (sim::readTruthYaml): the injected
-/// effects (model::EffectSpec, as simulated) and each head's constant mounting error (head frame, the
-/// drawn part included). False with *error ("FILE:LINE: key 'k': reason").
-bool readTruthFile(const std::string& path, Truth& out, std::string* error);
 
 }  // namespace boresight::audit

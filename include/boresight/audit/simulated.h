@@ -1,4 +1,5 @@
-// The model audit of simulated data, in memory: the simulator's samples go through the same path the
+// The model audit of simulated data (library boresight_audit_sim: the audit library itself does not
+// link the simulator), in memory: the simulator's samples go through the same path the
 // `boresight audit` command uses for files, without writing any.
 //
 //   sim::Simulator (its own thread) -> bounded queue -> stream::Source -> stream::Engine -> core::Pipeline
@@ -44,6 +45,11 @@ bool pipelineConfigFor(const sim::Scenario& sc, const core::PipelineConfig& base
 /// The truth of an initialised simulator: the scenario's effects and every head's mounting error
 /// (the configured one plus the seed's random draw).
 Truth truthOf(const sim::Simulator& s);
+
+/// The same from a simulator's truth.yaml (sim::readTruthYaml): the injected effects (as simulated)
+/// and each head's constant mounting error (head frame, the drawn part included), for
+/// RunRequest::truth. False with *error ("FILE:LINE: key 'k': reason").
+bool readTruthFile(const std::string& path, Truth& out, std::string* error);
 
 struct SimulatedOptions {
   std::uint64_t seed = 1;

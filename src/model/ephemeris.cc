@@ -1,24 +1,13 @@
-#include <boresight/model/orbit_context.h>
-#include <boresight/sim/ephemeris.h>
+#include <boresight/model/ephemeris.h>
 
 #include <cmath>
 
-namespace boresight::sim {
+namespace boresight::model {
 namespace {
-constexpr double kTtMinusGps = 51.184;
 constexpr double kGpsMinusUtc = 18.0;
 inline double deg(double d) { return d * kRadPerDeg; }
 inline double daysTT(double t) { return (t + kTtMinusGps) / 86400.0; }
 }  // namespace
-
-// one implementation, shared with the orbit context of the batch thermal model and the audit
-Vec3 sunPosition(double t) { return model::sunPositionLowPrecision(t); }
-
-Vec3 earthVelocity(double t) {
-  // Central difference of the Sun's geocentric position (the Earth moves opposite to it).
-  const double h = 300.0;
-  return -(sunPosition(t + h) - sunPosition(t - h)) / (2 * h);
-}
 
 Vec3 moonPosition(double t) {
   const double T = daysTT(t) / 36525.0;
@@ -52,4 +41,4 @@ Mat3 C_E_I(double t) {
   return m;
 }
 
-}  // namespace boresight::sim
+}  // namespace boresight::model
