@@ -3,6 +3,7 @@
 #include <boresight/core/rotation.h>
 #include <boresight/io/time_format.h>
 #include <boresight/model/stats.h>
+#include <boresight/report/text.h>
 
 #include <Eigen/Cholesky>
 
@@ -14,11 +15,7 @@
 namespace boresight::audit {
 namespace {
 
-std::string num(double v, const char* f = "%.3g") {
-  char b[48];
-  std::snprintf(b, sizeof b, f, v);
-  return b;
-}
+std::string num(double v, const char* f = "%.3g") { return report::fmt(v, f); }
 
 /// The estimate of a named cause: its entry in the extended model (every named effect re-estimated
 /// together), else the test's own.

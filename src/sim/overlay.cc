@@ -2,6 +2,7 @@
 
 #include <boresight/io/time_format.h>
 #include <boresight/model/rotation.h>
+#include <boresight/report/text.h>
 
 #include <algorithm>
 #include <cmath>
@@ -12,17 +13,9 @@
 namespace boresight::sim {
 namespace {
 
-std::string num(double v, const char* fmt = "%.4g") {
-  char b[48];
-  std::snprintf(b, sizeof b, fmt, v);
-  return b;
-}
-
-std::string exact(double v) {
-  char b[48];
-  std::snprintf(b, sizeof b, "%.17g", v);
-  return b;
-}
+std::string num(double v, const char* f = "%.4g") { return report::fmt(v, f); }
+/// A value for makeEffect, every digit kept (a non-finite value becomes "-", which makeEffect refuses).
+std::string exact(double v) { return report::fmt(v, "%.17g"); }
 
 using KV = std::vector<std::pair<std::string, std::string>>;
 
@@ -38,27 +31,27 @@ class Layer {
     return true;
   }
 
+  /// A spec on 'all' that is taken off head id: one copy per other head, so those keep it.
+  void splitAll(const model::EffectSpec& e, int id, std::vector<model::EffectSpec>& out) const {
+    if (id == 0 || e.sensor != "all") return;
+    for (const auto& h : sc_.heads)
+      if (h.id != id) {
+        model::EffectSpec c = e;
+        c.sensor = std::to_string(h.id);
+        out.push_back(std::move(c));
+      }
+  }
+
   /// Drops the scenario's specs of `kind` that act on head `id` (or on the accelerometer with id 0); a
   /// spec on 'all' is split into one per other head first. Each dropped spec is listed once.
   void drop(model::EffectKind kind, int id, const char* what = nullptr) {
     std::vector<model::EffectSpec> out;
     for (auto& e : sc_.effects) {
-      if (e.kind != kind || isOurs(e)) {
+      if (e.kind != kind || isOurs(e) || !hits(e, id)) {
         out.push_back(e);
         continue;
       }
-      if (!hits(e, id)) {
-        out.push_back(e);
-        continue;
-      }
-      if (id != 0 && e.sensor == "all") {
-        for (const auto& h : sc_.heads)
-          if (h.id != id) {
-            model::EffectSpec c = e;
-            c.sensor = std::to_string(h.id);
-            out.push_back(std::move(c));
-          }
-      }
+      splitAll(e, id, out);
       use_.replaced.push_back(e.name + (what ? std::string(" (") + what + ")" : "") + " on " +
                               (id == 0 ? std::string("the accelerometer") : "head " + std::to_string(id)) + " (" + e.origin + ")");
     }
@@ -75,14 +68,7 @@ class Layer {
         out.push_back(e);
         continue;
       }
-      if (id != 0 && e.sensor == "all") {
-        for (const auto& h : sc_.heads)
-          if (h.id != id) {
-            model::EffectSpec c = e;
-            c.sensor = std::to_string(h.id);
-            out.push_back(std::move(c));
-          }
-      }
+      splitAll(e, id, out);
       model::EffectSpec c = e;
       if (id != 0) c.sensor = std::to_string(id);
       c.values[key] = 0;
@@ -192,6 +178,10 @@ model::NoiseModel crossModel(const model::AxisNoise* x, const model::AxisNoise* 
   return m;
 }
 
+std::size_t colouredTerms(const model::NoiseModel& m) {
+  return static_cast<std::size_t>(std::count_if(m.terms.begin(), m.terms.end(), [](const model::NoiseTerm& t) { return t.kind != model::NoiseKind::White; }));
+}
+
 std::string validityText(const model::Validity& v) {
   return std::string("valid") + (v.from ? " from " + io::formatTime(*v.from) : "") + (v.to ? " to " + io::formatTime(*v.to) : "");
 }
@@ -263,7 +253,7 @@ bool applyOverlay(const model::Overlay& ov, const std::string& source, double du
         for (auto& kv : colouredSpecs(m, "cross_arcsec", kArcsecPerRad, &use.notes, item + " cross"))
           if (!L.add("coloured_noise", id, std::move(kv), item + " cross", error)) return false;
         use.applied.push_back(item + " cross-boresight: white " + num(h.sigma_cross_rad * kArcsecPerRad) + "\", " +
-                              std::to_string(m.terms.size() - (m.whiteVariance() > 0 ? 1 : 0)) + " coloured term(s)");
+                              std::to_string(colouredTerms(m)) + " coloured term(s)");
       }
       if (own) validity(own->valid, item);
       else if (cx || cy || ab || st) validity(ov.noise.head_defaults->valid, item);
@@ -306,7 +296,7 @@ bool applyOverlay(const model::Overlay& ov, const std::string& source, double du
         for (auto& kv : colouredSpecs(m, keys[a], 1.0, &use.notes, item))
           if (!L.add("acc_coloured_noise", "acc", std::move(kv), item, error)) return false;
         use.applied.push_back(item + ": white " + num(sc.acc.white_rad_s2[a]) + " rad/s^2, " +
-                              std::to_string(m.terms.size() - (m.whiteVariance() > 0 ? 1 : 0)) + " coloured term(s)");
+                              std::to_string(colouredTerms(m)) + " coloured term(s)");
       }
       validity(an.valid, "noise: accelerometer");
     }

@@ -230,6 +230,21 @@ TEST(SimOverlay, AccelerometerTermsAndTimeOffsetsBecomeSpecsAndWhatCannotBeSimul
   EXPECT_TRUE(contains(use.not_applied, "head2 against head1"));
   EXPECT_TRUE(contains(use.not_applied, "published_frame"));
   EXPECT_TRUE(contains(use.notes, "accelerometer: valid to")) << ::testing::PrintToString(use.notes);
+
+  // The ends of the span: a model written from data ends at its last epoch, a simulation of the span in
+  // whole seconds runs a little past it - no note for 30 s either side, a note for 2 minutes.
+  for (const auto& [margin_s, noted] : {std::pair<double, bool>{30, false}, {120, true}}) {
+    sim::Scenario s2 = scenario();
+    model::Overlay o2;
+    model::AccelerometerTerms a2;
+    a2.bias_rad_s2 = model::Uncertain3{Vec3(0, 1e-9, 0), Vec3::Zero()};
+    a2.valid.from = s2.start + static_cast<TimeUs>(margin_s * 1e6);
+    a2.valid.to = s2.start + static_cast<TimeUs>((3600 - margin_s) * 1e6);
+    o2.accelerometer = a2;
+    sim::ScenarioOverlayUse u2;
+    ASSERT_TRUE(sim::applyOverlay(o2, "o.yaml", 3600, s2, u2, &err)) << err;
+    EXPECT_EQ(contains(u2.notes, "accelerometer: valid from"), noted) << margin_s << " s: " << ::testing::PrintToString(u2.notes);
+  }
 }
 
 TEST(SimOverlay, AnOverlayForAHeadTheScenarioLacksIsNamedAndABadDatumRefused) {

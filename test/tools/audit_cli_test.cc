@@ -451,6 +451,7 @@ TEST(AuditCli, WriteModelCarriesAThermalHarmonicAndTheSecondPassNamesNothing) {
       if (e["x_arcsec"].as<double>() != 0) ax = e["x_arcsec"].as<double>(), px = e["phase_deg"].as<double>();
       if (e["y_arcsec"].as<double>() != 0) ay = e["y_arcsec"].as<double>(), py = e["phase_deg"].as<double>();
     }
+  std::printf("simulation's truth, head 2 harmonic 1: %.2f\" at %.0f deg about x, %.2f\" at %.0f deg about y\n", ax, px, ay, py);
   EXPECT_NEAR(ax, 6.0, 0.3);
   EXPECT_NEAR(std::remainder(px - 30.0, 360.0), 0.0, 4.0);
   EXPECT_NEAR(ay, 4.0, 0.3);  // -4" at 30 deg is 4" at -150 deg
@@ -480,6 +481,7 @@ TEST(AuditCli, WriteModelCarriesAThermalHarmonicAndTheSecondPassNamesNothing) {
   double line_ratio = 0;
   for (const auto& b : lacking.bands)
     if (b.family == "relative" && b.lo <= 1.0 && b.hi > 1.0) line_ratio = std::max(line_ratio, b.ratio);
+  std::printf("against a simulation of the configured model: the 1/rev band's power ratio %.3g\n%s", line_ratio, diff.c_str());
   EXPECT_GT(line_ratio, 5.0) << diff;
   // with the extended model (above) the same band is at the simulation's level
   double model_ratio = 0;
