@@ -128,6 +128,10 @@ bool loadTop(const YAML::Node& top, const std::string& path, Reader& r, NodeConf
     if (out.overlay[0] != '/') out.overlay = dirOf(path) + "/" + out.overlay;
     io::OverlayUses uses;
     uses.thermal = true;
+    // The accelerometer terms correct every sample before the core's CRN (the published alpha_acc_B), as
+    // in process and the audit; the worker still gets the samples as measured, as calibrate's feed does
+    // (method A estimates its own accelerometer terms from them).
+    uses.accelerometer = true;
     if (!io::applyOverlay(out.overlay, "boresightd", uses, pc, ovu, &perr)) return done(r.fail("overlay", perr, top["overlay"]));
     out.thermal_model = ovu.thermal_model;
     for (int s = 0; s < pc.pipeline.heads.n_heads; ++s)

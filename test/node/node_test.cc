@@ -1777,5 +1777,53 @@ TEST(NodeReplay, OverlayMountingsSurviveTheMountingsMessage) {
   EXPECT_EQ(a->c.used, b->c.used);  // the message is used (it sets heads 1 and 3) in both runs
 }
 
+TEST(NodeReplay, OverlayAccelerometerTermsCorrectThePublishedAngularAcceleration) {
+  // An overlay's accelerometer terms correct every sample before the core, as in process and the audit:
+  // a_A <- M (a_A - b). The CRN is linear with unit gain at zero frequency, so every published row
+  // with the terms is C_B_A M (C_B_A^T row_without - b) of the same replay without them.
+  const std::string log = simulate("overlay_acc", 300, {});
+  const std::string dir = makeTempDir("node_overlay_acc");
+  std::ofstream(dir + "/ov.yaml") << "boresight_overlay: 1\nwritten_by: test\naccelerometer:\n"
+                                  << "  bias_rad_s2: [2.0e-6, -1.0e-6, 5.0e-7]\n  bias_sigma_rad_s2: [1.0e-8, 1.0e-8, 1.0e-8]\n"
+                                  << "  scale: [0.02, -0.01, 0.03]\n  scale_sigma: [1.0e-4, 1.0e-4, 1.0e-4]\n"
+                                  << "  misalignment_arcsec: [200, -100, 50]\n  misalignment_sigma_arcsec: [5, 5, 5]\n";
+  std::ofstream(dir + "/n.yaml") << "platform: " << src("config/gracefo_ideal.yaml") << "\noverlay: ov.yaml\n";
+  std::ofstream(dir + "/plain.yaml") << "platform: " << src("config/gracefo_ideal.yaml") << "\n";
+  node::NodeConfig plain, with;
+  std::string err;
+  ASSERT_TRUE(node::loadNodeConfig(dir + "/plain.yaml", plain, &err)) << err;
+  ASSERT_TRUE(node::loadNodeConfig(dir + "/n.yaml", with, &err)) << err;
+  plain.calibration.enabled = with.calibration.enabled = false;
+  ASSERT_TRUE(with.pipeline.acc_correction.on);
+  EXPECT_FALSE(plain.pipeline.acc_correction.on);
+  std::string lines;
+  for (const auto& l : with.model_in_use) lines += l + "\n";
+  EXPECT_NE(lines.find("accelerometer: bias, scale, misalignment (every accelerometer sample corrected"), std::string::npos) << lines;
+  EXPECT_EQ(lines.find("does not apply accelerometer terms"), std::string::npos) << lines;
+
+  const auto a = replay(log, plain), b = replay(log, with);
+  const auto ra = a->out.all<boresight_lcm::fused_attitude_t>("BORESIGHT_ATTITUDE");
+  const auto rb = b->out.all<boresight_lcm::fused_attitude_t>("BORESIGHT_ATTITUDE");
+  ASSERT_EQ(ra.size(), rb.size());
+  const Mat3 C = with.pipeline.C_B_A, M = with.pipeline.acc_correction.M;
+  const Vec3 bias = with.pipeline.acc_correction.bias_A;
+  int compared = 0;
+  double worst = 0, moved = 0;
+  for (std::size_t i = 0; i < ra.size(); ++i) {
+    ASSERT_EQ(ra[i].utime, rb[i].utime);
+    ASSERT_EQ(ra[i].has_acc, rb[i].has_acc);
+    if (!ra[i].has_acc) continue;
+    const Vec3 x(ra[i].alpha_acc_B[0], ra[i].alpha_acc_B[1], ra[i].alpha_acc_B[2]);
+    const Vec3 y(rb[i].alpha_acc_B[0], rb[i].alpha_acc_B[1], rb[i].alpha_acc_B[2]);
+    worst = std::max(worst, (y - C * M * (C.transpose() * x - bias)).norm());
+    moved = std::max(moved, (y - x).norm());
+    ++compared;
+  }
+  ASSERT_GT(compared, 200);
+  EXPECT_GT(moved, 1e-6) << "the terms did not reach the published angular acceleration";
+  EXPECT_LT(worst, 1e-12) << "rad/s^2: not the corrected samples through the same filter";
+  EXPECT_EQ(a->c.used, b->c.used);
+}
+
 }  // namespace
 }  // namespace boresight
