@@ -178,6 +178,7 @@ BORESIGHT_CLONES Status Pipeline::stepHeads(const HeadEpoch& in) {
     p.row.q_I_B = f.q_I_B;
     p.row.P_B = f.P_B;
     p.row.heads_used = f.heads_used;
+    p.row.heads_mask = f.mask;
     for (int a = 0; a < cfg_.heads.n_heads; ++a)
       for (int b = a + 1; b < cfg_.heads.n_heads; ++b) {
         const auto k = static_cast<std::size_t>(pairIndex(a, b));

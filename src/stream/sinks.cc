@@ -1,6 +1,7 @@
-// CSV row sink (printf-identical numbers through std::to_chars) and the batch ring buffer.
+// CSV row sink (printf-identical numbers through std::to_chars), the batch ring buffer and the SCA1B writer.
 #include <boresight/stream/sinks.h>
 
+#include <algorithm>
 #include <charconv>
 #include <cerrno>
 #include <cmath>
@@ -164,6 +165,87 @@ bool CsvStarSink::commit(std::string* error) {
   if (!f_) return true;
   f_ = nullptr;
   return file_.commit(error);
+}
+
+}  // namespace boresight::stream
+
+namespace boresight::stream {
+
+Sca1bSink::Sca1bSink(std::string path, char satellite, double max_gap_s, std::function<double(TimeUs)> gps_minus_tag_s)
+    : path_(std::move(path)), max_gap_s_(max_gap_s), eps_(std::move(gps_minus_tag_s)) {
+  file_ = io::makeProduct<io::Sca1bRecord>(io::Product::SCA1B, satellite);
+}
+
+bool Sca1bSink::begin(const core::PipelineConfig& cfg) {
+  for (int s = 0; s < cfg.heads.n_heads; ++s) {
+    const int id = cfg.heads.head[static_cast<std::size_t>(s)].id;
+    if (id < 1 || id > 3) {
+      error_ = path_ + ": head id " + std::to_string(id) +
+               " has no bit in SCA1B's sca_id (GRACE-FO's cameras 1, 2 and 3): the platform's heads cannot be written as SCA1B";
+      return false;
+    }
+    bit_[static_cast<std::size_t>(s)] = 1 << (id - 1);
+  }
+  return true;
+}
+
+void Sca1bSink::emit(TimeUs t_gps, const Quat& q_in, std::uint32_t mask, double qual_rss, bool one_head) {
+  Quat q = q_in.normalized();
+  if (q.w() < 0) q.coeffs() = -q.coeffs();  // quatangle = cos(theta/2), theta in [0, 180 deg], as the product has it
+  io::Sca1bRecord r;
+  r.t = t_gps;
+  r.satellite = file_.header.satellite;
+  r.sca_id = 0;
+  for (std::size_t s = 0; s < bit_.size(); ++s)
+    if ((mask >> s) & 1u) r.sca_id |= bit_[s];
+  quatToScalarFirst(q, r.q);
+  r.qual_rss = qual_rss;
+  r.qualflg = io::Bits{one_head ? 8u : 0u, 8};
+  file_.records.push_back(r);
+}
+
+bool Sca1bSink::write(const core::PipelineRow& row) {
+  if (row.heads_used <= 0 || !row.q_I_B.coeffs().allFinite()) return true;
+  const TimeUs t = row.t + (eps_ ? static_cast<TimeUs>(std::llround(eps_(row.t) * 1e6)) : 0);
+  const double rss = 0.5 * std::sqrt(std::max(0.0, row.P_B.trace()));
+  const bool one = row.heads_used == 1;
+  // the first whole second at or after t
+  const auto ceilSecond = [](TimeUs x) {
+    TimeUs s = x / kUsPerSecond * kUsPerSecond;
+    if (s < x) s += kUsPerSecond;
+    return s;
+  };
+  if (!have_prev_) {
+    have_prev_ = true;
+    next_s_ = ceilSecond(t);
+  } else if (t <= prev_t_) {
+    return true;  // the rows are in time order; a GPS conversion that does not keep it is not followed
+  }
+  const bool bridged = have_prev_ && next_s_ < t && toSeconds(t - prev_t_) <= max_gap_s_ && prev_t_ < t;
+  for (; next_s_ <= t; next_s_ += kUsPerSecond) {
+    if (next_s_ == t) {
+      emit(t, row.q_I_B, row.heads_mask, rss, one);
+    } else if (bridged && next_s_ > prev_t_) {
+      const double f = static_cast<double>(next_s_ - prev_t_) / static_cast<double>(t - prev_t_);
+      emit(next_s_, prev_q_.slerp(f, row.q_I_B), prev_mask_ | row.heads_mask, std::max(prev_rss_, rss), prev_one_ || one);
+    } else {
+      ++holes_;
+    }
+  }
+  prev_t_ = t;
+  prev_q_ = row.q_I_B;
+  prev_mask_ = row.heads_mask;
+  prev_rss_ = rss;
+  prev_one_ = one;
+  return true;
+}
+
+bool Sca1bSink::commit(std::string* error) {
+  if (!error_.empty()) {
+    if (error) *error = error_;
+    return false;
+  }
+  return io::writeProduct(path_, file_, error);
 }
 
 }  // namespace boresight::stream

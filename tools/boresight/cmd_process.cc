@@ -19,6 +19,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <map>
 #include <memory>
 #include <string>
@@ -29,6 +30,7 @@ namespace {
 
 const char* kUsage =
     "usage: boresight process --config FILE INPUT... --out FILE.csv [--compare-sca1b FILE] [--clk1b FILE]\n"
+    "                         [--sca1b FILE [--satellite X]]\n"
     "                         [--stars-out FILE.csv] [--overlay FILE] [--lookahead S] [--strict]\n"
     "\n"
     "Runs the real-time core (head fusion, CRN rates and angular acceleration, accelerometer angular\n"
@@ -58,8 +60,16 @@ const char* kUsage =
     "                        process does not use are listed as not applied\n"
     "  --compare-sca1b FILE  compare the fused attitude with the official SCA1B product: per-axis mean\n"
     "                        and scatter of the difference (arcsec, body axes)\n"
-    "  --clk1b FILE          receiver-to-GPS clock offsets for that comparison (Level-1A tags are\n"
-    "                        receiver time; without CLK1B they are compared as if they were GPS time)\n"
+    "  --clk1b FILE          receiver-to-GPS clock offsets for that comparison and for --sca1b (Level-1A\n"
+    "                        tags are receiver time; without CLK1B they are taken as GPS time, and said so)\n"
+    "  --sca1b FILE          the fused attitude as a GRACE-FO SCA1B product (for a Level-1B chain): q_I_B at\n"
+    "                        every whole GPS second, slerp between the two rows around it; across a gap of\n"
+    "                        more than 1.5 row periods no record (a hole, counted; never an interpolated\n"
+    "                        value); sca_id from the heads fused (7: SCAs 1, 2 and 3), qual_rss the RSS of\n"
+    "                        the quaternion components' formal errors, 0.5 sqrt(trace P_B) of the fused\n"
+    "                        covariance; qualflg bit 3 where one head only was fused. Held in memory\n"
+    "                        (about 72 bytes per second of data) and written when the run succeeds\n"
+    "  --satellite X         the satellite letter of the SCA1B header and records (default C)\n"
     "  --stars-out FILE.csv  the joint attitude of every solved star epoch: time_s, q0..q3 (q_I_B),\n"
     "                        sigma_x..z_arcsec (1-sigma about the body axes, with the relative matrices'\n"
     "                        uncertainty), stars_in, stars_used, residual_rms_arcsec, d_fused_x..z_arcsec\n"
@@ -118,7 +128,7 @@ bool compareSca1b(const std::vector<std::pair<TimeUs, Quat>>& rows, const std::s
 
 int runProcess(int argc, char** argv) {
   CLI::App app{"boresight process"};
-  std::string config, out, compare, clk1b, stars_out, overlay;
+  std::string config, out, compare, clk1b, stars_out, overlay, sca1b_out, satellite = "C";
   std::vector<std::string> files;
   bool strict = false;
   double lookahead_s = 2.0;
@@ -127,6 +137,8 @@ int runProcess(int argc, char** argv) {
   app.add_option("--compare-sca1b", compare);
   app.add_option("--clk1b", clk1b);
   app.add_option("--stars-out", stars_out);
+  app.add_option("--sca1b", sca1b_out);
+  app.add_option("--satellite", satellite)->check(CLI::IsMember({"A", "B", "C", "D"}));
   app.add_option("--overlay", overlay);
   app.add_option("--lookahead", lookahead_s)->check(finiteRange(0.0, 3600.0));
   app.add_flag("--strict", strict);
@@ -138,7 +150,7 @@ int runProcess(int argc, char** argv) {
   {  // outputs never destroy inputs, checked before anything is read or written
     std::vector<std::string> ins = files;
     for (const auto* p : {&config, &compare, &clk1b, &overlay}) ins.push_back(*p);
-    if (!io::checkOutputs(ins, {{"--out", out}, {"--stars-out", stars_out}}, &err)) {
+    if (!io::checkOutputs(ins, {{"--out", out}, {"--stars-out", stars_out}, {"--sca1b", sca1b_out}}, &err)) {
       std::fprintf(stderr, "boresight process: %s\n", err.c_str());
       return 1;
     }
@@ -160,9 +172,11 @@ int runProcess(int argc, char** argv) {
     std::fprintf(stderr, "boresight process: %s\n", err.c_str());
     return 1;
   }
+  audit::ClockMap clk;
   if (!clk1b.empty()) {
-    if (compare.empty()) std::printf("%s: --clk1b is used only with --compare-sca1b: ignored\n", clk1b.c_str());
-    if (!audit::checkClk1b(clk1b, &err)) {
+    if (compare.empty() && sca1b_out.empty())
+      std::printf("%s: --clk1b is used only with --compare-sca1b or --sca1b: ignored\n", clk1b.c_str());
+    else if (!audit::checkClk1b(clk1b, &err) || !audit::loadClk1b({clk1b}, clk, &err)) {
       std::fprintf(stderr, "boresight process: %s\n", err.c_str());
       return 1;
     }
@@ -204,7 +218,11 @@ int runProcess(int argc, char** argv) {
   csv.deferCommit();
   stars_csv.deferCommit();
   AttitudeTrack track;
+  const double row_period_s = toSeconds(pc.pipeline.crn_attitude.output_period_us);
+  stream::Sca1bSink sca1b(sca1b_out, satellite[0], 1.5 * (row_period_s > 0 ? row_period_s : 1.0),
+                          clk.empty() ? std::function<double(TimeUs)>() : [&clk](TimeUs t) { return clk.epsAt(t); });
   engine.addSink(&csv);
+  if (!sca1b_out.empty()) engine.addSink(&sca1b);
   if (!stars_out.empty()) engine.addSink(&stars_csv);
   if (!compare.empty()) engine.addSink(&track);
   if (engine.run() != stream::Engine::Result::kDone) {
@@ -247,17 +265,21 @@ int runProcess(int argc, char** argv) {
   }
   printCoreHealth(engine.health());
   for (const auto& w : io::validityWarnings(ovu, engine.firstEpoch(), engine.lastEpoch())) std::printf("warning: %s\n", w.c_str());
-  if (!csv.commit(&err) || (!stars_out.empty() && !stars_csv.commit(&err))) {
+  if (!csv.commit(&err) || (!stars_out.empty() && !stars_csv.commit(&err)) || (!sca1b_out.empty() && !sca1b.commit(&err))) {
     std::fprintf(stderr, "boresight process: %s\n", err.c_str());
     return 1;
   }
 
+  if (!sca1b_out.empty()) {
+    std::printf("%s: %zu SCA1B records at whole GPS seconds (%s)", sca1b_out.c_str(), sca1b.records(),
+                clk.empty() ? (in.sca.empty() ? "the inputs' tags taken as GPS time"
+                                              : "receiver time taken as GPS time: give --clk1b for Level-1A input")
+                            : "receiver time through CLK1B");
+    if (sca1b.holeSeconds())
+      std::printf(", %llu seconds inside gaps not written", static_cast<unsigned long long>(sca1b.holeSeconds()));
+    std::printf("\n");
+  }
   if (!compare.empty()) {
-    audit::ClockMap clk;
-    if (!clk1b.empty() && !audit::loadClk1b({clk1b}, clk, &err)) {
-      std::fprintf(stderr, "boresight process: %s\n", err.c_str());
-      return 1;
-    }
     if (!compareSca1b(track.rows, compare, clk, &err)) {
       std::fprintf(stderr, "boresight process: %s\n", err.c_str());
       return 1;

@@ -67,6 +67,7 @@ struct PipelineRow {
   Quat q_I_B = Quat::Identity();  ///< fused body attitude at t (unfiltered), R = C_I_B
   Mat3 P_B = Mat3::Zero();        ///< its covariance, rad^2 in B
   int heads_used = 0;
+  std::uint32_t heads_mask = 0;   ///< slots fused (bit s: slot s of HeadSetConfig)
   bool has_rates = false;
   Vec3 w_B = Vec3::Constant(std::numeric_limits<double>::quiet_NaN());       ///< rad/s, B
   Vec3 a_sc_B = Vec3::Constant(std::numeric_limits<double>::quiet_NaN());    ///< star-sensor angular accel., rad/s^2, B

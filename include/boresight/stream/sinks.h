@@ -5,9 +5,12 @@
 #include <boresight/core/pipeline.h>
 #include <boresight/core/ring.h>
 #include <boresight/io/files.h>
+#include <boresight/io/level1.h>
 #include <boresight/model/orbit_context.h>
 
+#include <array>
 #include <cstdio>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -111,6 +114,47 @@ class CsvStarSink final : public RowSink {
   std::FILE* f_ = nullptr;
   bool defer_ = false;
   std::size_t rows_ = 0;
+};
+
+/// The fused attitude as a GRACE-FO SCA1B product (`boresight process --sca1b`): q_I_B (inertial to
+/// the body frame, scalar first and non-negative: quatangle = cos(theta/2), theta in [0, 180 deg]) at every whole GPS second between two rows with
+/// heads at most max_gap_s apart, by slerp; rows further apart leave a hole (no record, counted), never
+/// an interpolated value, so qualflg bit 0 ("interpolated") is never set. Per record:
+///   sca_id    the heads fused in the rows around it, as SCA1B counts them: bit id-1 for head id 1..3
+///             (7: SCAs 1, 2 and 3); the IMU bits stay 0 (the fusion uses no IMU)
+///   qual_rss  the RSS of the formal errors of the four quaternion components: 0.5 sqrt(trace P_B) of
+///             the fused covariance (a body-frame error e moves q by q (0, e/2), an isometry of e/2), the
+///             larger of the two rows'
+///   qualflg   bit 3 when either row fused one head only
+/// Row tags are the inputs' time (receiver time for Level-1A); `gps_minus_tag_s` (e.g. CLK1B's
+/// eps_time) turns them into GPS time, otherwise they are written as they are. Records are held in
+/// memory (about 72 bytes a second of data) and written at commit() through an atomic file.
+class Sca1bSink final : public RowSink {
+ public:
+  Sca1bSink(std::string path, char satellite, double max_gap_s, std::function<double(TimeUs)> gps_minus_tag_s = {});
+  /// False with error() when a head id is outside 1..3 (SCA1B's sca_id has bits for three cameras).
+  bool begin(const core::PipelineConfig& cfg) override;
+  bool write(const core::PipelineRow& row) override;
+  /// Writes the product (the header's record count and time coverage from the records).
+  bool commit(std::string* error);
+  std::string error() const override { return error_; }
+  std::size_t records() const { return file_.records.size(); }
+  std::uint64_t holeSeconds() const { return holes_; }  ///< whole seconds inside gaps, not written
+
+ private:
+  void emit(TimeUs t_gps, const Quat& q, std::uint32_t mask, double qual_rss, bool one_head);
+  std::string path_, error_;
+  double max_gap_s_;
+  std::function<double(TimeUs)> eps_;
+  std::array<std::int32_t, core::kMaxHeads> bit_{};
+  io::ProductFile<io::Sca1bRecord> file_;
+  bool have_prev_ = false;
+  TimeUs prev_t_ = 0, next_s_ = 0;  ///< GPS us of the previous row; the next whole second to write
+  Quat prev_q_ = Quat::Identity();
+  std::uint32_t prev_mask_ = 0;
+  double prev_rss_ = 0;
+  bool prev_one_ = false;
+  std::uint64_t holes_ = 0;
 };
 
 /// The last `capacity` rows in a ring (for a batch solver that works on a sliding span). Fixed
