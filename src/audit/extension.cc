@@ -444,6 +444,10 @@ SimulatedCheck compareWithSimulation(const AuditResult& data, const AuditResult&
       if (a.family != b.family || a.label != b.label || a.unit != b.unit || a.freq.empty() || b.freq.empty()) continue;
       c.data_spectra.push_back(a);
       c.sim_spectra.push_back(b);
+      std::string amplitude_unit;
+      for (const Series& se : data.series)
+        if (se.family == a.family && se.label == a.label && !se.unit.empty()) amplitude_unit = se.unit;
+      c.amplitude_units.push_back(amplitude_unit);
       const double df = std::max(a.freq.front(), b.freq.front());  // 1 / span: the independent spacing
       // base bands, then merged from low to high until each has kMinK independent frequencies
       struct Acc {
@@ -566,11 +570,25 @@ std::vector<std::pair<std::string, report::Plot>> SimulatedCheck::plots() const 
     p.width = 1100;
     p.logx = p.logy = true;
     p.ylabel = "amplitude";
+    double ylo = 1e300, yhi = 0, fhi = 0;
+    bool per_rev = false;
     for (std::size_t i = 0; i < data_spectra.size(); ++i) {
       if (data_spectra[i].family != fam) continue;
       p.xlabel = "frequency [" + data_spectra[i].unit + "]";
+      if (i < amplitude_units.size() && !amplitude_units[i].empty()) p.ylabel = "amplitude [" + amplitude_units[i] + "]";
       p.series.push_back({data_spectra[i].label + " data", data_spectra[i].freq, data_spectra[i].before, {}, report::Series::Style::kLine, 0.0, {}});
       p.series.push_back({data_spectra[i].label + " simulation", sim_spectra[i].freq, sim_spectra[i].before, {}, report::Series::Style::kLine, 0.0, {}});
+      for (const auto* s : {&data_spectra[i], &sim_spectra[i]}) {
+        for (double y : s->before)
+          if (std::isfinite(y) && y > 0) ylo = std::min(ylo, y), yhi = std::max(yhi, y);
+        for (double fq : s->freq) fhi = std::max(fhi, fq);
+      }
+      per_rev |= data_spectra[i].unit == "cycles/rev";
+    }
+    if (per_rev && yhi > ylo) {  // the orbit harmonics, where thermal terms and the field-of-view error sit
+      std::vector<double> orders;
+      for (int n = 1; n <= 10 && n <= fhi; ++n) orders.push_back(n);
+      if (!orders.empty()) p.series.push_back(report::verticalMarkers("orbit harmonics", orders, ylo, yhi));
     }
     std::string slug = fam;
     for (char& ch : slug)

@@ -225,14 +225,9 @@ std::vector<NamedPlot> plotsOf(const AuditResult& r) {
       per_rev |= s.unit == "cycles/rev";
     }
     if (per_rev && yhi > ylo) {
-      // the orbit harmonics as vertical lines (gaps between them)
-      report::Series h;
-      h.name = "orbit harmonics";
-      for (int n = 1; n <= 10 && n <= fhi; ++n) {
-        h.x.insert(h.x.end(), {double(n), double(n), double(n)});
-        h.y.insert(h.y.end(), {ylo, yhi, kNaN});
-      }
-      if (!h.x.empty()) np.plot.series.push_back(std::move(h));
+      std::vector<double> orders;
+      for (int n = 1; n <= 10 && n <= fhi; ++n) orders.push_back(n);
+      if (!orders.empty()) np.plot.series.push_back(report::verticalMarkers("orbit harmonics", orders, ylo, yhi));
     }
     out.push_back(std::move(np));
   }

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <fstream>
 #include <sstream>
 
@@ -181,6 +182,17 @@ std::string svgPlot(const Plot& p) {
 
 bool writeSvgPlot(const std::string& path, const Plot& p, std::string* error) {
   return io::writeFileAtomic(path, svgPlot(p), error);
+}
+
+Series verticalMarkers(std::string name, const std::vector<double>& xs, double ylo, double yhi) {
+  Series h;
+  h.name = std::move(name);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  for (double x : xs) {
+    h.x.insert(h.x.end(), {x, x, x});
+    h.y.insert(h.y.end(), {ylo, yhi, nan});
+  }
+  return h;
 }
 
 }  // namespace boresight::report

@@ -441,6 +441,11 @@ TEST(AuditCli, WriteModelCarriesAThermalHarmonicAndTheSecondPassNamesNothing) {
   for (const auto& l : sim["applied"]) applied += l.get<std::string>() + "\n";
   EXPECT_NE(applied.find("thermal: head 2 relative to head 1: 1 harmonic(s)"), std::string::npos) << applied;
   EXPECT_TRUE(std::filesystem::exists(dir + "/out/model_simulation_spectrum_relative.svg"));
+  {  // the plot says what its amplitude is in and where the orbit harmonics are
+    const std::string svg = testutil::slurp(dir + "/out/model_simulation_spectrum_relative.svg");
+    EXPECT_NE(svg.find("amplitude [arcsec]"), std::string::npos);
+    EXPECT_NE(svg.find("orbit harmonics"), std::string::npos);
+  }
   EXPECT_NE(testutil::slurp(dir + "/out/report.md").find("](model_simulation_spectrum_relative.svg)"), std::string::npos);
   // The simulation is of the model: its truth.yaml holds the overlay's harmonic as head 2's rotation
   // (x 6" at 30 deg, y -4" at 30 deg: per axis amplitude and phase), within the fit's sigma.

@@ -106,6 +106,7 @@ struct SimulatedCheck {
   /// Per family with spectra in both: one plot of every component's spectrum, data and simulation.
   std::vector<std::pair<std::string, report::Plot>> plots() const;
   std::vector<Spectrum> data_spectra, sim_spectra;  ///< as compared (the baselines' "before")
+  std::vector<std::string> amplitude_units;         ///< per data_spectra entry: its series' unit ("arcsec", ...)
 };
 SimulatedCheck compareWithSimulation(const AuditResult& data, const AuditResult& simulation);
 

@@ -32,6 +32,10 @@ struct Plot {
   bool logx = false, logy = false;
 };
 
+/// Vertical lines at `xs` from ylo to yhi as one series (gaps between them): markers such as the orbit
+/// harmonics on a spectrum.
+Series verticalMarkers(std::string name, const std::vector<double>& xs, double ylo, double yhi);
+
 /// The plot as an SVG document. Empty series or all-gap data give an empty frame, not an error.
 std::string svgPlot(const Plot& p);
 
