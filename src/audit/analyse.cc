@@ -1636,6 +1636,7 @@ void Analyser::dataTests(std::vector<EffectTest>& out) {
         runs += 1;
         dur += r.end_s - r.start_s;
         if (std::isnan(first_at)) first_at = r.start_s;
+        R.gaps.push_back({id, r.start_s, r.end_s, r.samples});
       }
       // One run is an event (head_dropout); several are a process (random gaps of this head).
       EffectTest e;
@@ -1665,6 +1666,7 @@ void Analyser::dataTests(std::vector<EffectTest>& out) {
       miss += r.samples;
       dur += r.end_s - r.start_s;
       runs += 1;
+      R.gaps.push_back({sensor, r.start_s, r.end_s, r.samples});
     }
     EffectTest e;
     e.name = "gaps";
@@ -1758,6 +1760,15 @@ Gain familyGain(const LinFam& f, const Fit& fin) {
   g.rms_after = rms(rp, false);
   g.heldout_rms_before = rms(f.yp, true);
   g.heldout_rms_after = rms(rp, true);
+  {
+    double m2 = 0, m4 = 0, n = 0;
+    for (int i = 0; i < f.yp.size(); ++i)
+      if (f.held[static_cast<std::size_t>(i)]) {
+        const double v2 = f.yp[i] * f.yp[i];
+        m2 += v2, m4 += v2 * v2, n += 1;
+      }
+    if (n > 0 && m2 > 0) g.heldout_kurtosis_before = (m4 / n) / ((m2 / n) * (m2 / n));
+  }
   g.whiteness_before = lag1(f, f.yw, true);
   g.whiteness_after = lag1(f, rw, true);
   // held-out log-likelihood, conditional on the fitting rows: per component a noise filter runs through

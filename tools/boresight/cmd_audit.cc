@@ -200,6 +200,20 @@ bool simulateModel(const std::string& scenario, unsigned long long seed, const s
   }
   sim::ScenarioOverlayUse use;
   if (!sim::applyOverlay(full, model_file, duration, sc, use, error)) return false;
+  // The data's availability is not part of the instrument model, but it shapes the residuals (the CRN
+  // and the bins around a hole): the simulation leaves the same holes, at the same seconds since the
+  // first head epoch, dropping the samples strictly between the two around each (the scenario's own
+  // blinding geometry makes the blinded runs).
+  std::vector<std::string> gap_args;
+  int gaps_head = 0, gaps_all = 0, gaps_acc = 0;
+  for (const audit::DataGap& g : second.result.gaps) {
+    const double p = (g.end_s - g.start_s) / (g.samples + 1);  // the stream's sampling interval
+    if (!(g.samples >= 1 && p > 0 && g.start_s + 0.5 * p < duration)) continue;
+    gap_args.push_back("gaps:sensor=" + g.sensor + ",at_s=" + fmt(g.start_s + 0.5 * p, "%.6f") + ",duration_s=" +
+                       fmt(g.end_s - g.start_s - p, "%.6f"));
+    (g.sensor == "all" ? gaps_all : g.sensor == "acc" ? gaps_acc : gaps_head) += 1;
+  }
+  if (!sim::addEffectArgs(sc, gap_args, error)) return false;
   const std::string dir = out_dir + "/model_simulation";
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
@@ -230,6 +244,8 @@ bool simulateModel(const std::string& scenario, unsigned long long seed, const s
                     "; the simulation keeps the scenario's start (orbit phase and Sun geometry differ)");
   lines.push_back("simulation: the model is the platform file's noise and the overlay; the scenario's " + std::to_string(n_effects) +
                   " effect(s) and its mounting errors are not used");
+  lines.push_back("simulation: the data's holes left in it too (" + std::to_string(gaps_head) + " of single heads, " +
+                  std::to_string(gaps_all) + " of every head, " + std::to_string(gaps_acc) + " of the accelerometer)");
   int noise_items = 0;
   for (const auto& l : use.applied)
     if (l.rfind("noise:", 0) == 0) ++noise_items;
@@ -248,9 +264,10 @@ bool simulateModel(const std::string& scenario, unsigned long long seed, const s
   js["replaced"] = use.replaced;
   js["not_applied"] = use.not_applied;
   js["notes"] = use.notes;
+  js["data_gaps_replicated"] = {{"head", gaps_head}, {"all_heads", gaps_all}, {"accelerometer", gaps_acc}};
   for (const auto& f : check.families)
     js["families"].push_back({{"family", f.family}, {"unit", f.unit}, {"heldout_rms_data", f.heldout_rms_data},
-                              {"heldout_rms_simulation", f.heldout_rms_sim}, {"ratio", f.ratio}, {"tolerance", f.tolerance},
+                              {"heldout_rms_simulation", f.heldout_rms_sim}, {"ratio", f.ratio}, {"tolerance", f.tolerance}, {"kurtosis", f.kurtosis},
                               {"agrees", f.agrees}});
   for (const auto& b : check.bands)
     js["bands"].push_back({{"family", b.family}, {"component", b.label}, {"band", b.band}, {"lo", b.lo}, {"hi", b.hi}, {"k", b.k},

@@ -128,6 +128,16 @@ struct EffectTest {
   std::string note;         ///< how the statistic was formed, when not the F test
 };
 
+/// A run of missing samples in the data that the geometry does not explain (seconds since the first
+/// head epoch; start_s and end_s are the samples around it): one head's while other heads delivered,
+/// outside the blinding cones (sensor: its id), every head's ("all"), the accelerometer's ("acc").
+/// The audit's loop (`--simulate-model`) leaves the same holes in the simulation of the model.
+struct DataGap {
+  std::string sensor;
+  double start_s = 0, end_s = 0;
+  double samples = 0;  ///< samples missing in the run
+};
+
 /// A group of causes the data cannot tell apart.
 struct Ambiguity {
   std::vector<std::string> causes;  ///< "name[sensor]"
@@ -148,6 +158,10 @@ struct Gain {
   std::string unit;
   double rms_before = kNaN, rms_after = kNaN;  ///< on the fitting data
   double heldout_rms_before = kNaN, heldout_rms_after = kNaN;
+  /// Kurtosis m4 / m2^2 of the held-out baseline residual rows (3 for Gaussian rows; large where a few
+  /// rows dominate, such as the edges of gaps): the relative sigma of an RMS of n rows is about
+  /// sqrt((kurtosis - 1) / 4n). NaN where not formed (the noise family).
+  double heldout_kurtosis_before = kNaN;
   /// lag-1 autocorrelation of the residuals (linear families: of the held-out rows)
   double whiteness_before = kNaN, whiteness_after = kNaN;
   /// Linear families: log-likelihood of the held-out rows under the extended model (named effects and the
@@ -213,6 +227,7 @@ struct AuditResult {
   std::vector<TruthCompare> truth;
   std::vector<Series> series;
   std::vector<Spectrum> spectra;
+  std::vector<DataGap> gaps;            ///< the data's unexplained missing-sample runs (at most 5000 per stream)
   std::vector<std::string> findings;    ///< one plain sentence per finding (printed by the command)
   /// canonical names of the named causes (deduplicated), e.g. {"relative_misalignment", "acc_bias"}
   std::vector<std::string> namedCauseNames() const;

@@ -92,6 +92,7 @@ struct SimulatedBand {
 struct SimulatedFamily {
   std::string family, unit;
   double heldout_rms_data = kNaN, heldout_rms_sim = kNaN, ratio = kNaN, tolerance = kNaN;
+  double kurtosis = 3.0;  ///< the larger of the two residuals' kurtosis (the tolerance's)
   bool agrees = true;
 };
 struct SimulatedCheck {
