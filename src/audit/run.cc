@@ -78,15 +78,24 @@ bool feedOrbit(const std::vector<std::string>& files, const io::ReadOptions& opt
 
 bool runAudit(const RunRequest& req, RunOutput& out, std::string* error) {
   out = RunOutput{};
-  io::PlatformConfig pc;
-  if (!io::loadPlatformConfig(req.config, pc, error)) return false;
-  io::OverlayUses uses;
-  uses.accelerometer = true;  // the angular-acceleration family then sees the corrected accelerometer
-  uses.thermal = true;        // the heads' mountings follow the thermal terms (AuditOptions::applied_thermal)
-  if (!req.overlay.empty() && !io::applyOverlay(req.overlay, "boresight audit", uses, pc, out.overlay, error)) return false;
+  stream::ReplayRequest rq;
+  rq.program = "boresight audit";
+  rq.config = req.config;
+  rq.overlay = req.overlay;
+  rq.uses.accelerometer = true;  // the angular-acceleration family then sees the corrected accelerometer
+  rq.uses.thermal = true;        // the heads' mountings follow the thermal terms (AuditOptions::applied_thermal)
+  rq.inputs = req.inputs;
+  rq.strict = req.strict;
+  rq.lookahead_s = req.lookahead_s;
+  rq.star_vectors = false;       // SCV1A: listed as ignored below
+  stream::Replay rp;
+  if (!stream::openReplay(rq, rp, error)) return false;
+  io::PlatformConfig& pc = rp.pc;
+  out.overlay = rp.overlay;
+  stream::ReplayInputs& in = rp.in;
+  const io::ReadOptions& opt = rp.opt;
+  stream::Engine& engine = *rp.engine;
   out.truth_given = req.truth.has_value();
-  stream::ReplayInputs in;
-  if (!stream::classifyInputs(req.inputs, in, error)) return false;
   // Sort what the replay does not read: outside reference, its clock, the orbit; the rest is ignored.
   std::vector<std::string> sca1b, clk1b, gni, gnv;
   std::vector<std::pair<std::string, std::string>> ignored;
@@ -97,8 +106,6 @@ bool runAudit(const RunRequest& req, RunOutput& out, std::string* error) {
     else if (product == "GNV1B") gnv.push_back(f);
     else ignored.emplace_back(f, product);
   }
-  for (const auto& f : in.scv) ignored.emplace_back(f, "SCV1A");
-  in.scv.clear();
   in.ignored = ignored;
   for (const auto& [f, product] : ignored)
     out.notes.push_back(f + ": " + product +
@@ -114,19 +121,13 @@ bool runAudit(const RunRequest& req, RunOutput& out, std::string* error) {
   for (const auto& f : clk1b)
     if (!checkClk1b(f, error)) return false;
 
-  io::ReadOptions opt;
-  if (req.strict) opt.on_error = io::OnError::Stop;
-  if (!stream::prepareConfig(in, opt, pc, error)) return false;
   for (const auto& f : in.sca) out.inputs.push_back(f + ": SCA1A heads");
   for (const auto& f : in.acc) out.inputs.push_back(f + ": accelerometer");
   for (const auto& f : in.qsa) out.inputs.push_back(f + ": QSA1B nominal mountings");
   for (const auto& f : in.lcm) out.inputs.push_back(f + ": LCM log");
   for (const auto& f : orbit) out.inputs.push_back(f + ": orbit context");
 
-  stream::AssemblerConfig acfg;
-  acfg.lookahead_us = static_cast<TimeUs>(std::llround(req.lookahead_s * 1e6));
-  stream::Engine engine(acfg);
-  if (!engine.configure(pc.pipeline, error) || !stream::addSources(in, opt, true, engine, error)) return false;
+  if (!stream::startReplay(rp, error)) return false;
   AuditOptions options = req.options;
   bool thermal_terms = false;
   if (out.overlay.thermal_model)

@@ -397,29 +397,30 @@ std::string uncertainChoiceNote(const std::vector<BandPoint>& band) {
 
 bool runNoise(const NoiseRequest& req, NoiseOutput& out, std::string* error) {
   out = NoiseOutput{};
-  io::PlatformConfig pc;
-  if (!io::loadPlatformConfig(req.config, pc, error)) return false;
-  io::OverlayUse ovu;
-  if (!req.overlay.empty() && !io::applyOverlay(req.overlay, "boresight noise", {true, true}, pc, ovu, error)) return false;
+  stream::ReplayRequest rq;
+  rq.program = "boresight noise";
+  rq.config = req.config;
+  rq.overlay = req.overlay;
+  rq.uses = io::OverlayUses{};  // noise and mountings
+  rq.inputs = req.inputs;
+  rq.strict = req.strict;
+  rq.lookahead_s = req.lookahead_s;
+  rq.star_vectors = false;
+  stream::Replay rp;
+  if (!stream::openReplay(rq, rp, error)) return false;
+  io::PlatformConfig& pc = rp.pc;
+  const io::OverlayUse& ovu = rp.overlay;
+  const stream::ReplayInputs& in = rp.in;
+  stream::Engine& engine = *rp.engine;
   out.platform = pc.platform;
-  stream::ReplayInputs in;
-  if (!stream::classifyInputs(req.inputs, in, error)) return false;
   for (const auto& [f, product] : in.ignored)
     out.notes.push_back(f + ": " + product + " is not an input of noise (SCA1A, ACC1A, QSA1B, LCM log): ignored");
-  for (const auto& f : in.scv) out.notes.push_back(f + ": SCV1A is not an input of noise: ignored");
-  in.scv.clear();
-  io::ReadOptions ropt;
-  if (req.strict) ropt.on_error = io::OnError::Stop;
-  if (!stream::prepareConfig(in, ropt, pc, error)) return false;
   for (const auto& f : in.sca) out.inputs.push_back(f + ": SCA1A heads");
   for (const auto& f : in.acc) out.inputs.push_back(f + ": accelerometer");
   for (const auto& f : in.qsa) out.inputs.push_back(f + ": QSA1B nominal mountings");
   for (const auto& f : in.lcm) out.inputs.push_back(f + ": LCM log");
 
-  stream::AssemblerConfig acfg;
-  acfg.lookahead_us = static_cast<TimeUs>(std::llround(req.lookahead_s * 1e6));
-  stream::Engine engine(acfg);
-  if (!engine.configure(pc.pipeline, error) || !stream::addSources(in, ropt, true, engine, error)) return false;
+  if (!stream::startReplay(rp, error)) return false;
   HeadResiduals heads(pc.pipeline.heads, req.options.max_samples);
   AccSeries acc(pc.pipeline, req.options.max_samples, req.options.acc_block_s);
   engine.addObserver(&heads);

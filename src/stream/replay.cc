@@ -5,6 +5,7 @@
 #include <boresight/stream/sources.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <map>
 
@@ -275,6 +276,33 @@ bool addSources(const ReplayInputs& in, const io::ReadOptions& opt_in, bool pref
     add(std::move(s));
   }
   return true;
+}
+
+bool openReplay(const ReplayRequest& rq, Replay& r, std::string* error) {
+  r = Replay{};
+  if (!io::loadPlatformConfig(rq.config, r.pc, error)) return false;
+  if (!rq.overlay.empty() && !io::applyOverlay(rq.overlay, rq.program, rq.uses, r.pc, r.overlay, error)) return false;
+  if (!classifyInputs(rq.inputs, r.in, error)) return false;
+  if (!rq.star_vectors) {
+    for (const auto& f : r.in.scv) r.in.ignored.emplace_back(f, "SCV1A");
+    r.in.scv.clear();
+  }
+  if (rq.strict) r.opt.on_error = io::OnError::Stop;
+  if (!prepareConfig(r.in, r.opt, r.pc, error)) return false;
+  AssemblerConfig acfg;
+  acfg.lookahead_us = static_cast<TimeUs>(std::llround(rq.lookahead_s * 1e6));
+  r.engine = std::make_unique<Engine>(acfg);
+  if (!r.engine->configure(r.pc.pipeline, error)) return false;
+  if (rq.thermal_in_core && r.overlay.thermal_model && !r.engine->setThermalModel(*r.overlay.thermal_model, error)) return false;
+  return true;
+}
+
+bool startReplay(Replay& r, std::string* error) {
+  if (!r.engine) {
+    if (error) *error = "startReplay before openReplay";
+    return false;
+  }
+  return addSources(r.in, r.opt, true, *r.engine, error);
 }
 
 }  // namespace boresight::stream

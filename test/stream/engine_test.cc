@@ -660,6 +660,73 @@ TEST(StreamReplay, InputsByContentIgnoredListedMixedRefused) {
   EXPECT_NE(err.find("give a QSA1B file"), std::string::npos) << err;
 }
 
+TEST(StreamReplay, OpenReplayIsTheOneSetUpOfEveryProgram) {
+  // openReplay + startReplay: what process, calibrate, audit and noise each did in their own lines.
+  const std::string d = tempDir();
+  const std::string cfg = sourceDir() + "/config/gracefo_ideal.yaml";
+  stream::ReplayRequest rq;
+  rq.program = "test";
+  rq.config = cfg;
+  rq.inputs = {span().sca, span().acc, span().qsa, span().scv};
+  stream::Replay r;
+  std::string err;
+  ASSERT_TRUE(stream::openReplay(rq, r, &err)) << err;
+  EXPECT_EQ(r.in.scv.size(), 1u);
+  EXPECT_TRUE(r.in.ignored.empty());
+  EXPECT_TRUE(r.pc.pipeline.use_accelerometer);
+  ASSERT_TRUE(r.engine != nullptr);
+  stream::BatchBufferSink rows(100000);
+  r.engine->addSink(&rows);
+  ASSERT_TRUE(stream::startReplay(r, &err)) << err;
+  ASSERT_EQ(r.engine->run(), stream::Engine::Result::kDone) << r.engine->error();
+  // the same rows as the steps by hand (the StreamEngine tests' way)
+  stream::ReplayInputs in;
+  io::PlatformConfig pc;
+  ASSERT_TRUE(io::loadPlatformConfig(cfg, pc, &err)) << err;
+  ASSERT_TRUE(stream::classifyInputs(rq.inputs, in, &err)) << err;
+  ASSERT_TRUE(stream::prepareConfig(in, {}, pc, &err)) << err;
+  stream::Engine e;
+  ASSERT_TRUE(e.configure(pc.pipeline, &err)) << err;
+  stream::BatchBufferSink rows2(100000);
+  e.addSink(&rows2);
+  ASSERT_TRUE(stream::addSources(in, {}, true, e, &err)) << err;
+  ASSERT_EQ(e.run(), stream::Engine::Result::kDone);
+  ASSERT_EQ(rows.size(), rows2.size());
+  ASSERT_GT(rows.size(), 500u);
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    EXPECT_EQ(rows.at(i).t, rows2.at(i).t);
+    EXPECT_EQ(rows.at(i).q_I_B.coeffs(), rows2.at(i).q_I_B.coeffs());
+  }
+  // star vectors not wanted: listed as ignored; strict read options; the look-ahead reaches the engine
+  rq.star_vectors = false;
+  rq.strict = true;
+  ASSERT_TRUE(stream::openReplay(rq, r, &err)) << err;
+  EXPECT_TRUE(r.in.scv.empty());
+  ASSERT_EQ(r.in.ignored.size(), 1u);
+  EXPECT_EQ(r.in.ignored[0].second, "SCV1A");
+  EXPECT_EQ(r.opt.on_error, io::OnError::Stop);
+  // each step's failure with its reason: the platform file, the overlay, the inputs, the configuration
+  rq.config = d + "/no_such.yaml";
+  EXPECT_FALSE(stream::openReplay(rq, r, &err));
+  EXPECT_NE(err.find("no_such.yaml"), std::string::npos) << err;
+  rq.config = cfg;
+  rq.overlay = d + "/ov.yaml";
+  {
+    std::ofstream o(rq.overlay);
+    o << "boresight_overlay: 1\nwritten_by: test\nno_such_key: 1\n";
+  }
+  EXPECT_FALSE(stream::openReplay(rq, r, &err));
+  EXPECT_NE(err.find("ov.yaml:3: key 'no_such_key'"), std::string::npos) << err;
+  rq.overlay.clear();
+  rq.inputs = {span().lcm, span().sca};
+  EXPECT_FALSE(stream::openReplay(rq, r, &err));
+  EXPECT_NE(err.find("is an LCM log and"), std::string::npos) << err;
+  rq.inputs = {span().sca};
+  EXPECT_FALSE(stream::openReplay(rq, r, &err));
+  EXPECT_NE(err.find("give a QSA1B file"), std::string::npos) << err;
+  EXPECT_FALSE(stream::startReplay(r, &err)) << "nothing opened";
+}
+
 TEST(StreamEngine, DamagedLcmLogCountsWhatItCannotRead) {
   // Junk between events and a cut last event: each damaged stretch is one malformed message, the
   // events around them are read, and read == used + rejected still holds.

@@ -430,7 +430,6 @@ int runCalibrate(int argc, char** argv) {
   so.unobservable_sigma_arcsec = unobs;
 
   Stages stages;
-  io::PlatformConfig pc;
   std::string err;
   {  // outputs never destroy inputs, checked before anything is read or written
     std::vector<std::string> ins = files;
@@ -441,35 +440,31 @@ int runCalibrate(int argc, char** argv) {
                           &err))
       return fail(err);
   }
-  if (!io::loadPlatformConfig(config, pc, &err)) return fail(err);
-  io::OverlayUse ovu;
-  if (!overlay.empty() && !io::applyOverlay(overlay, "boresight calibrate", {}, pc, ovu, &err)) return fail(err);
-  stream::ReplayInputs in;
-  if (!stream::classifyInputs(files, in, &err)) return fail(err);
+  stream::ReplayRequest rq;
+  rq.program = "boresight calibrate";
+  rq.config = config;
+  rq.overlay = overlay;
+  rq.uses = io::OverlayUses{};  // noise and mountings: method A estimates its own thermal and accelerometer terms
+  rq.inputs = files;
+  rq.strict = strict;
+  rq.lookahead_s = lookahead_s;
+  rq.star_vectors = false;  // SCV1A star vectors feed the multi-head Wahba solution, which method A does not use
+  stream::Replay rp;
+  if (!stream::openReplay(rq, rp, &err)) return fail(err);
+  io::PlatformConfig& pc = rp.pc;
+  const io::OverlayUse& ovu = rp.overlay;
+  const stream::ReplayInputs& in = rp.in;
+  stream::Engine& engine = *rp.engine;
   for (const auto& [f, product] : in.ignored)
     if (product != "GNV1B" && product != "GNI1B")
       std::printf("%s: %s is not an input of calibrate (SCA1A, ACC1A, QSA1B, GNI1B/GNV1B, LCM log): ignored\n",
                   f.c_str(), product.c_str());
-  // Star vectors (SCV1A) feed the multi-head Wahba solution, which method A does not use.
-  for (const auto& f : in.scv) {
-    std::printf("%s: SCV1A is not an input of calibrate (SCA1A, ACC1A, QSA1B, GNI1B/GNV1B, LCM log): ignored\n",
-                f.c_str());
-    in.ignored.emplace_back(f, "SCV1A");
-  }
-  in.scv.clear();
-  io::ReadOptions opt;
-  if (strict) opt.on_error = io::OnError::Stop;
-  if (!stream::prepareConfig(in, opt, pc, &err)) return fail(err);
   if (!pc.pipeline.use_accelerometer)
     return fail("no accelerometer input: method A compares the heads' angular acceleration with the "
                 "accelerometer's; give ACC1A files or an LCM log with accelerometer messages");
 
   for (const auto& l : io::modelInUseLines(pc, ovu)) std::printf("%s\n", l.c_str());
 
-  stream::AssemblerConfig acfg;
-  acfg.lookahead_us = static_cast<TimeUs>(std::llround(lookahead_s * 1e6));
-  stream::Engine engine(acfg);
-  if (!engine.configure(pc.pipeline, &err)) return fail(err);
   calib::SpanBuilder builder;
   calib::SpanOptions spo;
   spo.decimation_s = decimation;
@@ -494,7 +489,7 @@ int runCalibrate(int argc, char** argv) {
   engine.addObserver(&feed);  // before the sources: the orbit files are opened for an observer that wants them
   RawFeed raw_feed(pc.pipeline.heads);
   if (raw) engine.addObserver(&raw_feed);
-  if (!stream::addSources(in, opt, true, engine, &err)) return fail(err);
+  if (!stream::startReplay(rp, &err)) return fail(err);
   if (engine.run() != stream::Engine::Result::kDone) return fail(engine.error());
   const bool orbit_seen = engine.orbitSamples() > 0;
   with_thermal = with_thermal && orbit_seen;

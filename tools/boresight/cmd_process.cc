@@ -145,7 +145,6 @@ int runProcess(int argc, char** argv) {
   app.add_option("inputs", files)->required();
   if (int st = parseCommandLine(app, argc, argv, "process", kUsage); st >= 0) return st;
 
-  io::PlatformConfig pc;
   std::string err;
   {  // outputs never destroy inputs, checked before anything is read or written
     std::vector<std::string> ins = files;
@@ -154,18 +153,6 @@ int runProcess(int argc, char** argv) {
       std::fprintf(stderr, "boresight process: %s\n", err.c_str());
       return 1;
     }
-  }
-  if (!io::loadPlatformConfig(config, pc, &err)) {
-    std::fprintf(stderr, "boresight process: %s\n", err.c_str());
-    return 1;
-  }
-  io::OverlayUse ovu;
-  io::OverlayUses uses;
-  uses.thermal = true;
-  uses.accelerometer = true;
-  if (!overlay.empty() && !io::applyOverlay(overlay, "boresight process", uses, pc, ovu, &err)) {
-    std::fprintf(stderr, "boresight process: %s\n", err.c_str());
-    return 1;
   }
   // The comparison files are checked before the replay: a wrong path fails at once, not after it.
   if (!compare.empty() && !audit::checkSca1b(compare, &err)) {
@@ -181,11 +168,25 @@ int runProcess(int argc, char** argv) {
       return 1;
     }
   }
-  stream::ReplayInputs in;
-  if (!stream::classifyInputs(files, in, &err)) {
+  stream::ReplayRequest rq;
+  rq.program = "boresight process";
+  rq.config = config;
+  rq.overlay = overlay;
+  rq.uses.thermal = true;
+  rq.uses.accelerometer = true;
+  rq.inputs = files;
+  rq.strict = strict;
+  rq.lookahead_s = lookahead_s;
+  rq.thermal_in_core = true;
+  stream::Replay rp;
+  if (!stream::openReplay(rq, rp, &err)) {
     std::fprintf(stderr, "boresight process: %s\n", err.c_str());
     return 1;
   }
+  const io::PlatformConfig& pc = rp.pc;
+  const io::OverlayUse& ovu = rp.overlay;
+  const stream::ReplayInputs& in = rp.in;
+  stream::Engine& engine = *rp.engine;
   const bool thermal = ovu.thermal_model.has_value();
   for (const auto& [f, product] : in.ignored) {
     const bool orbit = product == "GNV1B" || product == "GNI1B";
@@ -197,21 +198,7 @@ int runProcess(int argc, char** argv) {
       std::printf("%s: %s is not an input of process (SCA1A, ACC1A, SCV1A, QSA1B, GNV1B/GNI1B, LCM log): ignored\n",
                   f.c_str(), product.c_str());
   }
-  io::ReadOptions opt;
-  if (strict) opt.on_error = io::OnError::Stop;
-  if (!stream::prepareConfig(in, opt, pc, &err)) {
-    std::fprintf(stderr, "boresight process: %s\n", err.c_str());
-    return 1;
-  }
   for (const auto& l : io::modelInUseLines(pc, ovu)) std::printf("%s\n", l.c_str());
-  stream::AssemblerConfig acfg;
-  acfg.lookahead_us = static_cast<TimeUs>(std::llround(lookahead_s * 1e6));
-  stream::Engine engine(acfg);
-  if (!engine.configure(pc.pipeline, &err) || (thermal && !engine.setThermalModel(*ovu.thermal_model, &err)) ||
-      !stream::addSources(in, opt, true, engine, &err)) {
-    std::fprintf(stderr, "boresight process: %s\n", err.c_str());
-    return 1;
-  }
   stream::CsvRowSink csv(out);
   stream::CsvStarSink stars_csv(stars_out);
   // Both appear at their paths only when the run has succeeded (commit below).
@@ -225,6 +212,10 @@ int runProcess(int argc, char** argv) {
   if (!sca1b_out.empty()) engine.addSink(&sca1b);
   if (!stars_out.empty()) engine.addSink(&stars_csv);
   if (!compare.empty()) engine.addSink(&track);
+  if (!stream::startReplay(rp, &err)) {
+    std::fprintf(stderr, "boresight process: %s\n", err.c_str());
+    return 1;
+  }
   if (engine.run() != stream::Engine::Result::kDone) {
     std::fprintf(stderr, "boresight process: %s\n", engine.error().c_str());
     return 1;

@@ -1,18 +1,23 @@
 // Replaying recorded telemetry through the engine: input files sorted by content, the core
-// configuration completed for them, one source per file. `boresight process` is these three calls
-// plus a CSV sink; calibrate and audit are the same with other sinks.
+// configuration completed for them, one source per file. Every program that replays files (process,
+// calibrate, audit, noise) opens its replay with openReplay() and starts it with startReplay():
 //
-//   stream::ReplayInputs in;
-//   if (!stream::classifyInputs(files, in, &err)) ...;          // in.ignored: listed, not errors
-//   if (!stream::prepareConfig(in, opt, platform, &err)) ...;    // QSA1B mountings, accelerometer
-//   stream::Engine e;  e.configure(platform.pipeline, &err);
-//   if (!stream::addSources(in, opt, true, e, &err)) ...;
+//   stream::ReplayRequest rq;  rq.program = "boresight process";  rq.config = ...;  rq.inputs = files;
+//   stream::Replay r;
+//   if (!stream::openReplay(rq, r, &err)) ...;   // platform, overlay, inputs by content, QSA1B, engine
+//   ... r.in.ignored: the program says what it ignores; r.engine->addSink / addObserver ...
+//   if (!stream::startReplay(r, &err)) ...;      // one source per file (the orbit when wanted)
+//   r.engine->run();
+//
+// The steps below are its parts.
 #pragma once
 
 #include <boresight/io/core_config.h>
 #include <boresight/io/level1.h>
+#include <boresight/io/overlay_apply.h>
 #include <boresight/stream/engine.h>
 
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
@@ -54,5 +59,38 @@ bool checkSampleRates(const ReplayInputs& in, const io::ReadOptions& opt, const 
 /// when engine.wantsOrbit(): set the thermal model and add the observers first), LCM logs (that order
 /// also breaks ties at equal time tags). `prefetch`: each is read on its own worker thread.
 bool addSources(const ReplayInputs& in, const io::ReadOptions& opt, bool prefetch, Engine& engine, std::string* error);
+
+/// What a program replays and how.
+struct ReplayRequest {
+  std::string program;              ///< "boresight process", ... (in the overlay's applied / not applied lines)
+  std::string config;               ///< platform file
+  std::string overlay;              ///< model overlay, empty: none
+  io::OverlayUses uses;             ///< the overlay's parts the program applies
+  std::vector<std::string> inputs;  ///< files, sorted by content
+  bool strict = false;              ///< stop at the first malformed input line
+  double lookahead_s = 2.0;         ///< the assembler's look-ahead
+  /// False: SCV1A star vectors among the inputs are moved to `ignored` (not an input of the program).
+  bool star_vectors = true;
+  /// True: the overlay's thermal terms are set in the engine's core (the prediction of blind pairs).
+  bool thermal_in_core = false;
+};
+
+/// An opened replay: the platform with the overlay and the QSA1B mountings, the inputs by content, and
+/// the engine configured with them (no source yet: sinks and observers go in before startReplay()).
+struct Replay {
+  io::PlatformConfig pc;
+  io::OverlayUse overlay;
+  ReplayInputs in;
+  io::ReadOptions opt;
+  std::unique_ptr<Engine> engine;
+};
+
+/// Loads the platform file, applies the overlay, sorts the inputs, completes the configuration for them
+/// (prepareConfig) and configures the engine (and its thermal model with thermal_in_core). False with
+/// *error (file:line: reason) at the first step that fails.
+bool openReplay(const ReplayRequest& rq, Replay& r, std::string* error);
+
+/// One source per input (addSources, read ahead on worker threads). False with *error.
+bool startReplay(Replay& r, std::string* error);
 
 }  // namespace boresight::stream
