@@ -71,10 +71,12 @@ plot() {  # plot CSV columns to an SVG next to the report and link it
 if [[ -d "$real/gracefo" ]]; then
   l1a="$real/gracefo/2023-06-01_L1A"; l1b="$real/gracefo/2023-06-01_L1B"
   section "Real-time core over the real GRACE-FO sample, compared with the official SCA1B"
-  echo "The three heads fused with their QSA1B mountings; the fused attitude against SCA1B (GRACE C):" >>"$report"
+  echo "The three heads fused with their QSA1B mountings; the fused attitude against SCA1B (GRACE C), and written as" >>"$report"
+  echo "an SCA1B product of our own (SCA1B_boresight_C.txt: whole GPS seconds through CLK1B, qual_rss from the fused covariance):" >>"$report"
   run process --config "$root/config/gracefo.yaml" "$l1a/SCA1A_2023-06-01_C_04.txt" "$l1a/ACC1A_2023-06-01_C_04.txt" \
     "$real/gracefo/static_2018-05-22/QSA1B_2018-05-22_C_04.txt" --out "$out/process_gracefo.csv" \
-    --compare-sca1b "$l1b/SCA1B_2023-06-01_C_04.txt" --clk1b "$l1b/CLK1B_2023-06-01_C_04.txt" || true
+    --compare-sca1b "$l1b/SCA1B_2023-06-01_C_04.txt" --clk1b "$l1b/CLK1B_2023-06-01_C_04.txt" \
+    --sca1b "$out/SCA1B_boresight_C.txt" || true
   plot "$out/process_gracefo.csv" iba_real.svg "GRACE C 2023-06-01: inter-boresight angle minus QSA1B value" arcsec \
     --y iba_12_dev_arcsec,iba_13_dev_arcsec,iba_23_dev_arcsec || true
 fi
