@@ -117,9 +117,10 @@ class CsvStarSink final : public RowSink {
 };
 
 /// The fused attitude as a GRACE-FO SCA1B product (`boresight process --sca1b`): q_I_B (inertial to
-/// the body frame, scalar first and non-negative: quatangle = cos(theta/2), theta in [0, 180 deg]) at every whole GPS second between two rows with
-/// heads at most max_gap_s apart, by slerp; rows further apart leave a hole (no record, counted), never
-/// an interpolated value, so qualflg bit 0 ("interpolated") is never set. Per record:
+/// the body frame, scalar first and non-negative: quatangle = cos(theta/2), theta in [0, 180 deg]) at
+/// every whole GPS second between two rows with heads at most max_gap_s apart, by slerp; rows further
+/// apart leave a hole (no record, counted), never an interpolated value, so qualflg bit 0
+/// ("interpolated") is never set. Per record:
 ///   sca_id    the heads fused in the rows around it, as SCA1B counts them: bit id-1 for head id 1..3
 ///             (7: SCAs 1, 2 and 3); the IMU bits stay 0 (the fusion uses no IMU)
 ///   qual_rss  the RSS of the formal errors of the four quaternion components: 0.5 sqrt(trace P_B) of
@@ -135,7 +136,7 @@ class Sca1bSink final : public RowSink {
   /// False with error() when a head id is outside 1..3 (SCA1B's sca_id has bits for three cameras).
   bool begin(const core::PipelineConfig& cfg) override;
   bool write(const core::PipelineRow& row) override;
-  /// Writes the product (the header's record count and time coverage from the records).
+  /// Writes the product (a synthesised SCA1B header with the record count), whole or not at all.
   bool commit(std::string* error);
   std::string error() const override { return error_; }
   std::size_t records() const { return file_.records.size(); }
