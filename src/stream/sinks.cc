@@ -48,7 +48,7 @@ bool CsvRowSink::begin(const core::PipelineConfig& cfg) {
       buf_ += ",iba_" + p + "_deg,iba_" + p + "_dev_arcsec";
     }
   buf_ += ",heads_used,rate_bridged,w_sigma_x,w_sigma_y,w_sigma_z,a_sc_sigma_x,a_sc_sigma_y,a_sc_sigma_z,acc_bridged,"
-          "a_acc_sigma_bridge\n";
+          "a_acc_sigma_bridge,q_sigma_x_arcsec,q_sigma_y_arcsec,q_sigma_z_arcsec,q_corr_xy,q_corr_xz,q_corr_yz\n";
   return true;
 }
 
@@ -81,6 +81,13 @@ bool CsvRowSink::write(const core::PipelineRow& r) {
   buf_.push_back(',');
   putInt(buf_, r.acc_bridged);
   field(buf_, r.has_acc ? r.a_acc_sigma_bridge : nan, std::chars_format::scientific, 3);
+  // the fused attitude's covariance P_B: 1-sigma about each body axis and the correlations
+  const Vec3 sd = r.P_B.diagonal().cwiseMax(0.0).cwiseSqrt();
+  for (int k = 0; k < 3; ++k) field(buf_, r.heads_used > 0 ? sd[k] * kArcsecPerRad : nan, std::chars_format::fixed, 4);
+  for (const auto& [i, j] : {std::pair<int, int>{0, 1}, {0, 2}, {1, 2}}) {
+    const double c = sd[i] > 0 && sd[j] > 0 ? r.P_B(i, j) / (sd[i] * sd[j]) : nan;
+    field(buf_, r.heads_used > 0 ? c : nan, std::chars_format::fixed, 4);
+  }
   buf_.push_back('\n');
   ++rows_;
   with_rates_ += r.has_rates;

@@ -253,6 +253,8 @@ TEST(CsvRowSink, NumbersAreFormattedAsPrintf) {
     r.a_acc_sigma_bridge = r.acc_bridged > 0 ? (u(rng) + 2.0) * 1e-10 * scale : 0.0;
     for (auto& v : r.iba_rad) v = i % 7 == 0 ? std::nan("") : u(rng) * 3;
     for (auto& v : r.iba_dev_rad) v = u(rng) * 1e-4 * scale;
+    const Mat3 L = (Mat3() << 2 + u(rng), 0, 0, u(rng), 3, 0, u(rng), u(rng), 1 + i % 5).finished() * 1e-6;
+    r.P_B = L * L.transpose();
     rows.push_back(r);
     ASSERT_TRUE(sink.write(r));
   }
@@ -261,7 +263,7 @@ TEST(CsvRowSink, NumbersAreFormattedAsPrintf) {
   std::string expect = "time_s,q0,q1,q2,q3,w_x,w_y,w_z,a_sc_x,a_sc_y,a_sc_z,a_acc_x,a_acc_y,a_acc_z,"
                        "iba_12_deg,iba_12_dev_arcsec,iba_13_deg,iba_13_dev_arcsec,iba_23_deg,iba_23_dev_arcsec,heads_used,"
                        "rate_bridged,w_sigma_x,w_sigma_y,w_sigma_z,a_sc_sigma_x,a_sc_sigma_y,a_sc_sigma_z,acc_bridged,"
-                       "a_acc_sigma_bridge\n";
+                       "a_acc_sigma_bridge,q_sigma_x_arcsec,q_sigma_y_arcsec,q_sigma_z_arcsec,q_corr_xy,q_corr_xz,q_corr_yz\n";
   char b[128];
   auto num = [&](double v, const char* fmt) {
     if (std::isfinite(v)) {
@@ -295,6 +297,9 @@ TEST(CsvRowSink, NumbersAreFormattedAsPrintf) {
     std::snprintf(b, sizeof b, ",%d", r.acc_bridged);
     expect += b;
     num(r.has_acc ? r.a_acc_sigma_bridge : NAN, ",%.3e");
+    for (int k = 0; k < 3; ++k) num(r.heads_used > 0 ? std::sqrt(r.P_B(k, k)) * kArcsecPerRad : NAN, ",%.4f");
+    for (const auto& [a, c] : {std::pair<int, int>{0, 1}, {0, 2}, {1, 2}})
+      num(r.heads_used > 0 ? r.P_B(a, c) / (std::sqrt(r.P_B(a, a)) * std::sqrt(r.P_B(c, c))) : NAN, ",%.4f");
     expect += '\n';
   }
   std::string got = slurp(path);

@@ -45,6 +45,8 @@ const char* kUsage =
     "  a_acc_x..z        accelerometer angular acceleration, same CRN low-pass, rad/s^2, body frame\n"
     "  iba_<i><j>_deg, iba_<i><j>_dev_arcsec   per head pair: inter-boresight angle, deviation from ground\n"
     "  heads_used        heads fused at this epoch\n"
+    "  q_sigma_x..z_arcsec, q_corr_xy..yz   the fused attitude's covariance P_B: 1-sigma about each body\n"
+    "                    axis and the correlations (the rates' sigmas and bridged-sample columns before them)\n"
     "The CRN output is stamped at the centre tap: rates need Tf/2 (~35 s) of data on each side.\n"
     "Star vectors (SCV1A files, STAR_VECTORS messages) among the inputs go to the multi-head Wahba solver\n"
     "with the thermally corrected relative matrices (config: thermal.wahba_correction).\n"
