@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <utility>
 
 namespace boresight::model {
@@ -75,9 +76,32 @@ double expectedMissingFraction(const std::vector<RandomGaps>& g) {
   return 1.0 - free;
 }
 
+namespace {
+
+/// The union of half-open intervals as disjoint intervals in time order (empty ones dropped), so that a
+/// time is looked up by bisection: the audit's loop gives one interval per gap of the data (thousands).
+std::vector<Interval> disjointUnion(std::vector<Interval> v) {
+  v.erase(std::remove_if(v.begin(), v.end(), [](const Interval& i) { return !(i.end_s > i.start_s); }), v.end());
+  std::sort(v.begin(), v.end(), [](const Interval& a, const Interval& b) { return a.start_s < b.start_s; });
+  std::vector<Interval> out;
+  for (const Interval& i : v) {
+    if (!out.empty() && i.start_s <= out.back().end_s) out.back().end_s = std::max(out.back().end_s, i.end_s);
+    else out.push_back(i);
+  }
+  return out;
+}
+
+bool inUnion(const std::vector<Interval>& u, double t) {
+  auto it = std::upper_bound(u.begin(), u.end(), t, [](double x, const Interval& i) { return x < i.start_s; });
+  return it != u.begin() && std::prev(it)->contains(t);
+}
+
+}  // namespace
+
 GapProcess::GapProcess(const std::vector<RandomGaps>& random, std::vector<Interval> fixed, std::vector<Interval> dropouts,
-                       std::uint64_t seed, Stream stream, std::uint64_t sensor)
-    : fixed_(std::move(fixed)), dropouts_(std::move(dropouts)) {
+                       std::uint64_t seed, Stream stream, std::uint64_t sensor) {
+  fixed.insert(fixed.end(), dropouts.begin(), dropouts.end());
+  fixed_ = disjointUnion(std::move(fixed));
   for (std::size_t j = 0; j < random.size(); ++j) {
     Proc p;
     p.g = random[j];
@@ -101,13 +125,7 @@ bool GapProcess::randomMissing(double t) {
   return miss;
 }
 
-bool GapProcess::fixedMissing(double t) const {
-  for (const auto& i : fixed_)
-    if (i.contains(t)) return true;
-  for (const auto& i : dropouts_)
-    if (i.contains(t)) return true;
-  return false;
-}
+bool GapProcess::fixedMissing(double t) const { return inUnion(fixed_, t); }
 
 bool GapProcess::missing(double t) {
   const bool r = randomMissing(t);

@@ -222,17 +222,20 @@ bool Sca1bSink::write(const core::PipelineRow& row) {
     if (s < x) s += kUsPerSecond;
     return s;
   };
-  if (!have_prev_) {
+  const bool first = !have_prev_;
+  if (first) {
     have_prev_ = true;
     next_s_ = ceilSecond(t);
   } else if (t <= prev_t_) {
-    return true;  // the rows are in time order; a GPS conversion that does not keep it is not followed
+    ++out_of_order_;  // the rows are in time order; a GPS conversion that does not keep it is not followed
+    return true;
   }
-  const bool bridged = have_prev_ && next_s_ < t && toSeconds(t - prev_t_) <= max_gap_s_ && prev_t_ < t;
+  // whole seconds strictly between the previous row and this one (next_s_ > prev_t_ always)
+  const bool bridged = !first && toSeconds(t - prev_t_) <= max_gap_s_;
   for (; next_s_ <= t; next_s_ += kUsPerSecond) {
     if (next_s_ == t) {
       emit(t, row.q_I_B, row.heads_mask, rss, one);
-    } else if (bridged && next_s_ > prev_t_) {
+    } else if (bridged) {
       const double f = static_cast<double>(next_s_ - prev_t_) / static_cast<double>(t - prev_t_);
       emit(next_s_, prev_q_.slerp(f, row.q_I_B), prev_mask_ | row.heads_mask, std::max(prev_rss_, rss), prev_one_ || one);
     } else {

@@ -32,6 +32,39 @@ OrbitContext ctxAt(double t, double u = 0.3, double beta = 0.2) {
   return c;
 }
 
+TEST(GapProcessFixed, ExplicitGapsAndDropoutsAreTheirUnionWhateverTheirOrderAndOverlap) {
+  // Thousands of explicit intervals (the audit's loop gives one per gap of the data) are looked up by
+  // bisection over their disjoint union: the same answer as asking every interval.
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> at(-10.0, 5000.0), len(-2.0, 30.0);
+  std::vector<Interval> fixed, drop;
+  for (int k = 0; k < 3000; ++k) (k % 3 ? fixed : drop).push_back({at(rng), 0.0});
+  for (auto* v : {&fixed, &drop})
+    for (auto& i : *v) i.end_s = i.start_s + len(rng);  // some empty or reversed: nothing
+  fixed.push_back({100.0, 200.0});
+  fixed.push_back({150.0, 160.0});  // nested
+  drop.push_back({199.0, 250.0});   // overlapping the end of another list's interval
+  const GapProcess p({}, fixed, drop, 1, Stream::HeadGap, 1);
+  int missing = 0;
+  for (double t = -20.0; t < 5100.0; t += 0.37) {
+    bool naive = false;
+    for (const auto* v : {&fixed, &drop})
+      for (const auto& i : *v) naive = naive || i.contains(t);
+    ASSERT_EQ(p.fixedMissing(t), naive) << t;
+    missing += naive;
+  }
+  EXPECT_GT(missing, 1000);
+  // at every interval's ends exactly (half-open: the start is missing, the end is not unless covered)
+  for (const auto* v : {&fixed, &drop})
+    for (const auto& i : *v)
+      for (double t : {i.start_s, i.end_s}) {
+        bool naive = false;
+        for (const auto* w : {&fixed, &drop})
+          for (const auto& j : *w) naive = naive || j.contains(t);
+        ASSERT_EQ(p.fixedMissing(t), naive) << t;
+      }
+}
+
 TEST(EffectModel, TwoDriftsAddEachWithItsOwnStart) {
   const auto d1 = spec("drift:sensor=1,x_arcsec_per_day=86400,start_s=100");  // 1"/s
   const auto d2 = spec("drift:sensor=1,y_arcsec_per_day=172800,z_arcsec_per_day=-86400,start_s=300");

@@ -114,6 +114,10 @@ TEST(Sca1bSink, TheGpsConversionMovesTheRecordsAndRowsOnWholeSecondsAreWrittenAs
     EXPECT_EQ(f.records[i].t, kT0 + static_cast<TimeUs>(i) * kUsPerSecond);
     EXPECT_LT(angleArcsec(quatFromScalarFirst(f.records[i].q), rows[i].q_I_B), 1e-9);
   }
+  // a row whose GPS time is not after the previous one is counted, not written
+  ASSERT_TRUE(sink.write(rows[3]));
+  EXPECT_EQ(sink.rowsOutOfOrder(), 1u);
+  EXPECT_EQ(sink.records(), rows.size());
   // rows without heads are not attitudes
   stream::Sca1bSink empty(path, 'C', 1.5);
   ASSERT_TRUE(empty.begin(threeHeads()));

@@ -6,6 +6,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -216,6 +217,33 @@ TEST(CliReal, ProcessWritesTheFusedAttitudeAsSca1bThatReadsLikeTheOfficialOne) {
     const double mean = sum[k] / n, sd = std::sqrt(std::max(0.0, sum2[k] / n - mean * mean));
     std::printf("ours - official SCA1B about %c: mean %.2f\" scatter %.2f\" (%d seconds)\n", "xyz"[k], mean, sd, n);
     EXPECT_LT(sd, 3.0) << "the written attitude scatters against the official product more than the fused one does";
+  }
+  // qual_rss and the CSV's covariance columns are one covariance: every record's qual_rss is
+  // 0.5 sqrt(sum of the three variances) of one of the rows around it
+  {
+    std::ifstream csv(dir + "/p.csv");
+    std::string header, line, x;
+    std::getline(csv, header);
+    std::vector<std::string> names;
+    for (std::stringstream hs(header); std::getline(hs, x, ',');) names.push_back(x);
+    const auto col = [&](const std::string& name) { return static_cast<std::size_t>(std::find(names.begin(), names.end(), name) - names.begin()); };
+    const std::size_t sx = col("q_sigma_x_arcsec");
+    ASSERT_LT(sx + 5, names.size()) << header;
+    double lo = 1e300, hi = 0;
+    while (std::getline(csv, line)) {
+      std::vector<std::string> f;
+      for (std::stringstream ls(line); std::getline(ls, x, ',');) f.push_back(x);
+      ASSERT_GT(f.size(), sx + 5) << line;
+      const double a = std::stod(f[sx]), b = std::stod(f[sx + 1]), c = std::stod(f[sx + 2]);
+      std::printf("row %s: sigma %.2f %.2f %.2f\" corr %s %s %s\n", f[0].c_str(), a, b, c, f[sx + 3].c_str(), f[sx + 4].c_str(), f[sx + 5].c_str());
+      const double rss = 0.5 * std::sqrt(a * a + b * b + c * c) * boresight::kRadPerArcsec;
+      lo = std::min(lo, rss), hi = std::max(hi, rss);
+      for (int k = 3; k < 6; ++k) EXPECT_LT(std::abs(std::stod(f[sx + k])), 1.0) << line;
+    }
+    for (const auto& rec : ours.records) {
+      EXPECT_GE(rec.qual_rss, lo * (1 - 1e-3));  // the CSV prints 4 decimals of an arcsecond
+      EXPECT_LE(rec.qual_rss, hi * (1 + 1e-3));
+    }
   }
   // read back by the comparison: zero difference at zero shift
   CliRun self = run(base + clk + " --out " + dir + "/p2.csv --compare-sca1b " + dir + "/SCA1B_ours.txt");

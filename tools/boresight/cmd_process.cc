@@ -270,6 +270,8 @@ int runProcess(int argc, char** argv) {
                             : "receiver time through CLK1B");
     if (sca1b.holeSeconds())
       std::printf(", %llu seconds inside gaps not written", static_cast<unsigned long long>(sca1b.holeSeconds()));
+    if (sca1b.rowsOutOfOrder())
+      std::printf(", %llu rows not used (GPS time not after the previous row's)", static_cast<unsigned long long>(sca1b.rowsOutOfOrder()));
     std::printf("\n");
   }
   if (!compare.empty()) {

@@ -103,7 +103,7 @@ class GapProcess {
     double until = -1;
   };
   std::vector<Proc> procs_;
-  std::vector<Interval> fixed_, dropouts_;
+  std::vector<Interval> fixed_;  ///< explicit gaps and dropouts: their union, disjoint, in time order
 };
 
 // ---------------------------------------------------------------------------------------------

@@ -141,6 +141,7 @@ class Sca1bSink final : public RowSink {
   std::string error() const override { return error_; }
   std::size_t records() const { return file_.records.size(); }
   std::uint64_t holeSeconds() const { return holes_; }  ///< whole seconds inside gaps, not written
+  std::uint64_t rowsOutOfOrder() const { return out_of_order_; }  ///< rows at or before the previous one (not used)
 
  private:
   void emit(TimeUs t_gps, const Quat& q, std::uint32_t mask, double qual_rss, bool one_head);
@@ -155,7 +156,7 @@ class Sca1bSink final : public RowSink {
   std::uint32_t prev_mask_ = 0;
   double prev_rss_ = 0;
   bool prev_one_ = false;
-  std::uint64_t holes_ = 0;
+  std::uint64_t holes_ = 0, out_of_order_ = 0;
 };
 
 /// The last `capacity` rows in a ring (for a batch solver that works on a sliding span). Fixed
