@@ -143,12 +143,15 @@ struct LinFam {
   std::vector<Block> blocks;
   MatrixXd Xp;  ///< physical regressors (rows x columns)
   VectorXd yp;
-  MatrixXd Xw;
+  /// The data whitened per block (yw); the regressors whitened the same way are not stored (rows x
+  /// columns: 75 MB on a day's relative family) but computed from Xp where needed (whitenedRow,
+  /// whitenedTimes), a block's few rows at a time.
   VectorXd yw;
+  std::vector<int> row_block;  ///< the block of each row (-1: none; its whitened regressors are 0)
   std::vector<Cand> cands;
   int ncols = 0;
   // fit
-  MatrixXd G;  ///< Gram of [Xw yw] over the fitting rows
+  MatrixXd G;  ///< Gram of the whitened [Xp yp] over the fitting rows
   int n_fit = 0;
   /// Colour of the noise: lag-1 autocorrelation rho of the whitened rows per component, from first
   /// differences (which remove constants and slow signals: for AR(1) noise their lag-1 correlation is
@@ -210,6 +213,35 @@ int addCand(LinFam& f, Cand c) {
   f.ncols += c.ncol;
   f.cands.push_back(std::move(c));
   return f.cands.back().col0;
+}
+
+/// Row i of the regressors whitened per block (Block::W times the block's rows of Xp), at the columns
+/// `cols` (every column when null), written to out.
+void whitenedRow(const LinFam& f, int i, const std::vector<int>* cols, double* out) {
+  const int q = cols ? static_cast<int>(cols->size()) : f.ncols;
+  const int bi = f.row_block[static_cast<std::size_t>(i)];
+  if (bi < 0) {
+    std::fill(out, out + q, 0.0);
+    return;
+  }
+  const Block& b = f.blocks[static_cast<std::size_t>(bi)];
+  const int r = i - b.row0;
+  for (int j = 0; j < q; ++j) {
+    const int c = cols ? (*cols)[static_cast<std::size_t>(j)] : j;
+    double v = 0;
+    for (int k = 0; k < b.n; ++k) v += b.W(r, k) * f.Xp(b.row0 + k, c);
+    out[j] = v;
+  }
+}
+
+/// The whitened regressors at the columns `cols` times beta: sum_j Xw(:, cols[j]) beta[j], every row.
+VectorXd whitenedTimes(const LinFam& f, const std::vector<int>& cols, const VectorXd& beta) {
+  const auto n = f.Xp.rows();
+  VectorXd v = VectorXd::Zero(n);
+  for (std::size_t j = 0; j < cols.size(); ++j) v += f.Xp.col(cols[j]) * beta[static_cast<Eigen::Index>(j)];
+  VectorXd w = VectorXd::Zero(n);
+  for (const auto& b : f.blocks) w.segment(b.row0, b.n) = b.W * v.segment(b.row0, b.n);
+  return w;
 }
 
 /// LinFam::time_colour: fits each component's noise to the rows with a constant and the columns `cols`
@@ -349,10 +381,12 @@ void colourInTime(LinFam& f, const std::vector<int>& cols) {
     s.t_s.resize(r.size());
     s.y.resize(r.size());
     std::vector<double> unit(r.size());
+    std::vector<double> xw(static_cast<std::size_t>(q));
     for (int k = 0; k < m; ++k) {
       const int i = r[static_cast<std::size_t>(k)];
       X(k, 0) = 1.0;
-      for (int j = 0; j < q; ++j) X(k, j + 1) = f.Xw(i, cols[static_cast<std::size_t>(j)]);
+      whitenedRow(f, i, &cols, xw.data());
+      for (int j = 0; j < q; ++j) X(k, j + 1) = xw[static_cast<std::size_t>(j)];
       if (nl > 0) lineRegressors(f, f.t[static_cast<std::size_t>(i)], lines.data());
       for (int j = 0; j < nl; ++j) X(k, q + 1 + j) = lines[static_cast<std::size_t>(j)];  // unweighted: the rows' own scale
       s.t_s[static_cast<std::size_t>(k)] = f.t[static_cast<std::size_t>(i)];
@@ -397,7 +431,7 @@ void colourInTime(LinFam& f, const std::vector<int>& cols) {
   };
   for (int i = 0; i < n; ++i) {
     if (f.held[static_cast<std::size_t>(i)]) continue;
-    for (int j = 0; j < p; ++j) in[static_cast<std::size_t>(j)] = f.Xw(i, j);
+    whitenedRow(f, i, nullptr, in.data());
     in[static_cast<std::size_t>(p)] = f.yw[i];
     kw[static_cast<std::size_t>(f.comp[static_cast<std::size_t>(i)])].whitenColumns(f.t[static_cast<std::size_t>(i)], in.data(), out.data(), p + 1);
     for (int j = 0; j <= p; ++j) Z(k, j) = out[static_cast<std::size_t>(j)];
@@ -432,21 +466,37 @@ std::vector<int> noiseProfile(const LinFam& f, const std::vector<int>& selected)
 
 void finishFamily(LinFam& f) {
   const int n = static_cast<int>(f.t.size());
-  f.Xw = MatrixXd::Zero(n, f.ncols);
+  f.row_block.assign(static_cast<std::size_t>(n), -1);
   f.yw = VectorXd::Zero(n);
-  for (const auto& b : f.blocks) {
-    f.Xw.middleRows(b.row0, b.n) = b.W * f.Xp.middleRows(b.row0, b.n);
+  for (std::size_t bi = 0; bi < f.blocks.size(); ++bi) {
+    const Block& b = f.blocks[bi];
+    for (int r = 0; r < b.n; ++r) f.row_block[static_cast<std::size_t>(b.row0 + r)] = static_cast<int>(bi);
     f.yw.segment(b.row0, b.n) = b.W * f.yp.segment(b.row0, b.n);
   }
-  MatrixXd A(n, f.ncols + 1);
-  A << f.Xw, f.yw;
-  int nf = 0;
-  for (int i = 0; i < n; ++i) nf += !f.held[static_cast<std::size_t>(i)];
-  MatrixXd Af(nf, f.ncols + 1);
-  for (int i = 0, k = 0; i < n; ++i)
-    if (!f.held[static_cast<std::size_t>(i)]) Af.row(k++) = A.row(i);
+  // The Gram of the whitened [Xp yp] over the fitting rows, a block at a time into chunks of rows (no
+  // copy of the whole matrix: a day's relative family is 55 000 rows of 170 columns).
+  constexpr int kChunk = 2048;
+  MatrixXd Z(kChunk, f.ncols + 1), blk;
   f.G = MatrixXd::Zero(f.ncols + 1, f.ncols + 1);
-  f.G.selfadjointView<Eigen::Lower>().rankUpdate(Af.transpose());
+  int nf = 0, k = 0;
+  auto flush = [&] {
+    if (k > 0) f.G.selfadjointView<Eigen::Lower>().rankUpdate(Z.topRows(k).transpose());
+    k = 0;
+  };
+  for (const auto& b : f.blocks) {
+    blk.resize(b.n, f.ncols + 1);
+    blk.leftCols(f.ncols) = b.W * f.Xp.middleRows(b.row0, b.n);
+    blk.col(f.ncols) = f.yw.segment(b.row0, b.n);
+    for (int r = 0; r < b.n; ++r) {
+      if (f.held[static_cast<std::size_t>(b.row0 + r)]) continue;
+      Z.row(k) = blk.row(r);
+      ++nf;
+      if (++k == kChunk) flush();
+    }
+  }
+  flush();
+  // rows outside every block are zero rows: they count as fitting rows and add nothing
+  for (int i = 0; i < n; ++i) nf += f.row_block[static_cast<std::size_t>(i)] < 0 && !f.held[static_cast<std::size_t>(i)];
   f.G = f.G.selfadjointView<Eigen::Lower>();
   f.n_fit = nf;
   // noise colour from first differences per component (fitting rows, consecutive in time), in physical
@@ -573,11 +623,8 @@ struct TestOut {
 /// correlation time on a day), at least 8 of them.
 double scoreInflation(const LinFam& f, const Fit& small, const Fit& big, int& blocks, double& block_s) {
   const int n = static_cast<int>(f.yw.size());
-  auto fitted = [&](const Fit& ft, int i) {
-    double v = 0;
-    for (std::size_t j = 0; j < ft.cols.size(); ++j) v += f.Xw(i, ft.cols[j]) * ft.beta[static_cast<int>(j)];
-    return v;
-  };
+  const VectorXd fit_small = whitenedTimes(f, small.cols, small.beta), fit_big = whitenedTimes(f, big.cols, big.beta);
+  auto fitted = [&](const Fit& ft, int i) { return (&ft == &small ? fit_small : fit_big)[i]; };
   double t0 = 1e300, t1 = -1e300;
   for (int i = 0; i < n; ++i)
     if (!f.held[static_cast<std::size_t>(i)]) t0 = std::min(t0, f.t[static_cast<std::size_t>(i)]), t1 = std::max(t1, f.t[static_cast<std::size_t>(i)]);
@@ -1745,11 +1792,9 @@ Gain familyGain(const LinFam& f, const Fit& fin) {
   Gain g;
   g.family = f.name;
   g.unit = f.unit;
-  VectorXd rp = f.yp, rw = f.yw;
-  for (std::size_t i = 0; i < fin.cols.size(); ++i) {
-    rp -= f.Xp.col(fin.cols[i]) * fin.beta[static_cast<int>(i)];
-    rw -= f.Xw.col(fin.cols[i]) * fin.beta[static_cast<int>(i)];
-  }
+  VectorXd rp = f.yp;
+  for (std::size_t i = 0; i < fin.cols.size(); ++i) rp -= f.Xp.col(fin.cols[i]) * fin.beta[static_cast<int>(i)];
+  const VectorXd rw = f.yw - whitenedTimes(f, fin.cols, fin.beta);
   auto rms = [&](const VectorXd& v, bool held) {
     double s = 0, n = 0;
     for (int i = 0; i < v.size(); ++i)
@@ -1942,8 +1987,7 @@ void Analyser::notExplained(const LinFam& f, const Fit& fin) {
   // Per component: low-order time polynomial and the family's lines (lineOrders: beyond the catalogue's
   // harmonic orders, so that such a line is found here, not spread over its candidates) on the final
   // residual.
-  VectorXd rp = f.yw;
-  for (std::size_t i = 0; i < fin.cols.size(); ++i) rp -= f.Xw.col(fin.cols[i]) * fin.beta[static_cast<int>(i)];
+  VectorXd rp = f.yw - whitenedTimes(f, fin.cols, fin.beta);
   const int nc = static_cast<int>(f.comp_label.size());
   const int nh = f.line_orders;
   std::vector<double> lines(static_cast<std::size_t>(2 * nh));
@@ -2117,8 +2161,6 @@ double Analyser::refineStep(LinFam& f, const std::vector<int>& S, int k) {
     if (p.key == "at_s") p.value = tau;
   for (int i = 0; i < static_cast<int>(f.t.size()); ++i)
     for (int a = 0; a < 3; ++a) f.Xp(i, cd.col0 + a) = f.t[static_cast<std::size_t>(i)] >= tau ? f.Xp(i, mis + a) : 0.0;
-  for (const auto& b : f.blocks)
-    f.Xw.block(b.row0, cd.col0, b.n, 3) = b.W * f.Xp.block(b.row0, cd.col0, b.n, 3);
   // the Gram again: through the noise fit (its profile is the selection's) or from the white rows
   if (f.time_colour) {
     f.colour_cols = {-1};
