@@ -179,9 +179,7 @@ bool CsvStarSink::commit(std::string* error) {
 namespace boresight::stream {
 
 Sca1bSink::Sca1bSink(std::string path, char satellite, double max_gap_s, std::function<double(TimeUs)> gps_minus_tag_s)
-    : path_(std::move(path)), max_gap_s_(max_gap_s), eps_(std::move(gps_minus_tag_s)) {
-  file_ = io::makeProduct<io::Sca1bRecord>(io::Product::SCA1B, satellite);
-}
+    : path_(std::move(path)), max_gap_s_(max_gap_s), eps_(std::move(gps_minus_tag_s)), satellite_(satellite) {}
 
 bool Sca1bSink::begin(const core::PipelineConfig& cfg) {
   for (int s = 0; s < cfg.heads.n_heads; ++s) {
@@ -193,7 +191,7 @@ bool Sca1bSink::begin(const core::PipelineConfig& cfg) {
     }
     bit_[static_cast<std::size_t>(s)] = 1 << (id - 1);
   }
-  return true;
+  return writer_.open(path_, io::makeProduct<io::Sca1bRecord>(io::Product::SCA1B, satellite_), &error_, 16384, true);
 }
 
 void Sca1bSink::emit(TimeUs t_gps, const Quat& q_in, std::uint32_t mask, double qual_rss, bool one_head) {
@@ -201,14 +199,14 @@ void Sca1bSink::emit(TimeUs t_gps, const Quat& q_in, std::uint32_t mask, double 
   if (q.w() < 0) q.coeffs() = -q.coeffs();  // quatangle = cos(theta/2), theta in [0, 180 deg], as the product has it
   io::Sca1bRecord r;
   r.t = t_gps;
-  r.satellite = file_.header.satellite;
+  r.satellite = satellite_;
   r.sca_id = 0;
   for (std::size_t s = 0; s < bit_.size(); ++s)
     if ((mask >> s) & 1u) r.sca_id |= bit_[s];
   quatToScalarFirst(q, r.q);
   r.qual_rss = qual_rss;
   r.qualflg = io::Bits{one_head ? 8u : 0u, 8};
-  file_.records.push_back(r);
+  writer_.add(r);
 }
 
 bool Sca1bSink::write(const core::PipelineRow& row) {
@@ -255,7 +253,7 @@ bool Sca1bSink::commit(std::string* error) {
     if (error) *error = error_;
     return false;
   }
-  return io::writeProduct(path_, file_, error);
+  return writer_.close(error);
 }
 
 }  // namespace boresight::stream

@@ -91,6 +91,9 @@ TEST(Sca1bSink, WholeSecondsFollowTheRotationGapsAreHolesAndTheHeadsAreNamed) {
     EXPECT_EQ(r.qualflg.value, (m_lo == 2u || m_hi == 2u) ? 8u : 0u) << s;
   }
   EXPECT_LT(worst, 1e-6) << "arcsec: the slerp of a constant-rate rotation is the rotation";
+  // the header states the records' span (start_time_epoch_secs / stop_time_epoch_secs)
+  EXPECT_EQ(f.header.coverage_start_s, static_cast<double>(kT0 / kUsPerSecond + 1));
+  EXPECT_EQ(f.header.coverage_stop_s, static_cast<double>(kT0 / kUsPerSecond + 40));
   // record for record as held
   const auto g = io::readProduct<io::Sca1bRecord>(path);
   ASSERT_TRUE(g.ok);

@@ -1,5 +1,6 @@
 // boresight convert: Level-1 SCA1A / ACC1A files -> LCM log ordered by sensor time, and back.
 #include <boresight/io/any_product.h>
+#include <boresight/io/chunked_writer.h>
 #include <boresight/io/files.h>
 #include <boresight/io/lcm_log.h>
 #include <boresight/io/level1.h>
@@ -301,9 +302,9 @@ int toLevel1(const Options& a) {
     std::fprintf(stderr, "boresight convert: %s\n", err.c_str());
     return 1;
   }
-  sim::ChunkedProductWriter<io::Sca1aRecord> sca;
-  sim::ChunkedProductWriter<io::FlaggedRecord> acc;
-  sim::ChunkedProductWriter<io::GnvRecord> gni, gnv;  // ORBIT messages by frame: inertial, Earth-fixed
+  io::ChunkedProductWriter<io::Sca1aRecord> sca;
+  io::ChunkedProductWriter<io::FlaggedRecord> acc;
+  io::ChunkedProductWriter<io::GnvRecord> gni, gnv;  // ORBIT messages by frame: inertial, Earth-fixed
   std::string sca_path, acc_path, gni_path, gnv_path;
   std::uint64_t invalid_heads = 0, invalid_accel = 0;
   io::OutputDir out_dir;  // created when missing, removed again when the conversion fails

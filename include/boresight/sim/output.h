@@ -1,13 +1,11 @@
 // Simulator output: real-format Level-1 files (SCA1A, ACC1A, GNV1B streamed in chunks, QSA1B), an
 // LCM log of the node's input messages, and truth.yaml.
 //
-// Streaming: the io writers format whole ProductFile objects. ChunkedProductWriter writes the header
-// of io::formatProduct(empty product) with the record-count field widened to a fixed width, then
-// calls io::formatProduct on chunks of records, drops each chunk's repeated header, appends the
-// records, and at close() overwrites the count field in place (left-aligned, blank-padded: the
-// readers trim blanks). Memory is one chunk, whatever the duration.
+// Streaming: io::ChunkedProductWriter (boresight/io/chunked_writer.h) writes each product as its
+// records come, in one chunk of memory whatever the duration.
 #pragma once
 
+#include <boresight/io/chunked_writer.h>
 #include <boresight/io/level1.h>
 #include <boresight/io/files.h>
 #include <boresight/sim/simulator.h>
@@ -21,35 +19,6 @@
 
 namespace boresight::sim {
 
-template <typename Rec>
-class ChunkedProductWriter {
- public:
-  ChunkedProductWriter() = default;
-  ~ChunkedProductWriter();
-  ChunkedProductWriter(const ChunkedProductWriter&) = delete;
-  ChunkedProductWriter& operator=(const ChunkedProductWriter&) = delete;
-  /// `proto` supplies the header (makeProduct(...)); its records are ignored.
-  bool open(const std::string& path, const io::ProductFile<Rec>& proto, std::string* error,
-            std::size_t chunk_records = 16384);
-  void add(const Rec& r) {
-    chunk_.records.push_back(r);
-    if (chunk_.records.size() >= chunk_size_) flush();
-  }
-  bool close(std::string* error);
-  std::uint64_t count() const { return count_; }
-
- private:
-  void flush();
-  static constexpr std::size_t kCountWidth = 12;
-  std::string path_;
-  io::ProductFile<Rec> chunk_;
-  std::size_t chunk_size_ = 16384, header_lines_ = 0;
-  std::size_t count_offset_ = std::string::npos, count_width_ = 0;
-  io::AtomicFile file_;
-  std::FILE* body_ = nullptr;
-  std::uint64_t count_ = 0;
-  bool io_error_ = false;
-};
 
 /// "SCA1A_2023-06-01_C_04.txt" for the scenario's start date, satellite and version.
 std::string productFileName(const char* product, const Scenario& sc);
@@ -77,11 +46,11 @@ class Level1Sink : public SimSink {
  private:
   char sat_ = 'C';
   bool scv_on_ = false;
-  ChunkedProductWriter<io::ScvRecord> scv_;
+  io::ChunkedProductWriter<io::ScvRecord> scv_;
   std::vector<io::ScvRecord> scv_buf_;
-  ChunkedProductWriter<io::Sca1aRecord> sca_;
-  ChunkedProductWriter<io::FlaggedRecord> acc_;
-  ChunkedProductWriter<io::GnvRecord> gnv_;
+  io::ChunkedProductWriter<io::Sca1aRecord> sca_;
+  io::ChunkedProductWriter<io::FlaggedRecord> acc_;
+  io::ChunkedProductWriter<io::GnvRecord> gnv_;
   std::vector<std::string> files_;
 };
 

@@ -5,6 +5,7 @@
 #include <boresight/core/pipeline.h>
 #include <boresight/core/ring.h>
 #include <boresight/io/files.h>
+#include <boresight/io/chunked_writer.h>
 #include <boresight/io/level1.h>
 #include <boresight/model/orbit_context.h>
 
@@ -128,18 +129,22 @@ class CsvStarSink final : public RowSink {
 ///             larger of the two rows'
 ///   qualflg   bit 3 when either row fused one head only
 /// Row tags are the inputs' time (receiver time for Level-1A); `gps_minus_tag_s` (e.g. CLK1B's
-/// eps_time) turns them into GPS time, otherwise they are written as they are. Records are held in
-/// memory (about 72 bytes a second of data) and written at commit() through an atomic file.
+/// eps_time) turns them into GPS time, otherwise they are written as they are. Records are written as
+/// they come (io::ChunkedProductWriter: one chunk of 16384 in memory, whatever the span) under a
+/// temporary name that commit() renames; the header states the record count and the records' time span
+/// (time_coverage_start/stop, start/stop_time_epoch_secs, as the official product has them).
 class Sca1bSink final : public RowSink {
  public:
   Sca1bSink(std::string path, char satellite, double max_gap_s, std::function<double(TimeUs)> gps_minus_tag_s = {});
   /// False with error() when a head id is outside 1..3 (SCA1B's sca_id has bits for three cameras).
   bool begin(const core::PipelineConfig& cfg) override;
   bool write(const core::PipelineRow& row) override;
-  /// Writes the product (a synthesised SCA1B header with the record count), whole or not at all.
+  /// Finishes the product (a synthesised SCA1B header with the record count and the time coverage of
+  /// the records), whole or not at all: it is written as the rows come (io::ChunkedProductWriter, one
+  /// chunk of records in memory), under a temporary name until then.
   bool commit(std::string* error);
   std::string error() const override { return error_; }
-  std::size_t records() const { return file_.records.size(); }
+  std::size_t records() const { return static_cast<std::size_t>(writer_.written()); }
   std::uint64_t holeSeconds() const { return holes_; }  ///< whole seconds inside gaps, not written
   std::uint64_t rowsOutOfOrder() const { return out_of_order_; }  ///< rows at or before the previous one (not used)
 
@@ -149,7 +154,8 @@ class Sca1bSink final : public RowSink {
   double max_gap_s_;
   std::function<double(TimeUs)> eps_;
   std::array<std::int32_t, core::kMaxHeads> bit_{};
-  io::ProductFile<io::Sca1bRecord> file_;
+  char satellite_ = 'C';
+  io::ChunkedProductWriter<io::Sca1bRecord> writer_;
   bool have_prev_ = false;
   TimeUs prev_t_ = 0, next_s_ = 0;  ///< GPS us of the previous row; the next whole second to write
   Quat prev_q_ = Quat::Identity();
