@@ -95,7 +95,8 @@ double HeadColourFilter::whiten(const PairBlock& b, Eigen::Ref<Eigen::MatrixXd> 
   return 2 * llt.matrixLLT().diagonal().array().log().sum();
 }
 
-HeadColourData mergeForFit(const std::vector<PairBlock>& blocks, int q, const BlockRows& rows, double superbin_s) {
+HeadColourData mergeForFit(const std::vector<PairBlock>& blocks, int q, const BlockRows& rows, double superbin_s,
+                           int profiled) {
   HeadColourData d;
   d.superbin_s = superbin_s;
   struct Acc {
@@ -137,21 +138,33 @@ HeadColourData mergeForFit(const std::vector<PairBlock>& blocks, int q, const Bl
     ++acc.count;
   }
   flush();
-  // the profiled columns reduced to an orthonormal basis (white metric) of their span
-  Eigen::MatrixXd Xm(d.rows, q);
+  d.X.resize(d.rows, q);
   d.y.resize(d.rows);
-  Eigen::MatrixXd G = Eigen::MatrixXd::Zero(q, q);
   for (std::size_t i = 0; i < d.blocks.size(); ++i) {
     const auto& b = d.blocks[i];
-    Xm.middleRows(b.row0, b.n) = vals[i].leftCols(q);
+    d.X.middleRows(b.row0, b.n) = vals[i].leftCols(q);
     d.y.segment(b.row0, b.n) = vals[i].col(q);
-    Eigen::MatrixXd w = vals[i].leftCols(q);
+  }
+  std::vector<int> all(static_cast<std::size_t>(profiled < 0 ? q : std::min(profiled, q)));
+  for (std::size_t j = 0; j < all.size(); ++j) all[j] = static_cast<int>(j);
+  setBasis(d, all);
+  return d;
+}
+
+void setBasis(HeadColourData& d, const std::vector<int>& cols) {
+  const int q = static_cast<int>(cols.size());
+  Eigen::MatrixXd Xm(d.rows, q);
+  for (int j = 0; j < q; ++j) Xm.col(j) = d.X.col(cols[static_cast<std::size_t>(j)]);
+  // the columns reduced to an orthonormal basis (white metric) of their span
+  Eigen::MatrixXd G = Eigen::MatrixXd::Zero(q, q);
+  for (const auto& b : d.blocks) {
+    Eigen::MatrixXd w = Xm.middleRows(b.row0, b.n);
     b.S.llt().matrixL().solveInPlace(w);
     G.noalias() += w.transpose() * w;
   }
   if (q == 0) {
     d.B = Eigen::MatrixXd(d.rows, 0);
-    return d;
+    return;
   }
   const Eigen::VectorXd sc = G.diagonal().cwiseMax(1e-300).cwiseSqrt().cwiseInverse();
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(sc.asDiagonal() * G * sc.asDiagonal());
@@ -162,7 +175,50 @@ HeadColourData mergeForFit(const std::vector<PairBlock>& blocks, int q, const Bl
   d.B.resize(d.rows, static_cast<int>(keep.size()));
   for (std::size_t j = 0; j < keep.size(); ++j)
     d.B.col(static_cast<int>(j)) = Xm * (sc.asDiagonal() * es.eigenvectors().col(keep[j])) / std::sqrt(es.eigenvalues()[keep[j]]);
-  return d;
+}
+
+std::vector<double> stepReductions(double white_factor, const HeadColourData& d, const Eigen::MatrixXd& M,
+                                   const std::vector<double>& taus) {
+  const int r = static_cast<int>(d.B.cols()), g = static_cast<int>(M.cols()), w = r + g + 1;
+  // per block its whitened [B M y]' [B M y]; the blocks' times are non-decreasing (super-bin order)
+  const int nb = static_cast<int>(d.blocks.size());
+  std::vector<Eigen::MatrixXd> blockG(static_cast<std::size_t>(nb));
+  Eigen::MatrixXd G = Eigen::MatrixXd::Zero(w, w), rows;
+  for (int i = 0; i < nb; ++i) {
+    const auto& b = d.blocks[static_cast<std::size_t>(i)];
+    rows.resize(b.n, w);
+    rows.leftCols(r) = d.B.middleRows(b.row0, b.n);
+    rows.middleCols(r, g) = M.middleRows(b.row0, b.n);
+    rows.col(w - 1) = d.y.segment(b.row0, b.n);
+    const Eigen::MatrixXd S = white_factor * b.S;
+    S.llt().matrixL().solveInPlace(rows);
+    blockG[static_cast<std::size_t>(i)] = rows.transpose() * rows;
+    G += blockG[static_cast<std::size_t>(i)];
+  }
+  const Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> bb(G.topLeftCorner(r, r));
+  const Eigen::VectorXd by = G.col(w - 1).head(r);
+  // a step at tau: the signature from tau on; its Gram entries are sums over the blocks from tau on
+  std::vector<double> out(taus.size(), 0.0);
+  std::vector<std::size_t> order(taus.size());
+  for (std::size_t j = 0; j < taus.size(); ++j) order[j] = j;
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return taus[a] > taus[b]; });
+  Eigen::MatrixXd suf = Eigen::MatrixXd::Zero(g, w);  // rows of [B M y]' restricted to the signature, from tau on
+  int i = nb - 1;
+  for (std::size_t j : order) {
+    for (; i >= 0 && d.blocks[static_cast<std::size_t>(i)].t >= taus[j]; --i) suf += blockG[static_cast<std::size_t>(i)].middleRows(r, g);
+    const Eigen::MatrixXd zb = suf.leftCols(r);
+    Eigen::MatrixXd zz = Eigen::MatrixXd::Zero(g, g);
+    // the step's own Gram: sum over blocks from tau on of M' M (the middle block of suf, same rows)
+    zz = suf.middleCols(r, g);
+    Eigen::VectorXd zy = suf.col(w - 1);
+    if (r > 0) {
+      const Eigen::MatrixXd P = bb.solve(zb.transpose());  // r x g
+      zz -= zb * P;
+      zy -= P.transpose() * by;
+    }
+    out[j] = zy.dot(zz.completeOrthogonalDecomposition().solve(zy));
+  }
+  return out;
 }
 
 double remlM2ll(const HeadColourModel& m, const HeadColourData& d) {
@@ -184,7 +240,7 @@ double remlM2ll(const HeadColourModel& m, const HeadColourData& d) {
     const Eigen::LDLT<Eigen::MatrixXd> ldlt(G.topLeftCorner(r, r));
     const Eigen::VectorXd g = G.col(r).head(r);
     m2ll -= g.dot(ldlt.solve(g));
-    m2ll += ldlt.vectorD().array().max(1e-300).log().sum();
+    if (d.reml) m2ll += ldlt.vectorD().array().max(1e-300).log().sum();
   }
   return m2ll;
 }

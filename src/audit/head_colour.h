@@ -80,8 +80,13 @@ class HeadColourFilter {
 /// The data a fit sees: fitting blocks merged into super-bins, a basis of the profiled columns.
 struct HeadColourData {
   std::vector<PairBlock> blocks;
-  Eigen::MatrixXd B;  ///< rows x r, physical (orthonormal in the white metric)
+  Eigen::MatrixXd X;  ///< rows x q, the merged columns as given (physical)
+  Eigen::MatrixXd B;  ///< rows x r, physical (orthonormal in the white metric): the profiled columns' span
   Eigen::VectorXd y;
+  /// Restricted likelihood (the profiled columns' information term included); false: the ordinary
+  /// likelihood maximised over their coefficients, whose differences between nested column sets are
+  /// likelihood ratios (restricted likelihoods of different column sets are not comparable).
+  bool reml = true;
   double superbin_s = 0;
   int rows = 0;
 };
@@ -90,10 +95,24 @@ struct HeadColourData {
 using BlockRows = std::function<void(const PairBlock&, Eigen::MatrixXd& v)>;
 
 /// Merges the fitting blocks (not held) into super-bins of `superbin_s` (per mask, generalised means
-/// with the white covariances), with the q profiled columns reduced to a basis of their span.
-HeadColourData mergeForFit(const std::vector<PairBlock>& blocks, int q, const BlockRows& rows, double superbin_s);
+/// with the white covariances) with q columns, the first `profiled` of them (every one when negative)
+/// reduced to a basis of their span (setBasis).
+HeadColourData mergeForFit(const std::vector<PairBlock>& blocks, int q, const BlockRows& rows, double superbin_s,
+                           int profiled = -1);
 
-/// -2 restricted log-likelihood of the data under the model (up to a constant of the data).
+/// Makes d.B the basis of the merged columns `cols` of d.X (the profiled set).
+void setBasis(HeadColourData& d, const std::vector<int>& cols);
+
+/// Steps under white noise (the blocks' covariances times white_factor): per time tau the reduction of
+/// the data's weighted sum of squares by the g columns M (rows of the merged data) from tau on - the
+/// blocks at or after tau - beyond the profiled basis d.B (a generalised-least-squares score statistic),
+/// from running sums over the blocks. The blocks must be in super-bin order, as merged, and every tau a
+/// super-bin boundary.
+std::vector<double> stepReductions(double white_factor, const HeadColourData& d, const Eigen::MatrixXd& M,
+                                   const std::vector<double>& taus);
+
+/// -2 restricted log-likelihood of the data under the model (up to a constant of the data); the
+/// ordinary one when d.reml is false.
 double remlM2ll(const HeadColourModel& m, const HeadColourData& d);
 
 struct HeadColourFit {

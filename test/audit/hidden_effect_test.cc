@@ -378,6 +378,35 @@ TEST(HiddenEffect, AThirdHarmonicIsNamedAtItsOrderAndNothingElseIs) {
   }
 }
 
+TEST(HiddenEffect, ALargeStepIsNamedAsAStepNotTakenForSlowNoise) {
+  // The defect found on this span: a step large against the white noise was fitted by the null's head
+  // noise (which does not profile the steps) as slow noise - 11" over 7180 s for (9, -12)" - and every
+  // step test, whitened by it, stayed under 1.1 against 6.9: coloured_noise[all] was named alone. The
+  // step scan refits the noise beside each head's best step (Analyser::stepScan); the step must be
+  // named at its time with its size, and nothing else.
+  for (const auto& [x, y] : std::vector<std::pair<double, double>>{{9, -12}, {28, -38}}) {
+    const std::string arg = "step:sensor=2,x_arcsec=" + std::to_string(x) + ",y_arcsec=" + std::to_string(y) + ",at_s=2300";
+    SCOPED_TRACE("--effect " + arg + ", seed 305");
+    const auto a = runAudit(scenario({arg}), 305);
+    expectAuditRan(a);
+    const audit::EffectTest* st = nullptr;
+    for (const auto& e : a.result.named)
+      if (e.name == "step" && e.sensor == "2") st = &e;
+    ASSERT_NE(st, nullptr) << "named: " << audittest::namedList(a.result);
+    EXPECT_EQ(audittest::deterministicCauses(a.result), 1) << "named: " << audittest::namedList(a.result);
+    EXPECT_FALSE(audittest::named(a.result, "coloured_noise")) << "named: " << audittest::namedList(a.result);
+    for (const auto& p : st->params) {
+      if (p.key == "at_s") {
+        EXPECT_NEAR(p.value, 2300, 40) << st->note;
+      } else if (p.key == "x_arcsec") {
+        EXPECT_NEAR(p.value, x, 0.6) << st->note;
+      } else if (p.key == "y_arcsec") {
+        EXPECT_NEAR(p.value, y, 0.6) << st->note;
+      }
+    }
+  }
+}
+
 TEST(HiddenEffect, ALineBeyondTheCatalogueIsLeftNotExplained) {
   // A sixth-harmonic deformation (orders 1..4 are tested): no candidate of the catalogue carries it, so
   // the audit must say that a line at 6 cycles/rev is not explained rather than name wrong causes. On a
