@@ -872,6 +872,7 @@ struct Analyser {
   void estimateNoise(std::vector<EffectTest>& out);
   void rateRoute(std::vector<EffectTest>& out);
   void dataTests(std::vector<EffectTest>& out);
+  void runCountTest(EffectTest& e, double runs, double missing, double rate_per_day) const;
   bool blindAt(int k, double t) const;
   void lineOrders(LinFam& f) const;
   void runFamily(LinFam& f);
@@ -1748,6 +1749,21 @@ bool Analyser::blindAt(int k, double t) const {
   return std::acos(std::clamp(b.dot(moon.normalized()), -1.0, 1.0)) < hc.moon_exclusion_rad + m;
 }
 
+/// A count of missing-sample runs against the platform file's expected rate (data_events): the
+/// statistic is the count, the p-value P(Poisson(rate x span) >= count); with no rate configured any run
+/// is a finding (p = 0). Parameters: the missing samples and the count expected by chance.
+void Analyser::runCountTest(EffectTest& e, double runs, double missing, double rate_per_day) const {
+  const double lambda = std::max(0.0, rate_per_day) * span_s / kDay;
+  e.dof = 1;
+  e.statistic = runs;
+  e.p_value = stats::poissonSfGe(runs, lambda);
+  e.note = rate_per_day > 0 ? "expected by chance " + fmt("%.2g", lambda) + " runs (data_events: " + fmt("%g", rate_per_day) +
+                                  " per day over " + fmt("%.0f", span_s) + " s)"
+                            : std::string("none expected (no rate in the platform file's data_events)");
+  e.params.push_back({"missing_samples", "samples", missing, kNaN, kNaN});
+  e.params.push_back({"expected_by_chance", "runs", lambda, kNaN, kNaN});
+}
+
 void Analyser::dataTests(std::vector<EffectTest>& out) {
   const int H = c.n_heads;
   // outliers: the per-sample threshold's own false-alarm expectation
@@ -1818,24 +1834,23 @@ void Analyser::dataTests(std::vector<EffectTest>& out) {
       e.name = runs >= 2 ? "gaps" : "head_dropout";
       e.sensor = id;
       e.family = "data";
-      e.dof = 1;
-      e.statistic = miss;
-      e.p_value = miss > 0 ? 0.0 : 1.0;
-      e.note = "samples missing while other heads delivered, outside the blinding geometry (" + fmt("%.0f", runs) +
-               " runs; " + fmt("%.0f", blind_runs) + " further runs explained by blinding" +
-               (orbit.ok() ? std::string(")") : std::string(", not checked: no orbit)"));
+      const double rate = opt.expected_head_dropouts_per_day[static_cast<std::size_t>(k)];
+      runCountTest(e, runs, miss, rate);
+      e.note = "runs of samples missing while other heads delivered, outside the blinding geometry (" + fmt("%.0f", runs) +
+               " runs, " + fmt("%.0f", miss) + " samples; " + fmt("%.0f", blind_runs) + " further runs explained by blinding" +
+               (orbit.ok() ? std::string("") : std::string(", not checked: no orbit")) + "); " + e.note;
       if (runs >= 2) {
-        e.params.push_back({"per_day", "1/day", span_s > 0 ? runs / span_s * kDay : kNaN, kNaN, kNaN});
-        e.params.push_back({"mean_s", "s", dur / runs, kNaN, kNaN});
+        e.params.insert(e.params.begin(), {{"per_day", "1/day", span_s > 0 ? runs / span_s * kDay : kNaN,
+                                            span_s > 0 ? std::sqrt(runs) / span_s * kDay : kNaN, kNaN},
+                                           {"mean_s", "s", dur / runs, kNaN, kNaN}});
       } else {
-        e.params.push_back({"at_s", "s since start", first_at, kNaN, kNaN});
-        e.params.push_back({"duration_s", "s", dur, kNaN, kNaN});
+        e.params.insert(e.params.begin(), {{"at_s", "s since start", first_at, kNaN, kNaN}, {"duration_s", "s", dur, kNaN, kNaN}});
       }
       out.push_back(e);
     }
   }
   // Missing-sample runs of a whole stream (every head at once; the accelerometer) as the gaps effect.
-  auto gapTest = [&](const std::vector<MissingRun>& runs_in, const char* sensor, const char* what) {
+  auto gapTest = [&](const std::vector<MissingRun>& runs_in, const char* sensor, const char* what, double rate) {
     double miss = 0, dur = 0, runs = 0;
     for (const auto& r : runs_in) {
       miss += r.samples;
@@ -1847,16 +1862,15 @@ void Analyser::dataTests(std::vector<EffectTest>& out) {
     e.name = "gaps";
     e.sensor = sensor;
     e.family = "data";
-    e.dof = 1;
-    e.statistic = miss;
-    e.p_value = miss > 0 ? 0.0 : 1.0;
-    e.note = std::string(what) + " (" + fmt("%.0f", runs) + " gaps)";
-    e.params.push_back({"per_day", "1/day", span_s > 0 ? runs / span_s * kDay : kNaN, kNaN, kNaN});
-    e.params.push_back({"mean_s", "s", runs > 0 ? dur / runs : kNaN, kNaN, kNaN});
+    runCountTest(e, runs, miss, rate);
+    e.note = std::string(what) + " (" + fmt("%.0f", runs) + " gaps, " + fmt("%.0f", miss) + " samples); " + e.note;
+    e.params.insert(e.params.begin(), {{"per_day", "1/day", span_s > 0 ? runs / span_s * kDay : kNaN,
+                                        span_s > 0 ? std::sqrt(runs) / span_s * kDay : kNaN, kNaN},
+                                       {"mean_s", "s", runs > 0 ? dur / runs : kNaN, kNaN, kNaN}});
     out.push_back(e);
   };
-  gapTest(c.epoch_gaps, "all", "head epochs missing for every head");
-  if (c.acc_samples > c.acc_outside) gapTest(c.acc_gaps, "acc", "accelerometer samples missing");
+  gapTest(c.epoch_gaps, "all", "head epochs missing for every head", opt.expected_epoch_gaps_per_day);
+  if (c.acc_samples > c.acc_outside) gapTest(c.acc_gaps, "acc", "accelerometer samples missing", opt.expected_acc_gaps_per_day);
 }
 
 EffectTest toTest(const LinFam& f, int k, const Fit& fit, const TestOut& t) {
@@ -2902,9 +2916,12 @@ AuditResult Analyser::run() {
     if (e.family == "noise")
       e.threshold = noise_jk_dof > 0 ? std::sqrt(stats::fQuantile(alpha_each, 1, noise_jk_dof)) : stats::normalQuantile2(alpha_each);
     else if (e.family == "angular_acceleration") e.threshold = stats::chi2Quantile(alpha_each, 3);
-    else if (e.name == "outliers") {
-      // the smallest count whose chance probability P(Poisson(lambda) >= count) is below the per-test level
-      const double lambda = e.params.size() > 1 ? e.params[1].value : 0.0;
+    else if (e.family == "data" && e.name != "sign_flips") {
+      // counts (outliers, missing-sample runs): the smallest count whose chance probability
+      // P(Poisson(lambda) >= count) is below the per-test level
+      double lambda = 0;
+      for (const auto& pv : e.params)
+        if (pv.key == "expected_by_chance") lambda = pv.value;
       double k = 1;
       while (k < 1e6 && stats::poissonSfGe(k, lambda) >= alpha_each) k += 1;
       e.threshold = k - 0.5;

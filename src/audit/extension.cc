@@ -8,6 +8,7 @@
 #include <Eigen/Cholesky>
 
 #include <algorithm>
+#include <cstdlib>
 #include <cctype>
 #include <cmath>
 #include <cstdio>
@@ -214,9 +215,37 @@ Extension extensionOverlay(const AuditResult& r, const io::PlatformConfig& pc, c
       thermal.push_back({s, static_cast<int>(std::lround(n->value)), cs, sn});
       x.carried.push_back(what + " -> thermal: harmonic " + std::to_string(static_cast<int>(std::lround(n->value))) + " of head " +
                           named.sensor + " (as a deformation relative to the datum head)");
+    } else if (named.name == "gaps" && named.family == "data") {
+      // a process of missing-sample runs: its observed rate becomes the expected one (the data events'
+      // null), the other rates as in use
+      const ParamValue* p = param(e, "per_day");
+      if (!p || !std::isfinite(p->value)) {
+        x.not_carried.push_back(what + ": no rate");
+        continue;
+      }
+      if (!o.data_events) o.data_events = pc.events;
+      model::DataEventRates& ev = *o.data_events;
+      std::string where;
+      if (named.sensor == "all") {
+        ev.epoch_gaps_per_day = p->value;
+        where = "every head at once";
+      } else if (named.sensor == "acc") {
+        ev.acc_gaps_per_day = p->value;
+        where = "the accelerometer";
+      } else {
+        const int id = std::atoi(named.sensor.c_str());
+        bool found = false;
+        for (auto& hr : ev.head_dropouts_by_id)
+          if (hr.first == id) hr.second = p->value, found = true;
+        if (!found) ev.head_dropouts_by_id.emplace_back(id, p->value);
+        where = "head " + named.sensor;
+      }
+      x.carried.push_back(what + " -> data_events: " + num(p->value) + " missing-sample runs a day expected of " + where);
     } else {
       std::string why;
-      if (named.name == "step" || named.name == "drift")
+      if (named.name == "head_dropout")
+        why = "one run, an event: one run does not determine a rate (data_events takes one when it is expected)";
+      else if (named.name == "step" || named.name == "drift")
         why = "the overlay has no " + named.name + "s (a mounting per validity span would carry a step; not written yet)";
       else if (named.family == "reference")
         why = "a finding against the outside reference (SCA1B), not a property of the instruments";

@@ -278,6 +278,18 @@ void readPlatform(const YAML::Node& root, const std::string& path, bool overlay,
     }
     if (acc["use"]) p.use_accelerometer = acc["use"].as<bool>();
   }
+  if (const YAML::Node ev = root["data_events"]) {
+    out.events = yamlcheck::readDataEvents(ev, "data_events", out.events);
+    const YAML::Node hl = ev["heads"];
+    for (std::size_t i = 0; i < out.events.head_dropouts_by_id.size(); ++i) {
+      const int id = out.events.head_dropouts_by_id[i].first;
+      bool known = false;
+      for (int sl = 0; sl < p.heads.n_heads; ++sl) known = known || p.heads.head[static_cast<std::size_t>(sl)].id == id;
+      if (!known)
+        fail("data_events.heads[" + std::to_string(i) + "].id", "head " + std::to_string(id) + " is not in heads.list",
+             hl ? hl[i]["id"] : ev);
+    }
+  }
   if (const YAML::Node th = root["thermal"]) {
     if (!th.IsMap()) fail("thermal", "expected a mapping", th);
     checkKeys(th, "thermal", {"wahba_correction", "deformation_model", "tau_s", "hold_drift_arcsec_per_s"});
@@ -340,7 +352,7 @@ bool loadAt(const std::string& path, PlatformConfig& out, NoiseSources& src, std
   if (!loadYamlFile(path, root, error, "platform configuration file")) return false;
   try {
     if (!root.IsMap()) fail("(top level)", "expected a mapping", root);
-    checkKeys(root, "", {"base", "platform", "heads", "noise", "crn_attitude", "crn_acc", "accelerometer", "thermal"});
+    checkKeys(root, "", {"base", "platform", "heads", "noise", "crn_attitude", "crn_acc", "accelerometer", "thermal", "data_events"});
     bool overlay = false;
     if (const YAML::Node b = root["base"]) {
       const std::string base = yamlcheck::text(b, "base");

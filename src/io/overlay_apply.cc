@@ -169,6 +169,21 @@ bool applyOverlay(const model::Overlay& ov, const std::string& path, const std::
     }
   }
 
+  // The data events' expected rates (the audit's null).
+  if (ov.data_events) {
+    if (uses.data_events) {
+      for (const auto& [id, r] : ov.data_events->head_dropouts_by_id)
+        if (slotOf(pc, id) < 0) {
+          if (error) *error = path + ": data_events.heads: head " + std::to_string(id) + " is not a head of the platform";
+          return false;
+        }
+      pc.events = *ov.data_events;
+      use.applied.push_back("data_events: the expected missing-sample runs (the data events' null)");
+    } else {
+      use.not_applied.push_back("data_events: " + program + " does not test data events");
+    }
+  }
+
   // What no program applies yet.
   for (const auto& t : ov.time_offsets)
     use.not_applied.push_back("time_offsets: " + program + " does not apply time offsets (" + t.sensor + " against " +

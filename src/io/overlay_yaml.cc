@@ -197,6 +197,34 @@ model::NoiseSection readNoiseSection(const YAML::Node& n, const std::string& pre
   return s;
 }
 
+model::DataEventRates readDataEvents(const YAML::Node& n, const std::string& prefix, model::DataEventRates r) {
+  constexpr double kMaxRate = 1e6;  // runs per day (a 2 Hz head has 172 800 samples a day)
+  if (!n.IsMap()) fail(prefix, "expected a mapping (head_dropouts_per_day, epoch_gaps_per_day, acc_gaps_per_day, heads)", n);
+  checkKeys(n, prefix, {"head_dropouts_per_day", "epoch_gaps_per_day", "acc_gaps_per_day", "heads"});
+  const auto rate = [&](const YAML::Node& v, const std::string& key, double def) {
+    return v && !v.IsNull() ? numberIn(v, key, 0, kMaxRate) : def;
+  };
+  r.head_dropouts_per_day = rate(n["head_dropouts_per_day"], prefix + ".head_dropouts_per_day", r.head_dropouts_per_day);
+  r.epoch_gaps_per_day = rate(n["epoch_gaps_per_day"], prefix + ".epoch_gaps_per_day", r.epoch_gaps_per_day);
+  r.acc_gaps_per_day = rate(n["acc_gaps_per_day"], prefix + ".acc_gaps_per_day", r.acc_gaps_per_day);
+  if (const YAML::Node hl = n["heads"]) {  // a list given replaces the one before
+    if (!hl.IsSequence()) fail(prefix + ".heads", "expected a list of {id, dropouts_per_day}", hl);
+    r.head_dropouts_by_id.clear();
+    for (std::size_t i = 0; i < hl.size(); ++i) {
+      const std::string k = prefix + ".heads[" + std::to_string(i) + "]";
+      if (!hl[i].IsMap()) fail(k, "expected a mapping {id, dropouts_per_day}", hl[i]);
+      checkKeys(hl[i], k, {"id", "dropouts_per_day"});
+      if (!hl[i]["id"]) fail(k + ".id", "missing", hl[i]);
+      if (!hl[i]["dropouts_per_day"]) fail(k + ".dropouts_per_day", "missing", hl[i]);
+      const int id = static_cast<int>(integerIn(hl[i]["id"], k + ".id", 1, 255));
+      for (const auto& e : r.head_dropouts_by_id)
+        if (e.first == id) fail(k + ".id", "head " + std::to_string(id) + " given twice", hl[i]["id"]);
+      r.head_dropouts_by_id.emplace_back(id, rate(hl[i]["dropouts_per_day"], k + ".dropouts_per_day", 0));
+    }
+  }
+  return r;
+}
+
 }  // namespace yamlcheck
 
 // ---------------------------------------------------------------------------------------------
@@ -263,7 +291,7 @@ void readOverlayRoot(const YAML::Node& root, model::Overlay& o) {
          v);
   o.version = static_cast<int>(version);
   checkKeys(root, "", {"boresight_overlay", "written_by", "platform", "note", "mountings", "noise", "thermal", "accelerometer", "time_offsets",
-                       "published_frame"});
+                       "published_frame", "data_events"});
   o.written_by = text(root["written_by"], "written_by");
   if (root["platform"]) o.platform = text(root["platform"], "platform");
   if (root["note"]) o.note = text(root["note"], "note");
@@ -384,6 +412,7 @@ void readOverlayRoot(const YAML::Node& root, model::Overlay& o) {
       o.time_offsets.push_back(e);
     }
   }
+  if (const YAML::Node ev = root["data_events"]) o.data_events = readDataEvents(ev, "data_events", model::DataEventRates{});
   if (const YAML::Node f = root["published_frame"]) {
     if (!f.IsMap()) fail("published_frame", "expected a mapping {q_B_Bpub, epoch, calibration}", f);
     checkKeys(f, "published_frame", {"q_B_Bpub", "epoch", "calibration"});
@@ -400,7 +429,7 @@ void readOverlayRoot(const YAML::Node& root, model::Overlay& o) {
     o.published_frame = pf;
   }
   if (o.parts().empty())
-    fail("(top level)", "the overlay has no content (mountings, noise, thermal, accelerometer, time_offsets or published_frame)", root);
+    fail("(top level)", "the overlay has no content (mountings, noise, thermal, accelerometer, time_offsets, published_frame or data_events)", root);
 }
 
 }  // namespace
@@ -646,6 +675,18 @@ std::string overlayYaml(const model::Overlay& o) {
     s += "  q_B_Bpub: [" + yamlNumber(q.w()) + ", " + yamlNumber(q.x()) + ", " + yamlNumber(q.y()) + ", " + yamlNumber(q.z()) + "]\n";
     s += "  epoch: " + timeText(f.epoch) + "  # the last frame change\n";
     s += "  calibration: " + std::to_string(f.calibration) + "\n";
+  }
+  if (o.data_events) {
+    const model::DataEventRates& r = *o.data_events;
+    s += "data_events:  # missing-sample runs per day the audit expects (its null for the data events)\n";
+    s += "  head_dropouts_per_day: " + yamlNumber(r.head_dropouts_per_day) + "\n";
+    s += "  epoch_gaps_per_day: " + yamlNumber(r.epoch_gaps_per_day) + "\n";
+    s += "  acc_gaps_per_day: " + yamlNumber(r.acc_gaps_per_day) + "\n";
+    s += "  heads: [";
+    for (std::size_t i = 0; i < r.head_dropouts_by_id.size(); ++i)
+      s += std::string(i ? ", " : "") + "{id: " + std::to_string(r.head_dropouts_by_id[i].first) +
+           ", dropouts_per_day: " + yamlNumber(r.head_dropouts_by_id[i].second) + "}";
+    s += "]\n";
   }
   return s;
 }

@@ -231,6 +231,7 @@ std::vector<std::string> Overlay::parts() const {
   if (accelerometer) p.push_back("accelerometer");
   if (!time_offsets.empty()) p.push_back("time_offsets");
   if (published_frame) p.push_back("published_frame");
+  if (data_events) p.push_back("data_events");
   return p;
 }
 
@@ -338,6 +339,20 @@ std::string validate(const Overlay& o) {
     const PublishedFrame& f = *o.published_frame;
     if (!f.q_B_Bpub.coeffs().allFinite() || std::abs(f.q_B_Bpub.norm() - 1.0) > 1e-6) return "published_frame.q_B_Bpub: not a unit quaternion";
     if (f.calibration < 0) return "published_frame.calibration: must be >= 0";
+  }
+  if (o.data_events) {
+    const DataEventRates& r = *o.data_events;
+    const auto bad = [](double v) { return !(std::isfinite(v) && v >= 0); };
+    if (bad(r.head_dropouts_per_day)) return "data_events.head_dropouts_per_day: must be a finite rate >= 0";
+    if (bad(r.epoch_gaps_per_day)) return "data_events.epoch_gaps_per_day: must be a finite rate >= 0";
+    if (bad(r.acc_gaps_per_day)) return "data_events.acc_gaps_per_day: must be a finite rate >= 0";
+    for (std::size_t i = 0; i < r.head_dropouts_by_id.size(); ++i) {
+      const std::string k = "data_events.heads[" + std::to_string(i) + "]";
+      if (r.head_dropouts_by_id[i].first <= 0) return k + ".id: must be > 0";
+      if (bad(r.head_dropouts_by_id[i].second)) return k + ".dropouts_per_day: must be a finite rate >= 0";
+      for (std::size_t j = 0; j < i; ++j)
+        if (r.head_dropouts_by_id[j].first == r.head_dropouts_by_id[i].first) return k + ".id: head given twice";
+    }
   }
   return {};
 }
@@ -491,6 +506,20 @@ std::vector<std::string> compareOverlays(const Overlay& a, const Overlay& b, dou
     for (int j = 0; j < 4; ++j) c.num("published_frame.q_B_Bpub[" + std::to_string(j) + "]", x.q_B_Bpub.coeffs()[j], y.q_B_Bpub.coeffs()[j]);
     c.exact("published_frame.epoch", x.epoch, y.epoch);
     c.exact("published_frame.calibration", x.calibration, y.calibration);
+  }
+  if (a.data_events.has_value() != b.data_events.has_value()) {
+    c.out.push_back("data_events: present in one only");
+  } else if (a.data_events) {
+    const DataEventRates &x = *a.data_events, &y = *b.data_events;
+    c.num("data_events.head_dropouts_per_day", x.head_dropouts_per_day, y.head_dropouts_per_day);
+    c.num("data_events.epoch_gaps_per_day", x.epoch_gaps_per_day, y.epoch_gaps_per_day);
+    c.num("data_events.acc_gaps_per_day", x.acc_gaps_per_day, y.acc_gaps_per_day);
+    if (x.head_dropouts_by_id.size() != y.head_dropouts_by_id.size()) c.out.push_back("data_events.heads: count differs");
+    for (std::size_t i = 0; i < std::min(x.head_dropouts_by_id.size(), y.head_dropouts_by_id.size()); ++i) {
+      const std::string k = "data_events.heads[" + std::to_string(i) + "]";
+      c.exact(k + ".id", x.head_dropouts_by_id[i].first, y.head_dropouts_by_id[i].first);
+      c.num(k + ".dropouts_per_day", x.head_dropouts_by_id[i].second, y.head_dropouts_by_id[i].second);
+    }
   }
   return c.out;
 }

@@ -419,6 +419,9 @@ bool applyOverlay(const model::Overlay& ov, const std::string& source, double du
   }
 
   if (ov.published_frame) use.not_applied.push_back("published_frame: the node's state, not a model of the instruments");
+  if (ov.data_events)
+    use.not_applied.push_back("data_events: the audit's expected rates of missing-sample runs carry no run lengths; the simulator "
+                              "draws gaps from the scenario's gaps and head_dropout effects");
   return true;
 }
 

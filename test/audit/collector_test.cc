@@ -7,6 +7,7 @@
 
 #include "synthetic_heads.h"
 
+#include <cmath>
 #include <random>
 
 namespace {
@@ -60,6 +61,90 @@ const audit::EffectTest* named(const audit::AuditResult& r, const std::string& n
   return nullptr;
 }
 
+/// Two hours like feed() without a misalignment: head 2 drops out for 20 s at `runs` times spread over
+/// the span, and every head for 10 s at `epoch_runs` times.
+void feedDropouts(audit::Collector& c, const core::PipelineConfig& cfg, int runs, int epoch_runs) {
+  std::mt19937_64 rng(7);
+  std::normal_distribution<double> n01;
+  // run j of n starts at first + j * 6600 / n (head 2 from 300 s, every head from 450 s: never together)
+  const auto inRun = [](double t, int n, double len, double first) {
+    for (int j = 0; j < n; ++j) {
+      const double a = first + j * 6600.0 / n;
+      if (t >= a && t < a + len) return true;
+    }
+    return false;
+  };
+  for (int i = 0; i < 14400; ++i) {
+    const double t = 0.5 * i;
+    if (inRun(t, epoch_runs, 10, 450)) continue;
+    core::HeadEpoch e;
+    e.t = audittest::kT0 + static_cast<TimeUs>(i) * 500000;
+    for (int k = 0; k < 3; ++k) {
+      if (k == 1 && inRun(t, runs, 20, 300)) continue;
+      audittest::addSample(e, cfg, k, audittest::pitchTurn(t), cfg.heads.head[static_cast<std::size_t>(k)].q_Si_B, rng, n01);
+    }
+    c.onHeads(e, core::Status::kOk);
+  }
+  c.onEnd();
+}
+
+const audit::EffectTest* tested(const audit::AuditResult& r, const std::string& name, const std::string& sensor) {
+  for (const auto& e : r.effects)
+    if (e.name == name && e.sensor == sensor) return &e;
+  return nullptr;
+}
+
+double param(const audit::EffectTest& e, const std::string& key) {
+  for (const auto& p : e.params)
+    if (p.key == key) return p.value;
+  return std::nan("");
+}
+
+TEST(AuditCollector, MissingSampleRunsAreTestedAgainstTheConfiguredRate) {
+  // 12 dropouts of head 2 and 6 gaps of every head in 2 h (144 and 72 a day). With no rate configured
+  // every run is a finding; at the configured rates they are what is expected and nothing is named; at a
+  // twentieth of the rates (0.6 and 0.3 expected) the counts are far beyond chance and both are named.
+  const auto cfg = threeHeads();
+  struct Case {
+    double head_rate, epoch_rate;
+    bool named;
+  };
+  for (const Case& cs : {Case{0, 0, true}, Case{144, 72, false}, Case{7.2, 3.6, true}}) {
+    SCOPED_TRACE(cs.head_rate);
+    audit::AuditOptions opt;
+    opt.expected_head_dropouts_per_day[1] = cs.head_rate;
+    opt.expected_epoch_gaps_per_day = cs.epoch_rate;
+    audit::Collector c;
+    std::string err;
+    ASSERT_TRUE(c.configure(cfg, opt, &err)) << err;
+    feedDropouts(c, cfg, 12, 6);
+    const audit::AuditResult r = audit::analyse(c, opt);
+    const auto* g = tested(r, "gaps", "2");
+    const auto* a = tested(r, "gaps", "all");
+    ASSERT_NE(g, nullptr);
+    ASSERT_NE(a, nullptr);
+    EXPECT_EQ(g->statistic, 12.0) << g->note;
+    EXPECT_EQ(a->statistic, 6.0) << a->note;
+    EXPECT_NEAR(param(*g, "expected_by_chance"), cs.head_rate * 7199.5 / 86400, 0.01);
+    EXPECT_NEAR(param(*a, "expected_by_chance"), cs.epoch_rate * 7199.5 / 86400, 0.01);
+    EXPECT_NEAR(param(*g, "per_day"), 144, 1);
+    EXPECT_NEAR(param(*g, "missing_samples"), 12 * 40, 12);
+    EXPECT_EQ(g->named, cs.named) << g->note << " p " << g->p_value;
+    EXPECT_EQ(a->named, cs.named) << a->note << " p " << a->p_value;
+    EXPECT_EQ(named(r, "gaps", "2") != nullptr, cs.named);
+    // the threshold is the count the per-test level allows by chance
+    if (cs.named) {
+      EXPECT_LT(g->threshold, g->statistic);
+    } else {
+      EXPECT_GT(g->threshold, g->statistic);
+    }
+    const auto* d = tested(r, "head_dropout", "3");  // head 3 never missed a sample
+    ASSERT_NE(d, nullptr);
+    EXPECT_FALSE(d->named) << d->note;
+    EXPECT_EQ(d->statistic, 0.0);
+  }
+}
+
 TEST(AuditCollector, BinDoublingLeavesTheAnalysisUnchangedAndSeamsAreCounted) {
   const auto cfg = threeHeads();
   const Vec3 mis = Vec3(10, -4, 0) * kRadPerArcsec;
@@ -88,7 +173,10 @@ TEST(AuditCollector, BinDoublingLeavesTheAnalysisUnchangedAndSeamsAreCounted) {
     // the gap of every head (one run of 120 epochs) and head 3's dropout (one run) are named
     const auto* g = named(res[run], "gaps", "all");
     ASSERT_NE(g, nullptr);
-    EXPECT_DOUBLE_EQ(g->statistic, 120.0);
+    EXPECT_DOUBLE_EQ(g->statistic, 1.0);  // one run
+    ASSERT_GE(g->params.size(), 3u);
+    EXPECT_EQ(g->params[2].key, "missing_samples");
+    EXPECT_DOUBLE_EQ(g->params[2].value, 120.0);
     const auto* d = named(res[run], "head_dropout", "3");
     ASSERT_NE(d, nullptr);
     EXPECT_NEAR(d->params[1].value, 100.5, 0.6);  // duration from the last sample before to the first after

@@ -322,6 +322,44 @@ TEST(PlatformConfig, BlindingConesForEveryHeadAndPerHead) {
   }
 }
 
+TEST(PlatformConfig, DataEventRatesWithPerHeadOverridesAndErrorsWithTheirLine) {
+  const std::string base = slurp(kConfigDir + "/gracefo.yaml");
+  io::PlatformConfig pc;
+  std::string err;
+  ASSERT_TRUE(io::loadPlatformConfig(kConfigDir + "/gracefo.yaml", pc, &err)) << err;
+  EXPECT_EQ(pc.events.headDropoutsPerDay(1), 0.0);  // none given: none expected
+  EXPECT_EQ(pc.events.epoch_gaps_per_day, 0.0);
+  const std::string ev =
+      replaced(replaced(replaced(replaced(base, "head_dropouts_per_day: 0 ", "head_dropouts_per_day: 2.5 "), "epoch_gaps_per_day: 0 ",
+                                 "epoch_gaps_per_day: 1 "),
+                        "acc_gaps_per_day: 0 ", "acc_gaps_per_day: 0.5 "),
+               "heads: []                  # per-head", "heads: [{id: 3, dropouts_per_day: 12}]  # per-head");
+  ASSERT_TRUE(io::loadPlatformConfig(writeTemp("events.yaml", ev), pc, &err)) << err;
+  EXPECT_EQ(pc.events.headDropoutsPerDay(1), 2.5);
+  EXPECT_EQ(pc.events.headDropoutsPerDay(3), 12.0);
+  EXPECT_EQ(pc.events.epoch_gaps_per_day, 1.0);
+  EXPECT_EQ(pc.events.acc_gaps_per_day, 0.5);
+  // an overlay keeps what it does not give; a head list given replaces the base's
+  const std::string ev_path = writeTemp("events_base.yaml", ev);
+  ASSERT_TRUE(io::loadPlatformConfig(writeTemp("events_over.yaml", "base: " + ev_path + "\ndata_events:\n  epoch_gaps_per_day: 4\n"), pc, &err)) << err;
+  EXPECT_EQ(pc.events.epoch_gaps_per_day, 4.0);
+  EXPECT_EQ(pc.events.headDropoutsPerDay(3), 12.0);
+  EXPECT_EQ(pc.events.headDropoutsPerDay(2), 2.5);
+  // a negative rate, an unknown key, a head not in the list: file, line and reason
+  const std::string neg = replaced(ev, "head_dropouts_per_day: 2.5", "head_dropouts_per_day: -1");
+  EXPECT_FALSE(io::loadPlatformConfig(writeTemp("events_neg.yaml", neg), pc, &err));
+  EXPECT_NE(err.find(":" + std::to_string(lineOfText(neg, "head_dropouts_per_day: -1")) + ": key 'data_events.head_dropouts_per_day'"),
+            std::string::npos) << err;
+  EXPECT_NE(err.find("outside [0,"), std::string::npos) << err;
+  const std::string typo = replaced(ev, "acc_gaps_per_day: 0.5", "acc_gap_per_day: 0.5");
+  EXPECT_FALSE(io::loadPlatformConfig(writeTemp("events_typo.yaml", typo), pc, &err));
+  EXPECT_NE(err.find("acc_gap_per_day"), std::string::npos) << err;
+  const std::string nohead = replaced(ev, "{id: 3, dropouts_per_day: 12}", "{id: 7, dropouts_per_day: 12}");
+  EXPECT_FALSE(io::loadPlatformConfig(writeTemp("events_nohead.yaml", nohead), pc, &err));
+  EXPECT_NE(err.find("head 7 is not in heads.list"), std::string::npos) << err;
+  EXPECT_NE(err.find(":" + std::to_string(lineOfText(nohead, "heads: [{id: 7")) + ":"), std::string::npos) << err;
+}
+
 TEST(PlatformConfig, ThermalSectionReachesThePipeline) {
   const std::string base = slurp(kConfigDir + "/gracefo.yaml");
   const std::string changed = replaced(replaced(base, "wahba_correction: filtered_three_axis", "wahba_correction: iba_one_axis"),

@@ -165,6 +165,12 @@ model::Overlay fullOverlay() {
   f.epoch = gps("2023-06-01 03:20:00");
   f.calibration = 4;
   o.published_frame = f;
+  model::DataEventRates ev;
+  ev.head_dropouts_per_day = 0.5;
+  ev.head_dropouts_by_id = {{3, 12.25}, {1, 0}};
+  ev.epoch_gaps_per_day = 2;
+  ev.acc_gaps_per_day = 1.0 / 3;
+  o.data_events = ev;
   return o;
 }
 
@@ -187,7 +193,9 @@ TEST(Overlay, FullyPopulatedOverlayRoundTrips) {
   EXPECT_TRUE(back.mountings[0].valid == o.mountings[0].valid);
   EXPECT_EQ(back.mountings[0].epoch, o.mountings[0].epoch);
   // The parts, and the file written and read through the file functions.
-  EXPECT_EQ(back.parts(), (std::vector<std::string>{"mountings", "noise", "thermal", "accelerometer", "time_offsets", "published_frame"}));
+  EXPECT_EQ(back.parts(),
+            (std::vector<std::string>{"mountings", "noise", "thermal", "accelerometer", "time_offsets", "published_frame", "data_events"}));
+  EXPECT_EQ(back.data_events->headDropoutsPerDay(3), 12.25);
   EXPECT_EQ(back.published_frame->epoch, o.published_frame->epoch);
   EXPECT_EQ(back.published_frame->calibration, 4);
   const std::string path = testutil::makeTempDir("overlay_rt") + "/o.yaml";
@@ -215,6 +223,13 @@ TEST(Overlay, CompareFindsADifferenceInEveryPart) {
       [](model::Overlay& x) { x.published_frame->q_B_Bpub = Quat::Identity(); },
       [](model::Overlay& x) { x.published_frame->calibration = 5; },
       [](model::Overlay& x) { x.published_frame.reset(); },
+      [](model::Overlay& x) { x.data_events->head_dropouts_by_id[0].second = 12; },
+      [](model::Overlay& x) { x.data_events->head_dropouts_by_id[1].first = 2; },
+      [](model::Overlay& x) { x.data_events->head_dropouts_by_id.pop_back(); },
+      [](model::Overlay& x) { x.data_events->epoch_gaps_per_day = 3; },
+      [](model::Overlay& x) { x.data_events->acc_gaps_per_day = 0; },
+      [](model::Overlay& x) { x.data_events->head_dropouts_per_day = 0; },
+      [](model::Overlay& x) { x.data_events.reset(); },
       [](model::Overlay& x) { x.written_by = "someone else"; },
   };
   for (std::size_t i = 0; i < changes.size(); ++i) {
@@ -355,6 +370,13 @@ TEST(Overlay, NonFiniteAndOutOfRangeValuesAreRefused) {
   const std::string off = std::string(kMinimal) + "time_offsets:\n  - {sensor: gyro, relative_to: heads, offset_s: 0.1, offset_sigma_s: 0.01}\n";
   expectRefused(off, 16, "time_offsets[0].sensor", "expected accelerometer, or head<id>");
   expectRefused(replaced(off, "sensor: gyro", "sensor: head2, extra: 1"), 16, "time_offsets[0].extra", "unknown key");
+  const std::string ev = std::string(kMinimal) + "data_events:\n  epoch_gaps_per_day: 2\n  heads: [{id: 3, dropouts_per_day: 4}]\n";
+  expectRefused(replaced(ev, "epoch_gaps_per_day: 2", "epoch_gaps_per_day: -2"), 16, "data_events.epoch_gaps_per_day", "outside [0,");
+  expectRefused(replaced(ev, "epoch_gaps_per_day: 2", "epoch_gaps_per_day: .nan"), 16, "data_events.epoch_gaps_per_day", "not a finite number");
+  expectRefused(replaced(ev, "{id: 3, dropouts_per_day: 4}", "{id: 3, dropouts_per_day: 4}, {id: 3, dropouts_per_day: 1}"), 17,
+                "data_events.heads[1].id", "given twice");
+  expectRefused(replaced(ev, "{id: 3, dropouts_per_day: 4}", "{id: 0, dropouts_per_day: 4}"), 17, "data_events.heads[0].id", "outside [1, 255]");
+  expectRefused(replaced(ev, "epoch_gaps_per_day: 2", "epoch_gap_per_day: 2"), 16, "data_events.epoch_gap_per_day", "unknown key");
 }
 
 TEST(Overlay, EmptyOrSyntacticallyBrokenFilesAreRefused) {
@@ -463,9 +485,27 @@ TEST(Overlay, ApplyingItNamesWhatWasNotApplied) {
   std::string not_applied;
   for (const auto& n : use.not_applied) not_applied += n + "\n";
   for (const char* part : {"mountings of head 7: no such head", "thermal: test does not apply", "accelerometer: test does not apply",
+                           "data_events: test does not test data events",
                            "time_offsets: test does not apply time offsets (accelerometer against heads)",
                            "time_offsets: test does not apply time offsets (head2 against gps)"})
     EXPECT_NE(not_applied.find(part), std::string::npos) << part << " not in\n" << not_applied;
+  EXPECT_EQ(pc.events.epoch_gaps_per_day, 0.0);  // not applied: the platform file's
+  // a program that tests data events takes the overlay's rates whole; a head the platform lacks is refused
+  {
+    io::PlatformConfig pe;
+    ASSERT_TRUE(io::loadPlatformConfig(kConfigDir + "/gracefo.yaml", pe, &err)) << err;
+    io::OverlayUses ev_uses;
+    ev_uses.data_events = true;
+    const model::Overlay full = fullOverlay();
+    ASSERT_TRUE(io::applyOverlay(full, "o.yaml", "test", ev_uses, pe, use, &err)) << err;
+    EXPECT_TRUE(pe.events == *full.data_events);
+    EXPECT_EQ(pe.events.headDropoutsPerDay(3), 12.25);
+    EXPECT_EQ(pe.events.headDropoutsPerDay(2), 0.5);
+    model::Overlay bad = full;
+    bad.data_events->head_dropouts_by_id[0].first = 9;
+    EXPECT_FALSE(io::applyOverlay(bad, "o.yaml", "test", ev_uses, pe, use, &err));
+    EXPECT_NE(err.find("o.yaml: data_events.heads: head 9 is not a head of the platform"), std::string::npos) << err;
+  }
   // a program that does not use noise says so
   io::PlatformConfig pc2;
   ASSERT_TRUE(io::loadPlatformConfig(kConfigDir + "/gracefo.yaml", pc2, &err)) << err;

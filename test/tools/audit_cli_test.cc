@@ -527,7 +527,15 @@ TEST(AuditCli, TheLoopOnGappedDataLeavesTheDataHolesInTheSimulationOfTheModel) {
   EXPECT_GE(holes["all_heads"].get<int>(), 1);
   EXPECT_GE(holes["accelerometer"].get<int>(), 1);
   const std::vector<std::string> named_data = sim["named_data"], named_sim = sim["named_simulation"];
-  EXPECT_FALSE(named_data.empty()) << "the data's gaps are named";
+  // the first pass names the gap processes; the overlay carries their rates (data_events), so the
+  // second pass, and the simulation of the model, name none of them
+  std::vector<std::string> first;
+  for (const auto& e : j["named_causes"]) first.push_back(e["name"].get<std::string>() + "[" + e["sensor"].get<std::string>() + "]");
+  EXPECT_NE(std::find(first.begin(), first.end(), "gaps[all]"), first.end());
+  EXPECT_NE(std::find(first.begin(), first.end(), "gaps[acc]"), first.end());
+  const std::string model_text = testutil::slurp(dir + "/model.yaml");
+  EXPECT_NE(model_text.find("epoch_gaps_per_day: 8"), std::string::npos) << model_text;  // 2 runs in 6 h
+  for (const auto& n : named_data) EXPECT_EQ(n.rfind("gaps", 0), std::string::npos) << n << ": carried, yet named again";
   EXPECT_EQ(named_data, named_sim) << "a cause named on the data only";
   int families = 0;
   for (const auto& f : sim["families"]) {
@@ -586,4 +594,60 @@ TEST(AuditCli, TheAuditsThermalTermsAgreeWithCalibratesThermalFit) {
         << "sin axis " << k << ": calibrate " << hc.sin_rad.value[k] * boresight::kArcsecPerRad << "\", audit "
         << ha.sin_rad.value[k] * boresight::kArcsecPerRad << "\"";
   }
+}
+
+/// The platform file's data_events reach the audit's data-event tests: random dropouts of head 2 (about
+/// one a minute) are named against the default (none expected) and not when the platform file expects
+/// them at that rate, whose expected count the test then states.
+TEST(AuditCli, DropoutsAtTheConfiguredRateAreNotNamed) {
+  const std::string dir = testutil::makeTempDir("audit_cli_events");
+  const std::string in = simulatedInputs(dir, BORESIGHT_SOURCE_DIR "/config/sim_gracefo.yaml", 4, 1800,
+                                         " --effect gaps:sensor=2,per_day=1440,mean_s=4");
+  auto gaps2 = [](const nlohmann::json& j) {
+    for (const auto& e : j["effects"])
+      if (e["name"] == "gaps" && e["sensor"] == "2") return e;
+    return nlohmann::json();
+  };
+  CliRun a = run("audit" + kConfig + in + " --quiet --out " + dir + "/none");
+  ASSERT_EQ(a.status, 0) << a.out;
+  const nlohmann::json ja = nlohmann::json::parse(testutil::slurp(dir + "/none/audit.json"));
+  const nlohmann::json ga = gaps2(ja);
+  ASSERT_FALSE(ga.is_null()) << "head 2's random gaps are tested as a process";
+  EXPECT_TRUE(ga["named"].get<bool>()) << ga.dump();
+  const double runs = ga["statistic"].get<double>();
+  EXPECT_GT(runs, 10);
+  const std::string cfg = dir + "/events.yaml";
+  ASSERT_TRUE(testutil::writeFile(cfg, "base: " BORESIGHT_SOURCE_DIR "/config/gracefo_ideal.yaml\n"
+                                       "data_events:\n  heads: [{id: 2, dropouts_per_day: 1440}]\n"));
+  CliRun b = run("audit --config " + cfg + " " + in + " --quiet --out " + dir + "/rate");
+  ASSERT_EQ(b.status, 0) << b.out;
+  const nlohmann::json jb = nlohmann::json::parse(testutil::slurp(dir + "/rate/audit.json"));
+  const nlohmann::json gb = gaps2(jb);
+  ASSERT_FALSE(gb.is_null());
+  EXPECT_FALSE(gb["named"].get<bool>()) << gb.dump();
+  EXPECT_EQ(gb["statistic"].get<double>(), runs);
+  EXPECT_NE(gb["note"].get<std::string>().find("data_events: 1440 per day"), std::string::npos) << gb.dump();
+  const auto na = namedCauses(ja);
+  EXPECT_NE(std::find(na.begin(), na.end(), "gaps[2]"), na.end());
+  const auto nb = namedCauses(jb);
+  EXPECT_EQ(std::find(nb.begin(), nb.end(), "gaps[2]"), nb.end());
+
+  // The loop: --write-model carries the named gap process as the expected rate (data_events), and the
+  // same files audited with that overlay do not name it again.
+  CliRun w = run("audit" + kConfig + in + " --quiet --out " + dir + "/w --write-model " + dir + "/model.yaml");
+  ASSERT_EQ(w.status, 0) << w.out;
+  boresight::model::Overlay ov;
+  std::string err;
+  ASSERT_TRUE(boresight::io::readOverlay(dir + "/model.yaml", ov, &err)) << err;
+  ASSERT_TRUE(ov.data_events.has_value()) << testutil::slurp(dir + "/model.yaml");
+  const double observed = ga["params"]["per_day"]["value"].get<double>();
+  EXPECT_NEAR(ov.data_events->headDropoutsPerDay(2), observed, 1e-9 * observed);
+  EXPECT_NEAR(observed, runs / 1800.0 * 86400, 0.05 * observed);
+  EXPECT_EQ(ov.data_events->headDropoutsPerDay(1), 0.0);
+  CliRun o = run("audit" + kConfig + in + " --quiet --out " + dir + "/ov --overlay " + dir + "/model.yaml");
+  ASSERT_EQ(o.status, 0) << o.out;
+  const nlohmann::json jo = nlohmann::json::parse(testutil::slurp(dir + "/ov/audit.json"));
+  const auto no = namedCauses(jo);
+  EXPECT_EQ(std::find(no.begin(), no.end(), "gaps[2]"), no.end()) << jo["model_in_use"].dump();
+  EXPECT_FALSE(gaps2(jo)["named"].get<bool>());
 }

@@ -72,6 +72,13 @@ struct AuditOptions {
   /// head's blinding cone (the platform file's heads.blinding_deg; the scenario's for simulated data)
   /// plus this margin, deg.
   double blinding_margin_deg = 2;
+  /// The data events' null hypothesis (the platform file's data_events section; audit::runAudit fills
+  /// it): missing-sample runs expected per day of span - per head slot (one head missing while the
+  /// others deliver, outside its blinding cones), of every head at once, of the accelerometer. A count
+  /// of runs is tested against Poisson(rate x span); 0: none expected, any run is named.
+  std::array<double, core::kMaxHeads> expected_head_dropouts_per_day{};
+  double expected_epoch_gaps_per_day = 0;
+  double expected_acc_gaps_per_day = 0;
   /// The relative and reference families' noise colour in time: a model per component (white, or white
   /// plus Gauss-Markov) fitted to the data under each test's null hypothesis, and the tests made on
   /// rows whitened in time by it (generalised least squares); non-white noise is a finding of its own

@@ -31,6 +31,9 @@ struct PlatformConfig {
   /// an overlay laid over it by applyOverlayNoise). The heads' sigma_cross_rad / sigma_roll_rad /
   /// sigma_star_rad in `pipeline` are derived from it (deriveHeadSigmas).
   model::NoiseInUse noise_in_use;
+  /// The data_events section (the audit's expected missing-sample runs; none by default); an overlay's
+  /// data_events replace it (io::applyOverlay).
+  model::DataEventRates events;
 };
 
 /// Parses and validates a platform file. On failure returns false and sets *error to

@@ -33,6 +33,9 @@ struct OverlayUses {
   /// The accelerometer terms correct every accelerometer sample before the core's CRN
   /// (core::AccCorrection: bias, scale, misalignment, non-orthogonality; a term not given is zero).
   bool accelerometer = false;
+  /// The expected missing-sample runs (the audit's null for its data events) replace the platform
+  /// file's data_events section.
+  bool data_events = false;
 };
 
 /// The core's correction (core::AccCorrection) for an overlay's accelerometer terms: M = R(Exp(m))^T

@@ -26,6 +26,7 @@
 #include <limits>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace boresight::model {
@@ -205,6 +206,26 @@ struct TimeOffsetEntry {
   bool operator==(const TimeOffsetEntry& o) const;
 };
 
+/// How often the data are expected to miss samples: the model audit's null for its data events (a count
+/// of runs against Poisson(rate x span)). Runs per day; 0: none expected. The platform file's
+/// `data_events` section and an overlay's (which replaces it whole) have this form.
+struct DataEventRates {
+  double head_dropouts_per_day = 0;  ///< one head missing while the others deliver, outside its blinding cones
+  std::vector<std::pair<int, double>> head_dropouts_by_id;  ///< per-head rates (head id, rate), over the above
+  double epoch_gaps_per_day = 0;     ///< every head missing at once
+  double acc_gaps_per_day = 0;       ///< accelerometer samples missing
+  /// The head's rate: its own, else head_dropouts_per_day.
+  double headDropoutsPerDay(int id) const {
+    for (const auto& [h, r] : head_dropouts_by_id)
+      if (h == id) return r;
+    return head_dropouts_per_day;
+  }
+  bool operator==(const DataEventRates& o) const {
+    return head_dropouts_per_day == o.head_dropouts_per_day && head_dropouts_by_id == o.head_dropouts_by_id &&
+           epoch_gaps_per_day == o.epoch_gaps_per_day && acc_gaps_per_day == o.acc_gaps_per_day;
+  }
+};
+
 /// boresightd's state beyond the mountings (its state file, so a restart does not jump): the rotation
 /// of the frame its attitude is published in from the heads' datum (frame changes; identity before the
 /// first) and the calibration in use.
@@ -226,8 +247,11 @@ struct Overlay {
   std::optional<AccelerometerTerms> accelerometer;
   std::vector<TimeOffsetEntry> time_offsets;
   std::optional<PublishedFrame> published_frame;
+  /// The data's expected missing-sample runs (the audit's null for its data events; replaces the
+  /// platform file's data_events section whole).
+  std::optional<DataEventRates> data_events;
   /// The parts present, by key: "mountings", "noise", "thermal", "accelerometer", "time_offsets",
-  /// "published_frame".
+  /// "published_frame", "data_events".
   std::vector<std::string> parts() const;
 };
 
