@@ -6,14 +6,26 @@
 #include <Eigen/Eigenvalues>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <map>
+#include <thread>
 
 namespace boresight::audit::detail {
 namespace {
 
 constexpr double kLog2Pi = 1.8378770664093453;
+/// Threads of the fits' numerical gradients (model::minimiseBfgs): their evaluations are shared by two
+/// threads where the machine has two cores (BORESIGHT_THREADS=1 keeps them on one, to compare or on a
+/// shared machine); the fits' results do not depend on it.
+int fitThreads() {
+  const char* e = std::getenv("BORESIGHT_THREADS");
+  if (e && std::atoi(e) == 1) return 1;
+  return std::thread::hardware_concurrency() >= 2 ? 2 : 1;
+}
+const int kFitThreads = fitThreads();
 
 /// The rows' map of the heads' states (3 per head slot, sensor axes): pairs (ref, o) in slot order.
 Eigen::MatrixXd observationMap(const HeadColourModel& m, unsigned mask, int n) {
@@ -255,7 +267,7 @@ HeadColourModel fitWhiteFactor(const HeadColourData& d, HeadColourModel m, doubl
   };
   bool conv = false;
   Eigen::VectorXd xw = Eigen::VectorXd::Constant(1, std::log(std::max(m.white_factor, 0.05)));
-  xw = model::minimiseBfgs(fw, xw, 30, &conv, nullptr);
+  xw = model::minimiseBfgs(fw, xw, 30, &conv, nullptr, kFitThreads);
   m.white_factor = std::exp(std::clamp(xw[0], lo, hi));
   if (m2ll) *m2ll = remlM2ll(m, d);
   return m;
@@ -264,7 +276,7 @@ HeadColourModel fitWhiteFactor(const HeadColourData& d, HeadColourModel m, doubl
 HeadColourFit fitHeadColour(const HeadColourData& d, const HeadColourModel& start) {
   HeadColourFit out;
   const int H = start.heads;
-  int evals = 0;
+  std::atomic<int> evals{0};  // the objective runs on two threads (kFitThreads)
   // white factor alone
   HeadColourModel w = start;
   w.sigma_cross.fill(0);
@@ -317,7 +329,7 @@ HeadColourFit fitHeadColour(const HeadColourData& d, const HeadColourModel& star
     x0[1 + H + k] = std::clamp(std::log(a > 0 ? a : 0.5 * s_ref), lo_s, hi_s);
   }
   x0[np - 1] = std::clamp(std::log(start.tau_s > 0 ? start.tau_s : 600.0), lo_t, hi_t);
-  const Eigen::VectorXd x = model::minimiseBfgs(fc, x0, 40, &conv, nullptr);
+  const Eigen::VectorXd x = model::minimiseBfgs(fc, x0, 40, &conv, nullptr, kFitThreads);
   double pen = 0;
   out.model = modelOf(x, pen);
   out.m2ll = remlM2ll(out.model, d);
@@ -326,7 +338,7 @@ HeadColourFit fitHeadColour(const HeadColourData& d, const HeadColourModel& star
     out.m2ll = out.m2ll_white;
   }
   out.params = 2 * H + 1;
-  out.evaluations = evals;
+  out.evaluations = evals.load();
   out.converged = conv;
   return out;
 }

@@ -2,28 +2,55 @@
 #include <boresight/model/minimise.h>
 
 #include <cmath>
+#include <exception>
 #include <limits>
+#include <thread>
 
 namespace boresight::model {
 namespace {
 constexpr double kInf = std::numeric_limits<double>::infinity();
 }  // namespace
 
-Eigen::VectorXd centralGradient(const Objective& f, const Eigen::VectorXd& x, double h) {
-  Eigen::VectorXd g(x.size());
-  for (Eigen::Index i = 0; i < x.size(); ++i) {
-    Eigen::VectorXd a = x, b = x;
-    a[i] += h;
-    b[i] -= h;
-    g[i] = (f(a) - f(b)) / (2 * h);
+Eigen::VectorXd centralGradient(const Objective& f, const Eigen::VectorXd& x, double h, int threads) {
+  const Eigen::Index n = x.size();
+  Eigen::VectorXd fp(n), fm(n);
+  // the evaluations at x + h e_i (sign +1) or x - h e_i (sign -1), every i
+  const auto side = [&](double sign, Eigen::VectorXd& out) {
+    Eigen::VectorXd a = x;
+    for (Eigen::Index i = 0; i < n; ++i) {
+      a[i] = x[i] + sign * h;
+      out[i] = f(a);
+      a[i] = x[i];
+    }
+  };
+  if (threads > 1 && n > 0) {
+    std::exception_ptr failed;
+    std::thread other([&] {
+      try {
+        side(-1, fm);
+      } catch (...) {
+        failed = std::current_exception();
+      }
+    });
+    side(+1, fp);
+    other.join();
+    if (failed) std::rethrow_exception(failed);
+  } else {
+    for (Eigen::Index i = 0; i < n; ++i) {  // as before: +h then -h per parameter
+      Eigen::VectorXd a = x, b = x;
+      a[i] += h;
+      b[i] -= h;
+      fp[i] = f(a);
+      fm[i] = f(b);
+    }
   }
-  return g;
+  return (fp - fm) / (2 * h);
 }
 
-Eigen::VectorXd minimiseBfgs(const Objective& f, Eigen::VectorXd x, int max_iter, bool* converged, std::string* why) {
+Eigen::VectorXd minimiseBfgs(const Objective& f, Eigen::VectorXd x, int max_iter, bool* converged, std::string* why, int threads) {
   const auto n = x.size();
   double fx = f(x);
-  Eigen::VectorXd g = centralGradient(f, x, 1e-4);
+  Eigen::VectorXd g = centralGradient(f, x, 1e-4, threads);
   Eigen::MatrixXd H = Eigen::MatrixXd::Identity(n, n);
   *converged = false;
   for (int it = 0; it < max_iter; ++it) {
@@ -51,7 +78,7 @@ Eigen::VectorXd minimiseBfgs(const Objective& f, Eigen::VectorXd x, int max_iter
       return x;
     }
     const Eigen::VectorXd s = xn - x;
-    const Eigen::VectorXd gn = centralGradient(f, xn, 1e-4);
+    const Eigen::VectorXd gn = centralGradient(f, xn, 1e-4, threads);
     const Eigen::VectorXd y = gn - g;
     const double sy = s.dot(y);
     const double df = fx - fn;
