@@ -2922,9 +2922,19 @@ AuditResult Analyser::run() {
       double lambda = 0;
       for (const auto& pv : e.params)
         if (pv.key == "expected_by_chance") lambda = pv.value;
-      double k = 1;
-      while (k < 1e6 && stats::poissonSfGe(k, lambda) >= alpha_each) k += 1;
-      e.threshold = k - 0.5;
+      // (P(N >= k) falls with k: bisection between 1 and a count far in the tail, so a large expected
+      // count - a high configured rate over days - costs a few dozen evaluations, not one per count)
+      double lo = 1, hi = std::ceil(lambda + 20 * std::sqrt(lambda) + 60);
+      if (stats::poissonSfGe(lo, lambda) < alpha_each) {
+        hi = lo;
+      } else {
+        while (hi < 1e15 && stats::poissonSfGe(hi, lambda) >= alpha_each) hi *= 2;
+        while (hi - lo > 1) {  // sf(lo) >= alpha > sf(hi)
+          const double mid = std::floor(0.5 * (lo + hi));
+          (stats::poissonSfGe(mid, lambda) >= alpha_each ? lo : hi) = mid;
+        }
+      }
+      e.threshold = hi - 0.5;
     } else {
       e.threshold = 0.5;
     }

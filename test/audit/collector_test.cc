@@ -2,6 +2,7 @@
 // the analysis; a gap of every head, one head's dropout, and the first and last epochs are accounted for.
 #include <boresight/audit/audit.h>
 #include <boresight/model/rotation.h>
+#include <boresight/model/stats.h>
 
 #include <gtest/gtest.h>
 
@@ -109,7 +110,7 @@ TEST(AuditCollector, MissingSampleRunsAreTestedAgainstTheConfiguredRate) {
     double head_rate, epoch_rate;
     bool named;
   };
-  for (const Case& cs : {Case{0, 0, true}, Case{144, 72, false}, Case{7.2, 3.6, true}}) {
+  for (const Case& cs : {Case{0, 0, true}, Case{144, 72, false}, Case{7.2, 3.6, true}, Case{1e6, 1e6, false}}) {
     SCOPED_TRACE(cs.head_rate);
     audit::AuditOptions opt;
     opt.expected_head_dropouts_per_day[1] = cs.head_rate;
@@ -138,6 +139,13 @@ TEST(AuditCollector, MissingSampleRunsAreTestedAgainstTheConfiguredRate) {
     } else {
       EXPECT_GT(g->threshold, g->statistic);
     }
+    // the threshold is the smallest count whose chance probability is under the level (at 1e6 a day,
+    // 83 000 expected in 2 h: beyond the expectation, found without counting up to it)
+    const double lambda = param(*g, "expected_by_chance");
+    EXPECT_GT(g->threshold, lambda);
+    const double alpha_each = opt.false_alarm / r.tests;
+    EXPECT_LT(model::stats::poissonSfGe(g->threshold + 0.5, lambda), alpha_each);
+    EXPECT_GE(model::stats::poissonSfGe(g->threshold - 0.5, lambda), alpha_each);
     const auto* d = tested(r, "head_dropout", "3");  // head 3 never missed a sample
     ASSERT_NE(d, nullptr);
     EXPECT_FALSE(d->named) << d->note;
