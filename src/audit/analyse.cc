@@ -872,7 +872,7 @@ struct Analyser {
   void estimateNoise(std::vector<EffectTest>& out);
   void rateRoute(std::vector<EffectTest>& out);
   void dataTests(std::vector<EffectTest>& out);
-  void runCountTest(EffectTest& e, double runs, double missing, double rate_per_day) const;
+  void runCountTest(EffectTest& e, double runs, double missing, double rate_per_day, double longest_s, double max_s) const;
   bool blindAt(int k, double t) const;
   void lineOrders(LinFam& f) const;
   void runFamily(LinFam& f);
@@ -1751,8 +1751,9 @@ bool Analyser::blindAt(int k, double t) const {
 
 /// A count of missing-sample runs against the platform file's expected rate (data_events): the
 /// statistic is the count, the p-value P(Poisson(rate x span) >= count); with no rate configured any run
-/// is a finding (p = 0). Parameters: the missing samples and the count expected by chance.
-void Analyser::runCountTest(EffectTest& e, double runs, double missing, double rate_per_day) const {
+/// is a finding (p = 0), and so is a run longer than the kind's longest expected (max_s, NaN: no
+/// limit). Parameters: the longest run, the missing samples and the count expected by chance.
+void Analyser::runCountTest(EffectTest& e, double runs, double missing, double rate_per_day, double longest_s, double max_s) const {
   const double lambda = std::max(0.0, rate_per_day) * span_s / kDay;
   e.dof = 1;
   e.statistic = runs;
@@ -1760,6 +1761,11 @@ void Analyser::runCountTest(EffectTest& e, double runs, double missing, double r
   e.note = rate_per_day > 0 ? "expected by chance " + fmt("%.2g", lambda) + " runs (data_events: " + fmt("%g", rate_per_day) +
                                   " per day over " + fmt("%.0f", span_s) + " s)"
                             : std::string("none expected (no rate in the platform file's data_events)");
+  if (runs > 0 && std::isfinite(max_s) && longest_s > max_s) {
+    e.p_value = 0;
+    e.note += "; a run of " + fmt("%.0f", longest_s) + " s, longer than the " + fmt("%g", max_s) + " s data_events expects at most";
+  }
+  e.params.push_back({"longest_s", "s", runs > 0 ? longest_s : kNaN, kNaN, kNaN});
   e.params.push_back({"missing_samples", "samples", missing, kNaN, kNaN});
   e.params.push_back({"expected_by_chance", "runs", lambda, kNaN, kNaN});
 }
@@ -1813,7 +1819,7 @@ void Analyser::dataTests(std::vector<EffectTest>& out) {
       out.push_back(e);
     }
     {
-      double miss = 0, runs = 0, dur = 0, blind_runs = 0, first_at = kNaN;
+      double miss = 0, runs = 0, dur = 0, blind_runs = 0, first_at = kNaN, longest = 0;
       for (const auto& r : c.head_runs[k]) {
         if (!r.others_present) continue;
         // explained by blinding when the geometry reaches the cone anywhere in the run
@@ -1826,6 +1832,7 @@ void Analyser::dataTests(std::vector<EffectTest>& out) {
         miss += r.samples;
         runs += 1;
         dur += r.end_s - r.start_s;
+        longest = std::max(longest, r.end_s - r.start_s);
         if (std::isnan(first_at)) first_at = r.start_s;
         R.gaps.push_back({id, r.start_s, r.end_s, r.samples});
       }
@@ -1834,8 +1841,7 @@ void Analyser::dataTests(std::vector<EffectTest>& out) {
       e.name = runs >= 2 ? "gaps" : "head_dropout";
       e.sensor = id;
       e.family = "data";
-      const double rate = opt.expected_head_dropouts_per_day[static_cast<std::size_t>(k)];
-      runCountTest(e, runs, miss, rate);
+      runCountTest(e, runs, miss, opt.data_events.headDropoutsPerDay(c.ids[k]), longest, opt.data_events.head_dropout_max_s);
       e.note = "runs of samples missing while other heads delivered, outside the blinding geometry (" + fmt("%.0f", runs) +
                " runs, " + fmt("%.0f", miss) + " samples; " + fmt("%.0f", blind_runs) + " further runs explained by blinding" +
                (orbit.ok() ? std::string("") : std::string(", not checked: no orbit")) + "); " + e.note;
@@ -1850,11 +1856,12 @@ void Analyser::dataTests(std::vector<EffectTest>& out) {
     }
   }
   // Missing-sample runs of a whole stream (every head at once; the accelerometer) as the gaps effect.
-  auto gapTest = [&](const std::vector<MissingRun>& runs_in, const char* sensor, const char* what, double rate) {
-    double miss = 0, dur = 0, runs = 0;
+  auto gapTest = [&](const std::vector<MissingRun>& runs_in, const char* sensor, const char* what, double rate, double max_s) {
+    double miss = 0, dur = 0, runs = 0, longest = 0;
     for (const auto& r : runs_in) {
       miss += r.samples;
       dur += r.end_s - r.start_s;
+      longest = std::max(longest, r.end_s - r.start_s);
       runs += 1;
       R.gaps.push_back({sensor, r.start_s, r.end_s, r.samples});
     }
@@ -1862,15 +1869,16 @@ void Analyser::dataTests(std::vector<EffectTest>& out) {
     e.name = "gaps";
     e.sensor = sensor;
     e.family = "data";
-    runCountTest(e, runs, miss, rate);
+    runCountTest(e, runs, miss, rate, longest, max_s);
     e.note = std::string(what) + " (" + fmt("%.0f", runs) + " gaps, " + fmt("%.0f", miss) + " samples); " + e.note;
     e.params.insert(e.params.begin(), {{"per_day", "1/day", span_s > 0 ? runs / span_s * kDay : kNaN,
                                         span_s > 0 ? std::sqrt(runs) / span_s * kDay : kNaN, kNaN},
                                        {"mean_s", "s", runs > 0 ? dur / runs : kNaN, kNaN, kNaN}});
     out.push_back(e);
   };
-  gapTest(c.epoch_gaps, "all", "head epochs missing for every head", opt.expected_epoch_gaps_per_day);
-  if (c.acc_samples > c.acc_outside) gapTest(c.acc_gaps, "acc", "accelerometer samples missing", opt.expected_acc_gaps_per_day);
+  gapTest(c.epoch_gaps, "all", "head epochs missing for every head", opt.data_events.epoch_gaps_per_day, opt.data_events.epoch_gap_max_s);
+  if (c.acc_samples > c.acc_outside)
+    gapTest(c.acc_gaps, "acc", "accelerometer samples missing", opt.data_events.acc_gaps_per_day, opt.data_events.acc_gap_max_s);
 }
 
 EffectTest toTest(const LinFam& f, int k, const Fit& fit, const TestOut& t) {

@@ -225,14 +225,22 @@ Extension extensionOverlay(const AuditResult& r, const io::PlatformConfig& pc, c
       }
       if (!o.data_events) o.data_events = pc.events;
       model::DataEventRates& ev = *o.data_events;
+      // a longest run that was exceeded becomes the longest seen (no limit stays no limit)
+      const ParamValue* lg = param(e, "longest_s");
+      const auto raise = [&](double& max_s) {
+        if (lg && std::isfinite(max_s) && lg->value > max_s) max_s = lg->value;
+      };
       std::string where;
       if (named.sensor == "all") {
         ev.epoch_gaps_per_day = p->value;
+        raise(ev.epoch_gap_max_s);
         where = "every head at once";
       } else if (named.sensor == "acc") {
         ev.acc_gaps_per_day = p->value;
+        raise(ev.acc_gap_max_s);
         where = "the accelerometer";
       } else {
+        raise(ev.head_dropout_max_s);
         const int id = std::atoi(named.sensor.c_str());
         bool found = false;
         for (auto& hr : ev.head_dropouts_by_id)

@@ -172,12 +172,7 @@ bool runAudit(const RunRequest& req, RunOutput& out, std::string* error) {
     }
     if (wsum > 0) options.configured_gm_tau_s = tsum / wsum;
   }
-  // the data events' null: the platform file's expected missing-sample runs
-  for (int s = 0; s < pc.pipeline.heads.n_heads; ++s)
-    options.expected_head_dropouts_per_day[static_cast<std::size_t>(s)] =
-        pc.events.headDropoutsPerDay(pc.pipeline.heads.head[static_cast<std::size_t>(s)].id);
-  options.expected_epoch_gaps_per_day = pc.events.epoch_gaps_per_day;
-  options.expected_acc_gaps_per_day = pc.events.acc_gaps_per_day;
+  options.data_events = pc.events;  // the data events' null: the platform file's (or the overlay's) expected runs
   Collector collector;
   if (!collector.configure(pc.pipeline, options, error)) return false;
   if (!feedOrbit(orbit, opt, collector, out.orbit_samples, out.orbit_rejected, out.notes, error)) return false;

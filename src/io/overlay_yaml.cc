@@ -200,13 +200,25 @@ model::NoiseSection readNoiseSection(const YAML::Node& n, const std::string& pre
 model::DataEventRates readDataEvents(const YAML::Node& n, const std::string& prefix, model::DataEventRates r) {
   constexpr double kMaxRate = 1e6;  // runs per day (a 2 Hz head has 172 800 samples a day)
   if (!n.IsMap()) fail(prefix, "expected a mapping (head_dropouts_per_day, epoch_gaps_per_day, acc_gaps_per_day, heads)", n);
-  checkKeys(n, prefix, {"head_dropouts_per_day", "epoch_gaps_per_day", "acc_gaps_per_day", "heads"});
+  checkKeys(n, prefix, {"head_dropouts_per_day", "epoch_gaps_per_day", "acc_gaps_per_day", "heads", "head_dropout_max_s",
+                        "epoch_gap_max_s", "acc_gap_max_s"});
   const auto rate = [&](const YAML::Node& v, const std::string& key, double def) {
     return v && !v.IsNull() ? numberIn(v, key, 0, kMaxRate) : def;
   };
   r.head_dropouts_per_day = rate(n["head_dropouts_per_day"], prefix + ".head_dropouts_per_day", r.head_dropouts_per_day);
   r.epoch_gaps_per_day = rate(n["epoch_gaps_per_day"], prefix + ".epoch_gaps_per_day", r.epoch_gaps_per_day);
   r.acc_gaps_per_day = rate(n["acc_gaps_per_day"], prefix + ".acc_gaps_per_day", r.acc_gaps_per_day);
+  // the longest runs, s (> 0; a null: no limit)
+  const auto longest = [&](const YAML::Node& v, const std::string& key, double def) {
+    if (!v) return def;
+    if (v.IsNull()) return kNaN;
+    const double x = numberIn(v, key, 0, 1e9);
+    if (!(x > 0)) fail(key, "must be > 0 (seconds; null: no limit)", v);
+    return x;
+  };
+  r.head_dropout_max_s = longest(n["head_dropout_max_s"], prefix + ".head_dropout_max_s", r.head_dropout_max_s);
+  r.epoch_gap_max_s = longest(n["epoch_gap_max_s"], prefix + ".epoch_gap_max_s", r.epoch_gap_max_s);
+  r.acc_gap_max_s = longest(n["acc_gap_max_s"], prefix + ".acc_gap_max_s", r.acc_gap_max_s);
   if (const YAML::Node hl = n["heads"]) {  // a list given replaces the one before
     if (!hl.IsSequence()) fail(prefix + ".heads", "expected a list of {id, dropouts_per_day}", hl);
     r.head_dropouts_by_id.clear();
@@ -682,6 +694,9 @@ std::string overlayYaml(const model::Overlay& o) {
     s += "  head_dropouts_per_day: " + yamlNumber(r.head_dropouts_per_day) + "\n";
     s += "  epoch_gaps_per_day: " + yamlNumber(r.epoch_gaps_per_day) + "\n";
     s += "  acc_gaps_per_day: " + yamlNumber(r.acc_gaps_per_day) + "\n";
+    s += "  head_dropout_max_s: " + yamlNumber(r.head_dropout_max_s) + "  # the longest run expected, s (null: no limit)\n";
+    s += "  epoch_gap_max_s: " + yamlNumber(r.epoch_gap_max_s) + "\n";
+    s += "  acc_gap_max_s: " + yamlNumber(r.acc_gap_max_s) + "\n";
     s += "  heads: [";
     for (std::size_t i = 0; i < r.head_dropouts_by_id.size(); ++i)
       s += std::string(i ? ", " : "") + "{id: " + std::to_string(r.head_dropouts_by_id[i].first) +

@@ -346,6 +346,9 @@ std::string validate(const Overlay& o) {
     if (bad(r.head_dropouts_per_day)) return "data_events.head_dropouts_per_day: must be a finite rate >= 0";
     if (bad(r.epoch_gaps_per_day)) return "data_events.epoch_gaps_per_day: must be a finite rate >= 0";
     if (bad(r.acc_gaps_per_day)) return "data_events.acc_gaps_per_day: must be a finite rate >= 0";
+    for (const auto& [v, key] : {std::pair<double, const char*>{r.head_dropout_max_s, "head_dropout_max_s"},
+                                 {r.epoch_gap_max_s, "epoch_gap_max_s"}, {r.acc_gap_max_s, "acc_gap_max_s"}})
+      if (!std::isnan(v) && !(std::isfinite(v) && v > 0)) return std::string("data_events.") + key + ": must be > 0 (NaN: no limit)";
     for (std::size_t i = 0; i < r.head_dropouts_by_id.size(); ++i) {
       const std::string k = "data_events.heads[" + std::to_string(i) + "]";
       if (r.head_dropouts_by_id[i].first <= 0) return k + ".id: must be > 0";
@@ -514,6 +517,9 @@ std::vector<std::string> compareOverlays(const Overlay& a, const Overlay& b, dou
     c.num("data_events.head_dropouts_per_day", x.head_dropouts_per_day, y.head_dropouts_per_day);
     c.num("data_events.epoch_gaps_per_day", x.epoch_gaps_per_day, y.epoch_gaps_per_day);
     c.num("data_events.acc_gaps_per_day", x.acc_gaps_per_day, y.acc_gaps_per_day);
+    c.num("data_events.head_dropout_max_s", x.head_dropout_max_s, y.head_dropout_max_s);
+    c.num("data_events.epoch_gap_max_s", x.epoch_gap_max_s, y.epoch_gap_max_s);
+    c.num("data_events.acc_gap_max_s", x.acc_gap_max_s, y.acc_gap_max_s);
     if (x.head_dropouts_by_id.size() != y.head_dropouts_by_id.size()) c.out.push_back("data_events.heads: count differs");
     for (std::size_t i = 0; i < std::min(x.head_dropouts_by_id.size(), y.head_dropouts_by_id.size()); ++i) {
       const std::string k = "data_events.heads[" + std::to_string(i) + "]";

@@ -106,15 +106,20 @@ TEST(AuditCollector, MissingSampleRunsAreTestedAgainstTheConfiguredRate) {
   // every run is a finding; at the configured rates they are what is expected and nothing is named; at a
   // twentieth of the rates (0.6 and 0.3 expected) the counts are far beyond chance and both are named.
   const auto cfg = threeHeads();
+  // Last: at their rates, but head 2's runs (20 s) longer than the 10 s its kind is expected to last at
+  // most: named (a rate of short gaps does not make a long one expected); every head's 10 s gaps not.
   struct Case {
-    double head_rate, epoch_rate;
-    bool named;
+    double head_rate, epoch_rate, head_max_s;
+    bool named, epoch_named;
   };
-  for (const Case& cs : {Case{0, 0, true}, Case{144, 72, false}, Case{7.2, 3.6, true}, Case{1e6, 1e6, false}}) {
+  const double kNoLimit = std::nan("");
+  for (const Case& cs : {Case{0, 0, kNoLimit, true, true}, Case{144, 72, kNoLimit, false, false}, Case{7.2, 3.6, kNoLimit, true, true},
+                         Case{1e6, 1e6, kNoLimit, false, false}, Case{144, 72, 10, true, false}}) {
     SCOPED_TRACE(cs.head_rate);
     audit::AuditOptions opt;
-    opt.expected_head_dropouts_per_day[1] = cs.head_rate;
-    opt.expected_epoch_gaps_per_day = cs.epoch_rate;
+    opt.data_events.head_dropouts_by_id = {{audittest::threeHeads().heads.head[1].id, cs.head_rate}};
+    opt.data_events.epoch_gaps_per_day = cs.epoch_rate;
+    opt.data_events.head_dropout_max_s = cs.head_max_s;
     audit::Collector c;
     std::string err;
     ASSERT_TRUE(c.configure(cfg, opt, &err)) << err;
@@ -131,10 +136,13 @@ TEST(AuditCollector, MissingSampleRunsAreTestedAgainstTheConfiguredRate) {
     EXPECT_NEAR(param(*g, "per_day"), 144, 1);
     EXPECT_NEAR(param(*g, "missing_samples"), 12 * 40, 12);
     EXPECT_EQ(g->named, cs.named) << g->note << " p " << g->p_value;
-    EXPECT_EQ(a->named, cs.named) << a->note << " p " << a->p_value;
+    EXPECT_EQ(a->named, cs.epoch_named) << a->note << " p " << a->p_value;
+    EXPECT_NEAR(param(*g, "longest_s"), 20, 0.6);
     EXPECT_EQ(named(r, "gaps", "2") != nullptr, cs.named);
     // the threshold is the count the per-test level allows by chance
-    if (cs.named) {
+    if (std::isfinite(cs.head_max_s)) {
+      EXPECT_NE(g->note.find("longer than the 10 s data_events expects at most"), std::string::npos) << g->note;
+    } else if (cs.named) {
       EXPECT_LT(g->threshold, g->statistic);
     } else {
       EXPECT_GT(g->threshold, g->statistic);
@@ -182,9 +190,8 @@ TEST(AuditCollector, BinDoublingLeavesTheAnalysisUnchangedAndSeamsAreCounted) {
     const auto* g = named(res[run], "gaps", "all");
     ASSERT_NE(g, nullptr);
     EXPECT_DOUBLE_EQ(g->statistic, 1.0);  // one run
-    ASSERT_GE(g->params.size(), 3u);
-    EXPECT_EQ(g->params[2].key, "missing_samples");
-    EXPECT_DOUBLE_EQ(g->params[2].value, 120.0);
+    EXPECT_DOUBLE_EQ(param(*g, "missing_samples"), 120.0);
+    EXPECT_NEAR(param(*g, "longest_s"), 60.5, 0.6);
     const auto* d = named(res[run], "head_dropout", "3");
     ASSERT_NE(d, nullptr);
     EXPECT_NEAR(d->params[1].value, 100.5, 0.6);  // duration from the last sample before to the first after

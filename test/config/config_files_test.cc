@@ -339,6 +339,14 @@ TEST(PlatformConfig, DataEventRatesWithPerHeadOverridesAndErrorsWithTheirLine) {
   EXPECT_EQ(pc.events.headDropoutsPerDay(3), 12.0);
   EXPECT_EQ(pc.events.epoch_gaps_per_day, 1.0);
   EXPECT_EQ(pc.events.acc_gaps_per_day, 0.5);
+  EXPECT_TRUE(std::isnan(pc.events.head_dropout_max_s));  // null: no limit
+  const std::string lim = replaced(ev, "epoch_gap_max_s: null", "epoch_gap_max_s: 120");
+  ASSERT_TRUE(io::loadPlatformConfig(writeTemp("events_lim.yaml", lim), pc, &err)) << err;
+  EXPECT_EQ(pc.events.epoch_gap_max_s, 120.0);
+  const std::string zero = replaced(ev, "acc_gap_max_s: null", "acc_gap_max_s: 0");
+  EXPECT_FALSE(io::loadPlatformConfig(writeTemp("events_zero.yaml", zero), pc, &err));
+  EXPECT_NE(err.find(":" + std::to_string(lineOfText(zero, "acc_gap_max_s: 0")) + ": key 'data_events.acc_gap_max_s'"), std::string::npos) << err;
+  ASSERT_TRUE(io::loadPlatformConfig(writeTemp("events.yaml", ev), pc, &err)) << err;
   // an overlay keeps what it does not give; a head list given replaces the base's
   const std::string ev_path = writeTemp("events_base.yaml", ev);
   ASSERT_TRUE(io::loadPlatformConfig(writeTemp("events_over.yaml", "base: " + ev_path + "\ndata_events:\n  epoch_gaps_per_day: 4\n"), pc, &err)) << err;

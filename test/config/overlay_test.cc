@@ -170,6 +170,7 @@ model::Overlay fullOverlay() {
   ev.head_dropouts_by_id = {{3, 12.25}, {1, 0}};
   ev.epoch_gaps_per_day = 2;
   ev.acc_gaps_per_day = 1.0 / 3;
+  ev.epoch_gap_max_s = 90;  // the others: no limit (null in the file)
   o.data_events = ev;
   return o;
 }
@@ -196,6 +197,8 @@ TEST(Overlay, FullyPopulatedOverlayRoundTrips) {
   EXPECT_EQ(back.parts(),
             (std::vector<std::string>{"mountings", "noise", "thermal", "accelerometer", "time_offsets", "published_frame", "data_events"}));
   EXPECT_EQ(back.data_events->headDropoutsPerDay(3), 12.25);
+  EXPECT_EQ(back.data_events->epoch_gap_max_s, 90.0);
+  EXPECT_TRUE(std::isnan(back.data_events->acc_gap_max_s));
   EXPECT_EQ(back.published_frame->epoch, o.published_frame->epoch);
   EXPECT_EQ(back.published_frame->calibration, 4);
   const std::string path = testutil::makeTempDir("overlay_rt") + "/o.yaml";
@@ -229,6 +232,8 @@ TEST(Overlay, CompareFindsADifferenceInEveryPart) {
       [](model::Overlay& x) { x.data_events->epoch_gaps_per_day = 3; },
       [](model::Overlay& x) { x.data_events->acc_gaps_per_day = 0; },
       [](model::Overlay& x) { x.data_events->head_dropouts_per_day = 0; },
+      [](model::Overlay& x) { x.data_events->epoch_gap_max_s = kNaN; },
+      [](model::Overlay& x) { x.data_events->acc_gap_max_s = 60; },
       [](model::Overlay& x) { x.data_events.reset(); },
       [](model::Overlay& x) { x.written_by = "someone else"; },
   };

@@ -650,4 +650,26 @@ TEST(AuditCli, DropoutsAtTheConfiguredRateAreNotNamed) {
   const auto no = namedCauses(jo);
   EXPECT_EQ(std::find(no.begin(), no.end(), "gaps[2]"), no.end()) << jo["model_in_use"].dump();
   EXPECT_FALSE(gaps2(jo)["named"].get<bool>());
+
+  // At its rate but with runs longer than the longest expected (2 s): named; the loop raises that
+  // longest to the longest seen, and the second pass does not name it.
+  const std::string cfg_max = dir + "/events_max.yaml";
+  ASSERT_TRUE(testutil::writeFile(cfg_max, "base: " BORESIGHT_SOURCE_DIR "/config/gracefo_ideal.yaml\n"
+                                           "data_events:\n  heads: [{id: 2, dropouts_per_day: 1440}]\n  head_dropout_max_s: 2\n"));
+  CliRun m = run("audit --config " + cfg_max + " " + in + " --quiet --out " + dir + "/max --write-model " + dir + "/model_max.yaml");
+  ASSERT_EQ(m.status, 0) << m.out;
+  const nlohmann::json jm = nlohmann::json::parse(testutil::slurp(dir + "/max/audit.json"));
+  const nlohmann::json gm = gaps2(jm);
+  EXPECT_TRUE(gm["named"].get<bool>()) << gm.dump();
+  const double longest = gm["params"]["longest_s"]["value"].get<double>();
+  EXPECT_GT(longest, 2.0);
+  EXPECT_NE(gm["note"].get<std::string>().find("longer than the 2 s data_events expects at most"), std::string::npos) << gm.dump();
+  boresight::model::Overlay om;
+  ASSERT_TRUE(boresight::io::readOverlay(dir + "/model_max.yaml", om, &err)) << err;
+  ASSERT_TRUE(om.data_events.has_value());
+  EXPECT_NEAR(om.data_events->head_dropout_max_s, longest, 1e-9 * longest);
+  EXPECT_TRUE(std::isnan(om.data_events->epoch_gap_max_s));  // no limit stays no limit
+  CliRun m2 = run("audit --config " + cfg_max + " " + in + " --quiet --out " + dir + "/max2 --overlay " + dir + "/model_max.yaml");
+  ASSERT_EQ(m2.status, 0) << m2.out;
+  EXPECT_FALSE(gaps2(nlohmann::json::parse(testutil::slurp(dir + "/max2/audit.json")))["named"].get<bool>());
 }

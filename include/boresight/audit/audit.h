@@ -35,6 +35,7 @@
 #include <boresight/core/pipeline.h>
 #include <boresight/model/effects.h>
 #include <boresight/model/orbit_context.h>
+#include <boresight/model/overlay.h>
 #include <boresight/stream/sinks.h>
 
 #include <array>
@@ -72,13 +73,13 @@ struct AuditOptions {
   /// head's blinding cone (the platform file's heads.blinding_deg; the scenario's for simulated data)
   /// plus this margin, deg.
   double blinding_margin_deg = 2;
-  /// The data events' null hypothesis (the platform file's data_events section; audit::runAudit fills
-  /// it): missing-sample runs expected per day of span - per head slot (one head missing while the
-  /// others deliver, outside its blinding cones), of every head at once, of the accelerometer. A count
-  /// of runs is tested against Poisson(rate x span); 0: none expected, any run is named.
-  std::array<double, core::kMaxHeads> expected_head_dropouts_per_day{};
-  double expected_epoch_gaps_per_day = 0;
-  double expected_acc_gaps_per_day = 0;
+  /// The data events' null hypothesis (the platform file's data_events section, or an overlay's;
+  /// audit::runAudit fills it): missing-sample runs expected per day of span - of one head while the
+  /// others deliver (outside its blinding cones; per head id), of every head at once, of the
+  /// accelerometer - and the longest run of each kind expected. A count of runs is tested against
+  /// Poisson(rate x span), and a run longer than its kind's longest is a finding; none expected by
+  /// default, so any run is named.
+  model::DataEventRates data_events;
   /// The relative and reference families' noise colour in time: a model per component (white, or white
   /// plus Gauss-Markov) fitted to the data under each test's null hypothesis, and the tests made on
   /// rows whitened in time by it (generalised least squares); non-white noise is a finding of its own

@@ -23,6 +23,7 @@
 
 #include <array>
 #include <cstdint>
+#include <cmath>
 #include <limits>
 #include <optional>
 #include <string>
@@ -214,6 +215,11 @@ struct DataEventRates {
   std::vector<std::pair<int, double>> head_dropouts_by_id;  ///< per-head rates (head id, rate), over the above
   double epoch_gaps_per_day = 0;     ///< every head missing at once
   double acc_gaps_per_day = 0;       ///< accelerometer samples missing
+  /// The longest run expected of each kind, s (NaN: no limit): a longer run is a finding whatever the
+  /// count (a rate of short gaps does not make an hour-long outage expected).
+  double head_dropout_max_s = std::numeric_limits<double>::quiet_NaN();
+  double epoch_gap_max_s = std::numeric_limits<double>::quiet_NaN();
+  double acc_gap_max_s = std::numeric_limits<double>::quiet_NaN();
   /// The head's rate: its own, else head_dropouts_per_day.
   double headDropoutsPerDay(int id) const {
     for (const auto& [h, r] : head_dropouts_by_id)
@@ -221,8 +227,11 @@ struct DataEventRates {
     return head_dropouts_per_day;
   }
   bool operator==(const DataEventRates& o) const {
+    const auto same = [](double a, double b) { return a == b || (std::isnan(a) && std::isnan(b)); };
     return head_dropouts_per_day == o.head_dropouts_per_day && head_dropouts_by_id == o.head_dropouts_by_id &&
-           epoch_gaps_per_day == o.epoch_gaps_per_day && acc_gaps_per_day == o.acc_gaps_per_day;
+           epoch_gaps_per_day == o.epoch_gaps_per_day && acc_gaps_per_day == o.acc_gaps_per_day &&
+           same(head_dropout_max_s, o.head_dropout_max_s) && same(epoch_gap_max_s, o.epoch_gap_max_s) &&
+           same(acc_gap_max_s, o.acc_gap_max_s);
   }
 };
 
