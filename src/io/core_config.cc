@@ -283,9 +283,7 @@ void readPlatform(const YAML::Node& root, const std::string& path, bool overlay,
     const YAML::Node hl = ev["heads"];
     for (std::size_t i = 0; i < out.events.head_dropouts_by_id.size(); ++i) {
       const int id = out.events.head_dropouts_by_id[i].first;
-      bool known = false;
-      for (int sl = 0; sl < p.heads.n_heads; ++sl) known = known || p.heads.head[static_cast<std::size_t>(sl)].id == id;
-      if (!known)
+      if (core::slotOf(p.heads, id) < 0)
         fail("data_events.heads[" + std::to_string(i) + "].id", "head " + std::to_string(id) + " is not in heads.list",
              hl ? hl[i]["id"] : ev);
     }
