@@ -60,6 +60,8 @@ struct ThermalCollector::Sums {
 
 ThermalCollector::ThermalCollector() = default;
 ThermalCollector::~ThermalCollector() = default;
+ThermalCollector::ThermalCollector(const ThermalCollector&) = default;
+ThermalCollector& ThermalCollector::operator=(const ThermalCollector&) = default;
 
 bool ThermalCollector::configure(const core::HeadSetConfig& heads, const ThermalFitConfig& cfg, std::string* error) {
   configured_ = false;

@@ -161,7 +161,7 @@ struct Node::Impl {
   // replay lockstep: solve id -> epoch index at which it is applied (FIFO, at most a few)
   core::Ring<std::pair<std::uint64_t, std::uint64_t>, 64> due{};
   std::atomic<std::uint64_t> worker_published{0};
-  std::array<char, 512> last_reason{};  ///< the last refused calibration's reason (real-time thread's copy)
+  std::array<char, 1024> last_reason{};  ///< the last refused calibration's reason (real-time thread's copy)
 
   // frame change (calibration.apply_common_rotation): rows with t >= frame_from_t are published
   // rotated by q_frame (q_B_Bpub), older ones by q_frame_old. The real-time thread only fills a slot of
@@ -481,17 +481,22 @@ struct Node::Impl {
     core_ready = true;
     for (int k = 0; k < kMaxHeads; ++k) handed_q[static_cast<std::size_t>(k)] = pcfg.heads.head[static_cast<std::size_t>(k)].q_Si_B;
     applyState();
-    if (cfg.calibration.enabled) {
-      calib::SpanOptions so;
-      so.acc_white_noise_radps2 = cfg.acc_white_noise_radps2;
-      so.decimation_s = cfg.calibration.decimation_s;
-      so.max_observations = cfg.calibration.max_observations;
-      worker.start(pcfg, so, [this] {  // on the worker thread, whenever its ring is empty
-        printFrameChanges();
-        writeStateIfNew();
-      });
-    }
+    if (cfg.calibration.enabled &&
+        !worker.start(pcfg, workerSpanOptions(cfg), [this] {  // on the worker thread, whenever its ring is empty
+          printFrameChanges();
+          writeStateIfNew();
+        }))
+      return false;  // cannot happen: configure() asked the worker first
     return true;
+  }
+
+  /// The worker's span options from the node's configuration.
+  static calib::SpanOptions workerSpanOptions(const NodeConfig& c) {
+    calib::SpanOptions so;
+    so.acc_white_noise_radps2 = c.acc_white_noise_radps2;
+    so.decimation_s = c.calibration.decimation_s;
+    so.max_observations = c.calibration.max_observations;
+    return so;
   }
 
   /// New nominal mountings for the worker: they must reach it, and before any later item (those belong
@@ -1002,6 +1007,12 @@ bool Node::configure(const NodeConfig& cfg, Mode mode, Output* out, std::string*
   if (cfg.calibration.enabled &&
       cfg.calibration.apply_lag_epochs / cfg.pipeline.crn_attitude.fs_hz >= cfg.calibration.cadence_s) {
     if (error) *error = cfg.file + ": calibration.apply_lag_epochs: must be shorter than cadence_s at the head rate";
+    return false;
+  }
+  // A configuration the calibration worker cannot run is refused here with the worker's reason (before:
+  // a worker that refused its span builder's configuration never calibrated, and a replay waited for it).
+  if (cfg.calibration.enabled && !CalibrationWorker::check(cfg.pipeline, Impl::workerSpanOptions(cfg), error)) {
+    if (error) *error = cfg.file + ": " + *error;
     return false;
   }
   m.cfg = cfg;

@@ -9,23 +9,32 @@
 
 namespace boresight::node {
 
-void CalibrationWorker::start(const core::PipelineConfig& pcfg, const calib::SpanOptions& so,
-                              std::function<void()> idle) {
+bool CalibrationWorker::check(const core::PipelineConfig& pcfg, const calib::SpanOptions& so, std::string* error) {
+  calib::CalibrationFeed f;
+  if (f.configure(pcfg, so, false, error)) return true;
+  if (error) *error = "the calibration worker cannot run this configuration: " + *error;
+  return false;
+}
+
+bool CalibrationWorker::start(const core::PipelineConfig& pcfg, const calib::SpanOptions& so,
+                              std::function<void()> idle, std::string* error) {
+  if (!check(pcfg, so, error)) return false;
   cfg_ = pcfg;
   so_ = so;
   idle_ = std::move(idle);
   done_.store(false, std::memory_order_relaxed);
   thread_ = std::thread([this] { workerLoop(); });
+  return true;
 }
 
-// The worker keeps the span builder fed from the ring; a solve request copies the builder and hands the
-// copy to the solver thread, so the ring keeps draining while Ceres runs (the real-time thread then
+// The worker keeps the feed fed from the ring; a solve request copies the feed and hands the copy to the
+// solver thread, so the ring keeps draining while Ceres runs (the real-time thread then
 // rarely finds the ring full). One job at a time, in request order.
 void CalibrationWorker::workerLoop() {
-  calib::SpanBuilder sb;
+  calib::CalibrationFeed feed;
   std::string err;
   std::uint64_t gen = 0;
-  bool ok = sb.configure(cfg_, so_, &err);
+  bool ok = feed.configure(cfg_, so_, false, &err);  // start() checked it
   std::thread solver([this] { solverLoop(); });
   WorkItem it;
   int idle = 0;
@@ -51,8 +60,7 @@ void CalibrationWorker::workerLoop() {
         h.q_Si_B = it.q_Si_B[static_cast<std::size_t>(k)];
       }
       gen = it.solve_id;
-      sb = calib::SpanBuilder();
-      ok = sb.configure(cfg_, so_, &err);
+      ok = feed.configure(cfg_, so_, false, &err);
       std::fprintf(stderr,
                    "boresightd: new nominal mountings applied from data time %lld us (moved: %s arcsec); the "
                    "calibration span starts again, the published frame is the heads' datum again\n",
@@ -61,12 +69,12 @@ void CalibrationWorker::workerLoop() {
     }
     if (!ok) continue;
     if (it.kind == WorkItem::kHeads) {
-      sb.pushHeads(it.heads);
+      feed.pushHeads(it.heads);
     } else if (it.kind == WorkItem::kAcc) {
-      sb.pushAcc(it.t, it.a_A);
+      feed.pushAcc(it.t, it.a_A);
     } else {
       auto j = std::make_unique<SolveJob>();
-      j->sb = std::make_unique<calib::SpanBuilder>(sb);
+      j->feed = std::make_unique<calib::CalibrationFeed>(feed);
       j->req = it;
       for (int k = 0; k < core::kMaxHeads; ++k) j->nominal[static_cast<std::size_t>(k)] = cfg_.heads.head[static_cast<std::size_t>(k)].q_Si_B;
       j->nominal_gen = gen;
@@ -95,17 +103,16 @@ void CalibrationWorker::solverLoop() {
       if (!job_) return;
       j = std::move(job_);
     }
-    j->sb->finish();
-    calib::SolveOptions opt;
-    opt.threads = 1;
-    const calib::SolveResult r = calib::solve(j->sb->span(), opt);
+    calib::RunOptions opt;
+    opt.solve.threads = 1;
+    const calib::CalibrationRun run = calib::runCalibration(*j->feed, opt);
     // One slot: wait until the real-time thread has taken the previous result.
     MailState expected = MailState::kEmpty;
     while (!mail_.state.compare_exchange_weak(expected, MailState::kWriting, std::memory_order_acq_rel)) {
       expected = MailState::kEmpty;
       std::this_thread::sleep_for(std::chrono::microseconds(100));
     }
-    fillResult(j->sb->span(), r, *j);
+    fillResult(j->feed->span(), run, *j);
     mail_.state.store(MailState::kReady, std::memory_order_release);
     {
       std::lock_guard<std::mutex> lk(job_m_);  // the job slot is free once this one is published
@@ -114,18 +121,23 @@ void CalibrationWorker::solverLoop() {
   }
 }
 
-void CalibrationWorker::fillResult(const calib::CalibrationSpan& sp, const calib::SolveResult& r, const SolveJob& j) {
+void CalibrationWorker::fillResult(const calib::CalibrationSpan& sp, const calib::CalibrationRun& run,
+                                   const SolveJob& j) {
+  const calib::SolveResult& r = run.result;
   boresight_lcm::calibration_t& m = mail_.msg;
   m = boresight_lcm::calibration_t{};
   mail_.solve_id = j.req.solve_id;
   mail_.nominal_gen = j.nominal_gen;
-  mail_.ok = r.ok;
-  const std::size_t n = std::min(r.message.size(), mail_.reason.size() - 1);
-  std::copy(r.message.begin(), r.message.begin() + static_cast<std::ptrdiff_t>(n), mail_.reason.begin());
+  mail_.ok = run.ok;
+  // The reason without the leading "refused: " (the node's summary says it was refused).
+  std::string why = run.refusal_text;
+  if (why.rfind("refused: ", 0) == 0) why.erase(0, 9);
+  const std::size_t n = std::min(why.size(), mail_.reason.size() - 1);
+  std::copy(why.begin(), why.begin() + static_cast<std::ptrdiff_t>(n), mail_.reason.begin());
   mail_.reason[n] = '\0';
-  if (!r.ok)  // the solver's own thread, never the real-time one
+  if (!run.ok)  // the solver's own thread, never the real-time one
     std::fprintf(stderr, "boresightd: calibration at data time %lld us refused: %s\n", static_cast<long long>(j.req.t),
-                 r.message.c_str());
+                 why.c_str());
   m.utime = j.req.t;
   m.span_start_utime = sp.t_first;
   m.span_end_utime = sp.t_last;

@@ -1,13 +1,13 @@
-// boresight::node - the node's calibration worker (private to the node library): it keeps a method A
-// span builder fed from a lock-free ring the real-time thread pushes to, hands a copy of the span to
-// its solver thread at each solve request, and leaves the result in a one-slot mailbox the real-time
+// boresight::node - the node's calibration worker (private to the node library): it keeps method A's
+// feed (calib::CalibrationFeed) fed from a lock-free ring the real-time thread pushes to, hands a copy
+// of it to its solver thread at each solve request, which runs calib::runCalibration as `boresight
+// calibrate` does, and leaves the result in a one-slot mailbox the real-time
 // thread takes at a head-epoch boundary. The ring's push and the mailbox's check are the only calls
 // on the real-time thread: neither allocates, blocks or throws. Everything else runs on the worker's
 // two threads, which may allocate and block on each other.
 #pragma once
 
-#include <boresight/calib/solver.h>
-#include <boresight/calib/span_builder.h>
+#include <boresight/calib/calibration.h>
 #include <boresight/core/pipeline.h>
 #include <boresight/core/ring.h>
 
@@ -44,7 +44,9 @@ struct Mailbox {
   bool ok = false;
   std::array<Quat, core::kMaxHeads> q_Si_B{};  ///< the calibrated mountings (the nominal ones when refused)
   boresight_lcm::calibration_t msg{};   ///< the message to publish (seq and applied set by the node)
-  std::array<char, 512> reason{};       ///< why a calibration was refused (the solver's message), NUL-terminated
+  /// Why a calibration was refused, NUL-terminated: calib::CalibrationRun::refusal_text (the reason and,
+  /// for a span too short or too quiet, what would be needed), cut at the array's size.
+  std::array<char, 1024> reason{};
   /// The common rotation is determined about every B axis (the solver's unobservable directions of a
   /// common rotation: none).
   bool common_determined = false;
@@ -60,10 +62,14 @@ class CalibrationWorker {
 
   /// The ring's storage (before start).
   void init(std::size_t ring_capacity) { ring_.init(ring_capacity); }
+  /// Whether the worker can run this configuration (the feed's configure): false with *error. The node
+  /// asks at start-up, so a configuration the worker cannot run is refused there, never found later.
+  static bool check(const core::PipelineConfig& pcfg, const calib::SpanOptions& so, std::string* error);
   /// Starts the threads. pcfg: the core configuration (its heads and nominal mountings; the worker
   /// keeps a copy); idle: called on the worker thread whenever the ring is empty (logging, the state
-  /// file).
-  void start(const core::PipelineConfig& pcfg, const calib::SpanOptions& so, std::function<void()> idle);
+  /// file). False with *error when the configuration cannot be run (check()); no thread is started.
+  bool start(const core::PipelineConfig& pcfg, const calib::SpanOptions& so, std::function<void()> idle,
+             std::string* error = nullptr);
   bool running() const { return thread_.joinable(); }
 
   /// Real-time thread: false when the ring is full.
@@ -82,14 +88,14 @@ class CalibrationWorker {
 
  private:
   struct SolveJob {
-    std::unique_ptr<calib::SpanBuilder> sb;
+    std::unique_ptr<calib::CalibrationFeed> feed;
     WorkItem req;
     std::array<Quat, core::kMaxHeads> nominal = core::filled<Quat, core::kMaxHeads>(Quat::Identity());  ///< the mountings the span was built with
     std::uint64_t nominal_gen = 0;
   };
   void workerLoop();
   void solverLoop();
-  void fillResult(const calib::CalibrationSpan& sp, const calib::SolveResult& r, const SolveJob& j);
+  void fillResult(const calib::CalibrationSpan& sp, const calib::CalibrationRun& run, const SolveJob& j);
 
   core::SpscRing<WorkItem> ring_;
   Mailbox mail_;

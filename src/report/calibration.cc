@@ -1,5 +1,4 @@
 // The calibration result as JSON, YAML and report.md (include/boresight/report/calibration.h).
-#include <boresight/core/crn.h>
 #include <boresight/io/files.h>
 #include <boresight/core/rotation.h>
 #include <boresight/report/calibration.h>
@@ -433,26 +432,6 @@ bool writeCalibrationReport(const std::string& dir, const calib::CalibrationSpan
   for (const auto& f : result["ignored"])
     md << "- " << f["file"].get<std::string>() << " (" << f["product"].get<std::string>() << ", ignored)\n";
   return io::writeFileAtomic(dir + "/report.md", md.str(), error);
-}
-
-SpanNeed spanNeed(const core::PipelineConfig& cfg, double decimation_s, double excitation_rms_radps2,
-                  double target_sigma_arcsec) {
-  SpanNeed n;
-  core::CrnKernel ka, kb;
-  const bool a_ok = core::designCrn(cfg.crn_attitude, ka) == core::Status::kOk;
-  const bool b_ok = cfg.use_accelerometer && core::designCrn(cfg.crn_acc, kb) == core::Status::kOk;
-  n.crn_s = std::max(a_ok ? ka.tf_s : cfg.crn_attitude.length_s, b_ok ? kb.tf_s : 0.0);
-  double g2 = 0.0;
-  if (a_ok)
-    for (int j = 0; j < ka.nf; ++j) g2 += ka.g[2][std::size_t(j)] * ka.g[2][std::size_t(j)];
-  double sigma_cross = INFINITY;
-  for (int s = 0; s < cfg.heads.n_heads; ++s)
-    sigma_cross = std::min(sigma_cross, cfg.heads.head[std::size_t(s)].sigma_cross_rad);
-  n.sigma_alpha_radps2 = sigma_cross * std::sqrt(g2);
-  const double per_obs = n.sigma_alpha_radps2 / (excitation_rms_radps2 * target_sigma_arcsec * kRadPerArcsec);
-  n.observations = std::ceil(per_obs * per_obs);
-  n.bound_s = n.crn_s + n.observations * decimation_s;
-  return n;
 }
 
 }  // namespace boresight::report

@@ -15,18 +15,7 @@ double chi2Hi(const mc::Result& r) {
   return mc::chi2Quantile(static_cast<double>(r.nees_runs) * r.nees_dim, 3.29) / r.nees_runs;
 }
 
-synth::Config manoeuvreCase(std::uint64_t seed) {
-  synth::Config c;
-  c.seed = seed;
-  c.q_S_B_nominal = synth::gracefoMountings();
-  c.duration_s = 3900;
-  c.manoeuvres = synth::threeAxisManoeuvres(150.0, 1200.0);
-  c.truth.r_S[0] = Vec3(300, -200, 500) * kRadPerArcsec;
-  c.truth.r_S[1] = Vec3(-250, 400, -300) * kRadPerArcsec;
-  c.truth.r_S[2] = Vec3(100, 350, 600) * kRadPerArcsec;
-  c.truth.acc_bias = Vec3(1.31e-5, 1.19e-4, -7.81e-4);
-  return c;
-}
+using synth::manoeuvreCase;
 
 CalibrationSpan build(const synth::Config& c) {
   SpanBuilder b;

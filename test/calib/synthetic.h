@@ -75,6 +75,21 @@ inline std::vector<Manoeuvre> threeAxisManoeuvres(double start_s, double gap_s =
   return m;
 }
 
+/// The calibration tests' span: three heads of GRACE-FO geometry, 3900 s with three one-axis manoeuvres,
+/// mounting errors of 100-600" and an accelerometer bias.
+inline Config manoeuvreCase(std::uint64_t seed) {
+  Config c;
+  c.seed = seed;
+  c.q_S_B_nominal = gracefoMountings();
+  c.duration_s = 3900;
+  c.manoeuvres = threeAxisManoeuvres(150.0, 1200.0);
+  c.truth.r_S[0] = Vec3(300, -200, 500) * kRadPerArcsec;
+  c.truth.r_S[1] = Vec3(-250, 400, -300) * kRadPerArcsec;
+  c.truth.r_S[2] = Vec3(100, 350, 600) * kRadPerArcsec;
+  c.truth.acc_bias = Vec3(1.31e-5, 1.19e-4, -7.81e-4);
+  return c;
+}
+
 class Attitude {
  public:
   explicit Attitude(const Config& c) : c_(c) {}

@@ -951,6 +951,28 @@ TEST(NodeReplay, GoldenOutputsByMatchingDigits) {
 
 // ---- configuration errors -----------------------------------------------------------------------
 
+// A configuration the calibration worker cannot run, handed to the library directly (not through
+// boresightd.yaml, whose reader refuses it too): refused by configure() with the worker's reason even
+// while the mountings are still to come from the log (the core starts only then) - before, the worker's
+// span builder refused it on the worker thread, nothing calibrated and a replay waited for the worker.
+TEST(NodeConfig, AConfigurationTheWorkerCannotRunIsRefusedAtStart) {
+  node::NodeConfig cfg = nodeConfig();
+  ASSERT_TRUE(cfg.mountings_from_log);
+  cfg.calibration.decimation_s = 0.2;  // below the 2 Hz heads' interval
+  node::Node n;
+  Captured out;
+  std::string err;
+  EXPECT_FALSE(n.configure(cfg, node::Node::Mode::kReplay, &out, &err));
+  EXPECT_NE(err.find("boresightd.yaml: the calibration worker cannot run this configuration: span builder: "
+                     "decimation_s must be at least the head sampling interval"),
+            std::string::npos)
+      << err;
+  // The same configuration without the worker runs.
+  cfg.calibration.enabled = false;
+  node::Node n2;
+  EXPECT_TRUE(n2.configure(cfg, node::Node::Mode::kReplay, &out, &err)) << err;
+}
+
 TEST(NodeConfig, ClearErrors) {
   const std::string dir = makeTempDir("node_cfg");
   auto write = [&](const std::string& text) {
@@ -1635,6 +1657,9 @@ TEST(Boresightd, ARefusedCalibrationSaysWhyAndDecimationHalfASecondWorks) {
   EXPECT_NE(r.out.find("calibration at data time"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("refused:"), std::string::npos) << r.out;
   EXPECT_NE(j.find("\"reason\": \"too"), std::string::npos) << j;
+  // The reason is calibrate's (calib::runCalibration): what the span would need comes with it.
+  EXPECT_NE(j.find("Needed: the Cramer-Rao bound needs about"), std::string::npos) << j;
+  EXPECT_NE(j.find("at this span's weakest-axis excitation"), std::string::npos) << j;
   // decimation_s 0.5 (the head interval): a calibration as at 10 s, not a refusal.
   const std::string cfg05 = nodeYaml(dir, {{"cadence_s", "  cadence_s: 1200"},
                                            {"min_span_s", "  min_span_s: 1200"},

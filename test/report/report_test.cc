@@ -271,26 +271,6 @@ TEST(SvgPlot, AnAsymmetricErrorBarReachesEachEnd) {
   EXPECT_NEAR((cy - y2) / (y1 - cy), 2.0, 1e-4);  // coordinates are printed to 6 digits
 }
 
-TEST(SpanNeed, CrnNoiseAndTheBoundsScaling) {
-  boresight::core::PipelineConfig cfg;
-  cfg.heads.n_heads = 2;
-  cfg.heads.head[0].sigma_cross_rad = 6.0 * boresight::kRadPerArcsec;
-  cfg.heads.head[1].sigma_cross_rad = 9.0 * boresight::kRadPerArcsec;
-  const auto n = br::spanNeed(cfg, 10.0, 5e-5, 30.0);
-  // The CRN length, and the head noise through the second-derivative kernel against the ideal
-  // band-limited differentiator: white noise of variance s^2 at fs through (2 pi f)^2 up to B gives
-  // s^2 (2 pi)^4 2 B^5 / (5 fs); the CRN's gentle edge keeps it within a few ten per cent.
-  EXPECT_NEAR(n.crn_s, cfg.crn_attitude.length_s, 0.5);
-  const double s = 6.0 * boresight::kRadPerArcsec, B = cfg.crn_attitude.bandwidth_hz, fs = cfg.crn_attitude.fs_hz;
-  const double ideal = s * std::sqrt(std::pow(2 * M_PI, 4) * 2 * std::pow(B, 5) / (5 * fs));
-  EXPECT_NEAR(n.sigma_alpha_radps2 / ideal, 1.0, 0.3) << n.sigma_alpha_radps2 << " vs " << ideal;
-  // N ~ (sigma_alpha / (excitation target))^2: twice the excitation or twice the target, a quarter.
-  const auto n2 = br::spanNeed(cfg, 10.0, 1e-4, 30.0), n3 = br::spanNeed(cfg, 10.0, 5e-5, 60.0);
-  EXPECT_NEAR(n2.observations / n.observations, 0.25, 0.01);
-  EXPECT_NEAR(n3.observations / n.observations, 0.25, 0.01);
-  EXPECT_NEAR(n.bound_s, n.crn_s + n.observations * 10.0, 1e-6);
-}
-
 TEST(ThermalJson, PerNonDatumHeadAxisAndHarmonicWithBetaNotDeterminedOnShortSpans) {
   bc::ThermalFitResult t;
   t.ok = true;

@@ -2,6 +2,7 @@
 // mounting-error angles of every head from the star cameras and the accelerometer (METHODS 1.7).
 // Option parsing and printing only: the replay engine feeds a calib::SpanBuilder through its input
 // observer, calib::solve() estimates, report:: writes.
+#include <boresight/calib/calibration.h>
 #include <boresight/calib/raw_bound.h>
 #include <boresight/calib/solver.h>
 #include <boresight/calib/span_builder.h>
@@ -134,26 +135,22 @@ const char* kUsage =
     "Exit status: 0 calibrated; 1 refused (span too short or too quiet: the reason and what would be\n"
     "needed) or bad input (the reason); 2 usage error.\n";
 
-/// Forwards the engine's inputs to the span builder and, when there is an orbit, the thermal collector
-/// (head epochs as the core's validator leaves them; the orbit from the same stream: GNI1B / GNV1B
-/// files, ORBIT messages).
+/// The engine's inputs into method A's feed (calib/calibration.h): head epochs as the core's validator
+/// leaves them, the accelerometer samples the core accepted, the orbit from the same stream when the
+/// feed collects the thermal fit (GNI1B / GNV1B files, ORBIT messages).
 class SpanFeed final : public stream::InputObserver {
  public:
-  SpanFeed(calib::SpanBuilder& b, calib::ThermalCollector* thermal) : b_(b), thermal_(thermal) {}
-  void onHeads(const core::HeadEpoch& e, core::Status) override {
-    b_.pushHeads(e);
-    if (thermal_) thermal_->pushHeads(e);
-  }
+  explicit SpanFeed(calib::CalibrationFeed& f) : f_(f) {}
+  void onHeads(const core::HeadEpoch& e, core::Status) override { f_.pushHeads(e); }
   void onAcc(TimeUs t, const Vec3& a_A, core::Status st) override {
-    if (core::accepted(st)) b_.pushAcc(t, a_A);
+    if (core::accepted(st)) f_.pushAcc(t, a_A);
   }
-  bool wantsOrbit() const override { return thermal_ != nullptr; }
-  void onOrbit(const model::OrbitSample& o) override { thermal_->pushOrbit(o); }
-  void onEnd() override { b_.finish(); }
+  bool wantsOrbit() const override { return f_.wantsOrbit(); }
+  void onOrbit(const model::OrbitSample& o) override { f_.pushOrbit(o); }
+  void onEnd() override { f_.finish(); }
 
  private:
-  calib::SpanBuilder& b_;
-  calib::ThermalCollector* thermal_;
+  calib::CalibrationFeed& f_;
 };
 
 /// Records the raw samples for the attitude-domain estimate (--raw): head samples as the core's validator
@@ -465,7 +462,6 @@ int runCalibrate(int argc, char** argv) {
 
   for (const auto& l : io::modelInUseLines(pc, ovu)) std::printf("%s\n", l.c_str());
 
-  calib::SpanBuilder builder;
   calib::SpanOptions spo;
   spo.decimation_s = decimation;
   // The accelerometer's weight: the white part of each A axis's noise model (the span builder models
@@ -476,23 +472,19 @@ int runCalibrate(int argc, char** argv) {
   spo.crn_bandwidth_hz = crn_bw;
   spo.crn_length_s = crn_len;
   spo.keep_observations = !moments;
-  if (!builder.configure(pc.pipeline, spo, &err)) return fail(err);
   // The thermal harmonic fit of the heads' relative deformation needs the argument of latitude: only
-  // with an orbit among the inputs.
   // with an orbit among the inputs (GNI1B / GNV1B files, or an LCM log's ORBIT messages), read in the
   // same stream as the heads.
-  calib::ThermalCollector thermal;
   bool with_thermal = (!in.orbit.empty() || !in.lcm.empty()) && pc.pipeline.heads.n_heads >= 2;
-  if (with_thermal && !thermal.configure(pc.pipeline.heads, calib::ThermalFitConfig{}, &err)) return fail(err);
+  calib::CalibrationFeed cal;
+  if (!cal.configure(pc.pipeline, spo, with_thermal, &err)) return fail(err);
   for (const auto& f : in.orbit) std::printf("%s: orbit for the thermal harmonic fit\n", f.c_str());
-  SpanFeed feed(builder, with_thermal ? &thermal : nullptr);
+  SpanFeed feed(cal);
   engine.addObserver(&feed);  // before the sources: the orbit files are opened for an observer that wants them
   RawFeed raw_feed(pc.pipeline.heads);
   if (raw) engine.addObserver(&raw_feed);
   if (!stream::startReplay(rp, &err)) return fail(err);
   if (engine.run() != stream::Engine::Result::kDone) return fail(engine.error());
-  const bool orbit_seen = engine.orbitSamples() > 0;
-  with_thermal = with_thermal && orbit_seen;
   stages.mark("replay and span");
   printSourceCounters(engine);
   const core::Health h = engine.health();
@@ -512,62 +504,23 @@ int runCalibrate(int argc, char** argv) {
                 " head samples carry an id that is not in the configuration (" + config + ": heads " + ids +
                 "); fix the configuration or the inputs");
   }
-  const calib::CalibrationSpan& span = builder.span();
+  const calib::CalibrationSpan& span = cal.span();
   const double span_s = toSeconds(engine.lastEpoch() - engine.firstEpoch());
   std::printf("span: %.1f s of head data, %llu head epochs, %llu accelerometer samples -> %zu observations\n",
               span_s, static_cast<unsigned long long>(span.head_epochs),
               static_cast<unsigned long long>(span.acc_samples), static_cast<std::size_t>(span.epochs_total));
 
-  // What a refused span would need: the CRN's length, and the bound's span at the planning excitation
-  // (and, when the span has observations, at its own weakest-axis excitation).
-  core::PipelineConfig need_cfg = pc.pipeline;  // with the calibration CRN when one is given
-  if (crn_bw > 0) {
-    for (core::CrnConfig* c : {&need_cfg.crn_attitude, &need_cfg.crn_acc}) {
-      c->bandwidth_hz = crn_bw;
-      c->length_s = crn_len;
-    }
-  }
-  auto needText = [&](double excitation, const char* what) {
-    const report::SpanNeed n = report::spanNeed(need_cfg, decimation, excitation, plan_sigma);
-    return "the Cramer-Rao bound needs about " + fmt("%.0f", n.observations) + " decorrelated observations (one per " +
-           fmt("%g", decimation) + " s) to reach " + fmt("%g", plan_sigma) + "\" with " + fmt("%.2g", excitation) +
-           " rad/s^2 RMS excitation per axis (" + what + "; head noise through the CRN " +
-           fmt("%.2g", n.sigma_alpha_radps2) + " rad/s^2): at least " +
-           (n.bound_s < 86400.0 * 365 ? fmt("%.0f", n.bound_s) + " s (" + fmt("%.1f", n.bound_s / 3600) + " h)"
-                                      : fmt("%.2g", n.bound_s / (86400.0 * 365.25)) + " years");
-  };
-  const report::SpanNeed need = report::spanNeed(need_cfg, decimation, plan_exc, plan_sigma);
-  const std::string crn_need = "the CRN gives an angular acceleration only with Tf = " + fmt("%.1f", need.crn_s) +
-                               " s of head and accelerometer data centred on it";
-  const std::string plan_need = needText(plan_exc, "--plan-excitation");
-  if (span.epochs_total == 0)
-    return fail("refused: the span is too short (" + fmt("%.1f", span_s) +
-                " s of head data, no CRN angular acceleration in it).\nNeeded: " + crn_need + "; " + plan_need +
-                " of excited data.");
-
-  calib::SolveResult r = calib::solve(span, so);
+  // The solve, the thermal fit and, for a refused span, what would be needed (calib::runCalibration,
+  // as the node's worker).
+  calib::RunOptions ro_run;
+  ro_run.solve = so;
+  ro_run.plan_excitation_radps2 = plan_exc;
+  ro_run.plan_sigma_arcsec = plan_sigma;
+  ro_run.plan_excitation_name = "--plan-excitation";
+  calib::CalibrationRun run = calib::runCalibration(cal, ro_run);
   stages.mark("solve");
-  // From the moments the solver reports no epochs (it counts kept observations): the span made them.
-  if (r.ok && r.epochs == 0) r.epochs = static_cast<std::size_t>(span.epochs_total);
-  if (!r.ok) {
-    // This span's own excitation: RMS about the mean of the accelerometer's angular acceleration in B,
-    // weakest axis.
-    // (From the accelerometer moments, which every span keeps: sum of (alpha_A, 1)(alpha_A, 1)^T.)
-    const double n = span.acc_moments(3, 3);
-    double weakest = 0.0;
-    if (n > 0) {
-      const Vec3 mean_A = span.acc_moments.block<3, 1>(0, 3) / n;
-      const Mat3 cov_A = span.acc_moments.block<3, 3>(0, 0) / n - mean_A * mean_A.transpose();
-      const Mat3 cov_B = span.C_B_A * cov_A * span.C_B_A.transpose();
-      weakest = std::sqrt(std::max(0.0, cov_B.diagonal().minCoeff()));
-    }
-    // What the bound needs is said for the refusals about the data's length or excitation; other
-    // refusals (a head never seen with the others, ...) carry their own remedy.
-    const bool about_span = r.refusal == calib::Refusal::kTooFewEpochs || r.refusal == calib::Refusal::kTooQuiet;
-    if (!about_span) return fail("refused: " + r.message);
-    return fail("refused: " + r.message + "\nNeeded: " + plan_need + "; at this span's weakest-axis excitation " +
-                (weakest > 0 ? needText(weakest, "this span") : std::string("(none)")) + ".");
-  }
+  if (!run.ok) return fail(run.refusal_text);
+  const calib::SolveResult& r = run.result;
 
   std::string thermal_text;
   calib::ThermalFitResult thermal_fit;
@@ -579,8 +532,8 @@ int runCalibrate(int argc, char** argv) {
   ctx.inputs.insert(ctx.inputs.end(), in.lcm.begin(), in.lcm.end());
   ctx.options = so;
   ctx.span_options = spo;
-  if (with_thermal) {
-    thermal_fit = thermal.fit();
+  if (run.thermal_fitted) {
+    thermal_fit = run.thermal;
     const calib::ThermalFitResult& tf = thermal_fit;
     ctx.thermal = report::thermalJson(tf);
     thermal_text = calib::formatThermalFit(tf);
@@ -723,7 +676,7 @@ int runCalibrate(int argc, char** argv) {
       return fail(err);
   }
   if (!write_model.empty()) {
-    const model::Overlay m = resultOverlay(r, pc, with_thermal ? &thermal_fit : nullptr, span.t_first, span.t_last, config, mounting);
+    const model::Overlay m = resultOverlay(r, pc, run.thermal_fitted ? &thermal_fit : nullptr, span.t_first, span.t_last, config, mounting);
     if (!io::writeOverlay(write_model, m, &err)) return fail(err);
   }
   if (!write_qsa1b.empty() && !writeMountingsQsa1b(write_qsa1b, pc, mounting, span.t_first, satellite[0], &err)) return fail(err);

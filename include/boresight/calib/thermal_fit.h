@@ -190,8 +190,9 @@ class ThermalCollector {
  public:
   ThermalCollector();
   ~ThermalCollector();
-  ThermalCollector(const ThermalCollector&) = delete;
-  ThermalCollector& operator=(const ThermalCollector&) = delete;
+  /// Copyable (a snapshot: the node's worker solves a copy of its feed while the original goes on).
+  ThermalCollector(const ThermalCollector&);
+  ThermalCollector& operator=(const ThermalCollector&);
 };
 
 /// One call over data in memory (tests, small spans): configure, push every orbit record and head epoch

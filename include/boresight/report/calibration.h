@@ -65,23 +65,4 @@ Residuals residuals(const calib::CalibrationSpan& span, const calib::SolveResult
 bool writeCalibrationReport(const std::string& dir, const calib::CalibrationSpan& span, const calib::SolveResult& r,
                             const Json& result, std::string* error);
 
-/// What a span needs before method A can say anything, from the configuration alone (used when a span
-/// is refused, to say what would be needed):
-/// - the CRN: one angular acceleration needs a whole filter length Tf of data centred on it (heads
-///   and accelerometer), so nothing comes out of a span shorter than Tf;
-/// - the bound: with white head noise sigma_cross per sample through the CRN second-derivative kernel
-///   (sigma_alpha = sigma_cross sqrt(sum g2^2)), one decorrelated observation per decimation_s and an
-///   excitation of `excitation_rms_radps2` per axis, an error angle's Cramer-Rao bound is
-///   sigma_alpha / (excitation sqrt(N)); N = (sigma_alpha / (excitation target))^2 observations reach
-///   `target_sigma_arcsec`. Accelerometer noise and the boresight axis (sigma_roll) are left out, so
-///   this is a lower limit on what is needed.
-struct SpanNeed {
-  double crn_s = 0.0;                ///< Tf: the shortest span with one CRN output
-  double sigma_alpha_radps2 = 0.0;   ///< head noise through the CRN, per output, cross-boresight
-  double observations = 0.0;         ///< decorrelated observations the bound needs
-  double bound_s = 0.0;              ///< Tf + observations x decimation_s
-};
-SpanNeed spanNeed(const core::PipelineConfig& cfg, double decimation_s, double excitation_rms_radps2,
-                  double target_sigma_arcsec);
-
 }  // namespace boresight::report

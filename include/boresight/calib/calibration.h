@@ -1,0 +1,122 @@
+// boresight::calib - method A's orchestration, one for every caller: `boresight calibrate` (fed by the
+// replay engine's input observer) and the node's calibration worker (fed from its ring) run the same
+// steps here, so the two cannot drift apart:
+// - the feed (CalibrationFeed): head epochs as the core's validator leaves them, the accelerometer
+//   samples the core accepted (as measured: method A estimates its own bias), and, when a thermal fit
+//   is wanted, the orbit from the same stream (GNI1B / GNV1B files, ORBIT messages);
+// - the run (runCalibration): the solve, the thermal harmonic fit where an orbit was seen, and, when
+//   the span is refused for its length or its excitation, what would be needed - the CRN's length and
+//   the Cramer-Rao bound's span at a planning excitation and at this span's own weakest-axis
+//   excitation (the RMS about the mean of the accelerometer's angular acceleration in B).
+// Not real time: allocates (the span's observations, Ceres).
+#pragma once
+
+#include "boresight/calib/solver.h"
+#include "boresight/calib/span_builder.h"
+#include "boresight/calib/thermal_fit.h"
+#include "boresight/core/pipeline.h"
+#include "boresight/model/orbit_context.h"
+
+#include <memory>
+#include <string>
+
+namespace boresight::calib {
+
+/// What a span needs before method A can say anything, from the configuration alone (said when a span
+/// is refused):
+/// - the CRN: one angular acceleration needs a whole filter length Tf of data centred on it (heads
+///   and accelerometer), so nothing comes out of a span shorter than Tf;
+/// - the bound: with white head noise sigma_cross per sample through the CRN second-derivative kernel
+///   (sigma_alpha = sigma_cross sqrt(sum g2^2)), one decorrelated observation per decimation_s and an
+///   excitation of `excitation_rms_radps2` per axis, an error angle's Cramer-Rao bound is
+///   sigma_alpha / (excitation sqrt(N)); N = (sigma_alpha / (excitation target))^2 observations reach
+///   `target_sigma_arcsec`. Accelerometer noise and the boresight axis (sigma_roll) are left out, so
+///   this is a lower limit on what is needed.
+struct SpanNeed {
+  double crn_s = 0.0;                ///< Tf: the shortest span with one CRN output
+  double sigma_alpha_radps2 = 0.0;   ///< head noise through the CRN, per output, cross-boresight
+  double observations = 0.0;         ///< decorrelated observations the bound needs
+  double bound_s = 0.0;              ///< Tf + observations x decimation_s
+};
+SpanNeed spanNeed(const core::PipelineConfig& cfg, double decimation_s, double excitation_rms_radps2,
+                  double target_sigma_arcsec);
+
+/// The span's weakest-axis excitation: the RMS about the mean of the accelerometer's angular
+/// acceleration, per B axis (C_B_A of the span), the smallest of the three, rad/s^2; 0 without
+/// accelerometer samples. From the accelerometer moments, which every span keeps.
+double weakestExcitation(const CalibrationSpan& span);
+
+/// The data of one calibration, pushed in time order (the engine's merge, or the node's ring).
+/// Copyable: the node's worker hands a copy to its solver thread and keeps feeding the original.
+class CalibrationFeed {
+ public:
+  CalibrationFeed() = default;
+  CalibrationFeed(const CalibrationFeed& o);
+  CalibrationFeed& operator=(const CalibrationFeed& o);
+  CalibrationFeed(CalibrationFeed&&) = default;
+  CalibrationFeed& operator=(CalibrationFeed&&) = default;
+  ~CalibrationFeed();
+
+  /// The span builder with the core configuration (heads, nominal mountings, C_B_A, CRNs) and the span
+  /// options; with_thermal: also collect the heads' relative attitude for the thermal harmonic fit (two
+  /// heads or more; the orbit must come in the same stream). False with *error: the configuration
+  /// cannot be run (said at start-up, never found later).
+  bool configure(const core::PipelineConfig& cfg, const SpanOptions& so, bool with_thermal, std::string* error);
+  bool configured() const { return configured_; }
+  /// Head epochs as the core's validator leaves them.
+  void pushHeads(const core::HeadEpoch& e);
+  /// An accelerometer sample the core accepted, a_A as measured.
+  void pushAcc(TimeUs t, const Vec3& a_A);
+  /// An orbit sample (taken only with the thermal fit).
+  void pushOrbit(const model::OrbitSample& o);
+  bool wantsOrbit() const { return thermal_ != nullptr; }
+  std::uint64_t orbitSamples() const { return orbit_samples_; }
+  /// End of data (runCalibration calls it when the caller has not).
+  void finish();
+  bool finished() const { return finished_; }
+
+  const CalibrationSpan& span() const { return builder_.span(); }
+  const SpanBuilder& builder() const { return builder_; }
+  const core::PipelineConfig& config() const { return cfg_; }
+  const SpanOptions& spanOptions() const { return so_; }
+  ThermalCollector* thermal() { return thermal_.get(); }
+
+ private:
+  core::PipelineConfig cfg_;
+  SpanOptions so_;
+  SpanBuilder builder_;
+  std::unique_ptr<ThermalCollector> thermal_;
+  std::uint64_t orbit_samples_ = 0;
+  bool configured_ = false, finished_ = false;
+};
+
+struct RunOptions {
+  SolveOptions solve;
+  /// For a refused span: the excitation (rad/s^2 RMS per axis) and the target sigma (arcsec) the
+  /// needed span is computed for.
+  double plan_excitation_radps2 = 4.9e-5;
+  double plan_sigma_arcsec = 30.0;
+  std::string plan_excitation_name = "the planning excitation";  ///< how the advice names it
+  /// Fit the thermal harmonic model when the feed collected it and saw an orbit.
+  bool thermal_fit = true;
+};
+
+struct CalibrationRun {
+  bool ok = false;
+  /// The solver's result (epochs counted from the span when it solved from the moments). A span with
+  /// no CRN output at all is refused here as kTooFewEpochs without calling the solver.
+  SolveResult result;
+  /// Refused: "refused: <why>", and for a refusal about the span's length or excitation a second line
+  /// "Needed: ..." with the CRN's length and the bound's span. Empty when ok.
+  std::string refusal_text;
+  double weakest_excitation_radps2 = 0.0;  ///< this span's (weakestExcitation)
+  SpanNeed need;                           ///< at the planning excitation
+  SpanNeed need_own;                       ///< at this span's weakest excitation (when > 0)
+  bool thermal_fitted = false;
+  ThermalFitResult thermal;                ///< when thermal_fitted
+};
+
+/// Solves the feed's span (finishing the feed first) and, when ok and wanted, fits the thermal model.
+CalibrationRun runCalibration(CalibrationFeed& feed, const RunOptions& o);
+
+}  // namespace boresight::calib

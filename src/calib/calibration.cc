@@ -1,0 +1,178 @@
+// Method A's orchestration (include/boresight/calib/calibration.h).
+#include "boresight/calib/calibration.h"
+
+#include "boresight/core/crn.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+namespace boresight::calib {
+namespace {
+
+std::string fmt(const char* f, double v) {
+  char b[64];
+  std::snprintf(b, sizeof b, f, v);
+  return b;
+}
+
+}  // namespace
+
+SpanNeed spanNeed(const core::PipelineConfig& cfg, double decimation_s, double excitation_rms_radps2,
+                  double target_sigma_arcsec) {
+  SpanNeed n;
+  core::CrnKernel ka, kb;
+  const bool a_ok = core::designCrn(cfg.crn_attitude, ka) == core::Status::kOk;
+  const bool b_ok = cfg.use_accelerometer && core::designCrn(cfg.crn_acc, kb) == core::Status::kOk;
+  n.crn_s = std::max(a_ok ? ka.tf_s : cfg.crn_attitude.length_s, b_ok ? kb.tf_s : 0.0);
+  double g2 = 0.0;
+  if (a_ok)
+    for (int j = 0; j < ka.nf; ++j) g2 += ka.g[2][std::size_t(j)] * ka.g[2][std::size_t(j)];
+  double sigma_cross = INFINITY;
+  for (int s = 0; s < cfg.heads.n_heads; ++s)
+    sigma_cross = std::min(sigma_cross, cfg.heads.head[std::size_t(s)].sigma_cross_rad);
+  n.sigma_alpha_radps2 = sigma_cross * std::sqrt(g2);
+  const double per_obs = n.sigma_alpha_radps2 / (excitation_rms_radps2 * target_sigma_arcsec * kRadPerArcsec);
+  n.observations = std::ceil(per_obs * per_obs);
+  n.bound_s = n.crn_s + n.observations * decimation_s;
+  return n;
+}
+
+double weakestExcitation(const CalibrationSpan& span) {
+  const double n = span.acc_moments(3, 3);
+  if (!(n > 0)) return 0.0;
+  const Vec3 mean_A = span.acc_moments.block<3, 1>(0, 3) / n;
+  const Mat3 cov_A = span.acc_moments.block<3, 3>(0, 0) / n - mean_A * mean_A.transpose();
+  const Mat3 cov_B = span.C_B_A * cov_A * span.C_B_A.transpose();
+  return std::sqrt(std::max(0.0, cov_B.diagonal().minCoeff()));
+}
+
+// ------------------------------------------------------------------------------------------------
+CalibrationFeed::CalibrationFeed(const CalibrationFeed& o)
+    : cfg_(o.cfg_),
+      so_(o.so_),
+      builder_(o.builder_),
+      thermal_(o.thermal_ ? std::make_unique<ThermalCollector>(*o.thermal_) : nullptr),
+      orbit_samples_(o.orbit_samples_),
+      configured_(o.configured_),
+      finished_(o.finished_) {}
+
+CalibrationFeed& CalibrationFeed::operator=(const CalibrationFeed& o) {
+  if (this != &o) {
+    CalibrationFeed c(o);
+    *this = std::move(c);
+  }
+  return *this;
+}
+
+CalibrationFeed::~CalibrationFeed() = default;
+
+bool CalibrationFeed::configure(const core::PipelineConfig& cfg, const SpanOptions& so, bool with_thermal,
+                                std::string* error) {
+  configured_ = finished_ = false;
+  orbit_samples_ = 0;
+  thermal_.reset();
+  cfg_ = cfg;
+  so_ = so;
+  builder_ = SpanBuilder();
+  if (!builder_.configure(cfg, so, error)) return false;
+  if (with_thermal) {
+    thermal_ = std::make_unique<ThermalCollector>();
+    if (!thermal_->configure(cfg.heads, ThermalFitConfig{}, error)) {
+      thermal_.reset();
+      return false;
+    }
+  }
+  configured_ = true;
+  return true;
+}
+
+void CalibrationFeed::pushHeads(const core::HeadEpoch& e) {
+  if (!configured_ || finished_) return;
+  builder_.pushHeads(e);
+  if (thermal_) thermal_->pushHeads(e);
+}
+
+void CalibrationFeed::pushAcc(TimeUs t, const Vec3& a_A) {
+  if (!configured_ || finished_) return;
+  builder_.pushAcc(t, a_A);
+}
+
+void CalibrationFeed::pushOrbit(const model::OrbitSample& o) {
+  if (!configured_ || finished_ || !thermal_) return;
+  thermal_->pushOrbit(o);
+  ++orbit_samples_;
+}
+
+void CalibrationFeed::finish() {
+  if (!configured_ || finished_) return;
+  builder_.finish();
+  finished_ = true;
+}
+
+// ------------------------------------------------------------------------------------------------
+CalibrationRun runCalibration(CalibrationFeed& feed, const RunOptions& o) {
+  CalibrationRun run;
+  feed.finish();
+  const CalibrationSpan& span = feed.span();
+  const SpanOptions& spo = feed.spanOptions();
+  // What a refused span would need: the CRN's length (the calibration CRN when one is given) and the
+  // bound's span at the planning excitation and at the span's own.
+  core::PipelineConfig need_cfg = feed.config();
+  if (spo.crn_bandwidth_hz > 0 && spo.crn_length_s > 0)
+    for (core::CrnConfig* c : {&need_cfg.crn_attitude, &need_cfg.crn_acc}) {
+      c->bandwidth_hz = spo.crn_bandwidth_hz;
+      c->length_s = spo.crn_length_s;
+    }
+  const double decimation = spo.decimation_s;
+  run.need = spanNeed(need_cfg, decimation, o.plan_excitation_radps2, o.plan_sigma_arcsec);
+  run.weakest_excitation_radps2 = weakestExcitation(span);
+  if (run.weakest_excitation_radps2 > 0)
+    run.need_own = spanNeed(need_cfg, decimation, run.weakest_excitation_radps2, o.plan_sigma_arcsec);
+  auto needText = [&](const SpanNeed& n, double excitation, const char* what) {
+    return "the Cramer-Rao bound needs about " + fmt("%.0f", n.observations) + " decorrelated observations (one per " +
+           fmt("%g", decimation) + " s) to reach " + fmt("%g", o.plan_sigma_arcsec) + "\" with " + fmt("%.2g", excitation) +
+           " rad/s^2 RMS excitation per axis (" + what + "; head noise through the CRN " +
+           fmt("%.2g", n.sigma_alpha_radps2) + " rad/s^2): at least " +
+           (n.bound_s < 86400.0 * 365 ? fmt("%.0f", n.bound_s) + " s (" + fmt("%.1f", n.bound_s / 3600) + " h)"
+                                      : fmt("%.2g", n.bound_s / (86400.0 * 365.25)) + " years");
+  };
+  const std::string plan_need = needText(run.need, o.plan_excitation_radps2, o.plan_excitation_name.c_str());
+
+  if (span.epochs_total == 0) {
+    const double span_s = span.head_epochs ? static_cast<double>(span.t_last - span.t_first) * 1e-6 : 0.0;
+    run.result.ok = false;
+    run.result.refusal = Refusal::kTooFewEpochs;
+    run.result.message = "the span is too short (" + fmt("%.1f", span_s) +
+                         " s of head data, no CRN angular acceleration in it)";
+    run.refusal_text = "refused: " + run.result.message +
+                       ".\nNeeded: the CRN gives an angular acceleration only with Tf = " + fmt("%.1f", run.need.crn_s) +
+                       " s of head and accelerometer data centred on it; " + plan_need + " of excited data.";
+    return run;
+  }
+
+  run.result = solve(span, o.solve);
+  // From the moments the solver reports no epochs (it counts kept observations): the span made them.
+  if (run.result.ok && run.result.epochs == 0) run.result.epochs = static_cast<std::size_t>(span.epochs_total);
+  if (!run.result.ok) {
+    // What the bound needs is said for the refusals about the data's length or excitation; other
+    // refusals (a head never seen with the others, ...) carry their own remedy.
+    const Refusal why = run.result.refusal;
+    run.refusal_text = "refused: " + run.result.message;
+    if (why == Refusal::kTooFewEpochs || why == Refusal::kTooQuiet)
+      run.refusal_text += "\nNeeded: " + plan_need + "; at this span's weakest-axis excitation " +
+                          (run.weakest_excitation_radps2 > 0
+                               ? needText(run.need_own, run.weakest_excitation_radps2, "this span")
+                               : std::string("(none)")) +
+                          ".";
+    return run;
+  }
+  run.ok = true;
+  if (o.thermal_fit && feed.thermal() && feed.orbitSamples() > 0) {
+    run.thermal = feed.thermal()->fit();
+    run.thermal_fitted = true;
+  }
+  return run;
+}
+
+}  // namespace boresight::calib

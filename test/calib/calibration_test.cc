@@ -1,0 +1,229 @@
+// Method A's orchestration (calib/calibration.h): the feed, the run, the refusal advice - the steps
+// `boresight calibrate` and the node's worker share.
+#include "synthetic.h"
+
+#include <boresight/calib/calibration.h>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace boresight::calib {
+namespace {
+
+using synth::manoeuvreCase;
+
+SpanOptions spanOptions(const synth::Config& c) {
+  SpanOptions so;
+  so.decimation_s = c.decimation_s;
+  so.acc_white_noise_radps2 = c.acc_white;
+  return so;
+}
+
+/// The synthetic data through a feed configured as synth::generate configures a span builder.
+void feed(const synth::Config& c, CalibrationFeed& f, bool finish = true) {
+  std::string err;
+  ASSERT_TRUE(f.configure(synth::pipelineConfig(c), spanOptions(c), false, &err)) << err;
+  synth::stream(c, f);
+  if (finish) f.finish();
+}
+
+TEST(SpanNeed, CrnNoiseAndTheBoundsScaling) {
+  core::PipelineConfig cfg;
+  cfg.heads.n_heads = 2;
+  cfg.heads.head[0].sigma_cross_rad = 6.0 * kRadPerArcsec;
+  cfg.heads.head[1].sigma_cross_rad = 9.0 * kRadPerArcsec;
+  const auto n = spanNeed(cfg, 10.0, 5e-5, 30.0);
+  // The CRN length, and the head noise through the second-derivative kernel against the ideal
+  // band-limited differentiator: white noise of variance s^2 at fs through (2 pi f)^2 up to B gives
+  // s^2 (2 pi)^4 2 B^5 / (5 fs); the CRN's gentle edge keeps it within a few ten per cent.
+  EXPECT_NEAR(n.crn_s, cfg.crn_attitude.length_s, 0.5);
+  const double s = 6.0 * kRadPerArcsec, B = cfg.crn_attitude.bandwidth_hz, fs = cfg.crn_attitude.fs_hz;
+  const double ideal = s * std::sqrt(std::pow(2 * kPi, 4) * 2 * std::pow(B, 5) / (5 * fs));
+  EXPECT_NEAR(n.sigma_alpha_radps2 / ideal, 1.0, 0.3) << n.sigma_alpha_radps2 << " vs " << ideal;
+  // N ~ (sigma_alpha / (excitation target))^2: twice the excitation or twice the target, a quarter.
+  const auto n2 = spanNeed(cfg, 10.0, 1e-4, 30.0), n3 = spanNeed(cfg, 10.0, 5e-5, 60.0);
+  EXPECT_NEAR(n2.observations / n.observations, 0.25, 0.01);
+  EXPECT_NEAR(n3.observations / n.observations, 0.25, 0.01);
+  EXPECT_NEAR(n.bound_s, n.crn_s + n.observations * 10.0, 1e-6);
+}
+
+// The run adds nothing to the solver's answer: the same estimate, covariance and epochs as solve() on
+// the same span, from the epochs and from the moments (where the epochs are the span's count).
+TEST(RunCalibration, SolvedSpanIsTheSolversResult) {
+  const synth::Config c = manoeuvreCase(3);
+  CalibrationFeed f;
+  feed(c, f);
+  RunOptions o;
+  const CalibrationRun run = runCalibration(f, o);
+  ASSERT_TRUE(run.ok) << run.refusal_text;
+  EXPECT_TRUE(run.refusal_text.empty());
+  const SolveResult direct = solve(f.span(), o.solve);
+  ASSERT_TRUE(direct.ok);
+  for (int h = 0; h < c.n_heads; ++h)
+    EXPECT_EQ(run.result.estimate.r_S[std::size_t(h)], direct.estimate.r_S[std::size_t(h)]) << h;
+  EXPECT_EQ(run.result.covariance_arcsec2, direct.covariance_arcsec2);
+  EXPECT_EQ(run.result.epochs, direct.epochs);
+  // The truth within 4 sigma on every axis (the orchestration hands the span over whole).
+  for (int h = 0; h < c.n_heads; ++h)
+    for (int a = 0; a < 3; ++a) {
+      const auto& hr = run.result.heads[std::size_t(h)];
+      ASSERT_TRUE(hr.sigma_arcsec[std::size_t(a)].has_value());
+      EXPECT_LT(std::abs(hr.error_angles_arcsec[std::size_t(a)] - c.truth.r_S[std::size_t(h)][a] / kRadPerArcsec),
+                4 * *hr.sigma_arcsec[std::size_t(a)])
+          << "head " << h << " axis " << a;
+    }
+  EXPECT_FALSE(run.thermal_fitted);  // no thermal collection asked
+
+  // From the moments only: the solver counts no kept observation, the run gives the span's epochs.
+  CalibrationFeed fm;
+  std::string err;
+  SpanOptions so = spanOptions(c);
+  so.keep_observations = false;
+  ASSERT_TRUE(fm.configure(synth::pipelineConfig(c), so, false, &err)) << err;
+  synth::stream(c, fm);
+  RunOptions om;
+  om.solve.from_moments = true;
+  const CalibrationRun rm = runCalibration(fm, om);  // the run finishes the feed itself
+  ASSERT_TRUE(rm.ok) << rm.refusal_text;
+  EXPECT_TRUE(fm.finished());
+  EXPECT_EQ(rm.result.epochs, static_cast<std::size_t>(fm.span().epochs_total));
+  EXPECT_GT(rm.result.epochs, 300u);
+}
+
+// A span shorter than the CRN: refused without a solve, with the CRN's length and the bound's span at
+// the planning excitation named.
+TEST(RunCalibration, SpanShorterThanTheCrnSaysWhatIsNeeded) {
+  synth::Config c = manoeuvreCase(4);
+  c.duration_s = 16;  // the real Level-1 excerpts' length
+  CalibrationFeed f;
+  feed(c, f);
+  ASSERT_EQ(f.span().epochs_total, 0u);
+  RunOptions o;
+  o.plan_excitation_name = "--plan-excitation";
+  const CalibrationRun run = runCalibration(f, o);
+  EXPECT_FALSE(run.ok);
+  EXPECT_EQ(run.result.refusal, Refusal::kTooFewEpochs);
+  EXPECT_EQ(run.result.iterations, 0);  // never handed to the solver
+  EXPECT_NE(run.refusal_text.find("refused: the span is too short (15.5 s of head data"), std::string::npos)
+      << run.refusal_text;
+  const SpanNeed n = spanNeed(synth::pipelineConfig(c), c.decimation_s, o.plan_excitation_radps2, o.plan_sigma_arcsec);
+  char tf[64];
+  std::snprintf(tf, sizeof tf, "Tf = %.1f s", n.crn_s);
+  EXPECT_NE(run.refusal_text.find(tf), std::string::npos) << run.refusal_text;
+  EXPECT_NE(run.refusal_text.find("(--plan-excitation;"), std::string::npos) << run.refusal_text;
+  EXPECT_DOUBLE_EQ(run.need.bound_s, n.bound_s);
+}
+
+// A quiet span: the solver's refusal with the bound's span at this span's own weakest-axis excitation,
+// which is the RMS about the mean of the accelerometer's CRN angular acceleration in B, weakest axis -
+// checked here from the kept observations themselves.
+TEST(RunCalibration, QuietSpanAdviceUsesItsOwnWeakestExcitation) {
+  synth::Config c = manoeuvreCase(8);
+  c.manoeuvres.clear();
+  c.duration_s = 1800;
+  CalibrationFeed f;
+  feed(c, f);
+  const CalibrationRun run = runCalibration(f, RunOptions{});
+  EXPECT_FALSE(run.ok);
+  EXPECT_EQ(run.result.refusal, Refusal::kTooQuiet);
+  EXPECT_NE(run.refusal_text.find("\nNeeded: the Cramer-Rao bound needs about"), std::string::npos) << run.refusal_text;
+  EXPECT_NE(run.refusal_text.find("at this span's weakest-axis excitation the Cramer-Rao bound"), std::string::npos)
+      << run.refusal_text;
+  // The weakest axis from the observations (every epoch is kept: no max_observations).
+  const auto& obs = f.span().obs;
+  ASSERT_EQ(obs.size(), f.span().epochs_total);
+  Vec3 mean = Vec3::Zero();
+  for (const auto& o : obs) mean += f.span().C_B_A * o.alpha_A;
+  mean /= static_cast<double>(obs.size());
+  Vec3 var = Vec3::Zero();
+  for (const auto& o : obs) var += (f.span().C_B_A * o.alpha_A - mean).cwiseAbs2();
+  var /= static_cast<double>(obs.size());
+  const double weakest = std::sqrt(var.minCoeff());
+  EXPECT_NEAR(run.weakest_excitation_radps2 / weakest, 1.0, 1e-6);
+  // Quieter than the plan, so it needs a longer span than the plan's.
+  EXPECT_LT(run.weakest_excitation_radps2, RunOptions{}.plan_excitation_radps2);
+  EXPECT_GT(run.need_own.bound_s, run.need.bound_s);
+}
+
+// A refusal that is not about the span's length or excitation carries the solver's own remedy only.
+TEST(RunCalibration, OtherRefusalsHaveNoSpanAdvice) {
+  synth::Config c = manoeuvreCase(12);
+  c.blind.push_back({2, 0.0, 1e9});  // head 3 never delivers: never seen with the others
+  CalibrationFeed f;
+  feed(c, f);
+  const CalibrationRun run = runCalibration(f, RunOptions{});
+  ASSERT_FALSE(run.ok);
+  EXPECT_EQ(run.result.refusal, Refusal::kHeadsNotLinked) << refusalName(run.result.refusal);
+  EXPECT_EQ(run.refusal_text, "refused: " + run.result.message);
+}
+
+// A copy of a feed is a snapshot: the node's worker solves the copy while the original keeps taking
+// data. The copy's run equals a feed given only the data up to the copy; the original's equals a feed
+// given all of it.
+TEST(CalibrationFeed, CopyIsAnIndependentSnapshot) {
+  const synth::Config c = manoeuvreCase(5);
+  synth::Config first = c;
+  first.duration_s = 2700;
+  // All of c's data, the copy taken once the first 2700 s are in.
+  struct Splitter {
+    CalibrationFeed& f;
+    TimeUs cut;
+    std::unique_ptr<CalibrationFeed> snap;
+    void pushHeads(const core::HeadEpoch& e) {
+      take(e.t);
+      f.pushHeads(e);
+    }
+    void pushAcc(TimeUs t, const Vec3& a) {
+      take(t);
+      f.pushAcc(t, a);
+    }
+    void take(TimeUs t) {
+      if (!snap && t >= cut) snap = std::make_unique<CalibrationFeed>(f);
+    }
+  };
+  CalibrationFeed whole;
+  std::string err;
+  ASSERT_TRUE(whole.configure(synth::pipelineConfig(c), spanOptions(c), false, &err)) << err;
+  Splitter sp{whole, c.t0 + static_cast<TimeUs>(2700e6), nullptr};
+  synth::stream(c, sp);
+  ASSERT_TRUE(sp.snap);
+  CalibrationFeed early, full;
+  feed(first, early, false);
+  feed(c, full, false);
+  const CalibrationRun r_snap = runCalibration(*sp.snap, RunOptions{}), r_early = runCalibration(early, RunOptions{});
+  const CalibrationRun r_whole = runCalibration(whole, RunOptions{}), r_full = runCalibration(full, RunOptions{});
+  ASSERT_TRUE(r_snap.ok && r_early.ok && r_whole.ok && r_full.ok) << r_snap.refusal_text << r_early.refusal_text;
+  EXPECT_EQ(sp.snap->span().head_epochs, early.span().head_epochs);
+  EXPECT_LT(sp.snap->span().head_epochs, whole.span().head_epochs);
+  for (int h = 0; h < c.n_heads; ++h) {
+    EXPECT_EQ(r_snap.result.estimate.r_S[std::size_t(h)], r_early.result.estimate.r_S[std::size_t(h)]) << h;
+    EXPECT_EQ(r_whole.result.estimate.r_S[std::size_t(h)], r_full.result.estimate.r_S[std::size_t(h)]) << h;
+  }
+  EXPECT_NE(r_snap.result.estimate.r_S[0], r_whole.result.estimate.r_S[0]);
+}
+
+// A configuration the span builder cannot run is refused when the feed is configured, with the reason
+// (the node says it at start-up), and a feed not configured takes nothing.
+TEST(CalibrationFeed, ConfigurationRefusedAtConfigure) {
+  synth::Config c = manoeuvreCase(6);
+  CalibrationFeed f;
+  std::string err;
+  SpanOptions so = spanOptions(c);
+  so.decimation_s = 0.2;  // below the 2 Hz heads' interval
+  EXPECT_FALSE(f.configure(synth::pipelineConfig(c), so, false, &err));
+  EXPECT_NE(err.find("decimation_s must be at least the head sampling interval"), std::string::npos) << err;
+  EXPECT_FALSE(f.configured());
+  core::HeadEpoch e;
+  e.t = c.t0;
+  f.pushHeads(e);
+  EXPECT_EQ(f.span().head_epochs, 0u);
+  // The thermal collection needs two heads.
+  c.n_heads = 1;
+  EXPECT_FALSE(f.configure(synth::pipelineConfig(c), spanOptions(c), true, &err));
+  EXPECT_FALSE(err.empty());
+  EXPECT_TRUE(f.configure(synth::pipelineConfig(c), spanOptions(c), false, &err)) << err;
+}
+
+}  // namespace
+}  // namespace boresight::calib
