@@ -94,7 +94,8 @@ void encodeHealth(TimeUs t, std::int32_t seq, const Counters& c, const LatencySu
   h.seq = seq;
   h.received = toI64(c.received);
   h.used = toI64(c.used);
-  for (int r = 0; r < kReasonCount; ++r) h.rejected[r] = toI64(c.rejected[static_cast<std::size_t>(r)]);
+  // The first 16 reasons: all the node counts (node.cc asserts it); the rest are the replay engine's.
+  for (int r = 0; r < 16 && r < kRejectCount; ++r) h.rejected[r] = toI64(c.rejected[static_cast<std::size_t>(r)]);
   h.lost = toI64(c.lost);
   h.epochs = toI64(c.head_epochs + c.accel_steps);
   h.calibrations_published = static_cast<int32_t>(c.calibrations_published);

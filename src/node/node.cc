@@ -35,32 +35,13 @@ using core::kMaxPairs;
 using core::quatExp;
 using core::quatLog;
 
-const char* reasonName(Reason r) {
-  switch (r) {
-    case Reason::kUndecodable: return "undecodable";
-    case Reason::kInvalidFlag: return "invalid_flag";
-    case Reason::kNonFinite: return "non_finite";
-    case Reason::kNonUnit: return "non_unit";
-    case Reason::kUnknownHead: return "unknown_head";
-    case Reason::kDuplicate: return "duplicate";
-    case Reason::kLate: return "late";
-    case Reason::kTimeJump: return "time_jump";
-    case Reason::kFlood: return "flood";
-    case Reason::kNoMountings: return "no_mountings";
-    case Reason::kOtherChannel: return "other_channel";
-    case Reason::kAssembler: return "assembler";
-    case Reason::kImplausible: return "implausible";
-    case Reason::kCommand: return "command";
-    case Reason::kNoConsumer: return "no_consumer";
-    case Reason::kOtherVersion: return "other_version";
-    case Reason::kCount: break;
-  }
-  return "?";
-}
 
 namespace {
 
-static_assert(kReasonCount <= 16, "node_health_t.rejected has 16 entries");
+// node_health_t.rejected has 16 entries: every reason the node counts is among the first 16 (what its
+// assembler refuses, too many heads or stars included, it counts as kAssembler or drops as stars).
+static_assert(static_cast<int>(Reject::kOtherVersion) < 16 && static_cast<int>(Reject::kTooManyHeads) >= 16,
+              "node_health_t.rejected has 16 entries, in io::Reject's order");
 static_assert(core::kStatusCount <= 20, "node_health_t.core_status has 20 entries");
 static_assert(core::kMaxHeads == 4 && core::kMaxPairs == 6, "the output types are sized for 4 heads");
 
@@ -230,7 +211,7 @@ struct Node::Impl {
   }
 
   // ---------------------------------------------------------------------------------------------
-  void reject(Reason r) { ++c.rejected[static_cast<std::size_t>(r)]; }
+  void reject(Reject r) { ++c.rejected[static_cast<std::size_t>(r)]; }
 
   SequenceCounts seqc;  ///< lost and restarts over every channel (channel_gate.h)
   void seqCheck(ChannelGate& s, std::int32_t seq) {
@@ -244,7 +225,7 @@ struct Node::Impl {
   struct GateSink final : TimeGate::Sink {
     Impl* m = nullptr;
     void pass(ChannelGate& ch, const stream::Sample* xs, int n, TimeUs t) override { m->pass(ch, xs, n, t); }
-    void refuse(bool late) override { m->reject(late ? Reason::kLate : Reason::kTimeJump); }
+    void refuse(bool late) override { m->reject(late ? Reject::kLate : Reject::kTimeJump); }
     TimeUs handedOut() const override { return m->emitted ? m->last_emit_t : std::numeric_limits<TimeUs>::min(); }
     void restart() override { m->resyncBack(); }
   } gate_sink;
@@ -257,20 +238,20 @@ struct Node::Impl {
 
   /// The checks after the time gate (duplicate, late, flood), then the samples to the assembler.
   void pass(ChannelGate& s, const stream::Sample* xs, int n, TimeUs t) {
-    if (s.duplicate(t)) return reject(Reason::kDuplicate);
+    if (s.duplicate(t)) return reject(Reject::kDuplicate);
     const stream::Sample::Kind kind = xs[0].kind;
     // A head epoch at the last handed-out tag is late (its epoch is gone); an accelerometer sample may
     // share it, a star epoch only after a head or accelerometer step.
     const bool head_like = kind == stream::Sample::Kind::kHead ||
                            (kind == stream::Sample::Kind::kStar && last_emit_kind == stream::Sample::Kind::kStar);
-    if (emitted && (t < last_emit_t || (t == last_emit_t && head_like))) return reject(Reason::kLate);
+    if (emitted && (t < last_emit_t || (t == last_emit_t && head_like))) return reject(Reject::kLate);
     const double max_hz = kind == stream::Sample::Kind::kHead || kind == stream::Sample::Kind::kOrbit ? cfg.max_head_rate_hz
                           : kind == stream::Sample::Kind::kAccel                                        ? cfg.max_accel_rate_hz
                                                                                                         : cfg.max_star_rate_hz;
-    if (s.flooded(t, max_hz)) return reject(Reason::kFlood);
+    if (s.flooded(t, max_hz)) return reject(Reject::kFlood);
     for (int i = 0; i < n; ++i) {
       if (!src.push(xs[i])) {
-        if (kind != stream::Sample::Kind::kStar) return reject(Reason::kAssembler);
+        if (kind != stream::Sample::Kind::kStar) return reject(Reject::kAssembler);
         ++stars_dropped_push;
         continue;
       }
@@ -307,16 +288,16 @@ struct Node::Impl {
   bool checked(const io::InputMessage& m) {
     switch (io::checkInput(m, pcfg.heads.unit_norm_tolerance)) {
       case io::InputFault::kNone: return true;
-      case io::InputFault::kInvalidFlag: reject(Reason::kInvalidFlag); return false;
-      case io::InputFault::kNonFinite: reject(Reason::kNonFinite); return false;
-      case io::InputFault::kNonUnit: reject(Reason::kNonUnit); return false;
-      case io::InputFault::kImplausible: reject(Reason::kImplausible); return false;
+      case io::InputFault::kInvalidFlag: reject(Reject::kInvalidFlag); return false;
+      case io::InputFault::kNonFinite: reject(Reject::kNonFinite); return false;
+      case io::InputFault::kNonUnit: reject(Reject::kNonUnit); return false;
+      case io::InputFault::kImplausible: reject(Reject::kImplausible); return false;
     }
     return false;
   }
   /// Bytes the channel's decoder refused: another layout of its type, or damaged / another type.
-  static Reason undecodable(const char* type, const void* data, int size) {
-    return io::isOtherVersion(type, data, size) ? Reason::kOtherVersion : Reason::kUndecodable;
+  static Reject undecodable(const char* type, const void* data, int size) {
+    return io::isOtherVersion(type, data, size) ? Reject::kOtherVersion : Reject::kMalformed;
   }
   io::InputMessage msg{};  ///< the message being handled (decodeInput writes it; no allocation)
 
@@ -324,10 +305,10 @@ struct Node::Impl {
     if (!io::decodeInput(io::InputKind::kHead, data, size, msg)) return reject(undecodable(io::inputTypeName(io::InputKind::kHead), data, size));
     const io::HeadSample& m = msg.head;
     const int slot = slotOf(m.head_id);
-    if (slot < 0) return reject(Reason::kUnknownHead);
+    if (slot < 0) return reject(Reject::kUnknownHead);
     ChannelGate& s = ch_head[static_cast<std::size_t>(slot)];
     seqCheck(s, m.seq);
-    if (!core_ready) return reject(Reason::kNoMountings);
+    if (!core_ready) return reject(Reject::kNoMountings);
     if (!checked(msg)) return;
     stream::Sample x;
     x.kind = stream::Sample::Kind::kHead;
@@ -341,7 +322,7 @@ struct Node::Impl {
     if (!io::decodeInput(io::InputKind::kAccel, data, size, msg)) return reject(undecodable(io::inputTypeName(io::InputKind::kAccel), data, size));
     const io::AccelSample& m = msg.accel;
     seqCheck(ch_acc, m.seq);
-    if (!core_ready) return reject(Reason::kNoMountings);
+    if (!core_ready) return reject(Reject::kNoMountings);
     if (!checked(msg)) return;
     stream::Sample x;
     x.kind = stream::Sample::Kind::kAccel;
@@ -355,8 +336,8 @@ struct Node::Impl {
     const io::StarVectors& m = msg.stars;
     seqCheck(ch_stars_seq, m.seq);
     const int slot = slotOf(m.head_id);
-    if (slot < 0) return reject(Reason::kUnknownHead);
-    if (!core_ready) return reject(Reason::kNoMountings);
+    if (slot < 0) return reject(Reject::kUnknownHead);
+    if (!core_ready) return reject(Reject::kNoMountings);
     if (!checked(msg)) return;
     std::array<stream::Sample, io::StarVectors::kCapacity> xs;
     for (int i = 0; i < m.n_stars; ++i) {
@@ -380,10 +361,10 @@ struct Node::Impl {
       if ((cfg.overlay_mounting_mask >> k) & 1u) continue;  // the overlay's mounting stays
       int j = 0;
       while (j < m.n_heads && m.head_id[j] != h.id) ++j;
-      if (j == m.n_heads) return reject(Reason::kUnknownHead);
+      if (j == m.n_heads) return reject(Reject::kUnknownHead);
       const Quat q(m.q_Si_B[j][0], m.q_Si_B[j][1], m.q_Si_B[j][2], m.q_Si_B[j][3]);
-      if (!q.coeffs().allFinite()) return reject(Reason::kNonFinite);
-      if (std::abs(q.norm() - 1) > 1e-6) return reject(Reason::kNonUnit);
+      if (!q.coeffs().allFinite()) return reject(Reject::kNonFinite);
+      if (std::abs(q.norm() - 1) > 1e-6) return reject(Reject::kNonUnit);
       h.q_Si_B = q.normalized();
     }
     if (core_ready) {
@@ -402,7 +383,7 @@ struct Node::Impl {
       return;
     }
     pcfg = p;
-    if (!startCore()) return reject(Reason::kInvalidFlag);
+    if (!startCore()) return reject(Reject::kInvalidFlag);
     ++c.used;
   }
 
@@ -456,8 +437,8 @@ struct Node::Impl {
     const io::OrbitSample& o = msg.orbit;
     seqCheck(ch_orbit, o.seq);
     if (!checked(msg)) return;
-    if (!cfg.thermal_model) return reject(Reason::kNoConsumer);  // the orbit feeds the thermal prediction only
-    if (!core_ready) return reject(Reason::kNoMountings);
+    if (!cfg.thermal_model) return reject(Reject::kNoConsumer);  // the orbit feeds the thermal prediction only
+    if (!core_ready) return reject(Reject::kNoMountings);
     stream::Sample x;
     x.kind = stream::Sample::Kind::kOrbit;
     x.t = o.utime;
@@ -575,7 +556,7 @@ struct Node::Impl {
     // Samples the assembler refused, moved from used: kLate and kTooManyHeads (kAssembler), a tag far
     // from its neighbours (kTimeJump), the same head twice at a tag (kDuplicate).
     const auto& ac = asm_->counters();
-    auto take = [&](std::uint64_t now_count, std::uint64_t& seen, Reason r) {
+    auto take = [&](std::uint64_t now_count, std::uint64_t& seen, Reject r) {
       if (now_count <= seen) return;
       c.used -= now_count - seen;
       c.rejected[static_cast<std::size_t>(r)] += now_count - seen;
@@ -583,9 +564,9 @@ struct Node::Impl {
     };
     take(ac.rejected[static_cast<std::size_t>(stream::Reject::kLate)] +
              ac.rejected[static_cast<std::size_t>(stream::Reject::kTooManyHeads)],
-         asm_refused, Reason::kAssembler);
-    take(ac.rejected[static_cast<std::size_t>(stream::Reject::kTimeOutlier)], asm_outliers, Reason::kTimeJump);
-    take(ac.rejected[static_cast<std::size_t>(stream::Reject::kDuplicate)], asm_duplicates, Reason::kDuplicate);
+         asm_refused, Reject::kAssembler);
+    take(ac.rejected[static_cast<std::size_t>(stream::Reject::kTimeJump)], asm_outliers, Reject::kTimeJump);
+    take(ac.rejected[static_cast<std::size_t>(stream::Reject::kDuplicate)], asm_duplicates, Reject::kDuplicate);
     c.stars_dropped = stars_dropped_push + ac.rejected[static_cast<std::size_t>(stream::Reject::kTooManyStars)];
   }
   std::uint64_t asm_refused = 0, asm_outliers = 0, asm_duplicates = 0, stars_dropped_push = 0;
@@ -762,14 +743,14 @@ struct Node::Impl {
     boresight_lcm::node_command_t m;
     if (m.decode(data, 0, size) != size) return reject(undecodable("node_command_t", data, size));
     seqCheck(ch_cmd, m.seq);
-    if (!core_ready) return reject(Reason::kNoMountings);
+    if (!core_ready) return reject(Reject::kNoMountings);
     if (m.command == 1) {
-      if (!held_cal.have || (m.calibration_utime != 0 && m.calibration_utime != held_cal.msg.utime)) return reject(Reason::kCommand);
+      if (!held_cal.have || (m.calibration_utime != 0 && m.calibration_utime != held_cal.msg.utime)) return reject(Reject::kCommand);
     } else if (m.command == 2) {
       if (m.calibration_id <= 0 || static_cast<std::uint64_t>(m.calibration_id) != mounting_version || n_history == 0)
-        return reject(Reason::kCommand);
+        return reject(Reject::kCommand);
     } else {
-      return reject(Reason::kCommand);
+      return reject(Reject::kCommand);
     }
     pending_cmd = m.command;
     ++c.used;
@@ -1052,21 +1033,21 @@ void Node::onMessage(const std::string& ch, const void* data, int size) {
   if (!m.configured || m.finished) return;
   ++m.c.received;
   const Channels& c = m.cfg.channels;
-  if (size < 0) m.reject(Reason::kUndecodable);
+  if (size < 0) m.reject(Reject::kMalformed);
   else if (ch == c.star_head) m.onHead(data, size);
   else if (ch == c.accel) m.onAccel(data, size);
   else if (ch == c.star_vectors) m.onStars(data, size);
   else if (ch == c.mountings) m.onMountings(data, size);
   else if (ch == c.orbit) m.onOrbit(data, size);
   else if (ch == c.command) m.onCommand(data, size);
-  else m.reject(Reason::kOtherChannel);
+  else m.reject(Reject::kOtherChannel);
 }
 
 void Node::onGarbage() {
   Impl& m = *impl_;
   if (!m.configured || m.finished) return;
   ++m.c.received;
-  m.reject(Reason::kUndecodable);
+  m.reject(Reject::kMalformed);
 }
 
 void Node::finish() {

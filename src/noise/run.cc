@@ -439,7 +439,7 @@ bool runNoise(const NoiseRequest& req, NoiseOutput& out, std::string* error) {
     std::string s = engine.source(i).name() + ": " + std::to_string(c.read) + " read, " + std::to_string(c.used()) + " used";
     for (int r = 0; r < stream::kRejectCount; ++r)
       if (c.rejected[static_cast<std::size_t>(r)])
-        s += ", " + std::to_string(c.rejected[static_cast<std::size_t>(r)]) + " " + stream::rejectName(stream::Reject(r));
+        s += ", " + std::to_string(c.rejected[static_cast<std::size_t>(r)]) + " " + io::rejectText(stream::Reject(r));
     out.sources.push_back(s);
     const auto issues = engine.source(i).issues();
     for (std::size_t k = 0; k < issues.size() && k < 5; ++k) out.sources.push_back("    rejected " + issues[k]);

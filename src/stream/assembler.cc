@@ -73,7 +73,7 @@ void EpochAssembler::admit(std::size_t i, const Sample& s) {
       const Sample h = ss.held[0];
       ss.n_held = 0;
       if (dist(s.t, h.t) <= dist(s.t, ss.frontier)) enqueue(i, h);
-      else reject(i, Reject::kTimeOutlier);
+      else reject(i, Reject::kTimeJump);
     } else if (ss.n_held == 1) {
       // The source's first sample: confirmed by a second one near it; otherwise both wait for a third.
       if (dist(s.t, ss.held[0].t) > W) {
@@ -93,11 +93,11 @@ void EpochAssembler::admit(std::size_t i, const Sample& s) {
         enqueue(i, a);
         enqueue(i, b);
       } else if (dist(s.t, b.t) <= dist(s.t, a.t)) {
-        reject(i, Reject::kTimeOutlier);
+        reject(i, Reject::kTimeJump);
         enqueue(i, b);
       } else {
         enqueue(i, a);
-        reject(i, Reject::kTimeOutlier);
+        reject(i, Reject::kTimeJump);
       }
     }
   }
@@ -124,7 +124,7 @@ void EpochAssembler::settle(std::size_t i) {
   if (!ss.have_frontier) {
     for (int k = 0; k < ss.n_held; ++k) enqueue(i, ss.held[k]);  // nothing contradicts them
   } else {
-    for (int k = 0; k < ss.n_held; ++k) reject(i, Reject::kTimeOutlier);  // a jump nothing confirmed
+    for (int k = 0; k < ss.n_held; ++k) reject(i, Reject::kTimeJump);  // a jump nothing confirmed
   }
   ss.n_held = 0;
 }
@@ -173,7 +173,7 @@ bool EpochAssembler::fill(Out& out) {
     emitted_ = false;
     for (std::size_t i = 0; i < src_.size(); ++i) {
       SourceState& ss = src_[i];
-      for (int k = 0; k < ss.n_held; ++k) reject(i, Reject::kTimeOutlier);
+      for (int k = 0; k < ss.n_held; ++k) reject(i, Reject::kTimeJump);
       ss.n_held = 0;
       ss.have_frontier = false;
       ss.step = 0;
@@ -232,7 +232,7 @@ EpochAssembler::Out EpochAssembler::next(core::HeadEpoch& epoch, TimeUs& t, Vec3
   pop(it);
   // Inputs nobody here takes: counted, never handed out.
   while ((it.s.kind == Sample::Kind::kStar && stars == nullptr) || (it.s.kind == Sample::Kind::kOrbit && orbit == nullptr)) {
-    reject(it.src, it.s.kind == Sample::Kind::kStar ? Reject::kNoStarConsumer : Reject::kNoOrbitConsumer);
+    reject(it.src, it.s.kind == Sample::Kind::kStar ? Reject::kNoConsumer : Reject::kNoConsumer);
     if (!fill(o)) return o;
     if (heap_.empty()) return Out::kEnd;
     pop(it);

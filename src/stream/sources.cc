@@ -11,25 +11,6 @@
 
 namespace boresight::stream {
 
-const char* rejectName(Reject r) {
-  switch (r) {
-    case Reject::kMalformed: return "malformed (reader)";
-    case Reject::kInvalid: return "flagged invalid";
-    case Reject::kNoAngular: return "no angular acceleration";
-    case Reject::kOtherChannel: return "other LCM channel";
-    case Reject::kLate: return "late (beyond look-ahead)";
-    case Reject::kTooManyHeads: return "more heads than kMaxHeads";
-    case Reject::kTooManyStars: return "more star vectors than kMaxStarInputs";
-    case Reject::kNoStarConsumer: return "star vector (not used here)";
-    case Reject::kImplausible: return "implausible value";
-    case Reject::kTimeOutlier: return "time tag far from its neighbours";
-    case Reject::kDuplicate: return "duplicate (same head, same tag)";
-    case Reject::kNoOrbitConsumer: return "orbit (no thermal model or fit here)";
-    case Reject::kOtherVersion: return "other layout of the message type (versions.txt)";
-    case Reject::kCount: break;
-  }
-  return "?";
-}
 
 bool hasLcmMagic(const std::string& path) {
   std::FILE* f = std::fopen(path.c_str(), "rb");
@@ -105,7 +86,7 @@ Source::Next Acc1aSource::next(Sample& out, Reject& why) {
   // The same fields and validity bits as the message (io::accelFromAcc1a).
   const io::AccelSample m = io::accelFromAcc1a(rec_, 0);
   if (!(m.flags & 1) && !keep_without_angular_) {
-    why = Reject::kNoAngular;
+    why = Reject::kInvalidFlag;
     return Next::kRejected;
   }
   out.kind = Sample::Kind::kAccel;
@@ -178,18 +159,14 @@ Source::Next LcmLogSource::next(Sample& out, Reject& why) {
                                                 : Reject::kOtherChannel;
     return Next::kRejected;
   }
-  // The node's rule (io::checkInput), in the replay's coarser reasons.
+  // The node's rule (io::checkInput) and its reasons.
   const io::InputMessage& m = r_->message();
   switch (io::checkInput(m, quat_tol_)) {
     case io::InputFault::kNone: break;
-    case io::InputFault::kInvalidFlag:
-      why = m.kind == io::InputKind::kAccel ? Reject::kNoAngular : Reject::kInvalid;
-      return Next::kRejected;
-    case io::InputFault::kNonFinite:
-    case io::InputFault::kNonUnit:
-    case io::InputFault::kImplausible:
-      why = Reject::kImplausible;
-      return Next::kRejected;
+    case io::InputFault::kInvalidFlag: why = Reject::kInvalidFlag; return Next::kRejected;
+    case io::InputFault::kNonFinite: why = Reject::kNonFinite; return Next::kRejected;
+    case io::InputFault::kNonUnit: why = Reject::kNonUnit; return Next::kRejected;
+    case io::InputFault::kImplausible: why = Reject::kImplausible; return Next::kRejected;
   }
   switch (m.kind) {
     case io::InputKind::kHead:

@@ -289,7 +289,7 @@ void fuzzSource(std::uint8_t mode, Product p) {
       ++malformed;
     } else if (why == boresight::stream::Reject::kImplausible) {  // the reader's gates (core/plausibility.h)
       ++implausible;
-    } else if (why == boresight::stream::Reject::kNoAngular) {
+    } else if (why == boresight::stream::Reject::kInvalidFlag) {
       ++no_angular;
     } else {
       ++other;
@@ -418,14 +418,15 @@ void fuzzLcmLog(std::string_view body, std::uint8_t mode) {
   if (c.read != events - star_msgs + star_vectors) fail("the source read a different number of events than the reader");
   if (c.read != c.used() + c.rejectedTotal()) fail("read != used + rejected");
   if (c.used() != out) fail("used != samples handed out");
-  if (rej(st::Reject::kInvalid) != heads_invalid + star_msgs_invalid) fail("invalid head or star messages miscounted");
-  if (rej(st::Reject::kNoAngular) != acc_invalid) fail("accelerometer messages without angular acceleration miscounted");
+  // Flagged invalid: head and star messages, accelerometer messages without angular acceleration.
+  if (rej(st::Reject::kInvalidFlag) != heads_invalid + star_msgs_invalid + acc_invalid)
+    fail("invalid messages (flags, no angular acceleration) miscounted");
   if (rej(st::Reject::kMalformed) != r.decodeFailures()) fail("undecodable events miscounted");
   if (rej(st::Reject::kOtherChannel) != r.unknownChannel()) fail("other-channel events miscounted");
-  // A sample whose flags say valid is used, or rejected as late, outside a plausibility gate, a time
-  // outlier of its source or the same head again at one tag: nothing else.
-  if (c.used() + rej(st::Reject::kLate) + rej(st::Reject::kImplausible) + rej(st::Reject::kTimeOutlier) +
-          rej(st::Reject::kDuplicate) !=
+  // A sample whose flags say valid is used, or rejected as late, non-finite, not unit, outside a
+  // plausibility gate, a time outlier of its source or the same head again at one tag: nothing else.
+  if (c.used() + rej(st::Reject::kLate) + rej(st::Reject::kNonFinite) + rej(st::Reject::kNonUnit) +
+          rej(st::Reject::kImplausible) + rej(st::Reject::kTimeJump) + rej(st::Reject::kDuplicate) !=
       heads_valid + acc_valid + star_vectors + star_msgs_bad + orbits)
     fail("valid samples lost");
 }

@@ -102,7 +102,7 @@ TEST(NodeEncode, HealthRecordsWallClockFiguresOnlyWhenGiven) {
   node::Counters c;
   c.received = 10;
   c.used = 7;
-  c.rejected[static_cast<std::size_t>(node::Reason::kLate)] = 3;
+  c.rejected[static_cast<std::size_t>(io::Reject::kLate)] = 3;
   c.head_epochs = 4;
   c.accel_steps = 2;
   c.ring_high_water = 99;
@@ -115,7 +115,7 @@ TEST(NodeEncode, HealthRecordsWallClockFiguresOnlyWhenGiven) {
   EXPECT_EQ(h.seq, 3);
   EXPECT_EQ(h.received, 10);
   EXPECT_EQ(h.used, 7);
-  EXPECT_EQ(h.rejected[static_cast<int>(node::Reason::kLate)], 3);
+  EXPECT_EQ(h.rejected[static_cast<int>(io::Reject::kLate)], 3);
   EXPECT_EQ(h.epochs, 6);
   EXPECT_EQ(h.core_status[1], 6);
   EXPECT_EQ(h.ring_high_water, 99);

@@ -370,7 +370,7 @@ TEST(OrbitThermal, AnLcmLogAndTheNodeGiveWhatTheLevel1ReplayGives) {
   EXPECT_EQ(log.counters.used_orbit, d.n_orbit);
   EXPECT_EQ(log.counters.rejectedTotal(), 0u);
   EXPECT_EQ(log_without.counters.used_orbit, 0u);
-  EXPECT_EQ(log_without.counters.rejected[static_cast<std::size_t>(stream::Reject::kNoOrbitConsumer)], d.n_orbit);
+  EXPECT_EQ(log_without.counters.rejected[static_cast<std::size_t>(stream::Reject::kNoConsumer)], d.n_orbit);
   EXPECT_EQ(log_without.counters.read, log_without.counters.used() + log_without.counters.rejectedTotal());
   // Same samples, same order: the same predictions (the text files round the quaternions, so not
   // bit for bit).
@@ -382,7 +382,7 @@ TEST(OrbitThermal, AnLcmLogAndTheNodeGiveWhatTheLevel1ReplayGives) {
   const NodeRun node = runNode(true);
   const NodeRun node_without = runNode(false);
   EXPECT_EQ(node.c.orbit_steps, d.n_orbit);
-  EXPECT_EQ(node.c.rejected[static_cast<std::size_t>(node::Reason::kNoConsumer)], 0u);
+  EXPECT_EQ(node.c.rejected[static_cast<std::size_t>(io::Reject::kNoConsumer)], 0u);
   EXPECT_EQ(node.c.received, node.c.used + [&] {
     std::uint64_t s = 0;
     for (auto v : node.c.rejected) s += v;
@@ -390,7 +390,7 @@ TEST(OrbitThermal, AnLcmLogAndTheNodeGiveWhatTheLevel1ReplayGives) {
   }());
   EXPECT_EQ(node.c.used, d.n_orbit + d.n_head_samples);
   EXPECT_EQ(node_without.c.orbit_steps, 0u);
-  EXPECT_EQ(node_without.c.rejected[static_cast<std::size_t>(node::Reason::kNoConsumer)], d.n_orbit);
+  EXPECT_EQ(node_without.c.rejected[static_cast<std::size_t>(io::Reject::kNoConsumer)], d.n_orbit);
   EXPECT_EQ(node_without.c.used, d.n_head_samples);
   // Its core ends in the state of the engine's on the same log: predicted, the same deformation.
   ASSERT_TRUE(node.last.predicted);

@@ -153,7 +153,7 @@ TEST(Assembler, MoreHeadsThanTheCoreTakesAreCounted) {
 }
 
 TEST(Assembler, RejectedRecordsPendingAndErrors) {
-  Step bad{Source::Next::kRejected, {}, stream::Reject::kNoAngular};
+  Step bad{Source::Next::kRejected, {}, stream::Reject::kInvalidFlag};
   Step pending{Source::Next::kPending, {}};
   ScriptSource a({head(1, 1), bad, pending, head(5, 1)});
   stream::EpochAssembler as;
@@ -164,7 +164,7 @@ TEST(Assembler, RejectedRecordsPendingAndErrors) {
   EXPECT_EQ(last, stream::EpochAssembler::Out::kPending);
   EXPECT_EQ(drain(as, &last), "H1:1 H5:1 ");
   EXPECT_EQ(last, stream::EpochAssembler::Out::kEnd);
-  EXPECT_EQ(as.counters().rejected[std::size_t(stream::Reject::kNoAngular)], 1u);
+  EXPECT_EQ(as.counters().rejected[std::size_t(stream::Reject::kInvalidFlag)], 1u);
   EXPECT_EQ(as.counters().read, 3u);
 
   ScriptSource b({head(1, 1), Step{Source::Next::kError, {}}});
@@ -194,7 +194,7 @@ TEST(Assembler, OrbitSamplesGoInTimeOrderLastAtTheirTagOrAreCountedWithoutAConsu
   EXPECT_EQ(c.read, c.used() + c.rejectedTotal());
   EXPECT_EQ(run(false, c), "H1:1 H2:1 A2 H3:1 A3.5 H4:1 ");
   EXPECT_EQ(c.used_orbit, 0u);
-  EXPECT_EQ(c.rejected[std::size_t(stream::Reject::kNoOrbitConsumer)], 3u);
+  EXPECT_EQ(c.rejected[std::size_t(stream::Reject::kNoConsumer)], 3u);
   EXPECT_EQ(c.read, c.used() + c.rejectedTotal());
   // nextSample() (convert) hands orbit samples out as kOrbit and counts them as used.
   ScriptSource o({orbitAt(1), orbitAt(2)});
@@ -327,7 +327,7 @@ TEST(AssemblerTimeBase, OneTagFarAheadCostsThatSampleNotTheLookAheadOfTheRest) {
   as.addSource(&b);
   const std::string out = drain(as);
   const auto& c = as.counters();
-  EXPECT_EQ(c.rejected[std::size_t(stream::Reject::kTimeOutlier)], 1u);
+  EXPECT_EQ(c.rejected[std::size_t(stream::Reject::kTimeJump)], 1u);
   EXPECT_EQ(c.rejected[std::size_t(stream::Reject::kLate)], 0u);
   EXPECT_EQ(c.used_heads, 359u);
   EXPECT_EQ(c.read, c.used() + c.rejectedTotal());
@@ -342,7 +342,7 @@ TEST(AssemblerTimeBase, AWrongFirstTagAndARealGapAreTold) {
   stream::EpochAssembler as;
   as.addSource(&a);
   EXPECT_EQ(drain(as), "H10:1 H10.5:1 H11:1 ");
-  EXPECT_EQ(as.counters().rejected[std::size_t(stream::Reject::kTimeOutlier)], 1u);
+  EXPECT_EQ(as.counters().rejected[std::size_t(stream::Reject::kTimeJump)], 1u);
   // A real gap of an hour, confirmed by the next sample: nothing lost.
   ScriptSource b({head(10, 1), head(10.5, 1), head(3610, 1), head(3610.5, 1), head(3611, 1)});
   stream::EpochAssembler as2;

@@ -457,7 +457,7 @@ TEST(StreamAssembler, StarVectorsWithoutAConsumerAreCountedNotHandedOut) {
     if (o == stream::EpochAssembler::Out::kHeads) heads += static_cast<std::uint64_t>(e.n);
   }
   EXPECT_EQ(a.counters().used_stars, 0u);
-  EXPECT_GT(a.counters().rejected[std::size_t(stream::Reject::kNoStarConsumer)], 0u);
+  EXPECT_GT(a.counters().rejected[std::size_t(stream::Reject::kNoConsumer)], 0u);
   EXPECT_EQ(a.counters().used_heads, heads);
   EXPECT_EQ(a.counters().read, a.counters().used() + a.counters().rejectedTotal());
 }

@@ -264,7 +264,7 @@ int toLcm(const Options& a) {
     for (int r = 0; r < stream::kRejectCount; ++r)
       if (c.rejected[std::size_t(r)])
         std::printf(", %llu rejected: %s", static_cast<unsigned long long>(c.rejected[std::size_t(r)]),
-                    stream::rejectName(stream::Reject(r)));
+                    io::rejectText(stream::Reject(r)));
     std::printf("\n");
     auto issues = sources[i]->issues();
     for (std::size_t k = 0; k < issues.size() && k < 5; ++k) std::printf("    rejected %s\n", issues[k].c_str());

@@ -17,7 +17,7 @@ inline void printSourceCounters(const stream::Engine& engine) {
     for (int r = 0; r < stream::kRejectCount; ++r)
       if (c.rejected[std::size_t(r)])
         std::printf(", %llu %s", static_cast<unsigned long long>(c.rejected[std::size_t(r)]),
-                    stream::rejectName(stream::Reject(r)));
+                    io::rejectText(stream::Reject(r)));
     std::printf("\n");
     auto issues = s.issues();
     for (std::size_t k = 0; k < issues.size() && k < 5; ++k) std::printf("    rejected %s\n", issues[k].c_str());

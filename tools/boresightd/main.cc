@@ -219,10 +219,10 @@ int run(int argc, char** argv) {
   }
   if (!replay.empty() && !interrupted && c0.head_epochs == 0) {
     std::string why;
-    for (int r = 0; r < node::kReasonCount; ++r)
+    for (int r = 0; r < io::kRejectCount; ++r)
       if (c0.rejected[std::size_t(r)])
         why += (why.empty() ? "" : ", ") + std::to_string(c0.rejected[std::size_t(r)]) + " " +
-               node::reasonName(node::Reason(r));
+               io::rejectKey(io::Reject(r));
     std::fprintf(stderr,
                  "boresightd: %s: no %s message the node could use (%llu messages received%s%s): nothing was "
                  "computed\n",
@@ -246,7 +246,7 @@ int run(int argc, char** argv) {
   j["received"] = c.received;
   j["used"] = c.used;
   nlohmann::ordered_json rej = nlohmann::ordered_json::object();
-  for (int r = 0; r < node::kReasonCount; ++r) rej[node::reasonName(node::Reason(r))] = c.rejected[std::size_t(r)];
+  for (int r = 0; r < io::kRejectCount; ++r) rej[io::rejectKey(io::Reject(r))] = c.rejected[std::size_t(r)];
   j["rejected"] = rej;
   j["lost"] = c.lost;
   j["calibrations_published"] = c.calibrations_published;
@@ -325,9 +325,9 @@ int run(int argc, char** argv) {
               static_cast<unsigned long long>(c.head_epochs), static_cast<unsigned long long>(c.calibrations_published),
               wall, wall > 0 ? static_cast<double>(c.received) / wall : 0.0, l.p50_us, l.p99_us, l.p999_us, l.max_us,
               n.headStepLatency().p50_us, n.headStepLatency().p99_us, n.headStepLatency().p999_us);
-  for (int r = 0; r < node::kReasonCount; ++r)
+  for (int r = 0; r < io::kRejectCount; ++r)
     if (c.rejected[std::size_t(r)])
-      std::printf("  rejected %s: %llu\n", node::reasonName(node::Reason(r)),
+      std::printf("  rejected %s: %llu\n", io::rejectKey(io::Reject(r)),
                   static_cast<unsigned long long>(c.rejected[std::size_t(r)]));
   if (interrupted) j["interrupted"] = true;
   if (!summary_json.empty() && !io::writeFileAtomic(summary_json, j.dump(2) + "\n", &err)) {

@@ -40,6 +40,7 @@
 #pragma once
 
 #include <boresight/core/pipeline.h>
+#include <boresight/io/reject.h>
 
 #include <array>
 #include <atomic>
@@ -51,32 +52,10 @@
 
 namespace boresight::node {
 
-/// Reasons a message is rejected (index into Counters::rejected; node_health_t.rejected uses the same).
-enum class Reason : std::uint8_t {
-  kUndecodable = 0,  ///< bytes that do not decode as the channel's type (or a wrong fingerprint)
-  kInvalidFlag,      ///< the message says it is not valid (or has no stars / no angular acceleration)
-  kNonFinite,        ///< NaN or Inf in a value
-  kNonUnit,          ///< quaternion or direction not unit within tolerance
-  kUnknownHead,      ///< head id not in the configuration
-  kDuplicate,        ///< the same head / sample tag again
-  kLate,             ///< older than what the assembler already handed to the core
-  kTimeJump,         ///< tag far from the node's data time (not confirmed by the channel)
-  kFlood,            ///< more messages per second of data time than the channel's limit
-  kNoMountings,      ///< input before the nominal mountings are known (mountings: log)
-  kOtherChannel,     ///< a channel the node does not read (replay: e.g. earlier outputs)
-  kAssembler,        ///< the assembler refused it as late or one head too many (should stay 0: the
-                     ///< handlers check first; a tag the assembler finds far from its neighbours counts
-                     ///< as kTimeJump, the same head twice at a tag as kDuplicate)
-  kImplausible,      ///< a finite value outside its physical gate (core/plausibility.h): an angular
-                     ///< acceleration beyond 0.1 rad/s^2
-  kCommand,          ///< a command that does not apply: unknown, or naming a calibration not held / not in use
-  kNoConsumer,       ///< an input nothing in this configuration uses: ORBIT without thermal terms in the overlay
-  kOtherVersion,     ///< a layout of the channel's type other than this build's (io::isOtherVersion: a
-                     ///< sender or recorder built with other message types; src/lcmtypes/versions.txt)
-  kCount
-};
-constexpr int kReasonCount = static_cast<int>(Reason::kCount);
-const char* reasonName(Reason r);
+/// Reasons a message is rejected: the one list of every program (io/reject.h; index into
+/// Counters::rejected, and node_health_t.rejected uses the same for the first 16, all the node counts).
+using io::Reject;
+using io::kRejectCount;
 
 struct Channels {
   std::string star_head = "STAR_HEAD", accel = "ACCEL", star_vectors = "STAR_VECTORS";
@@ -164,7 +143,7 @@ struct LatencySummary {
 
 struct Counters {
   std::uint64_t received = 0, used = 0, lost = 0;
-  std::array<std::uint64_t, kReasonCount> rejected{};
+  std::array<std::uint64_t, kRejectCount> rejected{};
   std::uint64_t head_epochs = 0, accel_steps = 0, star_epochs = 0, rows = 0;
   std::uint64_t orbit_steps = 0;  ///< orbit samples the core's thermal prediction stepped with
   std::uint64_t calibrations_published = 0, calibrations_applied = 0, calibrations_refused = 0;

@@ -13,7 +13,7 @@
 // Robust time base: a sample more than W = max(look-ahead, 1 s, 3 typical steps of its source) ahead
 // of its source's time (the latest tag it confirmed) is held until the source's next sample: when that
 // one lies at least as close to it as to the source's time, the jump is real (a gap in the data) and
-// both go on; otherwise the held sample was one corrupt tag and is rejected as Reject::kTimeOutlier. So
+// both go on; otherwise the held sample was one corrupt tag and is rejected as Reject::kTimeJump. So
 // a tag 1e8 s ahead costs that sample, not the look-ahead of every later one (it would have become the
 // source's time: every later sample handed out alone, heads of one tag split and late). A source's
 // first sample waits for the second (near it: confirmed; far: a third decides, in line with both

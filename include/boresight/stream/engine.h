@@ -45,7 +45,7 @@ class Engine {
   /// False with *error when the core refuses the model.
   bool setThermalModel(const core::ThermalHarmonicModel& m, std::string* error);
   /// The orbit is read: the core has a thermal model, or an observer wants the orbit. Otherwise orbit
-  /// samples are counted as rejected (Reject::kNoOrbitConsumer) and orbit files are not opened.
+  /// samples are counted as rejected (Reject::kNoConsumer) and orbit files are not opened.
   bool wantsOrbit() const;
   /// Orbit samples handed to the core's thermal prediction and the observers that take the orbit.
   std::uint64_t orbitSamples() const { return orbit_samples_; }

@@ -8,6 +8,7 @@
 
 #include <boresight/core/conventions.h>
 #include <boresight/core/wahba.h>
+#include <boresight/io/reject.h>
 
 #include <array>
 #include <cstdint>
@@ -41,29 +42,10 @@ struct Sample {
   char orbit_frame = 'I';        ///< kOrbit: 'I' inertial (GNI1B, ORBIT messages), 'E' Earth-fixed (GNV1B)
 };
 
-/// Why an input record or message was not handed to the core.
-enum class Reject : std::uint8_t {
-  kMalformed,       ///< the reader rejected the line (Level-1) or could not decode the message (LCM)
-  kInvalid,         ///< the message says it is not valid (head flags bit 0 clear)
-  kNoAngular,       ///< accelerometer record/message without (all three) angular accelerations
-  kOtherChannel,    ///< an LCM event on a channel the engine does not read
-  kLate,            ///< older than what was already handed to the core (beyond the look-ahead)
-  kTooManyHeads,    ///< more head samples in one epoch than core::kMaxHeads
-  kTooManyStars,    ///< more star vectors in one epoch than core::kMaxStarInputs
-  kNoStarConsumer,  ///< a star vector, and the caller of the assembler takes no star epochs
-  kImplausible,     ///< outside a physical plausibility gate (core/plausibility.h): the reader's
-                    ///< "implausible" lines, a message's impossible value
-  kTimeOutlier,     ///< a tag far from its neighbours in its source (beyond the look-ahead from the
-                    ///< source's time, not confirmed by the next sample): one corrupt tag
-  kDuplicate,       ///< the same head at the same tag again (a file given twice, a repeated record)
-  kNoOrbitConsumer, ///< an orbit sample, and nothing in this run uses the orbit (no thermal model, no
-                    ///< thermal fit)
-  kOtherVersion,    ///< an LCM message of another layout of its type (io::isOtherVersion,
-                    ///< src/lcmtypes/versions.txt): written with other message types
-  kCount
-};
-constexpr int kRejectCount = static_cast<int>(Reject::kCount);
-const char* rejectName(Reject r);
+/// Why an input record or message was not handed to the core: the one list every program counts in
+/// (io/reject.h).
+using io::Reject;
+using io::kRejectCount;
 
 /// Counts of one source or of the whole run.
 struct Counters {

@@ -89,7 +89,7 @@ class Sca1aSource final : public Level1FileSource<io::Sca1aRecord> {
 };
 
 /// ACC1A (or ACT1A) angular accelerations from one file, in file order. Records without all three
-/// angular accelerations are rejected (Reject::kNoAngular), unless keepWithoutAngular(true): then
+/// angular accelerations are rejected (Reject::kInvalidFlag), unless keepWithoutAngular(true): then
 /// they are samples with flags bit 0 clear (for writing messages; never hand those to the core).
 class Acc1aSource final : public Level1FileSource<io::FlaggedRecord> {
  public:
