@@ -55,7 +55,15 @@ CalibrationFeed::CalibrationFeed(const CalibrationFeed& o)
       thermal_(o.thermal_ ? std::make_unique<ThermalCollector>(*o.thermal_) : nullptr),
       orbit_samples_(o.orbit_samples_),
       configured_(o.configured_),
-      finished_(o.finished_) {}
+      finished_(o.finished_),
+      with_raw_(o.with_raw_),
+      raw_(o.raw_),
+      sum_A_(o.sum_A_),
+      n_acc_(o.n_acc_),
+      aberrated_(o.aberrated_),
+      orbit_v_(o.orbit_v_),
+      t0_(o.t0_),
+      have_t0_(o.have_t0_) {}
 
 CalibrationFeed& CalibrationFeed::operator=(const CalibrationFeed& o) {
   if (this != &o) {
@@ -68,10 +76,16 @@ CalibrationFeed& CalibrationFeed::operator=(const CalibrationFeed& o) {
 CalibrationFeed::~CalibrationFeed() = default;
 
 bool CalibrationFeed::configure(const core::PipelineConfig& cfg, const SpanOptions& so, bool with_thermal,
-                                std::string* error) {
+                                std::string* error, bool with_raw) {
   configured_ = finished_ = false;
   orbit_samples_ = 0;
   thermal_.reset();
+  with_raw_ = with_raw;
+  raw_ = RawData{};
+  sum_A_ = Vec3::Zero();
+  n_acc_ = aberrated_ = 0;
+  orbit_v_.clear();
+  have_t0_ = false;
   cfg_ = cfg;
   so_ = so;
   builder_ = SpanBuilder();
@@ -87,20 +101,47 @@ bool CalibrationFeed::configure(const core::PipelineConfig& cfg, const SpanOptio
   return true;
 }
 
+double CalibrationFeed::rawTime(TimeUs t) {
+  if (!have_t0_) {
+    t0_ = t;
+    have_t0_ = true;
+  }
+  return static_cast<double>(t - t0_) * 1e-6;
+}
+
 void CalibrationFeed::pushHeads(const core::HeadEpoch& e) {
   if (!configured_ || finished_) return;
   builder_.pushHeads(e);
   if (thermal_) thermal_->pushHeads(e);
+  if (!with_raw_) return;
+  for (int k = 0; k < e.n; ++k) {
+    const auto& h = e.sample[static_cast<std::size_t>(k)];
+    const int slot = core::slotOf(cfg_.heads, h.head_id);
+    if (slot < 0) continue;
+    RawData::Event ev;
+    ev.t_s = rawTime(e.t);
+    ev.head = slot;
+    ev.q_I_Si = h.q_I_Si;
+    raw_.events.push_back(ev);
+  }
 }
 
 void CalibrationFeed::pushAcc(TimeUs t, const Vec3& a_A) {
   if (!configured_ || finished_) return;
   builder_.pushAcc(t, a_A);
+  if (!with_raw_) return;
+  RawData::Event ev;
+  ev.t_s = rawTime(t);
+  ev.z_A = a_A;
+  raw_.events.push_back(ev);
+  sum_A_ += a_A;
+  ++n_acc_;
 }
 
 void CalibrationFeed::pushOrbit(const model::OrbitSample& o) {
-  if (!configured_ || finished_ || !thermal_) return;
-  thermal_->pushOrbit(o);
+  if (!configured_ || finished_ || !wantsOrbit()) return;
+  if (thermal_) thermal_->pushOrbit(o);
+  if (with_raw_) orbit_v_.emplace_back(o.t, o.v_I);
   ++orbit_samples_;
 }
 
@@ -108,6 +149,31 @@ void CalibrationFeed::finish() {
   if (!configured_ || finished_) return;
   builder_.finish();
   finished_ = true;
+  if (!with_raw_ || orbit_v_.size() < 2 || !have_t0_) return;
+  // Every head sample inside the orbit's span gets the observer velocity (the satellite's, linear
+  // between orbit samples, and the Earth's), so that the estimate removes the stars' aberration.
+  std::stable_sort(orbit_v_.begin(), orbit_v_.end(),
+                   [](const std::pair<TimeUs, Vec3>& a, const std::pair<TimeUs, Vec3>& b) { return a.first < b.first; });
+  // Segment j is [orbit j, orbit j+1]; it serves t inside it unless it spans an orbit gap (> 60 s).
+  const auto serves = [&](std::size_t j, TimeUs t) {
+    const TimeUs ta = orbit_v_[j].first, tb = orbit_v_[j + 1].first;
+    return t >= ta && t <= tb && tb > ta && tb - ta <= 60 * kUsPerSecond;
+  };
+  std::size_t k = 0;
+  for (auto& ev : raw_.events) {  // in time order, as the orbit
+    if (ev.head < 0) continue;
+    const TimeUs t = t0_ + static_cast<TimeUs>(std::llround(ev.t_s * 1e6));
+    while (k + 2 < orbit_v_.size() && orbit_v_[k + 1].first < t) ++k;
+    // A sample at an orbit sample's time belongs to either segment: the next one when this one is a gap.
+    std::size_t j = k;
+    if (!serves(j, t) && j + 2 < orbit_v_.size() && serves(j + 1, t)) ++j;
+    if (!serves(j, t)) continue;  // outside the orbit's span, or in an orbit gap
+    const auto& [ta, va] = orbit_v_[j];
+    const auto& [tb, vb] = orbit_v_[j + 1];
+    const double f = static_cast<double>(t - ta) / static_cast<double>(tb - ta);
+    ev.v_obs_I = va + f * (vb - va) + model::earthVelocityLowPrecision(toSeconds(t));
+    ++aberrated_;
+  }
 }
 
 // ------------------------------------------------------------------------------------------------
@@ -168,6 +234,10 @@ CalibrationRun runCalibration(CalibrationFeed& feed, const RunOptions& o) {
     return run;
   }
   run.ok = true;
+  if (o.raw && feed.collectsRaw()) {
+    run.raw = estimateRaw(*o.raw, feed.raw(), feed.rawMeanAcc(), o.raw_passes);
+    run.raw_estimated = true;
+  }
   if (o.thermal_fit && feed.thermal() && feed.orbitSamples() > 0) {
     run.thermal = feed.thermal()->fit();
     run.thermal_fitted = true;

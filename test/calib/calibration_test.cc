@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <functional>
 
 namespace boresight::calib {
 namespace {
@@ -201,6 +202,87 @@ TEST(CalibrationFeed, CopyIsAnIndependentSnapshot) {
     EXPECT_EQ(r_whole.result.estimate.r_S[std::size_t(h)], r_full.result.estimate.r_S[std::size_t(h)]) << h;
   }
   EXPECT_NE(r_snap.result.estimate.r_S[0], r_whole.result.estimate.r_S[0]);
+}
+
+// The raw samples for the attitude-domain estimate: every head sample of a configured head and every
+// accelerometer sample, in the order pushed, times from the first; the observer velocity interpolated
+// between orbit samples (plus the Earth's) only inside the orbit's span and not across an orbit gap
+// over 60 s; nothing kept unless asked.
+TEST(CalibrationFeed, RawSamplesAndTheObserverVelocityAtTheOrbitsSeams) {
+  synth::Config c = manoeuvreCase(7);
+  c.duration_s = 400;
+  CalibrationFeed none;
+  feed(c, none);
+  EXPECT_TRUE(none.raw().events.empty());
+  EXPECT_FALSE(none.wantsOrbit());
+
+  CalibrationFeed f;
+  std::string err;
+  ASSERT_TRUE(f.configure(synth::pipelineConfig(c), spanOptions(c), false, &err, true)) << err;
+  EXPECT_TRUE(f.wantsOrbit());  // for the aberration
+  // Orbit samples every 10 s from 100 s to 300 s with a gap from 200 s to 290 s; v_I = (1000 t, 7000, 0).
+  auto orbitAt = [&](double ts) {
+    model::OrbitSample o;
+    o.t = c.t0 + static_cast<TimeUs>(ts * 1e6);
+    o.v_I = Vec3(1000.0 * ts, 7000.0, 0.0);
+    return o;
+  };
+  struct Tee {
+    CalibrationFeed& f;
+    std::function<model::OrbitSample(double)> orbit;
+    TimeUs t0;
+    double next_orbit_s = 100.0;
+    void at(TimeUs t) {
+      while (next_orbit_s <= 300.0 && c0(t) >= next_orbit_s) {
+        if (!(next_orbit_s > 200.0 && next_orbit_s < 290.0)) f.pushOrbit(orbit(next_orbit_s));
+        next_orbit_s += 10.0;
+      }
+    }
+    double c0(TimeUs t) const { return static_cast<double>(t - t0) * 1e-6; }
+    void pushHeads(const core::HeadEpoch& e) {
+      at(e.t);
+      f.pushHeads(e);
+    }
+    void pushAcc(TimeUs t, const Vec3& a) {
+      at(t);
+      f.pushAcc(t, a);
+    }
+  } tee{f, orbitAt, c.t0};
+  synth::stream(c, tee);
+  f.finish();
+  const auto& ev = f.raw().events;
+  std::size_t heads = 0, acc = 0, with_v = 0;
+  Vec3 sum = Vec3::Zero();
+  double last_t = -1.0;
+  for (const auto& e : ev) {
+    EXPECT_GE(e.t_s, last_t);
+    last_t = e.t_s;
+    if (e.head < 0) {
+      ++acc;
+      sum += e.z_A;
+      EXPECT_EQ(e.v_obs_I, Vec3::Zero());
+      continue;
+    }
+    ++heads;
+    const bool inside = (e.t_s >= 100.0 && e.t_s <= 200.0) || (e.t_s >= 290.0 && e.t_s <= 300.0);
+    if (!inside) {
+      EXPECT_EQ(e.v_obs_I, Vec3::Zero()) << e.t_s;
+      continue;
+    }
+    ++with_v;
+    const Vec3 want = Vec3(1000.0 * e.t_s, 7000.0, 0.0) +
+                      model::earthVelocityLowPrecision(toSeconds(c.t0) + e.t_s);
+    EXPECT_LT((e.v_obs_I - want).norm(), 1e-6) << e.t_s;
+  }
+  EXPECT_EQ(ev.front().t_s, 0.0);
+  EXPECT_EQ(heads, static_cast<std::size_t>(c.duration_s * c.head_rate_hz) * 3);
+  EXPECT_EQ(acc, static_cast<std::size_t>(c.duration_s * c.acc_rate_hz));
+  EXPECT_EQ(f.aberratedSamples(), with_v);
+  EXPECT_EQ(with_v, (201u + 21u) * 3u);  // 100..200 s and 290..300 s at 2 Hz, three heads
+  EXPECT_LT((f.rawMeanAcc() - sum / static_cast<double>(acc)).norm(), 1e-15);
+  // A copy keeps them.
+  const CalibrationFeed copy(f);
+  EXPECT_EQ(copy.raw().events.size(), ev.size());
 }
 
 // A configuration the span builder cannot run is refused when the feed is configured, with the reason

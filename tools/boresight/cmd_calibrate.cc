@@ -28,6 +28,7 @@
 #include <algorithm>
 #include <chrono>
 #include <limits>
+#include <optional>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -151,73 +152,6 @@ class SpanFeed final : public stream::InputObserver {
 
  private:
   calib::CalibrationFeed& f_;
-};
-
-/// Records the raw samples for the attitude-domain estimate (--raw): head samples as the core's validator
-/// leaves them, accepted accelerometer samples; times in seconds since the first.
-class RawFeed final : public stream::InputObserver {
- public:
-  explicit RawFeed(const core::HeadSetConfig& heads) : heads_(heads) {}
-  void onHeads(const core::HeadEpoch& e, core::Status) override {
-    for (int k = 0; k < e.n; ++k) {
-      const auto& h = e.sample[static_cast<std::size_t>(k)];
-      const int slot = core::slotOf(heads_, h.head_id);
-      if (slot < 0) continue;
-      calib::RawData::Event ev;
-      ev.t_s = seconds(e.t);
-      ev.head = slot;
-      ev.q_I_Si = h.q_I_Si;
-      data.events.push_back(ev);
-    }
-  }
-  void onAcc(TimeUs t, const Vec3& a_A, core::Status st) override {
-    if (!core::accepted(st)) return;
-    calib::RawData::Event ev;
-    ev.t_s = seconds(t);
-    ev.z_A = a_A;
-    data.events.push_back(ev);
-    sum_A += a_A;
-    ++n_acc;
-  }
-  /// The orbit's velocity, for the stars' aberration (GNI1B / GNV1B files, ORBIT messages).
-  bool wantsOrbit() const override { return true; }
-  void onOrbit(const model::OrbitSample& o) override { orbit.emplace_back(o.t, o.v_I); }
-  /// Gives every head sample inside the orbit's span the observer velocity (the satellite's, linear
-  /// between orbit samples, and the Earth's), so that the estimate removes the aberration; returns how
-  /// many head samples got one.
-  std::uint64_t addObserverVelocity() {
-    std::uint64_t n = 0;
-    if (orbit.size() < 2 || !have_t0_) return 0;
-    std::size_t k = 0;
-    for (auto& ev : data.events) {  // in time order, as the orbit
-      if (ev.head < 0) continue;
-      const TimeUs t = t0_ + static_cast<TimeUs>(std::llround(ev.t_s * 1e6));
-      while (k + 2 < orbit.size() && orbit[k + 1].first <= t) ++k;
-      const auto& [ta, va] = orbit[k];
-      const auto& [tb, vb] = orbit[k + 1];
-      if (t < ta || t > tb || tb <= ta || tb - ta > 60 * kUsPerSecond) continue;  // outside, or an orbit gap
-      const double f = static_cast<double>(t - ta) / static_cast<double>(tb - ta);
-      ev.v_obs_I = va + f * (vb - va) + model::earthVelocityLowPrecision(toSeconds(t));
-      ++n;
-    }
-    return n;
-  }
-  calib::RawData data;
-  Vec3 sum_A = Vec3::Zero();
-  std::uint64_t n_acc = 0;
-  std::vector<std::pair<TimeUs, Vec3>> orbit;
-
- private:
-  double seconds(TimeUs t) {
-    if (!have_t0_) {
-      t0_ = t;
-      have_t0_ = true;
-    }
-    return static_cast<double>(t - t0_) * 1e-6;
-  }
-  const core::HeadSetConfig& heads_;
-  TimeUs t0_ = 0;
-  bool have_t0_ = false;
 };
 
 int fail(const std::string& msg) {
@@ -462,6 +396,24 @@ int runCalibrate(int argc, char** argv) {
 
   for (const auto& l : io::modelInUseLines(pc, ovu)) std::printf("%s\n", l.c_str());
 
+  // The attitude-domain estimate's configuration (--raw), checked before anything is read.
+  calib::RawBoundOptions ro;
+  std::optional<calib::RawBoundConfig> raw_cfg;
+  double raw_unobs = unobs;
+  if (raw) {
+    if (const std::string e = pc.noise_in_use.missing(); !e.empty()) return fail("--raw needs a noise model for " + e);
+    ro.bias = !no_bias;
+    ro.scale = acc_scale;
+    ro.time_offset = time_offset;
+    ro.fit_noise = raw_noise == "fit";
+    // Not determined: a sigma above what is known without the data (the platform file's
+    // heads.mounting_uncertainty_arcsec), else above --unobservable-sigma.
+    raw_unobs = pc.mounting_uncertainty_arcsec > 0 ? std::min(pc.mounting_uncertainty_arcsec, unobs) : unobs;
+    ro.unobservable_sigma_rad = raw_unobs * kRadPerArcsec;
+    raw_cfg = calib::rawBoundConfig(pc.pipeline, pc.noise_in_use, ro);
+    if (const std::string e = raw_cfg->validate(); !e.empty()) return fail("--raw: " + e);
+  }
+
   calib::SpanOptions spo;
   spo.decimation_s = decimation;
   // The accelerometer's weight: the white part of each A axis's noise model (the span builder models
@@ -477,12 +429,10 @@ int runCalibrate(int argc, char** argv) {
   // same stream as the heads.
   bool with_thermal = (!in.orbit.empty() || !in.lcm.empty()) && pc.pipeline.heads.n_heads >= 2;
   calib::CalibrationFeed cal;
-  if (!cal.configure(pc.pipeline, spo, with_thermal, &err)) return fail(err);
+  if (!cal.configure(pc.pipeline, spo, with_thermal, &err, raw)) return fail(err);
   for (const auto& f : in.orbit) std::printf("%s: orbit for the thermal harmonic fit\n", f.c_str());
   SpanFeed feed(cal);
   engine.addObserver(&feed);  // before the sources: the orbit files are opened for an observer that wants them
-  RawFeed raw_feed(pc.pipeline.heads);
-  if (raw) engine.addObserver(&raw_feed);
   if (!stream::startReplay(rp, &err)) return fail(err);
   if (engine.run() != stream::Engine::Result::kDone) return fail(engine.error());
   stages.mark("replay and span");
@@ -517,8 +467,9 @@ int runCalibrate(int argc, char** argv) {
   ro_run.plan_excitation_radps2 = plan_exc;
   ro_run.plan_sigma_arcsec = plan_sigma;
   ro_run.plan_excitation_name = "--plan-excitation";
+  ro_run.raw = raw_cfg;  // --raw: the attitude-domain estimate from the raw samples after the CRN solve
   calib::CalibrationRun run = calib::runCalibration(cal, ro_run);
-  stages.mark("solve");
+  stages.mark(raw && run.ok ? "solve and attitude-domain estimate" : "solve");
   if (!run.ok) return fail(run.refusal_text);
   const calib::SolveResult& r = run.result;
 
@@ -564,25 +515,11 @@ int runCalibrate(int argc, char** argv) {
   }
   std::string raw_text;
   if (raw) {
-    // The attitude-domain estimate from the raw samples (calib::estimateRaw; no CRN, no decimation).
-    if (const std::string e = pc.noise_in_use.missing(); !e.empty()) return fail("--raw needs a noise model for " + e);
-    calib::RawBoundOptions ro;
-    ro.bias = !no_bias;
-    ro.scale = acc_scale;
-    ro.time_offset = time_offset;
-    ro.fit_noise = raw_noise == "fit";
-    // Not determined: a sigma above what is known without the data (the platform file's
-    // heads.mounting_uncertainty_arcsec), else above --unobservable-sigma.
-    const double raw_unobs = pc.mounting_uncertainty_arcsec > 0 ? std::min(pc.mounting_uncertainty_arcsec, unobs) : unobs;
-    ro.unobservable_sigma_rad = raw_unobs * kRadPerArcsec;
-    const calib::RawBoundConfig rc = calib::rawBoundConfig(pc.pipeline, pc.noise_in_use, ro);
-    if (const std::string e = rc.validate(); !e.empty()) return fail("--raw: " + e);
-    const Vec3 bias0 = raw_feed.n_acc ? Vec3(raw_feed.sum_A / static_cast<double>(raw_feed.n_acc)) : Vec3::Zero();
-    std::sort(raw_feed.orbit.begin(), raw_feed.orbit.end(),
-              [](const std::pair<TimeUs, Vec3>& a, const std::pair<TimeUs, Vec3>& b) { return a.first < b.first; });
-    const std::uint64_t aberrated = raw_feed.addObserverVelocity();
-    const calib::RawEstimate est = calib::estimateRaw(rc, raw_feed.data, bias0, 3);
-    stages.mark("attitude-domain estimate");
+    // The attitude-domain estimate from the raw samples (calib::estimateRaw in runCalibration; no CRN,
+    // no decimation).
+    const calib::RawEstimate& est = run.raw;
+    const calib::RawBoundConfig& rc = *raw_cfg;
+    const std::uint64_t aberrated = cal.aberratedSamples();
     report::Json jr;
     jr["method"] = "attitude domain: raw head samples and accelerometer angular accelerations at their rates, "
                    "trajectory driven by the accelerometer, noise models in use (calib/raw_bound.h)";

@@ -2,15 +2,19 @@
 // replay engine's input observer) and the node's calibration worker (fed from its ring) run the same
 // steps here, so the two cannot drift apart:
 // - the feed (CalibrationFeed): head epochs as the core's validator leaves them, the accelerometer
-//   samples the core accepted (as measured: method A estimates its own bias), and, when a thermal fit
-//   is wanted, the orbit from the same stream (GNI1B / GNV1B files, ORBIT messages);
-// - the run (runCalibration): the solve, the thermal harmonic fit where an orbit was seen, and, when
+//   samples the core accepted (as measured: method A estimates its own bias), into the span builder
+//   (today's CRN rows) and, when asked, as raw samples for the attitude-domain estimate
+//   (calib::estimateRaw); when a thermal fit or the aberration is wanted, the orbit from the same
+//   stream (GNI1B / GNV1B files, ORBIT messages);
+// - the run (runCalibration): the solve, the attitude-domain estimate from the raw samples when asked,
+//   the thermal harmonic fit where an orbit was seen, and, when
 //   the span is refused for its length or its excitation, what would be needed - the CRN's length and
 //   the Cramer-Rao bound's span at a planning excitation and at this span's own weakest-axis
 //   excitation (the RMS about the mean of the accelerometer's angular acceleration in B).
 // Not real time: allocates (the span's observations, Ceres).
 #pragma once
 
+#include "boresight/calib/raw_bound.h"
 #include "boresight/calib/solver.h"
 #include "boresight/calib/span_builder.h"
 #include "boresight/calib/thermal_fit.h"
@@ -18,6 +22,7 @@
 #include "boresight/model/orbit_context.h"
 
 #include <memory>
+#include <optional>
 #include <string>
 
 namespace boresight::calib {
@@ -61,15 +66,19 @@ class CalibrationFeed {
   /// options; with_thermal: also collect the heads' relative attitude for the thermal harmonic fit (two
   /// heads or more; the orbit must come in the same stream). False with *error: the configuration
   /// cannot be run (said at start-up, never found later).
-  bool configure(const core::PipelineConfig& cfg, const SpanOptions& so, bool with_thermal, std::string* error);
+  /// with_raw: also keep every head and accelerometer sample (and the orbit's velocity, for the stars'
+  /// aberration) for the attitude-domain estimate - the whole span in memory (about 50 MB per day of
+  /// GRACE-FO data), so only when asked.
+  bool configure(const core::PipelineConfig& cfg, const SpanOptions& so, bool with_thermal, std::string* error,
+                 bool with_raw = false);
   bool configured() const { return configured_; }
   /// Head epochs as the core's validator leaves them.
   void pushHeads(const core::HeadEpoch& e);
   /// An accelerometer sample the core accepted, a_A as measured.
   void pushAcc(TimeUs t, const Vec3& a_A);
-  /// An orbit sample (taken only with the thermal fit).
+  /// An orbit sample (taken with the thermal fit and with the raw samples).
   void pushOrbit(const model::OrbitSample& o);
-  bool wantsOrbit() const { return thermal_ != nullptr; }
+  bool wantsOrbit() const { return thermal_ != nullptr || with_raw_; }
   std::uint64_t orbitSamples() const { return orbit_samples_; }
   /// End of data (runCalibration calls it when the caller has not).
   void finish();
@@ -80,6 +89,15 @@ class CalibrationFeed {
   const core::PipelineConfig& config() const { return cfg_; }
   const SpanOptions& spanOptions() const { return so_; }
   ThermalCollector* thermal() { return thermal_.get(); }
+  bool collectsRaw() const { return with_raw_; }
+  /// The raw samples (with_raw), times in seconds since the first; finish() gives every head sample
+  /// inside the orbit's span the observer velocity (the satellite's, linear between orbit samples no
+  /// more than 60 s apart, plus the Earth's).
+  const RawData& raw() const { return raw_; }
+  /// The mean of the accelerometer samples taken (A, rad/s^2): the estimate's starting bias.
+  Vec3 rawMeanAcc() const { return n_acc_ ? Vec3(sum_A_ / static_cast<double>(n_acc_)) : Vec3::Zero(); }
+  /// Head samples given an observer velocity (finish()).
+  std::uint64_t aberratedSamples() const { return aberrated_; }
 
  private:
   core::PipelineConfig cfg_;
@@ -87,7 +105,15 @@ class CalibrationFeed {
   SpanBuilder builder_;
   std::unique_ptr<ThermalCollector> thermal_;
   std::uint64_t orbit_samples_ = 0;
-  bool configured_ = false, finished_ = false;
+  bool configured_ = false, finished_ = false, with_raw_ = false;
+  // The raw samples (with_raw).
+  double rawTime(TimeUs t);
+  RawData raw_;
+  Vec3 sum_A_ = Vec3::Zero();
+  std::uint64_t n_acc_ = 0, aberrated_ = 0;
+  std::vector<std::pair<TimeUs, Vec3>> orbit_v_;  ///< (t, v_I) of the orbit samples
+  TimeUs t0_ = 0;
+  bool have_t0_ = false;
 };
 
 struct RunOptions {
@@ -99,6 +125,11 @@ struct RunOptions {
   std::string plan_excitation_name = "the planning excitation";  ///< how the advice names it
   /// Fit the thermal harmonic model when the feed collected it and saw an orbit.
   bool thermal_fit = true;
+  /// The attitude-domain estimate from the feed's raw samples (the feed must collect them), after the
+  /// CRN solve succeeded: its configuration (rawBoundConfig of the platform and the noise in use) and
+  /// passes.
+  std::optional<RawBoundConfig> raw;
+  int raw_passes = 3;
 };
 
 struct CalibrationRun {
@@ -114,9 +145,12 @@ struct CalibrationRun {
   SpanNeed need_own;                       ///< at this span's weakest excitation (when > 0)
   bool thermal_fitted = false;
   ThermalFitResult thermal;                ///< when thermal_fitted
+  bool raw_estimated = false;
+  RawEstimate raw;                         ///< when raw_estimated
 };
 
-/// Solves the feed's span (finishing the feed first) and, when ok and wanted, fits the thermal model.
+/// Solves the feed's span (finishing the feed first) and, when ok and wanted, runs the attitude-domain
+/// estimate and fits the thermal model.
 CalibrationRun runCalibration(CalibrationFeed& feed, const RunOptions& o);
 
 }  // namespace boresight::calib
