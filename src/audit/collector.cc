@@ -155,6 +155,13 @@ void Collector::onHeads(const core::HeadEpoch& e, core::Status) {
         const bool others = m.have_epoch && m.last_epoch_t > m.last_tag[slot];
         addRun(m.head_runs[slot], m.secs(m.last_tag[slot]), m.secs(e.t), missing, others);
       }
+    } else if (m.have_epoch && e.t - m.first_epoch_t > m.period_us * 3 / 2) {
+      // The seam at the start: the other heads delivered from first_epoch_t, this one only from now
+      // (a head switched on late, or out at the start of the data): its samples from first_epoch_t on
+      // are missing. The run's bounds are the neighbouring samples' times, as inside the data. One
+      // sample is not a run: a file or an excerpt may begin inside an epoch (cut between its heads).
+      const double missing = std::round(static_cast<double>(e.t - m.first_epoch_t) / static_cast<double>(m.period_us));
+      addRun(m.head_runs[slot], m.secs(m.first_epoch_t) - static_cast<double>(m.period_us) * 1e-6, m.secs(e.t), missing, true);
     }
     m.seen[slot] = true;
     m.last_tag[slot] = e.t;
@@ -195,6 +202,7 @@ void Collector::onHeads(const core::HeadEpoch& e, core::Status) {
       addRun(m.epoch_gaps, m.secs(m.last_epoch_t), m.secs(e.t), missing, false);
     }
   }
+  if (!m.have_epoch) m.first_epoch_t = e.t;
   m.have_epoch = true;
   m.last_epoch_t = e.t;
   ++m.head_epochs;
@@ -384,6 +392,25 @@ void Collector::onAcc(TimeUs t, const Vec3& a_in, core::Status) {
 void Collector::onEnd() {
   Impl& m = *impl_;
   if (!m.configured) return;
+  // The seam at the end: a head whose samples stopped while the others went on (a head lost before the
+  // end of the data), or that never delivered while the others did, has a run up to the last epoch.
+  // One sample is not a run: the data may end inside an epoch (the real excerpts are cut by lines).
+  if (m.have_epoch && !m.ended) {
+    m.ended = true;
+    const double period_s = static_cast<double>(m.period_us) * 1e-6;
+    for (int k = 0; k < m.n_heads; ++k) {
+      if (m.seen[static_cast<std::size_t>(k)]) {
+        const TimeUs dt = m.last_epoch_t - m.last_tag[static_cast<std::size_t>(k)];
+        if (dt > m.period_us * 3 / 2)
+          addRun(m.head_runs[static_cast<std::size_t>(k)], m.secs(m.last_tag[static_cast<std::size_t>(k)]), m.secs(m.last_epoch_t) + period_s,
+                 std::round(static_cast<double>(dt) / static_cast<double>(m.period_us)), true);
+      } else {
+        addRun(m.head_runs[static_cast<std::size_t>(k)], m.secs(m.first_epoch_t) - period_s, m.secs(m.last_epoch_t) + period_s,
+               std::round(static_cast<double>(m.last_epoch_t - m.first_epoch_t) / static_cast<double>(m.period_us)) + 1,
+               true);
+      }
+    }
+  }
   // finalise what the ring still holds: its epochs have no successor, so no outlier decision
   if (m.ring_n == 3) {
     m.ring[2].chi2.fill(0);

@@ -88,6 +88,7 @@ struct Collector::Impl {
   // bins
   bool have_t0 = false;
   TimeUs t0 = 0, t_last = 0;
+  TimeUs first_epoch_t = 0;  ///< the first epoch with a configured head (a head's run at the start counts from it)
   TimeUs bin_us = 500000;
   std::vector<Bin> bins;
   Bin& binAt(TimeUs t);
@@ -116,6 +117,7 @@ struct Collector::Impl {
   // per head events
   std::array<TimeUs, kMaxHeads> last_tag{};
   std::array<bool, kMaxHeads> seen{};
+  bool ended = false;  ///< onEnd() ran (the end seam's runs are added once)
   std::array<Quat, kMaxHeads> last_q{};
   std::array<std::uint64_t, kMaxHeads> flips{}, outliers{}, samples{};
   std::uint64_t outliers_unattributed = 0;

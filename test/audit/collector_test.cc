@@ -161,6 +161,64 @@ TEST(AuditCollector, MissingSampleRunsAreTestedAgainstTheConfiguredRate) {
   }
 }
 
+// The data's first and last epochs are seams too: a head that delivers only from 600 s on (switched on
+// late) and one that stops 900 s before the end (lost) while the others deliver are dropouts with the
+// samples they miss, as inside the data; a head that never delivers misses the whole span; a first or
+// last epoch cut between its heads is not a run. Before, the runs were only found between two samples
+// of the head, and all three went unseen.
+TEST(AuditCollector, DropoutsAtTheFirstAndLastEpochsAreRuns) {
+  const auto cfg = threeHeads();
+  for (bool never : {false, true}) {
+    SCOPED_TRACE(never);
+    audit::AuditOptions opt;
+    audit::Collector c;
+    std::string err;
+    ASSERT_TRUE(c.configure(cfg, opt, &err)) << err;
+    std::mt19937_64 rng(11);
+    std::normal_distribution<double> n01;
+    // Without `never` the data begin and end inside an epoch: the first (-0.5 s) and the last (7200 s)
+    // hold head 1 alone, as where a file is cut between the heads of one epoch - one sample, not a run.
+    const int first = never ? 0 : -1, last = never ? 14400 : 14401;
+    for (int i = first; i < last; ++i) {
+      const double t = 0.5 * i;
+      core::HeadEpoch e;
+      e.t = audittest::kT0 + static_cast<TimeUs>(i) * 500000;
+      for (int k = 0; k < 3; ++k) {
+        if (k > 0 && (i == -1 || i == 14400)) continue;  // the cut epochs
+        if (!never && k == 1 && t < 600.0) continue;  // head 2 from 600 s
+        if (k == 2 && (never || t >= 6300.0)) continue;  // head 3 up to 6300 s, or never
+        audittest::addSample(e, cfg, k, audittest::pitchTurn(t), cfg.heads.head[static_cast<std::size_t>(k)].q_Si_B, rng, n01);
+      }
+      c.onHeads(e, core::Status::kOk);
+    }
+    c.onEnd();
+    c.onEnd();  // a second end adds nothing
+    const audit::AuditResult r = audit::analyse(c, opt);
+    const auto* h1 = tested(r, "head_dropout", std::to_string(cfg.heads.head[0].id));
+    ASSERT_NE(h1, nullptr);
+    EXPECT_EQ(h1->statistic, 0.0) << h1->note;  // the first head delivered throughout
+    const auto* h3 = tested(r, "head_dropout", std::to_string(cfg.heads.head[2].id));
+    ASSERT_NE(h3, nullptr);
+    EXPECT_EQ(h3->statistic, 1.0) << h3->note;
+    EXPECT_TRUE(h3->named) << h3->note;  // no rate configured: every run is a finding
+    // seconds since the first epoch (-0.5 s when cut); bounds as inside the data: the samples around
+    EXPECT_EQ(param(*h3, "missing_samples"), never ? 14400.0 : 1801.0) << h3->note;
+    EXPECT_NEAR(param(*h3, "at_s"), never ? -0.5 : 6300.0, 1e-9);
+    EXPECT_NEAR(param(*h3, "duration_s"), never ? 7200.5 : 901.0, 1e-9);
+    const auto* h2 = tested(r, "head_dropout", std::to_string(cfg.heads.head[1].id));
+    ASSERT_NE(h2, nullptr);
+    if (never) {
+      EXPECT_EQ(h2->statistic, 0.0) << h2->note;
+    } else {
+      EXPECT_EQ(h2->statistic, 1.0) << h2->note;
+      EXPECT_TRUE(h2->named) << h2->note;
+      EXPECT_EQ(param(*h2, "missing_samples"), 1201.0) << h2->note;
+      EXPECT_NEAR(param(*h2, "at_s"), -0.5, 1e-9);
+      EXPECT_NEAR(param(*h2, "duration_s"), 601.0, 1e-9);
+    }
+  }
+}
+
 TEST(AuditCollector, BinDoublingLeavesTheAnalysisUnchangedAndSeamsAreCounted) {
   const auto cfg = threeHeads();
   const Vec3 mis = Vec3(10, -4, 0) * kRadPerArcsec;
