@@ -58,7 +58,11 @@ TEST(CalibrationWorker, AnsweringEachSolveRequestInTheMailboxInOrder) {
   EXPECT_EQ(m.state.load(), MailState::kReady);
   EXPECT_EQ(m.solve_id, 1u);
   EXPECT_FALSE(m.ok);
-  EXPECT_GT(std::string(m.reason.data()).size(), 0u) << "a refusal says why";
+  // A refusal says why, as `boresight calibrate` says it (calib::runCalibration): no CRN output in an
+  // empty span, and what the span would need.
+  const std::string why(m.reason.data());
+  EXPECT_EQ(why.rfind("the span is too short (0.0 s of head data", 0), 0u) << why;
+  EXPECT_NE(why.find("\nNeeded: the CRN gives an angular acceleration only with Tf = "), std::string::npos) << why;
   EXPECT_EQ(m.msg.status, 1);
   EXPECT_EQ(m.msg.utime, 1000000);
   EXPECT_EQ(m.msg.n_heads, pc.heads.n_heads);
@@ -97,6 +101,25 @@ TEST(CalibrationWorker, AnsweringEachSolveRequestInTheMailboxInOrder) {
   w.join();
   EXPECT_FALSE(w.running());
   EXPECT_GT(idles.load(), 0) << "the idle hook runs on the worker thread while the ring is empty";
+}
+
+// A configuration the worker cannot run is refused by start() with the reason, and no thread starts
+// (before, the worker thread found it, never calibrated, and a replay waited for it).
+TEST(CalibrationWorker, StartRefusesAConfigurationItCannotRun) {
+  const core::PipelineConfig pc = nodePipeline();
+  CalibrationWorker w;
+  w.init(64);
+  calib::SpanOptions so;
+  so.decimation_s = 0.1;  // below the head interval
+  std::string err;
+  EXPECT_FALSE(CalibrationWorker::check(pc, so, &err));
+  EXPECT_NE(err.find("decimation_s must be at least the head sampling interval"), std::string::npos) << err;
+  err.clear();
+  EXPECT_FALSE(w.start(pc, so, nullptr, &err));
+  EXPECT_FALSE(w.running());
+  EXPECT_NE(err.find("the calibration worker cannot run this configuration"), std::string::npos) << err;
+  so.decimation_s = 10.0;
+  EXPECT_TRUE(CalibrationWorker::check(pc, so, &err)) << err;
 }
 
 TEST(CalibrationWorker, TheRealTimeSideNeitherAllocatesNorWaits) {
