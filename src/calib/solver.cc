@@ -830,10 +830,7 @@ SolveResult solve(const CalibrationSpan& span, const SolveOptions& opt) {
   for (int round = 0; round < opt.outlier_rounds && opt.outlier_sigma > 0 && !m.moments && sum.IsSolutionUsable();
        ++round) {
     // raw residual of every head epoch at the current parameters, normalised by its covariance
-    Mat3 K;
-    K << 1 + m.scale[0], m.nonorth[2], m.nonorth[1], m.nonorth[2], 1 + m.scale[1], m.nonorth[0], m.nonorth[1],
-        m.nonorth[0], 1 + m.scale[2];
-    const Mat3 Kinv = K.inverse();
+    const Mat3 Kinv = accAxes(Vec3(m.scale[0], m.scale[1], m.scale[2]), Vec3(m.nonorth[0], m.nonorth[1], m.nonorth[2])).inverse();
     const Vec3 bias(m.bias[0], m.bias[1], m.bias[2]);
     std::size_t added = 0;
     for (std::size_t k = 0; k < span.obs.size(); ++k) {
@@ -949,10 +946,7 @@ SolveResult solve(const CalibrationSpan& span, const SolveOptions& opt) {
   {
     double ss = 0;
     std::size_t n = 0;
-    Eigen::Matrix3d K;
-    K << 1 + m.scale[0], m.nonorth[2], m.nonorth[1], m.nonorth[2], 1 + m.scale[1], m.nonorth[0], m.nonorth[1],
-        m.nonorth[0], 1 + m.scale[2];
-    const Mat3 Kinv = K.inverse();
+    const Mat3 Kinv = accAxes(Vec3(m.scale[0], m.scale[1], m.scale[2]), Vec3(m.nonorth[0], m.nonorth[1], m.nonorth[2])).inverse();
     if (m.moments) {  // sum |A0 d|^2 = tr(A0 D_raw A0^T), A0 = [I, -W, -tau W, W b]
       for (int h = 0; h < m.n; ++h) {
         const auto hs = static_cast<std::size_t>(h);
@@ -992,6 +986,38 @@ SolveResult solve(const CalibrationSpan& span, const SolveOptions& opt) {
   res.ok = true;
   res.message = sum.BriefReport();
   return res;
+}
+
+Mat3 accAxes(const Vec3& scale, const Vec3& nonorth) {
+  Mat3 K;
+  K << 1 + scale[0], nonorth[2], nonorth[1],  //
+      nonorth[2], 1 + scale[1], nonorth[0],   //
+      nonorth[1], nonorth[0], 1 + scale[2];
+  return K;
+}
+
+SpanResiduals residuals(const CalibrationSpan& span, const ModelParameters& p) {
+  const Mat3 Kinv = accAxes(p.acc_scale, p.acc_nonorth).inverse();
+  SpanResiduals out;
+  std::array<Mat3, kMaxHeads> C{};
+  for (int s = 0; s < span.n_heads && s < kMaxHeads; ++s) {
+    const auto us = static_cast<std::size_t>(s);
+    C[us] = core::so3Exp(p.r_S[us]) * span.q_S_B_nominal[us].toRotationMatrix() * span.C_B_A * Kinv;
+  }
+  const TimeUs t0 = span.obs.empty() ? 0 : span.obs.front().t;
+  out.t_s.reserve(span.obs.size());
+  out.r_S.reserve(span.obs.size());
+  for (const auto& ob : span.obs) {
+    out.t_s.push_back(toSeconds(ob.t - t0));
+    std::array<Vec3, kMaxHeads> row = core::filled<Vec3, kMaxHeads>(Vec3::Constant(std::numeric_limits<double>::quiet_NaN()));
+    const Vec3 a = ob.alpha_A + p.time_offset_s * ob.jerk_A - p.acc_bias;
+    for (int s = 0; s < span.n_heads && s < kMaxHeads; ++s) {
+      const auto us = static_cast<std::size_t>(s);
+      if (ob.has_head[us]) row[us] = ob.alpha_S[us] - C[us] * a;
+    }
+    out.r_S.push_back(row);
+  }
+  return out;
 }
 
 }  // namespace boresight::calib

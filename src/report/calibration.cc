@@ -250,38 +250,6 @@ std::string toYaml(const json& j) {
   return o.str();
 }
 
-Residuals residuals(const calib::CalibrationSpan& span, const calib::SolveResult& r) {
-  // The solver's model (solver.h) at its estimate: alpha_S = Exp([r]x) M C_B_A K^-1 (alpha_A + tau jerk_A - b),
-  // K = I + diag(s) + N(n), N = [0 n2 n1; n2 0 n0; n1 n0 0].
-  const calib::ModelParameters& p = r.estimate;
-  Mat3 K = Mat3::Identity();
-  K.diagonal() += p.acc_scale;
-  K(0, 1) = K(1, 0) = p.acc_nonorth.z();
-  K(0, 2) = K(2, 0) = p.acc_nonorth.y();
-  K(1, 2) = K(2, 1) = p.acc_nonorth.x();
-  const Mat3 Kinv = K.inverse();
-  Residuals out;
-  std::array<Mat3, calib::kMaxHeads> C{};
-  for (int s = 0; s < span.n_heads && s < calib::kMaxHeads; ++s) {
-    const auto us = std::size_t(s);
-    C[us] = core::so3Exp(p.r_S[us]) * span.q_S_B_nominal[us].toRotationMatrix() * span.C_B_A * Kinv;
-  }
-  const TimeUs t0 = span.obs.empty() ? 0 : span.obs.front().t;
-  out.t_s.reserve(span.obs.size());
-  out.r_S.reserve(span.obs.size());
-  for (const auto& ob : span.obs) {
-    out.t_s.push_back(toSeconds(ob.t - t0));
-    std::array<Vec3, calib::kMaxHeads> row = core::filled<Vec3, calib::kMaxHeads>(Vec3::Constant(NAN));
-    const Vec3 a = ob.alpha_A + p.time_offset_s * ob.jerk_A - p.acc_bias;
-    for (int s = 0; s < span.n_heads && s < calib::kMaxHeads; ++s) {
-      const auto us = std::size_t(s);
-      if (ob.has_head[us]) row[us] = ob.alpha_S[us] - C[us] * a;
-    }
-    out.r_S.push_back(row);
-  }
-  return out;
-}
-
 bool writeCalibrationReport(const std::string& dir, const calib::CalibrationSpan& span, const calib::SolveResult& r,
                             const json& result, std::string* error) {
   std::error_code ec;
@@ -292,7 +260,7 @@ bool writeCalibrationReport(const std::string& dir, const calib::CalibrationSpan
   }
   const char* ax = "xyz";
   // Residuals against time, per head and head axis.
-  Residuals res = residuals(span, r);
+  const calib::SpanResiduals res = calib::residuals(span, r.estimate);
   Plot pr;
   pr.title = "residuals under the estimates (head frames)";
   pr.xlabel = "t - t0 [s]";

@@ -75,6 +75,18 @@ TEST(RunCalibration, SolvedSpanIsTheSolversResult) {
           << "head " << h << " axis " << a;
     }
   EXPECT_FALSE(run.thermal_fitted);  // no thermal collection asked
+  // The residuals the report plots are the solver's model at its estimate: their RMS is the solver's.
+  const SpanResiduals res = residuals(f.span(), run.result.estimate);
+  ASSERT_EQ(res.r_S.size(), f.span().obs.size());
+  double ss = 0;
+  std::size_t n = 0;
+  for (const auto& row : res.r_S)
+    for (int h = 0; h < c.n_heads; ++h)
+      if (row[std::size_t(h)].allFinite()) {
+        ss += row[std::size_t(h)].squaredNorm();
+        n += 3;
+      }
+  EXPECT_NEAR(std::sqrt(ss / static_cast<double>(n)) / run.result.residual_rms_radps2, 1.0, 1e-9);
 
   // From the moments only: the solver counts no kept observation, the run gives the span's epochs.
   CalibrationFeed fm;

@@ -186,7 +186,7 @@ TEST(CalibrationReport, ResidualsOfASpanBuiltFromTheEstimatesAreZeroAndShowAWron
     }
     span.obs.push_back(ob);
   }
-  auto res = br::residuals(span, r);
+  auto res = bc::residuals(span, r.estimate);
   ASSERT_EQ(res.t_s.size(), 50u);
   EXPECT_DOUBLE_EQ(res.t_s.front(), 0.0);
   EXPECT_DOUBLE_EQ(res.t_s.back(), 490.0);
@@ -201,7 +201,7 @@ TEST(CalibrationReport, ResidualsOfASpanBuiltFromTheEstimatesAreZeroAndShowAWron
   // A head angle off by 100": residuals of about 100" times the excitation.
   bc::SolveResult wrong = r;
   wrong.estimate.r_S[0].x() += 100.0 * boresight::kRadPerArcsec;
-  auto res2 = br::residuals(span, wrong);
+  auto res2 = bc::residuals(span, wrong.estimate);
   double worst = 0;
   for (const auto& row : res2.r_S) worst = std::max(worst, row[0].norm());
   EXPECT_GT(worst, 1e-6 * 100 * boresight::kRadPerArcsec);

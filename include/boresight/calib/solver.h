@@ -72,6 +72,19 @@ struct ModelParameters {
   double time_offset_s = 0.0;          ///< tau, s (+: accelerometer tags late)
 };
 
+/// The accelerometer's axes beyond a rotation, the solver's K = I + diag(s) + N(n) with
+/// N = [0 n2 n1; n2 0 n0; n1 n0 0] (the one place the model's matrix is written for doubles).
+Mat3 accAxes(const Vec3& scale, const Vec3& nonorth);
+
+/// The solver's model at the parameters `p`, per observation and head slot, in the head frame (rad/s^2):
+/// alpha_S - Exp([r]x) M C_B_A K^-1 (alpha_A + tau jerk_A - b); NaN where the head has no value; times
+/// in seconds since the first observation. What the report plots (it computes none of it itself).
+struct SpanResiduals {
+  std::vector<double> t_s;
+  std::vector<std::array<Vec3, kMaxHeads>> r_S;  ///< by observation, slot
+};
+SpanResiduals residuals(const CalibrationSpan& span, const ModelParameters& p);
+
 /// Covariance of the head angles (3 n_heads, by slot and axis), rad^2; determined[i] false where the
 /// information has no (or too little) support: the variance is then meaningless (reported as inf).
 struct HeadCovariance {

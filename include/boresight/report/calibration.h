@@ -51,14 +51,6 @@ Json thermalJson(const calib::ThermalFitResult& t);
 /// The JSON tree as block YAML (same keys, same values; number arrays in flow style).
 std::string toYaml(const Json& j);
 
-/// Residuals of the span under the solver's model at its estimate (SolveResult::estimate), per
-/// observation and head, in the head frame (rad/s^2): alpha_S - Exp([r]x) C_S_B(nominal) C_B_A K^-1
-/// (alpha_A + tau jerk_A - b) (calib/solver.h). NaN where the head has no value.
-struct Residuals {
-  std::vector<double> t_s;                        ///< seconds since the first observation
-  std::vector<std::array<Vec3, calib::kMaxHeads>> r_S;  ///< by observation, slot
-};
-Residuals residuals(const calib::CalibrationSpan& span, const calib::SolveResult& r);
 
 /// Writes DIR/report.md and DIR/{residuals,excitation,estimates}.svg (DIR is created). False with
 /// *error when a file cannot be written.
