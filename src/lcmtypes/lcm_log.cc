@@ -218,6 +218,41 @@ bool LcmLogWriter::writeRaw(const std::string& channel, TimeUs utime, const void
   return ok;
 }
 
+bool applyNominalMountings(const NominalMountings& m, core::HeadSetConfig& heads, std::uint32_t keep_mask, Reject& why) {
+  core::HeadSetConfig h = heads;
+  for (int k = 0; k < h.n_heads; ++k) {
+    auto& hk = h.head[static_cast<std::size_t>(k)];
+    if ((keep_mask >> k) & 1u) continue;
+    int j = 0;
+    while (j < m.n_heads && m.head_id[j] != hk.id) ++j;
+    if (j == m.n_heads) {
+      why = Reject::kUnknownHead;
+      return false;
+    }
+    const Quat q(m.q_Si_B[j][0], m.q_Si_B[j][1], m.q_Si_B[j][2], m.q_Si_B[j][3]);
+    if (!q.coeffs().allFinite()) {
+      why = Reject::kNonFinite;
+      return false;
+    }
+    if (std::abs(q.norm() - 1) > 1e-6) {
+      why = Reject::kNonUnit;
+      return false;
+    }
+    hk.q_Si_B = q.normalized();
+  }
+  heads = h;
+  return true;
+}
+
+bool firstNominalMountings(const std::string& path, NominalMountings& out) {
+  LcmLogReader r;
+  if (!r.open(path, nullptr)) return false;
+  LcmLogReader::RawEvent ev;
+  for (int k = 0; k < 100000 && r.nextRaw(ev); ++k)
+    if (ev.size >= 0 && *ev.channel == kMountingsChannel && decodeNominalMountings(ev.data, ev.size, out)) return true;
+  return false;
+}
+
 bool decodeNominalMountings(const void* data, int size, NominalMountings& out) {
   boresight_lcm::nominal_mountings_t m{};
   if (m.decode(data, 0, size) != size) return false;

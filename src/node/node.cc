@@ -356,17 +356,9 @@ struct Node::Impl {
     io::NominalMountings m;
     if (!io::decodeNominalMountings(data, size, m)) return reject(undecodable("nominal_mountings_t", data, size));
     core::PipelineConfig p = pcfg;
-    for (int k = 0; k < p.heads.n_heads; ++k) {
-      auto& h = p.heads.head[static_cast<std::size_t>(k)];
-      if ((cfg.overlay_mounting_mask >> k) & 1u) continue;  // the overlay's mounting stays
-      int j = 0;
-      while (j < m.n_heads && m.head_id[j] != h.id) ++j;
-      if (j == m.n_heads) return reject(Reject::kUnknownHead);
-      const Quat q(m.q_Si_B[j][0], m.q_Si_B[j][1], m.q_Si_B[j][2], m.q_Si_B[j][3]);
-      if (!q.coeffs().allFinite()) return reject(Reject::kNonFinite);
-      if (std::abs(q.norm() - 1) > 1e-6) return reject(Reject::kNonUnit);
-      h.q_Si_B = q.normalized();
-    }
+    Reject why = Reject::kMalformed;
+    // The overlay's mountings stay (overlay_mounting_mask); the rule is the replay programs' too.
+    if (!io::applyNominalMountings(m, p.heads, cfg.overlay_mounting_mask, why)) return reject(why);
     if (core_ready) {
       // A later message: the same mountings again are used and change nothing; new ones are applied at
       // the next head-epoch boundary (applyNominal).

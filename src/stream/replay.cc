@@ -1,5 +1,6 @@
 // Replay setup: inputs by content, configuration for them, sources.
 #include <boresight/stream/replay.h>
+#include <boresight/io/lcm_log.h>
 #include <boresight/core/plausibility.h>
 #include <boresight/io/files.h>
 #include <boresight/stream/sources.h>
@@ -179,13 +180,38 @@ bool prepareConfig(const ReplayInputs& in, const io::ReadOptions& opt, io::Platf
     if (error) *error = "no star sensor input (SCA1A file or LCM log) among the inputs (" + names + ")";
     return false;
   }
+  if (pc.mounting_from_qsa1b && in.qsa_records.empty() && !in.lcm.empty()) {
+    // No QSA1B file: an LCM log's first NOMINAL_MOUNTINGS message carries them, as boresightd takes them
+    // (mountings: log) - the same message, the same rule (io::applyNominalMountings); the overlay's
+    // mountings stay.
+    for (const auto& f : in.lcm) {
+      io::NominalMountings m;
+      if (!io::firstNominalMountings(f, m)) continue;
+      std::uint32_t keep = 0;
+      for (int s = 0; s < pc.pipeline.heads.n_heads; ++s)
+        if (pc.mounting_source[static_cast<std::size_t>(s)].rfind("overlay", 0) == 0) keep |= 1u << s;
+      Reject why = Reject::kMalformed;
+      if (!io::applyNominalMountings(m, pc.pipeline.heads, keep, why)) {
+        if (error)
+          *error = f + ": its NOMINAL_MOUNTINGS message cannot give the platform's mountings (" + io::rejectKey(why) +
+                   ": " + (why == Reject::kUnknownHead ? "a configured head is not in it" : "not a rotation") + ")";
+        return false;
+      }
+      for (int s = 0; s < pc.pipeline.heads.n_heads; ++s)
+        if (!((keep >> s) & 1u))
+          pc.mounting_source[static_cast<std::size_t>(s)] = f + ": the first NOMINAL_MOUNTINGS message";
+      pc.mounting_from_qsa1b = false;
+      break;
+    }
+  }
   if (pc.mounting_from_qsa1b) {
     if (in.qsa_records.empty()) {
       std::string names;
       for (const auto& [f, p] : in.ignored) names += (names.empty() ? "" : ", ") + f + " (" + p + ")";
       for (const auto& f : in.lcm) names += (names.empty() ? "" : ", ") + f + " (LCM log)";
       if (error)
-        *error = "the platform takes the mountings from QSA1B (heads.mounting: qsa1b): give a QSA1B file (none among " +
+        *error = "the platform takes the mountings from QSA1B (heads.mounting: qsa1b): give a QSA1B file, or an LCM "
+                 "log with a NOMINAL_MOUNTINGS message (none among " +
                  (names.empty() ? std::string("the inputs") : names) + ")";
       return false;
     }

@@ -1056,6 +1056,69 @@ Event encodeAs(const std::string& ch, TimeUs t, const M& m) {
   return e;
 }
 
+#ifdef BORESIGHT_CLI
+/// The numbers of every `"key": [a, b, c]` of a JSON text, in order (the tests' minimal reader).
+std::vector<std::array<double, 3>> jsonTriples(const std::string& j, const std::string& key) {
+  std::vector<std::array<double, 3>> out;
+  for (std::size_t at = j.find("\"" + key + "\""); at != std::string::npos; at = j.find("\"" + key + "\"", at + 1)) {
+    std::size_t p = j.find_first_not_of(" \n", j.find(':', at) + 1);
+    if (p == std::string::npos || j[p] != '[') continue;  // the key in a text (the conventions)
+    std::array<double, 3> v{};
+    for (int i = 0; i < 3 && p != std::string::npos; ++i) {
+      p = j.find_first_of("-0123456789n", p + 1);
+      if (p == std::string::npos) break;
+      v[static_cast<std::size_t>(i)] = j.compare(p, 4, "null") == 0 ? std::nan("") : std::strtod(j.c_str() + p, nullptr);
+      p = j.find_first_of(",]", p);
+    }
+    out.push_back(v);
+  }
+  return out;
+}
+
+// One orchestration of method A (calib::runCalibration): the node's worker and `boresight calibrate`
+// give the same calibration of the same data. The node solves once, at the first head epoch 1300 s
+// into a manoeuvring span; calibrate runs on the log cut where the worker's span ends (the heads up to
+// that epoch, the accelerometer before it: the worker has the epoch's heads, its accelerometer sample
+// comes after the request). The same samples, the same code: the angles agree to 1e-6 arcsec.
+TEST(NodeReplay, TheWorkerCalibratesAsCalibrateDoesOnTheSameData) {
+  const std::string log = simulate("same_cal", 1500, {}, nullptr, "config/sim_gracefo_node_demo.yaml");
+  node::NodeConfig cfg = nodeConfig(1e6, 1300);
+  cfg.calibration.apply_lag_epochs = 20;
+  const auto r = replay(log, cfg);
+  const auto cals = r->out.all<boresight_lcm::calibration_t>("BORESIGHT_CALIBRATION");
+  ASSERT_EQ(cals.size(), 1u);
+  const auto& k = cals[0];
+  ASSERT_EQ(k.status, 0);
+  const TimeUs T = k.utime;
+  const std::string cut = editLog(log, "cut.lcm", [&](std::size_t, const Event& e) {
+    std::vector<Event> keep;  // (event times are Unix time, message times GPS: cut by the messages')
+    if (e.ch == "STAR_HEAD") {
+      if (decodeAs<boresight_lcm::star_head_sample_t>(e).utime <= T) keep.push_back(e);
+    } else if (e.ch == "ACCEL") {
+      if (decodeAs<boresight_lcm::accel_sample_t>(e).utime < T) keep.push_back(e);
+    } else if (e.ch == "NOMINAL_MOUNTINGS") {
+      keep.push_back(e);
+    }  // star vectors and the orbit: not method A's inputs
+    return keep;
+  });
+  const std::string dir = makeTempDir("node_same_cal");
+  const auto cal = testutil::runProgram(BORESIGHT_CLI, "calibrate --config " + src("config/gracefo_ideal.yaml") +
+                                                           " --json " + dir + "/c.json " + cut);
+  ASSERT_EQ(cal.status, 0) << cal.out;
+  const std::string j = testutil::slurp(dir + "/c.json");
+  const auto angles = jsonTriples(j, "error_angles_arcsec"), sigmas = jsonTriples(j, "sigma_arcsec");
+  ASSERT_GE(angles.size(), static_cast<std::size_t>(k.n_heads));
+  ASSERT_GE(sigmas.size(), static_cast<std::size_t>(k.n_heads));
+  for (int h = 0; h < k.n_heads; ++h)
+    for (int a = 0; a < 3; ++a) {
+      const auto uh = static_cast<std::size_t>(h), ua = static_cast<std::size_t>(a);
+      EXPECT_NEAR(k.error_angles_arcsec[h][a], angles[uh][ua], 1e-6) << "head " << h << " axis " << a;
+      EXPECT_NEAR(k.sigma_arcsec[h][a], sigmas[uh][ua], 1e-6) << "head " << h << " axis " << a;
+      EXPECT_GT(std::abs(k.error_angles_arcsec[h][a]), 1.0);  // a real calibration, not zeros on both sides
+    }
+}
+#endif
+
 /// Moves the sensor time of a STAR_HEAD, ACCEL, STAR_VECTORS or ORBIT message by dt (a sender clock).
 Event shifted(const Event& e, TimeUs dt) {
   if (e.ch == "STAR_HEAD") {

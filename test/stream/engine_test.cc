@@ -658,6 +658,29 @@ TEST(StreamReplay, InputsByContentIgnoredListedMixedRefused) {
   ASSERT_TRUE(io::loadPlatformConfig(sourceDir() + "/config/gracefo_ideal.yaml", pc2, &err)) << err;
   EXPECT_FALSE(stream::prepareConfig(in, {}, pc2, &err));
   EXPECT_NE(err.find("give a QSA1B file"), std::string::npos) << err;
+  // An LCM log carries them in its NOMINAL_MOUNTINGS message, as boresightd takes them: no QSA1B file
+  // needed, the same mountings as the QSA1B file's (before: refused, "give a QSA1B file").
+  const std::string with_m = tempDir() + "/mountings.lcmlog";
+  {
+    sim::Scenario sc;
+    ASSERT_TRUE(sim::loadScenario(sourceDir() + "/config/sim_gracefo.yaml", sc, &err)) << err;
+    sim::Simulator simulator;
+    ASSERT_TRUE(simulator.init(sc, 11, 60.0, &err)) << err;
+    sim::LcmSink log;
+    ASSERT_TRUE(log.open(with_m, &err)) << err;
+    ASSERT_TRUE(log.writeMountings(simulator));
+    simulator.run(log);
+    ASSERT_TRUE(log.close(&err)) << err;
+  }
+  ASSERT_TRUE(stream::classifyInputs({with_m}, in, &err)) << err;
+  io::PlatformConfig pc3;
+  ASSERT_TRUE(io::loadPlatformConfig(sourceDir() + "/config/gracefo_ideal.yaml", pc3, &err)) << err;
+  ASSERT_TRUE(stream::prepareConfig(in, {}, pc3, &err)) << err;
+  for (int s = 0; s < pc3.pipeline.heads.n_heads; ++s) {
+    EXPECT_LT(pc3.pipeline.heads.head[std::size_t(s)].q_Si_B.angularDistance(pc.pipeline.heads.head[std::size_t(s)].q_Si_B), 1e-9) << s;
+    EXPECT_NE(pc3.mounting_source[std::size_t(s)].find("the first NOMINAL_MOUNTINGS message"), std::string::npos)
+        << pc3.mounting_source[std::size_t(s)];
+  }
 }
 
 TEST(StreamReplay, OpenReplayIsTheOneSetUpOfEveryProgram) {

@@ -6,7 +6,9 @@
 #pragma once
 
 #include <boresight/core/conventions.h>
+#include <boresight/core/heads.h>
 #include <boresight/io/level1.h>
+#include <boresight/io/reject.h>
 
 #include <cstdint>
 #include <memory>
@@ -76,6 +78,14 @@ struct OrbitSample {
 };
 /// Decoders of one message's bytes (false: not decodable, or counts outside their range).
 bool decodeNominalMountings(const void* data, int size, NominalMountings& out);
+/// The message's mounting for every configured head whose bit is not set in `keep_mask` (slot k: bit
+/// k), into `heads`: the node's rule, and the replay programs' when a log carries the mountings. False
+/// with the reason, `heads` unchanged: a configured head the message does not name (kUnknownHead), a
+/// non-finite (kNonFinite) or non-unit (kNonUnit, 1e-6) quaternion.
+bool applyNominalMountings(const NominalMountings& m, core::HeadSetConfig& heads, std::uint32_t keep_mask, Reject& why);
+/// The first NOMINAL_MOUNTINGS message of an LCM log (its first 100 000 events): false when there is none
+/// that decodes.
+bool firstNominalMountings(const std::string& path, NominalMountings& out);
 bool decodeOrbit(const void* data, int size, OrbitSample& out);
 
 // ---- The input messages, decoded and judged once for every reader ------------------------------
