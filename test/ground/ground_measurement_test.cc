@@ -194,6 +194,15 @@ TEST(GroundMeasurement, BadFilesNameTheLine) {
     EXPECT_NE(e.find("on a line"), std::string::npos) << e;
     EXPECT_EQ(e.rfind(at(lineOf(ok, "- name:")), 0), 0u) << e;
   }
+  // a control character in a position name (a NUL, escaped in YAML): refused with its line - it would
+  // not survive the round trip (the fuzzer's finding: "position\0 1" came back as another name)
+  {
+    for (const char* esc : {"\\0", "\\n", "\\t"}) {
+      const std::string e = errorOf(replaced(ok, "name: \"position 1\"", std::string("name: \"position") + esc + "1\""));
+      EXPECT_EQ(e.rfind(at(lineOf(ok, "- name:")), 0), 0u) << e;
+      EXPECT_NE(e.find("name: a control character in it"), std::string::npos) << e;
+    }
+  }
   // YAML syntax error, wrong shapes, quaternion, missing blocks
   {
     const std::string e = errorOf(replaced(ok, "principal_point_px: [", "principal_point_px: [["));
