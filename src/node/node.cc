@@ -13,6 +13,7 @@
 #include <boresight/io/overlay_yaml.h>
 #include <boresight/stream/assembler.h>
 #include <boresight/stream/engine.h>
+#include <boresight/stream/sources.h>
 
 #include "boresight_lcm/calibration_t.hpp"
 #include "boresight_lcm/node_command_t.hpp"
@@ -76,26 +77,6 @@ class LatencyHistogram {
   double max_ns_ = 0;
 };
 
-/// The node's input samples, pushed by the handlers, pulled by the assembler (kPending when empty,
-/// kEnd once closed and empty). Fixed capacity: the assembler pulls each sample right after its push.
-class PushSource final : public stream::Source {
- public:
-  void init(std::size_t cap) { buf_.reset(cap); }
-  bool push(const stream::Sample& s) { return buf_.push(s); }
-  void close() { closed_ = true; }
-  Next next(stream::Sample& out, stream::Reject&) override {
-    if (!buf_.pop(out)) return closed_ ? Next::kEnd : Next::kPending;
-    return Next::kSample;
-  }
-  const std::string& name() const override { return name_; }
-
- private:
-  core::Ring<stream::Sample> buf_;
-  bool closed_ = false;
-  std::string name_ = "node";
-};
-
-
 }  // namespace
 
 struct Node::Impl {
@@ -104,11 +85,13 @@ struct Node::Impl {
   Output* out = nullptr;
   bool configured = false, core_ready = false, finished = false;
   core::PipelineConfig pcfg;
-  core::Pipeline pipe;
-  std::unique_ptr<stream::EpochAssembler> asm_;
-  PushSource src;
-  std::unique_ptr<core::StarEpoch> stars;
-  core::HeadEpoch epoch{};
+  /// The one data path of every program (stream::Engine): the handlers push what they admit into
+  /// `src`, the engine's assembler merges it, steps the core and hands the rows to `rows` (the
+  /// published messages); `feed` (the worker's ring) observes the inputs as calibrate's feed does, and
+  /// `hook` does the node's work at each head-epoch boundary and after each step.
+  std::unique_ptr<stream::Engine> eng = std::make_unique<stream::Engine>();
+  stream::PushSource* src = nullptr;  ///< owned by eng
+  core::Pipeline& pipe() { return eng->pipeline(); }
   Counters c;
   LatencyHistogram lat, lat_heads;  ///< every core step; head epochs only
   std::uint64_t mounting_version = 0;
@@ -119,9 +102,6 @@ struct Node::Impl {
 
   // time state
   TimeGate gate;           ///< data time, jumps (channel_gate.h)
-  bool emitted = false;    ///< the assembler's late rule, mirrored
-  TimeUs last_emit_t = 0;
-  stream::Sample::Kind last_emit_kind = stream::Sample::Kind::kHead;
   TimeUs lookahead_us = 0;
 
   std::array<ChannelGate, kMaxHeads> ch_head{}, ch_stars{};
@@ -226,7 +206,10 @@ struct Node::Impl {
     Impl* m = nullptr;
     void pass(ChannelGate& ch, const stream::Sample* xs, int n, TimeUs t) override { m->pass(ch, xs, n, t); }
     void refuse(bool late) override { m->reject(late ? Reject::kLate : Reject::kTimeJump); }
-    TimeUs handedOut() const override { return m->emitted ? m->last_emit_t : std::numeric_limits<TimeUs>::min(); }
+    TimeUs handedOut() const override {
+      TimeUs t = 0;
+      return m->eng->lastHandedOut(t) ? t : std::numeric_limits<TimeUs>::min();
+    }
     void restart() override { m->resyncBack(); }
   } gate_sink;
   void admit(ChannelGate& s, const stream::Sample* xs, int n, TimeUs t) {
@@ -240,17 +223,15 @@ struct Node::Impl {
   void pass(ChannelGate& s, const stream::Sample* xs, int n, TimeUs t) {
     if (s.duplicate(t)) return reject(Reject::kDuplicate);
     const stream::Sample::Kind kind = xs[0].kind;
-    // A head epoch at the last handed-out tag is late (its epoch is gone); an accelerometer sample may
-    // share it, a star epoch only after a head or accelerometer step.
-    const bool head_like = kind == stream::Sample::Kind::kHead ||
-                           (kind == stream::Sample::Kind::kStar && last_emit_kind == stream::Sample::Kind::kStar);
-    if (emitted && (t < last_emit_t || (t == last_emit_t && head_like))) return reject(Reject::kLate);
+    // The assembler's late rule, asked before the push: a late message is one rejection, whatever
+    // number of samples it carries.
+    if (eng->late(t, kind)) return reject(Reject::kLate);
     const double max_hz = kind == stream::Sample::Kind::kHead || kind == stream::Sample::Kind::kOrbit ? cfg.max_head_rate_hz
                           : kind == stream::Sample::Kind::kAccel                                        ? cfg.max_accel_rate_hz
                                                                                                         : cfg.max_star_rate_hz;
     if (s.flooded(t, max_hz)) return reject(Reject::kFlood);
     for (int i = 0; i < n; ++i) {
-      if (!src.push(xs[i])) {
+      if (!src->push(xs[i])) {
         if (kind != stream::Sample::Kind::kStar) return reject(Reject::kAssembler);
         ++stars_dropped_push;
         continue;
@@ -262,15 +243,11 @@ struct Node::Impl {
     ++c.used;
   }
   void resyncBack() {
-    asm_->restart();
-    drain();  // hands out what the assembler holds, in order, then it forgets its time
-    pipe.flush();
-    publishRows();
-    core_base.add(pipe.health());
-    pipe.reset();
-    if (core_handed) pipe.handMountings(handed_q);  // the calibration in use stays in use
-    emitted = false;
-    last_emit_t = 0;
+    // What the assembler holds goes to the core, in order, and the rows out; then the assembler forgets
+    // its time and the core starts again, its counts kept in core_base.
+    eng->restart([this] { core_base.add(pipe().health()); });
+    account();
+    if (core_handed) pipe().handMountings(handed_q);  // the calibration in use stays in use
   }
   core::Health core_base{};  ///< core counts before the last re-synchronisation (reset() clears them)
   bool core_handed = false;  ///< mountings handed to the core (else its running means align the heads)
@@ -390,12 +367,11 @@ struct Node::Impl {
     have_pending_nominal = false;
     core::PipelineConfig p = pcfg;
     for (int k = 0; k < p.heads.n_heads; ++k) p.heads.head[static_cast<std::size_t>(k)].q_Si_B = pending_nominal[static_cast<std::size_t>(k)];
-    pipe.flush();
-    publishRows();
-    core_base.add(pipe.health());
-    if (configureCore(p) != core::Status::kOk) {  // cannot happen for unit quaternions; keep the old ones
+    eng->flushCore();  // the rows so far, with the old mountings
+    core_base.add(pipe().health());
+    if (!configureCore(p)) {  // cannot happen for unit quaternions; keep the old ones
       configureCore(pcfg);
-      if (core_handed) pipe.handMountings(handed_q);
+      if (core_handed) pipe().handMountings(handed_q);
       ++c.mountings_refused;
       return;
     }
@@ -441,16 +417,15 @@ struct Node::Impl {
   }
 
   /// The core configured with `p`, and the overlay's thermal model set again (configure() drops it).
-  core::Status configureCore(const core::PipelineConfig& p) {
-    const core::Status st = pipe.configure(p);
-    if (st == core::Status::kOk && cfg.thermal_model) pipe.setThermalModel(*cfg.thermal_model);
-    return st;
+  bool configureCore(const core::PipelineConfig& p) {
+    if (!eng->configure(p, nullptr)) return false;
+    if (cfg.thermal_model) eng->setThermalModel(*cfg.thermal_model, nullptr);
+    return true;
   }
-  stream::Sample orbit_out{};  ///< the orbit sample the assembler hands out
 
   // ---------------------------------------------------------------------------------------------
   bool startCore() {
-    if (configureCore(pcfg) != core::Status::kOk) return false;
+    if (!configureCore(pcfg)) return false;
     core_ready = true;
     for (int k = 0; k < kMaxHeads; ++k) handed_q[static_cast<std::size_t>(k)] = pcfg.heads.head[static_cast<std::size_t>(k)].q_Si_B;
     applyState();
@@ -505,49 +480,16 @@ struct Node::Impl {
     c.ring_high_water = std::max<std::uint64_t>(c.ring_high_water, worker.fill());
   }
 
-  /// Hands out everything the assembler may give now and steps the core with it.
+  /// Hands out everything the assembler may give now: the engine steps the core (hook and feed below)
+  /// and publishes the rows (rows); then the samples its assembler refused are moved from used.
   void drain() {
-    for (;;) {
-      TimeUs t = 0;
-      Vec3 a = Vec3::Zero();
-      const auto o = asm_->next(epoch, t, a, stars.get(), &orbit_out);
-      if (o == stream::EpochAssembler::Out::kPending || o == stream::EpochAssembler::Out::kEnd ||
-          o == stream::EpochAssembler::Out::kError)
-        break;
-      emitted = true;
-      if (o == stream::EpochAssembler::Out::kHeads) {
-        last_emit_t = epoch.t;
-        last_emit_kind = stream::Sample::Kind::kHead;
-        stepHeads();
-      } else if (o == stream::EpochAssembler::Out::kAccel) {
-        last_emit_t = t;
-        last_emit_kind = stream::Sample::Kind::kAccel;
-        const auto t0 = std::chrono::steady_clock::now();
-        const core::Status st = pipe.stepAcc(t, a);
-        lat.add(std::chrono::duration<double, std::nano>(std::chrono::steady_clock::now() - t0).count());
-        ++c.accel_steps;
-        if (core::accepted(st)) {  // the samples the core took, as calibrate's feed (SpanFeed) gives them
-          WorkItem it;
-          it.kind = WorkItem::kAcc;
-          it.t = t;
-          it.a_A = a;
-          pushRing(it);
-        }
-      } else if (o == stream::EpochAssembler::Out::kOrbit) {
-        last_emit_t = t;
-        last_emit_kind = stream::Sample::Kind::kOrbit;
-        stepOrbit(t);
-      } else {
-        last_emit_t = stars->t;
-        last_emit_kind = stream::Sample::Kind::kStar;
-        pipe.stepStars(*stars);
-        ++c.star_epochs;
-      }
-      publishRows();
-    }
-    // Samples the assembler refused, moved from used: kLate and kTooManyHeads (kAssembler), a tag far
-    // from its neighbours (kTimeJump), the same head twice at a tag (kDuplicate).
-    const auto& ac = asm_->counters();
+    eng->run();  // a push source never fails; kPending when it holds nothing, kDone once closed
+    account();
+  }
+  /// Samples the assembler refused, moved from used: kLate and kTooManyHeads (kAssembler), a tag far
+  /// from its neighbours (kTimeJump), the same head twice at a tag (kDuplicate).
+  void account() {
+    const auto& ac = eng->counters();
     auto take = [&](std::uint64_t now_count, std::uint64_t& seen, Reject r) {
       if (now_count <= seen) return;
       c.used -= now_count - seen;
@@ -563,60 +505,104 @@ struct Node::Impl {
   }
   std::uint64_t asm_refused = 0, asm_outliers = 0, asm_duplicates = 0, stars_dropped_push = 0;
 
-  /// An orbit sample to the core's thermal prediction (the angles as the engine forms them).
-  void stepOrbit(TimeUs t) {
-    model::OrbitSample o;
-    stream::orbitAngles(orbit_out, o);  // no orbit plane: NaN angles, counted by the core as non-finite
-    pipe.stepOrbit(t, o.u_rad, o.u_rate_rad_s, o.beta_rad);
-    ++c.orbit_steps;
+  /// The node's work between the engine's core steps (real-time thread).
+  struct Hook final : stream::StepHook {
+    Impl* m = nullptr;
+    void beforeHeads(const core::HeadEpoch& e) override { m->beforeHeads(e.t); }
+    void afterStep(stream::Sample::Kind kind, TimeUs t, core::Status, double ns) override { m->afterStep(kind, t, ns); }
+  } hook;
+  /// The worker's inputs: head epochs as the core's validator leaves them and the accelerometer samples
+  /// the core accepted - what `boresight calibrate`'s feed takes from the same engine.
+  struct Feed final : stream::InputObserver {
+    Impl* m = nullptr;
+    void onHeads(const core::HeadEpoch& e, core::Status) override {
+      WorkItem& it = m->item;
+      it.kind = WorkItem::kHeads;
+      it.t = e.t;
+      it.heads = e;
+      m->pushRing(it);
+    }
+    void onAcc(TimeUs t, const Vec3& a_A, core::Status st) override {
+      if (!core::accepted(st)) return;
+      WorkItem& it = m->item;
+      it.kind = WorkItem::kAcc;
+      it.t = t;
+      it.a_A = a_A;
+      m->pushRing(it);
+    }
+  } feed;
+  WorkItem item;  ///< scratch (a work item holds a head epoch)
+  /// The published messages of each row the core completes.
+  struct Rows final : stream::RowSink {
+    Impl* m = nullptr;
+    bool begin(const core::PipelineConfig&) override { return true; }
+    bool write(const core::PipelineRow& r) override {
+      m->publishRow(r);
+      return true;
+    }
+    bool end() override { return true; }
+  } rows;
+
+  /// At a head-epoch boundary, before the core steps the epoch at t: new nominal mountings, a ground
+  /// command, a finished calibration.
+  void beforeHeads(TimeUs t) {
+    if (have_pending_nominal) applyNominal(t);
+    if (pending_cmd != 0) runCommand(t);
+    applyMailbox(t);
   }
 
-  void stepHeads() {
-    if (have_pending_nominal) applyNominal(epoch.t);
-    if (pending_cmd != 0) runCommand(epoch.t);
-    applyMailbox();
-    const auto t0 = std::chrono::steady_clock::now();
-    pipe.stepHeads(epoch);
-    const double ns = std::chrono::duration<double, std::nano>(std::chrono::steady_clock::now() - t0).count();
+  void afterStep(stream::Sample::Kind kind, TimeUs t, double ns) {
+    switch (kind) {
+      case stream::Sample::Kind::kHead: afterHeads(t, ns); break;
+      case stream::Sample::Kind::kAccel:
+        lat.add(ns);
+        ++c.accel_steps;
+        break;
+      case stream::Sample::Kind::kStar:
+        lat.add(ns);
+        ++c.star_epochs;
+        break;
+      case stream::Sample::Kind::kOrbit: ++c.orbit_steps; break;  // the core's thermal prediction
+    }
+  }
+
+  /// After the core stepped the head epoch at t (the feed has pushed it to the worker): the worker's
+  /// schedule, the health message.
+  void afterHeads(TimeUs t, double ns) {
     lat.add(ns);
     lat_heads.add(ns);
     ++c.head_epochs;
     ++head_epoch_index;
-    last_epoch_t = epoch.t;
-    WorkItem it;
-    it.kind = WorkItem::kHeads;
-    it.t = epoch.t;
-    it.heads = epoch;
-    pushRing(it);
+    last_epoch_t = t;
     if (cfg.calibration.enabled) {
       if (!have_first_head) {
         have_first_head = true;
-        first_head_t = epoch.t;
-        next_cal_t = epoch.t + static_cast<TimeUs>(cfg.calibration.min_span_s * 1e6);
+        first_head_t = t;
+        next_cal_t = t + static_cast<TimeUs>(cfg.calibration.min_span_s * 1e6);
       }
       // Replay: one calibration in flight at a time (the lockstep waits for it; several queued behind a
       // jump in the data would have the worker, the solver and this thread wait on each other).
-      if (epoch.t >= next_cal_t && !(mode == Mode::kReplay && !due.empty())) {
+      if (t >= next_cal_t && !(mode == Mode::kReplay && !due.empty())) {
         next_cal_t += static_cast<TimeUs>(cfg.calibration.cadence_s * 1e6);
-        if (next_cal_t <= epoch.t) next_cal_t = epoch.t + static_cast<TimeUs>(cfg.calibration.cadence_s * 1e6);
-        WorkItem s;
+        if (next_cal_t <= t) next_cal_t = t + static_cast<TimeUs>(cfg.calibration.cadence_s * 1e6);
+        WorkItem& s = item;
         s.kind = WorkItem::kSolve;
-        s.t = epoch.t;
+        s.t = t;
         s.solve_id = next_solve_id++;
         if (mode == Mode::kReplay)
           due.push({s.solve_id, head_epoch_index + static_cast<std::uint64_t>(cfg.calibration.apply_lag_epochs)});
         pushRing(s);
       }
     }
-    if (epoch.t >= next_health) {
-      if (next_health != std::numeric_limits<TimeUs>::min()) publishHealth(epoch.t);
-      next_health = epoch.t + static_cast<TimeUs>(cfg.health_period_s * 1e6);
+    if (t >= next_health) {
+      if (next_health != std::numeric_limits<TimeUs>::min()) publishHealth(t);
+      next_health = t + static_cast<TimeUs>(cfg.health_period_s * 1e6);
     }
   }
 
   /// At a head-epoch boundary: a finished calibration goes to the core. Replay: the one due at this
   /// epoch is waited for; live: whatever is ready.
-  void applyMailbox() {
+  void applyMailbox(TimeUs t) {
     if (!cfg.calibration.enabled) return;
     if (mode == Mode::kReplay) {
       if (due.empty() || due.front().second > head_epoch_index) return;
@@ -625,7 +611,7 @@ struct Node::Impl {
     } else if (!worker.ready()) {
       return;
     }
-    takeMailbox(epoch.t);
+    takeMailbox(t);
   }
 
   /// from_t: the first row time the new mountings (and a frame change) apply to.
@@ -679,7 +665,7 @@ struct Node::Impl {
   /// Hands a result's mountings to the core (the datum keeps the relative part), under a new identifier,
   /// with the frame change where configured and allowed; m.applied and its common rotation are filled.
   void applyResult(const std::array<Quat, kMaxHeads>& q, boresight_lcm::calibration_t& m, bool common_determined, TimeUs from_t) {
-    if (pipe.handMountings(q) != core::Status::kOk) return;
+    if (pipe().handMountings(q) != core::Status::kOk) return;
     if (n_history == static_cast<int>(history.size())) {  // the oldest goes
       for (std::size_t i = 1; i < history.size(); ++i) history[i - 1] = history[i];
       --n_history;
@@ -699,7 +685,7 @@ struct Node::Impl {
     mounting_from_t = from_t;
     ++c.calibrations_applied;
     // The common part the datum kept out: the handed rotation minus the correction in use (slot 0).
-    const auto& al = pipe.fusion().relativeAlignment();
+    const auto& al = pipe().fusion().relativeAlignment();
     const Vec3 raw = quatLog(q[0].conjugate() * pcfg.heads.head[0].q_Si_B);
     const Vec3 common = raw - al.c_B[0];
     for (int k = 0; k < 3; ++k) m.common_rotation_B_arcsec[k] = common[k] / kRadPerArcsec;
@@ -763,9 +749,9 @@ struct Node::Impl {
     } else if (cmd == 2 && n_history > 0) {
       const InUse h = history[static_cast<std::size_t>(--n_history)];
       if (h.handed) {
-        if (pipe.handMountings(h.q) != core::Status::kOk) return;
+        if (pipe().handMountings(h.q) != core::Status::kOk) return;
       } else {
-        pipe.releaseMountings();  // the running means again, as before anything was handed
+        pipe().releaseMountings();  // the running means again, as before anything was handed
       }
       core_handed = h.handed;
       const std::uint64_t from = mounting_version;
@@ -891,7 +877,7 @@ struct Node::Impl {
   /// At the core's start: the state's calibration and frame go on.
   void applyState() {
     if (!have_state) return;
-    if (state_frame.calibration > 0 && pipe.handMountings(state_q) == core::Status::kOk) {
+    if (state_frame.calibration > 0 && pipe().handMountings(state_q) == core::Status::kOk) {
       handed_q = state_q;
       core_handed = true;
       mounting_version = mounting_prev = max_version = static_cast<std::uint64_t>(state_frame.calibration);
@@ -919,16 +905,13 @@ struct Node::Impl {
   boresight_lcm::boresight_monitor_t mon_msg{};
   boresight_lcm::node_health_t health_msg{};
 
-  void publishRows() {
-    core::PipelineRow row;
-    while (pipe.popRow(row)) {
-      ++c.rows;
-      if (frame_active) toPublishedFrame(row, row.t >= frame_from_t ? q_frame : q_frame_old);
-      encodeAttitude(row, seq_att++, static_cast<int32_t>(row.t < mounting_from_t ? mounting_prev : mounting_version), att_msg);
-      publish(cfg.channels.attitude, row.t, att_msg);
-      encodeMonitor(row, seq_mon++, pipe, last_epoch_t, mon_msg);
-      publish(cfg.channels.monitor, row.t, mon_msg);
-    }
+  void publishRow(core::PipelineRow row) {
+    ++c.rows;
+    if (frame_active) toPublishedFrame(row, row.t >= frame_from_t ? q_frame : q_frame_old);
+    encodeAttitude(row, seq_att++, static_cast<int32_t>(row.t < mounting_from_t ? mounting_prev : mounting_version), att_msg);
+    publish(cfg.channels.attitude, row.t, att_msg);
+    encodeMonitor(row, seq_mon++, pipe(), last_epoch_t, mon_msg);
+    publish(cfg.channels.monitor, row.t, mon_msg);
   }
 
   /// Replay publishes nothing that depends on the wall clock or thread timing (latency, ring fill):
@@ -937,7 +920,7 @@ struct Node::Impl {
 
   void publishHealth(TimeUs t) {
     const LatencySummary l = lat.summary();
-    core::Health ch = pipe.health();
+    core::Health ch = pipe().health();
     ch.add(core_base);
     encodeHealth(t, seq_health++, c, wallClockFree() ? nullptr : &l, ch, health_msg);
     publish(cfg.channels.health, t, health_msg);
@@ -1005,10 +988,15 @@ bool Node::configure(const NodeConfig& cfg, Mode mode, Output* out, std::string*
   m.gate_sink.m = &m;
   ac.lookahead_us = m.lookahead_us;
   ac.max_buffered = 4096;  // the heap's reserve: no allocation while stepping
-  m.asm_ = std::make_unique<stream::EpochAssembler>(ac);
-  m.src.init(256);
-  m.asm_->addSource(&m.src);
-  m.stars = std::make_unique<core::StarEpoch>();
+  m.eng = std::make_unique<stream::Engine>(ac);
+  auto src = std::make_unique<stream::PushSource>("node");
+  src->init(256);
+  m.src = src.get();
+  m.eng->addSource(std::move(src));
+  m.hook.m = m.feed.m = m.rows.m = &m;
+  m.eng->setHook(&m.hook);
+  m.eng->addSink(&m.rows);
+  if (cfg.calibration.enabled) m.eng->addObserver(&m.feed);
   m.enc.init(8192);
   m.worker.init(cfg.ring_capacity);
   if (!m.readState(error)) return false;
@@ -1047,11 +1035,9 @@ void Node::finish() {
   if (!m.configured || m.finished) return;
   m.finished = true;
   m.dropHeld();  // a jump that the end of the data left unconfirmed
-  m.src.close();
+  m.src->close();
   if (m.core_ready) {
-    m.drain();
-    m.pipe.flush();
-    m.publishRows();
+    m.drain();  // the source is closed: the engine hands out the rest, flushes the core, publishes the rows
     // Replay: calibrations still due are applied (published) at the end, in order.
     if (m.cfg.calibration.enabled && m.mode == Node::Mode::kReplay) {
       while (!m.due.empty()) {
@@ -1071,12 +1057,12 @@ const Counters& Node::counters() const { return impl_->c; }
 LatencySummary Node::stepLatency() const { return impl_->lat.summary(); }
 LatencySummary Node::headStepLatency() const { return impl_->lat_heads.summary(); }
 core::Health Node::coreHealth() const {
-  core::Health h = impl_->pipe.health();
+  core::Health h = impl_->pipe().health();
   h.add(impl_->core_base);
   return h;
 }
 std::string Node::lastCalibrationReason() const { return std::string(impl_->last_reason.data()); }
-const core::Pipeline& Node::pipeline() const { return impl_->pipe; }
+const core::Pipeline& Node::pipeline() const { return impl_->eng->pipeline(); }
 TimeUs Node::dataTime() const { return impl_->gate.now(); }
 std::uint64_t Node::mountingVersion() const { return impl_->mounting_version; }
 Quat Node::frameRotation() const { return impl_->q_frame; }

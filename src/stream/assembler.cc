@@ -45,9 +45,7 @@ void EpochAssembler::enqueue(std::size_t i, const Sample& s) {
   // Late: something after it was handed out already. A head sample at the tag of the last
   // hand-out is late too (its epoch, or an accelerometer sample that sorts after it, is gone), and
   // so is a star vector at the tag of a star epoch already handed out.
-  if (emitted_ && (s.t < last_t_ || (s.t == last_t_ && (s.kind == Sample::Kind::kHead ||
-                                                         (s.kind == Sample::Kind::kStar &&
-                                                          last_kind_ == Sample::Kind::kStar))))) {
+  if (late(s.t, s.kind)) {
     reject(i, Reject::kLate);
     return;
   }

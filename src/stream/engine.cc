@@ -1,20 +1,23 @@
 // Engine: the replay loop (assembler -> core -> sinks).
 #include <boresight/stream/engine.h>
 
+#include <chrono>
 #include <limits>
 
 namespace boresight::stream {
 
 Engine::Engine(const AssemblerConfig& acfg)
-    : pipe_(std::make_unique<core::Pipeline>()), asm_(acfg), stars_(std::make_unique<core::StarEpoch>()) {}
+    : pipe_(std::make_unique<core::Pipeline>()),
+      asm_(acfg),
+      obs_validator_(std::make_unique<core::HeadInputValidator>()),
+      stars_(std::make_unique<core::StarEpoch>()) {}
 Engine::~Engine() = default;
 
 bool Engine::configure(const core::PipelineConfig& cfg, std::string* error) {
   core::Status st = pipe_->configure(cfg);
   configured_ = st == core::Status::kOk;
   heads_cfg_ = cfg.heads;
-  obs_validator_ = std::make_unique<core::HeadInputValidator>();
-  if (configured_) obs_validator_->configure(cfg.heads);
+  if (configured_) obs_validator_->configure(cfg.heads);  // no allocation: a driver re-configures between steps
   if (!configured_ && error) *error = std::string("the core rejected the configuration: ") + core::statusName(st);
   return configured_;
 }
@@ -53,6 +56,16 @@ void Engine::addObserver(InputObserver* o) { observers_.push_back(o); }
 
 core::Health Engine::health() const { return pipe_->health(); }
 
+bool Engine::flushCore() {
+  pipe_->flush();
+  return drain();
+}
+
+namespace {
+using Clock = std::chrono::steady_clock;
+double nsSince(Clock::time_point t0) { return std::chrono::duration<double, std::nano>(Clock::now() - t0).count(); }
+}  // namespace
+
 bool Engine::drain() {
   core::PipelineRow r;
   while (pipe_->popRow(r)) {
@@ -90,14 +103,18 @@ Engine::Result Engine::run() {
         model::OrbitSample o;
         orbitAngles(orbit_, o);  // no orbit plane: NaN angles, which the core counts as non-finite
         ++orbit_samples_;
-        pipe_->stepOrbit(t, o.u_rad, o.u_rate_rad_s, o.beta_rad);
+        const core::Status st = pipe_->stepOrbit(t, o.u_rad, o.u_rate_rad_s, o.beta_rad);
         for (InputObserver* ob : observers_)
           if (ob->wantsOrbit()) ob->onOrbit(o);
+        if (hook_) hook_->afterStep(Sample::Kind::kOrbit, t, st, 0.0);
         break;
       }
       case EpochAssembler::Out::kStars: {
         ++star_epochs_;
-        if (pipe_->stepStars(*stars_) == core::Status::kOk) {
+        const Clock::time_point t0 = hook_ ? Clock::now() : Clock::time_point{};
+        const core::Status st = pipe_->stepStars(*stars_);
+        if (hook_) hook_->afterStep(Sample::Kind::kStar, stars_->t, st, nsSince(t0));
+        if (st == core::Status::kOk) {
           ++star_solutions_;
           StarSolution sol;
           sol.wahba = pipe_->wahba().output();
@@ -116,7 +133,10 @@ Engine::Result Engine::run() {
         if (epochs_++ == 0) first_epoch_ = e.t;
         last_epoch_ = e.t;
         {
+          if (hook_) hook_->beforeHeads(e);
+          const Clock::time_point t0 = hook_ ? Clock::now() : Clock::time_point{};
           const core::Status st = pipe_->stepHeads(e);
+          const double ns = hook_ ? nsSince(t0) : 0.0;
           if (!observers_.empty() && obs_validator_->step(e) == core::Status::kOk) {
             // The epoch as the core's validator leaves it (the same checks, the same order of heads).
             const core::ValidHeads& v = obs_validator_->output();
@@ -131,11 +151,15 @@ Engine::Result Engine::run() {
             }
             for (InputObserver* o : observers_) o->onHeads(clean, st);
           }
+          if (hook_) hook_->afterStep(Sample::Kind::kHead, e.t, st, ns);
         }
         break;
       case EpochAssembler::Out::kAccel: {
+        const Clock::time_point t0 = hook_ ? Clock::now() : Clock::time_point{};
         const core::Status st = pipe_->stepAcc(t, a);
+        const double ns = hook_ ? nsSince(t0) : 0.0;
         for (InputObserver* o : observers_) o->onAcc(t, a, st);
+        if (hook_) hook_->afterStep(Sample::Kind::kAccel, t, st, ns);
         break;
       }
       case EpochAssembler::Out::kPending:

@@ -199,4 +199,9 @@ Source::Next LcmLogSource::next(Sample& out, Reject& why) {
   return Next::kEnd;
 }
 
+Source::Next PushSource::next(Sample& out, Reject&) {
+  if (!buf_.pop(out)) return closed_ ? Next::kEnd : Next::kPending;
+  return Next::kSample;
+}
+
 }  // namespace boresight::stream

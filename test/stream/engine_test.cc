@@ -396,6 +396,163 @@ TEST(StreamEngine, AnObserverGetsHeadEpochsAsTheCoreValidatorLeavesThem) {
     for (int k = 0; k < x.n; ++k) EXPECT_TRUE(core::allFinite(x.sample[std::size_t(k)].q_I_Si));
 }
 
+/// The span's head and accelerometer records as samples in time order (heads first at equal tags), the
+/// order a live link delivers them in.
+std::vector<stream::Sample> mergedSamples(const std::vector<io::Sca1aRecord>& sca, const std::vector<io::FlaggedRecord>& acc) {
+  std::vector<stream::Sample> v;
+  for (const auto& r : sca) {
+    stream::Sample x;
+    x.kind = stream::Sample::Kind::kHead;
+    x.t = r.t;
+    x.head_id = r.head;
+    x.q_I_S = quatFromScalarFirst(r.q);
+    v.push_back(x);
+  }
+  for (const auto& r : acc) {
+    stream::Sample x;
+    x.kind = stream::Sample::Kind::kAccel;
+    x.t = r.t;
+    x.a_A = Vec3(r.value[3], r.value[4], r.value[5]);
+    v.push_back(x);
+  }
+  std::stable_sort(v.begin(), v.end(), [](const stream::Sample& a, const stream::Sample& b) {
+    return a.t != b.t ? a.t < b.t : static_cast<int>(a.kind) < static_cast<int>(b.kind);
+  });
+  return v;
+}
+
+/// What a driver's hook sees: every boundary and step, in order.
+struct RecordingHook final : stream::StepHook {
+  std::vector<TimeUs> before, heads, accs;
+  int out_of_order = 0;  ///< a head step without its boundary just before it
+  bool open_boundary = false;
+  double min_head_ns = 1e300;
+  void beforeHeads(const core::HeadEpoch& e) override {
+    if (open_boundary) ++out_of_order;
+    before.push_back(e.t);
+    open_boundary = true;
+  }
+  void afterStep(stream::Sample::Kind k, TimeUs t, core::Status, double ns) override {
+    if (k == stream::Sample::Kind::kHead) {
+      if (!open_boundary || before.back() != t) ++out_of_order;
+      open_boundary = false;
+      heads.push_back(t);
+      min_head_ns = std::min(min_head_ns, ns);
+    } else if (k == stream::Sample::Kind::kAccel) {
+      accs.push_back(t);
+    }
+  }
+};
+
+// The node's data path: a live source pushed sample by sample, the engine run after each push (kPending
+// while it holds nothing), a hook at every head-epoch boundary. It must give the rows of the file
+// replay bit for bit, call the hook once per boundary and step, and judge lateness by the assembler's
+// own rule; a restart (a clock step back) hands out what is held, then the core and the observers'
+// validator start again.
+TEST(StreamEngine, APushSourceWithAHookGivesTheFileReplaysRowsAndRestarts) {
+  const auto sca = readSca(span().sca);
+  const auto acc = readAcc(span().acc);
+  const auto cfg = pipelineConfig(sca);
+  const EngineRun files = runEngine({span().sca}, {span().acc}, {}, cfg);
+  ASSERT_EQ(files.result, stream::Engine::Result::kDone) << files.error;
+  const std::vector<stream::Sample> in = mergedSamples(sca, acc);
+  ASSERT_GT(in.size(), 1000u);
+
+  stream::Engine e;
+  std::string err;
+  ASSERT_TRUE(e.configure(cfg, &err)) << err;
+  auto src = std::make_unique<stream::PushSource>();
+  src->init(8);
+  stream::PushSource* push = src.get();
+  e.addSource(std::move(src));
+  VectorSink sink;
+  e.addSink(&sink);
+  RecordingHook hook;
+  e.setHook(&hook);
+  struct Obs final : stream::InputObserver {
+    std::size_t heads = 0;
+    void onHeads(const core::HeadEpoch&, core::Status) override { ++heads; }
+  } obs;
+  e.addObserver(&obs);
+  TimeUs t_dummy = 0;
+  EXPECT_FALSE(e.lastHandedOut(t_dummy));  // nothing handed out yet
+  for (const auto& x : in) {
+    ASSERT_TRUE(push->push(x));
+    ASSERT_EQ(e.run(), stream::Engine::Result::kPending);
+  }
+  push->close();
+  ASSERT_EQ(e.run(), stream::Engine::Result::kDone) << e.error();
+  EXPECT_TRUE(sameRows(sink.rows, files.rows));
+  EXPECT_EQ(hook.out_of_order, 0);
+  EXPECT_EQ(hook.heads.size(), e.epochs());
+  EXPECT_EQ(hook.before.size(), e.epochs());
+  EXPECT_EQ(hook.accs.size(), e.counters().used_accel);
+  EXPECT_EQ(hook.heads.front(), e.firstEpoch());
+  EXPECT_EQ(hook.heads.back(), e.lastEpoch());
+  EXPECT_GT(hook.min_head_ns, 0.0);  // every head step timed
+  EXPECT_EQ(obs.heads, e.epochs());
+  // The late rule, asked before a push: the last epoch's tag is gone for a head, not for the accelerometer.
+  TimeUs last = 0;
+  ASSERT_TRUE(e.lastHandedOut(last));
+  EXPECT_EQ(last, in.back().t);
+  EXPECT_TRUE(e.late(e.lastEpoch(), stream::Sample::Kind::kHead));
+  EXPECT_TRUE(e.late(e.firstEpoch(), stream::Sample::Kind::kAccel));
+  EXPECT_FALSE(e.late(last + 1, stream::Sample::Kind::kHead));
+
+  // A clock step back: the first half, a restart, then the whole span again from its start.
+  stream::Engine r;
+  ASSERT_TRUE(r.configure(cfg, &err)) << err;
+  src = std::make_unique<stream::PushSource>();
+  src->init(8);
+  push = src.get();
+  r.addSource(std::move(src));
+  VectorSink rsink;
+  r.addSink(&rsink);
+  Obs robs;
+  r.addObserver(&robs);
+  const std::size_t half = in.size() / 2;
+  for (std::size_t i = 0; i < half; ++i) {
+    ASSERT_TRUE(push->push(in[i]));
+    r.run();
+  }
+  int before_reset = 0;
+  std::uint64_t epochs_before_reset = 0;
+  ASSERT_EQ(r.restart([&] {
+    ++before_reset;
+    epochs_before_reset = r.pipeline().health().count(core::Status::kOk);
+  }),
+            stream::Engine::Result::kPending);
+  EXPECT_EQ(before_reset, 1);
+  const std::size_t rows_first = rsink.rows.size();
+  const std::size_t heads_first = robs.heads;
+  EXPECT_GT(epochs_before_reset, 0u);
+  EXPECT_EQ(r.pipeline().health().count(core::Status::kOk), 0u);  // the core started again
+  EXPECT_FALSE(r.lastHandedOut(t_dummy));                // the assembler forgot its time
+  EXPECT_FALSE(r.late(in.front().t, stream::Sample::Kind::kHead));
+  // Everything of the first half went out before the restart: the rows of a replay of that half alone
+  // (the records are in time order in the files, so the half's are the first ones of each).
+  ASSERT_TRUE(std::is_sorted(sca.begin(), sca.end(), [](const auto& a, const auto& b) { return a.t < b.t; }));
+  ASSERT_TRUE(std::is_sorted(acc.begin(), acc.end(), [](const auto& a, const auto& b) { return a.t < b.t; }));
+  std::size_t heads_in_half = 0;
+  for (std::size_t i = 0; i < half; ++i) heads_in_half += in[i].kind == stream::Sample::Kind::kHead;
+  const std::vector<io::Sca1aRecord> sca_half(sca.begin(), sca.begin() + static_cast<long>(heads_in_half));
+  const std::vector<io::FlaggedRecord> acc_half(acc.begin(), acc.begin() + static_cast<long>(half - heads_in_half));
+  EXPECT_TRUE(sameRows(std::vector<core::PipelineRow>(rsink.rows.begin(), rsink.rows.begin() + static_cast<long>(rows_first)),
+                       referenceRows(sca_half, acc_half, cfg)));
+  for (const auto& x : in) {
+    ASSERT_TRUE(push->push(x));
+    r.run();
+  }
+  push->close();
+  ASSERT_EQ(r.run(), stream::Engine::Result::kDone) << r.error();
+  // After the restart: the whole span's rows again, and the observers saw every epoch again (their
+  // validator restarted with the core: without it, every epoch older than the first half's last fails).
+  EXPECT_TRUE(sameRows(std::vector<core::PipelineRow>(rsink.rows.begin() + static_cast<long>(rows_first), rsink.rows.end()),
+                       files.rows));
+  EXPECT_EQ(robs.heads - heads_first, obs.heads);
+  EXPECT_EQ(r.counters().rejectedTotal(), 0u);
+}
+
 TEST(StreamEngine, LcmLogGivesTheSameRowsAsLevel1) {
   const auto sca = readSca(span().sca);
   const auto cfg = pipelineConfig(sca);

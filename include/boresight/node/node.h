@@ -1,15 +1,19 @@
-// boresight::node - the LCM node `boresightd`: message handlers (decode, validate, count), the epoch
-// assembler and the real-time core stepped per epoch, outputs published as LCM messages, and a worker
-// thread that runs the method A solver at a configured cadence and hands the mountings back.
+// boresight::node - the LCM node `boresightd`: message handlers (decode, validate, count) in front of
+// the replay engine every program runs (stream::Engine: epoch assembler, real-time core, sinks),
+// outputs published as LCM messages, and a worker thread that runs the method A solver at a
+// configured cadence and hands the mountings back.
 //
-//   live:    lcm::LCM subscriptions ---------\                            /--> publish (lcm::LCM)
-//   replay:  io::LcmLogReader::nextRaw() -----+-> Node::onMessage() ... core +--> record (LCM log)
-//                                             (same handlers)              \--> SPSC ring -> worker
+//   live:    lcm::LCM subscriptions ---------\                  stream::Engine     /--> publish (lcm::LCM)
+//   replay:  io::LcmLogReader::nextRaw() -----+-> Node::onMessage() -> PushSource -> core +--> record (LCM log)
+//                                             (same handlers)      (hook, sink)    \--> SPSC ring -> worker
 //
-// Threads: the caller's thread (the real-time one) runs the handlers, the assembler and the core;
-// after configure() it does not allocate (fixed-size messages decoded on the stack, a fixed ring, a
-// fixed latency histogram). The worker thread owns a calib::SpanBuilder fed from a bounded lock-free
-// single-producer/single-consumer ring (head epochs and accelerometer samples as the core got them);
+// Threads: the caller's thread (the real-time one) runs the handlers and the engine (its assembler and
+// core; the node's work at each head-epoch boundary is the engine's StepHook, the published messages
+// its RowSink, the worker's ring its InputObserver); after configure() it does not allocate
+// (fixed-size messages decoded on the stack, a fixed ring, a fixed latency histogram). The worker
+// thread owns a calib::CalibrationFeed fed from a bounded lock-free single-producer/single-consumer
+// ring (head epochs as the core's validator leaves them and the accelerometer samples the core
+// accepted: what `boresight calibrate`'s feed takes from the same engine);
 // at every `cadence_s` of data time the real-time thread puts a solve request into the ring, and the
 // worker solves a copy of the span (single-threaded Ceres) and leaves the result in a one-slot mailbox.
 // The real-time thread takes it at a head-epoch boundary and hands the mountings to the core

@@ -62,6 +62,19 @@ class EpochAssembler {
   /// by the next calls as if every source had finished, then the assembler forgets its time (held
   /// samples become time outliers) and starts again with the next sample. No allocation.
   void restart() { restart_ = true; }
+  /// The tag and kind of the last sample handed out since the start or the last restart (false: none):
+  /// what the late rule compares a new sample with, for a driver that checks before it pushes.
+  bool lastHandedOut(TimeUs& t, Sample::Kind& kind) const {
+    t = last_t_;
+    kind = last_kind_;
+    return emitted_;
+  }
+  /// The late rule: a sample at `t` of `kind` would be rejected as Reject::kLate now (older than the
+  /// last hand-out; at its tag, a head - its epoch is gone - or a star vector after a star epoch).
+  bool late(TimeUs t, Sample::Kind kind) const {
+    return emitted_ && (t < last_t_ || (t == last_t_ && (kind == Sample::Kind::kHead ||
+                                                         (kind == Sample::Kind::kStar && last_kind_ == Sample::Kind::kStar))));
+  }
 
   /// Counters of all sources together, and of each (index = order added).
   const Counters& counters() const { return total_; }

@@ -1,7 +1,8 @@
 // The streaming replay engine: sources -> epoch assembler (bounded look-ahead) -> core::Pipeline ->
 // sinks. Memory does not depend on the span: the sources read in chunks, the assembler buffers at
 // most AssemblerConfig::max_buffered samples, the core is fixed-size and rows go straight to the
-// sinks. `boresight process` runs it over files; the node and the batch tools will run it too.
+// sinks. `boresight process`, `calibrate` and the audit run it over files; `boresightd` runs it on a
+// stream::PushSource fed by its message handlers, with a StepHook for its work between core steps.
 //
 //   stream::Engine e;
 //   if (!e.configure(cfg, &err)) ...;
@@ -27,6 +28,22 @@ namespace boresight::stream {
 /// velocity span no orbit plane; then the angles are NaN (the core counts that input as non-finite).
 /// The engine and the node step Pipeline::stepOrbit with it.
 bool orbitAngles(const Sample& s, model::OrbitSample& out);
+
+/// What a driver does between the core's steps, on the engine's thread (the node: new mountings,
+/// ground commands and finished calibrations at a head-epoch boundary; its latency figures, the
+/// worker's schedule and the health messages after a step). Must not allocate, throw or block when
+/// the engine runs on a real-time thread.
+class StepHook {
+ public:
+  virtual ~StepHook() = default;
+  /// A head-epoch boundary: the core is about to step the epoch `e` (what the driver changes in the
+  /// core now applies from this epoch on).
+  virtual void beforeHeads(const core::HeadEpoch& /*e*/) {}
+  /// The core stepped an input: kind kHead (a head epoch at t), kAccel, kStar (a star epoch) or kOrbit,
+  /// with the core's status and the step's wall time in ns (the core's step alone; 0 for orbit
+  /// samples). After the observers saw the input, before the rows it completed go to the sinks.
+  virtual void afterStep(Sample::Kind /*kind*/, TimeUs /*t*/, core::Status /*st*/, double /*wall_ns*/) {}
+};
 
 class Engine {
  public:
@@ -54,6 +71,8 @@ class Engine {
   /// Sees every head epoch (validated, see InputObserver) and accelerometer sample handed to the core;
   /// not owned.
   void addObserver(InputObserver* o);
+  /// The driver's hook (not owned; nullptr: none). With a hook, every core step is timed.
+  void setHook(StepHook* h) { hook_ = h; }
 
   /// Runs until every source is finished (then the core is flushed and the sinks end: kDone), a
   /// source has nothing now (kPending: call run() again later), or a source or sink fails (kError).
@@ -74,6 +93,38 @@ class Engine {
   std::size_t maxBuffered() const { return asm_.maxBuffered(); }
   core::Health health() const;
   const core::Pipeline& pipeline() const { return *pipe_; }
+  /// The core, for a driver that changes it between steps (hands mountings, restarts it). Re-configure
+  /// through configure(), which keeps the observers' validator in step with it.
+  core::Pipeline& pipeline() { return *pipe_; }
+
+  // A driver of a live source (stream::PushSource) between pushes and runs:
+  /// True when a sample of this kind at t would be rejected as late (EpochAssembler::late): a driver
+  /// that counts per message checks it before pushing.
+  bool late(TimeUs t, Sample::Kind kind) const { return asm_.late(t, kind); }
+  /// The tag of the last input handed to the core since the start or the last restart (false: none).
+  bool lastHandedOut(TimeUs& t) const {
+    Sample::Kind k{};
+    return asm_.lastHandedOut(t, k);
+  }
+  /// A re-synchronisation (a confirmed clock step back): what the assembler holds goes to the core,
+  /// the core's pending rows go to the sinks, then the assembler forgets its time and the core and the
+  /// observers' validator start again (filters empty; the core's health counts restart too, so a driver
+  /// adds them up before). `before_reset` runs between the flush and the reset (the driver's last look
+  /// at the core). kError as run().
+  template <typename F>
+  Result restart(F&& before_reset) {
+    asm_.restart();
+    const Result r = run();
+    if (r == Result::kError) return r;
+    if (!flushCore()) return Result::kError;
+    before_reset();
+    pipe_->reset();
+    obs_validator_->reset();
+    return r;
+  }
+  /// The core's pending rows (Pipeline::flush) to the sinks, at a boundary where the driver changes the
+  /// core (new mountings). False when a sink fails (error()).
+  bool flushCore();
 
  private:
   bool drain();
@@ -82,6 +133,7 @@ class Engine {
   std::vector<std::unique_ptr<Source>> sources_;
   std::vector<RowSink*> sinks_;
   std::vector<InputObserver*> observers_;
+  StepHook* hook_ = nullptr;
   std::unique_ptr<core::HeadInputValidator> obs_validator_;  ///< the core's validator, for observers
   core::HeadSetConfig heads_cfg_{};
   std::string error_;

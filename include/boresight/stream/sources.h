@@ -2,6 +2,7 @@
 // samples; and the recognition of an input file by its content.
 #pragma once
 
+#include <boresight/core/ring.h>
 #include <boresight/io/level1.h>
 #include <boresight/io/product_stream.h>
 #include <boresight/stream/source.h>
@@ -143,6 +144,27 @@ class LcmLogSource final : public Source {
 }  // namespace boresight::stream
 
 namespace boresight::stream {
+
+/// A live source: the driver pushes the samples it received (the node's message handlers, after their
+/// checks) and runs the engine; next() hands them out in push order, kPending when it holds none, kEnd
+/// once closed and empty. Fixed capacity, allocated once by init(): the engine takes each sample right
+/// after its push, so a few slots are enough. Rejects nothing itself (the driver counts what it refuses
+/// before pushing).
+class PushSource final : public Source {
+ public:
+  explicit PushSource(std::string name = "live") : name_(std::move(name)) {}
+  void init(std::size_t capacity) { buf_.reset(capacity); }
+  /// False (nothing pushed) when full.
+  bool push(const Sample& s) { return buf_.push(s); }
+  void close() { closed_ = true; }
+  Next next(Sample& out, Reject& why) override;
+  const std::string& name() const override { return name_; }
+
+ private:
+  core::Ring<Sample> buf_;
+  bool closed_ = false;
+  std::string name_;
+};
 
 /// Runs another (file) source on its own thread and hands its results over in batches through a
 /// bounded queue, so parsing overlaps the core. Memory: at most `queue_batches` batches of
