@@ -495,8 +495,14 @@ bool Collector::Impl::argumentOfLatitude(TimeUs t, double& u) const {
   return true;
 }
 
+std::uint64_t Collector::orbitUnusable() const { return impl_->orbit_unusable; }
+
 void Collector::addOrbit(const model::OrbitSample& o) {
   Impl& m = *impl_;
+  if (!std::isfinite(o.u_rad) || !std::isfinite(o.u_rate_rad_s)) {
+    ++m.orbit_unusable;
+    return;
+  }
   if (!m.orbit.empty() && std::llabs(o.t - m.orbit.back().t) < 10 * kUsPerSecond) return;
   if (!m.orbit.empty() && o.t < m.orbit.back().t) {  // out of order (several files): kept sorted
     const auto it = std::lower_bound(m.orbit.begin(), m.orbit.end(), o.t, [](const model::OrbitSample& a, TimeUs x) { return a.t < x; });

@@ -152,6 +152,7 @@ struct Collector::Impl {
   std::vector<model::OrbitSample> orbit;
   /// AuditOptions::applied_thermal: epochs corrected, epochs without an orbit sample near them.
   std::uint64_t thermal_applied = 0, thermal_no_orbit = 0;
+  std::uint64_t orbit_unusable = 0;  ///< orbit samples without an orbit plane (not kept)
   /// The argument of latitude at t from the nearest orbit sample (within 60 s); false without one.
   bool argumentOfLatitude(TimeUs t, double& u) const;
 

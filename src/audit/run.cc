@@ -9,6 +9,7 @@
 #include <boresight/stream/engine.h>
 #include <boresight/stream/replay.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -47,33 +48,6 @@ class Progress final : public stream::InputObserver {
   std::chrono::steady_clock::time_point w0_ = std::chrono::steady_clock::now();
 };
 
-/// Orbit records (GNI1B inertial, GNV1B Earth-fixed) into the collector. Counts what it could not use.
-bool feedOrbit(const std::vector<std::string>& files, const io::ReadOptions& opt, Collector& c, std::uint64_t& used,
-               std::uint64_t& rejected, std::vector<std::string>& notes, std::string* error) {
-  for (const auto& f : files) {
-    io::ProductStream<io::GnvRecord> st;
-    if (!st.open(f, opt, error)) return false;
-    io::GnvRecord r;
-    while (st.next(r)) {
-      model::OrbitSample s;
-      const Vec3 p(r.pos[0], r.pos[1], r.pos[2]), v(r.vel[0], r.vel[1], r.vel[2]);
-      if (!model::orbitSampleFromRecord(r.t, r.coord_ref, p, v, s)) {
-        ++rejected;
-        continue;
-      }
-      c.addOrbit(s);
-      ++used;
-    }
-    if (!st.ok()) {
-      if (error) *error = st.error();
-      return false;
-    }
-    rejected += st.rejectedCount();
-    for (std::size_t k = 0; k < st.rejected().size() && k < 5; ++k) notes.push_back("  rejected " + st.rejected()[k].str());
-  }
-  return true;
-}
-
 }  // namespace
 
 bool runAudit(const RunRequest& req, RunOutput& out, std::string* error) {
@@ -94,10 +68,10 @@ bool runAudit(const RunRequest& req, RunOutput& out, std::string* error) {
   io::PlatformConfig& pc = rp.pc;
   out.overlay = rp.overlay;
   stream::ReplayInputs& in = rp.in;
-  const io::ReadOptions& opt = rp.opt;
   stream::Engine& engine = *rp.engine;
   out.truth_given = req.truth.has_value();
-  // Sort what the replay does not read: outside reference, its clock, the orbit; the rest is ignored.
+  // Sort what the replay does not read: outside reference, its clock; the orbit files are the engine's
+  // (in.orbit, also listed as ignored); the rest is ignored.
   std::vector<std::string> sca1b, clk1b, gni, gnv;
   std::vector<std::pair<std::string, std::string>> ignored;
   for (const auto& [f, product] : in.ignored) {
@@ -111,8 +85,10 @@ bool runAudit(const RunRequest& req, RunOutput& out, std::string* error) {
   for (const auto& [f, product] : ignored)
     out.notes.push_back(f + ": " + product +
                         " is not an input of audit (SCA1A, ACC1A, QSA1B, GNI1B/GNV1B, SCA1B, CLK1B, LCM log): ignored");
-  // The orbit: GNI1B (inertial, exact) when given, else GNV1B (through the Earth rotation angle).
-  const std::vector<std::string>& orbit = gni.empty() ? gnv : gni;
+  // The orbit: GNI1B (inertial, exact) when given, else GNV1B (through the Earth rotation angle); an LCM
+  // log's ORBIT messages too. Read by the engine in time order with the rest (the collector takes it).
+  const std::vector<std::string> orbit = gni.empty() ? gnv : gni;
+  in.orbit = orbit;
   if (!gni.empty())
     for (const auto& f : gnv) out.notes.push_back(f + ": GNV1B not used: GNI1B gives the orbit");
   if (!clk1b.empty() && sca1b.empty())
@@ -128,14 +104,33 @@ bool runAudit(const RunRequest& req, RunOutput& out, std::string* error) {
   for (const auto& f : in.lcm) out.inputs.push_back(f + ": LCM log");
   for (const auto& f : orbit) out.inputs.push_back(f + ": orbit context");
 
+  // The observers before the sources (the engine opens the orbit files for an observer that wants the
+  // orbit): the reference's samples up to each head epoch first, then the progress, then the collector
+  // (configured below, once the replay has settled the mountings).
+  Collector collector;
+  ClockMap clock;
+  if (!sca1b.empty() && !loadClk1b(clk1b, clock, error)) return false;
+  ReferenceFeed reference(collector, clock);
+  if (!sca1b.empty()) {
+    if (!reference.open(sca1b, error)) return false;
+    out.reference_time_base = reference.timeBase();
+    for (const auto& f : sca1b) out.inputs.push_back(f + ": SCA1B outside reference (" + out.reference_time_base + ")");
+    for (const auto& f : clk1b) out.inputs.push_back(f + ": CLK1B receiver clock");
+    engine.addObserver(&reference);
+  }
+  Progress progress(req.progress, req.progress_every_s > 0 ? req.progress_every_s : 6 * 3600.0);
+  engine.addObserver(&progress);
+  engine.addObserver(&collector);
+  engine.addSink(&collector);
+
   if (!stream::startReplay(rp, error)) return false;
   AuditOptions options = req.options;
   bool thermal_terms = false;
   if (out.overlay.thermal_model)
     for (const auto& h : out.overlay.thermal_model->head) thermal_terms = thermal_terms || h.valid;
   if (thermal_terms) {
-    if (orbit.empty()) {
-      if (error) *error = req.overlay + ": thermal terms need the orbit among the inputs (GNI1B or GNV1B files)";
+    if (orbit.empty() && in.lcm.empty()) {
+      if (error) *error = req.overlay + ": thermal terms need the orbit among the inputs (GNI1B or GNV1B files, or an LCM log's ORBIT messages)";
       return false;
     }
     options.applied_thermal = out.overlay.thermal_model;
@@ -173,24 +168,7 @@ bool runAudit(const RunRequest& req, RunOutput& out, std::string* error) {
     if (wsum > 0) options.configured_gm_tau_s = tsum / wsum;
   }
   options.data_events = pc.events;  // the data events' null: the platform file's (or the overlay's) expected runs
-  Collector collector;
   if (!collector.configure(pc.pipeline, options, error)) return false;
-  if (!feedOrbit(orbit, opt, collector, out.orbit_samples, out.orbit_rejected, out.notes, error)) return false;
-
-  ClockMap clock;
-  if (!sca1b.empty() && !loadClk1b(clk1b, clock, error)) return false;
-  ReferenceFeed reference(collector, clock);
-  if (!sca1b.empty()) {
-    if (!reference.open(sca1b, error)) return false;
-    out.reference_time_base = reference.timeBase();
-    for (const auto& f : sca1b) out.inputs.push_back(f + ": SCA1B outside reference (" + out.reference_time_base + ")");
-    for (const auto& f : clk1b) out.inputs.push_back(f + ": CLK1B receiver clock");
-    engine.addObserver(&reference);  // before the collector: reference samples up to each head epoch first
-  }
-  Progress progress(req.progress, req.progress_every_s > 0 ? req.progress_every_s : 6 * 3600.0);
-  engine.addObserver(&progress);
-  engine.addObserver(&collector);
-  engine.addSink(&collector);
   if (engine.run() != stream::Engine::Result::kDone) {
     if (error) *error = engine.error();
     return false;
@@ -200,6 +178,11 @@ bool runAudit(const RunRequest& req, RunOutput& out, std::string* error) {
     return false;
   }
   out.counters = engine.counters();
+  out.orbit_samples = engine.orbitSamples() - collector.orbitUnusable();
+  out.orbit_rejected = collector.orbitUnusable();
+  for (std::size_t i = 0; i < engine.sourceCount(); ++i)
+    if (std::find(orbit.begin(), orbit.end(), engine.source(i).name()) != orbit.end())
+      out.orbit_rejected += engine.counters(i).rejectedTotal();
   // Every record is used or rejected with a reason: the rejected ones per source, with the first lines.
   for (std::size_t i = 0; i < engine.sourceCount(); ++i) {
     const auto& c = engine.counters(i);
@@ -230,12 +213,14 @@ bool runAudit(const RunRequest& req, RunOutput& out, std::string* error) {
                         (out.reference_dropped ? ", " + std::to_string(out.reference_dropped) +
                                                      " dropped (bad quaternion or out of time order)"
                                                : std::string()));
-  if (!orbit.empty())
+  if (out.orbit_samples > 0)
     out.notes.push_back("orbit context: " + std::to_string(out.orbit_samples) + " samples from " +
-                        (gni.empty() ? "GNV1B (Earth-fixed, rotated by the Earth rotation angle)" : "GNI1B") +
+                        (!gni.empty()   ? std::string("GNI1B")
+                         : !gnv.empty() ? std::string("GNV1B (Earth-fixed, rotated by the Earth rotation angle)")
+                                        : std::string("the LCM log's ORBIT messages")) +
                         (out.orbit_rejected ? ", " + std::to_string(out.orbit_rejected) + " rejected" : std::string()));
   else
-    out.notes.push_back("no orbit context (GNI1B / GNV1B): no orbit-harmonic tests");
+    out.notes.push_back("no orbit context (GNI1B / GNV1B, ORBIT messages): no orbit-harmonic tests");
   if (options.applied_thermal) {
     const auto& ci = collector.impl();
     out.notes.push_back("thermal terms of " + req.overlay + " applied to " + std::to_string(ci.thermal_applied) + " head epochs" +

@@ -673,3 +673,37 @@ TEST(AuditCli, DropoutsAtTheConfiguredRateAreNotNamed) {
   ASSERT_EQ(m2.status, 0) << m2.out;
   EXPECT_FALSE(gaps2(nlohmann::json::parse(testutil::slurp(dir + "/max2/audit.json")))["named"].get<bool>());
 }
+
+// An LCM log carries the orbit as ORBIT messages: the audit reads them from the same stream as the
+// heads (the engine), so the log alone gives the audit the Level-1 files give - an orbit-periodic
+// effect hidden in it is named. Before, the audit read only GNI1B / GNV1B files ahead of the replay, and
+// on a log said "no orbit context": thermal_periodic was not even tested.
+TEST(AuditCli, AnLcmLogsOrbitMessagesAreTheOrbitContext) {
+  const std::string dir = testutil::makeTempDir("audit_cli_log_orbit");
+  CliRun s = run("simulate --scenario " BORESIGHT_SOURCE_DIR "/config/sim_audit.yaml --seed 12 --duration 21600 --out " + dir +
+                 "/sim --quiet --effect thermal_periodic:sensor=2,harmonic=1,x_arcsec=6,y_arcsec=-4,phase_deg=30");
+  ASSERT_EQ(s.status, 0) << s.out;
+  const std::string d = dir + "/sim/";
+  CliRun l1 = run("audit" + kConfig + d + "SCA1A_2023-06-01_C_04.txt " + d + "ACC1A_2023-06-01_C_04.txt " + d +
+                  "QSA1B_2023-06-01_C_04.txt " + d + "GNV1B_2023-06-01_C_04.txt --quiet --out " + dir + "/l1");
+  ASSERT_EQ(l1.status, 0) << l1.out;
+  CliRun lg = run("audit" + kConfig + d + "sim.lcmlog --out " + dir + "/log");
+  ASSERT_EQ(lg.status, 0) << lg.out;
+  EXPECT_NE(lg.out.find("orbit context: 21600 samples from the LCM log's ORBIT messages"), std::string::npos) << lg.out;
+  const nlohmann::json a = nlohmann::json::parse(testutil::slurp(dir + "/l1/audit.json"));
+  const nlohmann::json b = nlohmann::json::parse(testutil::slurp(dir + "/log/audit.json"));
+  EXPECT_EQ(namedCauses(a), (std::vector<std::string>{"thermal_periodic[2]"}));
+  EXPECT_EQ(namedCauses(b), namedCauses(a));
+  EXPECT_EQ(b["baseline"]["orbit_samples"], a["baseline"]["orbit_samples"]);
+  EXPECT_EQ(b["baseline"]["head_epochs"], a["baseline"]["head_epochs"]);
+  // The same data, the orbit in two forms: the log's inertial ORBIT messages, the file's Earth-fixed
+  // records rotated back by the Earth rotation angle, both rounded in text. The statistics that use the
+  // orbit's velocity differ a little (aberration 0.2 % on this span), the rest less: 1 % for every test.
+  ASSERT_EQ(b["effects"].size(), a["effects"].size());
+  for (std::size_t i = 0; i < a["effects"].size(); ++i) {
+    EXPECT_EQ(b["effects"][i]["name"], a["effects"][i]["name"]);
+    EXPECT_NEAR(b["effects"][i]["statistic"].get<double>(), a["effects"][i]["statistic"].get<double>(),
+                1e-2 * (1.0 + std::fabs(a["effects"][i]["statistic"].get<double>())))
+        << a["effects"][i]["name"];
+  }
+}

@@ -255,8 +255,14 @@ class Collector final : public stream::InputObserver, public stream::RowSink {
   void onEnd() override;
   // stream::RowSink: the core's rows (fused attitude, rates, angular accelerations).
   bool write(const core::PipelineRow& row) override;
-  /// Orbit context (GNI1B / GNV1B / simulator), any order; kept decimated to one per 10 s.
+  /// Orbit context (GNI1B / GNV1B / simulator), any order; kept decimated to one per 10 s. A sample
+  /// without an orbit plane (NaN angles) is counted (orbitUnusable) and not kept.
   void addOrbit(const model::OrbitSample& o);
+  // stream::InputObserver: the orbit from the engine's stream (GNI1B / GNV1B files, an LCM log's ORBIT
+  // messages), in time order with the head epochs.
+  bool wantsOrbit() const override { return true; }
+  void onOrbit(const model::OrbitSample& o) override { addOrbit(o); }
+  std::uint64_t orbitUnusable() const;
   /// Outside reference attitude q_I_B (SCA1B), time order.
   void addReference(TimeUs t, const Quat& q_I_B);
 

@@ -3,7 +3,8 @@
 //
 //   files -> stream::classifyInputs / prepareConfig (SCA1A, ACC1A, QSA1B mountings, LCM log)
 //         -> stream::Engine (-> Collector as InputObserver and RowSink)
-//   GNI1B / GNV1B -> model::OrbitSample -> Collector::addOrbit (before the replay)
+//   GNI1B (else GNV1B) files, an LCM log's ORBIT messages -> the same engine, in time order
+//         -> Collector::onOrbit (the orbit context)
 //   SCA1B (+ CLK1B) -> ReferenceFeed -> Collector::addReference (interleaved with the head epochs)
 //   -> analyse() -> AuditResult
 //
