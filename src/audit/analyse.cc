@@ -1194,7 +1194,7 @@ void Analyser::buildRelative() {
   lineOrders(f);
   finishFamily(f);
   R.baseline.families.push_back("relative");
-  if (!ctx) R.baseline.missing.push_back("thermal_periodic, aberration: no orbit context (give GNI1B or GNV1B)");
+  if (!ctx) R.baseline.missing.push_back("thermal_periodic, aberration: no orbit context (give GNI1B or GNV1B files, or an LCM log with ORBIT messages)");
   else if (!th_ok)
     R.baseline.missing.push_back("thermal_periodic: the span (" + fmt("%.0f", span_s) + " s) is shorter than half an orbit (" +
                                  fmt("%.0f", 0.5 * T_orb) + " s): orbit-periodic and constant cannot be told apart");
