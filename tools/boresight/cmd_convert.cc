@@ -74,7 +74,6 @@ int toLcm(const Options& a) {
   std::vector<std::unique_ptr<stream::Source>> sources;
   std::vector<std::string> product_of;
   std::vector<io::QsaRecord> qsa;   // QSA1B records (the latest per head is written)
-  std::vector<io::GnvRecord> orbit; // GNV1B/GNI1B records (small: one per second or slower)
   for (const auto& f : a.inputs) {
     stream::FileKind kind = stream::identifyFile(f);
     if (kind.type == stream::FileKind::Type::kUnknown) {
@@ -117,18 +116,14 @@ int toLcm(const Options& a) {
       }
       for (const auto& r : pf.records) qsa.push_back(r);
     } else if (kind.product == io::Product::GNV1B || kind.product == io::Product::GNI1B) {
-      auto pf = io::readProduct<io::GnvRecord>(f, opt);
-      if (!pf.ok) {
-        std::fprintf(stderr, "boresight convert: %s: %s\n", f.c_str(), pf.error.c_str());
+      // The orbit is a stream like the others (the engine's source): merged by time, streamed.
+      auto s = std::make_unique<stream::OrbitFileSource>();
+      if (!s->open(f, opt, &err)) {
+        std::fprintf(stderr, "boresight convert: %s\n", err.c_str());
         return 1;
       }
-      if (pf.rejected_count > 0) {  // every record read is written or rejected with its reason
-        std::printf("%s: %zu records read, %zu written, %zu rejected\n", f.c_str(), pf.records.size() + pf.rejected_count,
-                    pf.records.size(), pf.rejected_count);
-        for (std::size_t k = 0; k < pf.rejected.size() && k < 5; ++k)
-          std::printf("    rejected %s\n", pf.rejected[k].str().c_str());
-      }
-      for (const auto& r : pf.records) orbit.push_back(r);
+      sources.push_back(std::move(s));
+      product_of.push_back(name);
     } else {
       std::printf("%s: %s is not a node input (SCA1A, ACC1A, QSA1B, GNV1B, GNI1B): ignored\n", f.c_str(), name.c_str());
     }
@@ -145,7 +140,8 @@ int toLcm(const Options& a) {
     std::fprintf(stderr, "boresight convert: %s\n", err.c_str());
     return 1;
   }
-  // The nominal mountings first (the latest QSA1B record of each head), then the orbit merged by time.
+  // The nominal mountings first (the latest QSA1B record of each head), then the samples merged by time
+  // (at one tag heads, then the accelerometer, then the orbit: the assembler's order).
   if (!qsa.empty()) {
     std::map<int, io::QsaRecord> last;
     for (const auto& r : qsa)
@@ -165,33 +161,15 @@ int toLcm(const Options& a) {
     }
     std::printf("%s: NOMINAL_MOUNTINGS of %d heads from QSA1B\n", out.c_str(), m.n_heads);
   }
-  std::stable_sort(orbit.begin(), orbit.end(), [](const io::GnvRecord& x, const io::GnvRecord& y) { return x.t < y.t; });
-  std::size_t orbit_next = 0;
   std::int32_t orbit_seq = 0;
-  auto writeOrbitUpTo = [&](TimeUs t) {
-    for (; orbit_next < orbit.size() && orbit[orbit_next].t <= t; ++orbit_next) {
-      const auto& r = orbit[orbit_next];
-      io::OrbitSample o;
-      o.utime = r.t;
-      o.frame = r.coord_ref == 'I' ? 'I' : 'E';
-      for (int k = 0; k < 3; ++k) {
-        o.r_m[k] = r.pos[k];
-        o.v_m_s[k] = r.vel[k];
-      }
-      o.seq = orbit_seq++;
-      if (!w.write(o)) return false;
-    }
-    return true;
-  };
   std::map<int, std::int32_t> head_seq;
   std::int32_t acc_seq = 0;
-  std::uint64_t n_heads = 0, n_accel = 0, without_ang = 0;
+  std::uint64_t n_heads = 0, n_accel = 0, n_orbit = 0, without_ang = 0;
   TimeUs first_t = 0, last_t = 0;
   bool write_failed = false;
   // The samples of one time tag (heads first, as the assembler gives them): heads put in id order.
   std::vector<stream::Sample> group;
   auto flush = [&]() {
-    if (!group.empty() && !writeOrbitUpTo(group.front().t)) write_failed = true;
     auto heads_end = std::find_if(group.begin(), group.end(),
                                   [](const stream::Sample& x) { return x.kind != stream::Sample::Kind::kHead; });
     std::stable_sort(group.begin(), heads_end,
@@ -208,6 +186,17 @@ int toLcm(const Options& a) {
         h.seq = head_seq[x.head_id]++;
         ok = w.write(h);
         ++n_heads;
+      } else if (x.kind == stream::Sample::Kind::kOrbit) {
+        io::OrbitSample o;
+        o.utime = x.t;
+        o.frame = x.orbit_frame == 'I' ? 'I' : 'E';
+        for (int k = 0; k < 3; ++k) {
+          o.r_m[k] = x.r_orbit[k];
+          o.v_m_s[k] = x.v_orbit[k];
+        }
+        o.seq = orbit_seq++;
+        ok = w.write(o);
+        ++n_orbit;
       } else {
         io::AccelSample m;
         m.utime = x.t;
@@ -234,15 +223,18 @@ int toLcm(const Options& a) {
                    i >= 0 ? sources[std::size_t(i)]->error().c_str() : "a source failed");
       return 1;
     }
-    if (o != stream::EpochAssembler::Out::kHeads && o != stream::EpochAssembler::Out::kAccel) break;
+    if (o != stream::EpochAssembler::Out::kHeads && o != stream::EpochAssembler::Out::kAccel &&
+        o != stream::EpochAssembler::Out::kOrbit)
+      break;
     if (!group.empty() && group.front().t != x.t) flush();
-    if (n_heads + n_accel + group.size() == 0) first_t = x.t;
-    last_t = x.t;
+    if (x.kind != stream::Sample::Kind::kOrbit) {  // the span of the sensors' samples
+      if (n_heads + n_accel == 0) first_t = x.t;
+      last_t = x.t;
+    }
     group.push_back(x);
     if (write_failed) break;
   }
   flush();
-  if (!writeOrbitUpTo(std::numeric_limits<TimeUs>::max())) write_failed = true;
   if (!write_failed && n_heads + n_accel == 0) {
     std::fprintf(stderr, "boresight convert: no star head or accelerometer sample in the inputs: nothing to write\n");
     return 1;  // the writer removes its temporary file
@@ -279,6 +271,7 @@ int toLcm(const Options& a) {
   std::printf("%s: %llu star head samples, %llu accelerometer samples", out.c_str(),
               static_cast<unsigned long long>(n_heads), static_cast<unsigned long long>(n_accel));
   if (n_heads + n_accel) std::printf(", %s .. %s", io::formatTime(first_t).c_str(), io::formatTime(last_t).c_str());
+  if (n_orbit) std::printf("; %llu orbit samples", static_cast<unsigned long long>(n_orbit));
   std::printf("\n");
   return 0;
 }
