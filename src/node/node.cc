@@ -636,6 +636,12 @@ struct Node::Impl {
       ++c.calibrations_refused;
       last_reason = mail.reason;
     }
+    ++c.solves;
+    c.solve_cpu_s_sum += mail.cpu_s;
+    c.solve_cpu_s_max = std::max(c.solve_cpu_s_max, mail.cpu_s);
+    c.solve_wall_s_max = std::max(c.solve_wall_s_max, mail.wall_s);
+    c.solve_observations_max = std::max(c.solve_observations_max, mail.observations);
+    c.solve_observation_bytes_max = std::max(c.solve_observation_bytes_max, mail.observation_bytes);
     m.seq = seq_cal++;
     publish(cfg.channels.calibration, m.utime, m);
     ++c.calibrations_published;

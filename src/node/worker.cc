@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <ctime>
 #include <cstdio>
 #include <limits>
 #include <string>
@@ -105,7 +106,13 @@ void CalibrationWorker::solverLoop() {
     }
     calib::RunOptions opt;
     opt.solve.threads = 1;
+    timespec c0{}, c1{};
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &c0);
+    const auto w0 = std::chrono::steady_clock::now();
     const calib::CalibrationRun run = calib::runCalibration(*j->feed, opt);
+    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - w0).count();
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &c1);
+    const double cpu = static_cast<double>(c1.tv_sec - c0.tv_sec) + 1e-9 * static_cast<double>(c1.tv_nsec - c0.tv_nsec);
     // One slot: wait until the real-time thread has taken the previous result.
     MailState expected = MailState::kEmpty;
     while (!mail_.state.compare_exchange_weak(expected, MailState::kWriting, std::memory_order_acq_rel)) {
@@ -113,6 +120,10 @@ void CalibrationWorker::solverLoop() {
       std::this_thread::sleep_for(std::chrono::microseconds(100));
     }
     fillResult(j->feed->span(), run, *j);
+    mail_.cpu_s = cpu;
+    mail_.wall_s = wall;
+    mail_.observations = j->feed->span().obs.size();
+    mail_.observation_bytes = j->feed->span().obs.size() * sizeof(calib::Observation);
     mail_.state.store(MailState::kReady, std::memory_order_release);
     {
       std::lock_guard<std::mutex> lk(job_m_);  // the job slot is free once this one is published

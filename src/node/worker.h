@@ -51,6 +51,10 @@ struct Mailbox {
   /// common rotation: none).
   bool common_determined = false;
   std::uint64_t nominal_gen = 0;  ///< the nominal mountings the span was built with (0: the first)
+  /// The solve's cost: CPU time of the solver thread in calib::runCalibration, its wall time, and the
+  /// span it solved (decimated epochs kept, their bytes: what the solve's copy of the feed holds).
+  double cpu_s = 0.0, wall_s = 0.0;
+  std::uint64_t observations = 0, observation_bytes = 0;
 };
 
 class CalibrationWorker {

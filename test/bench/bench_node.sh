@@ -31,6 +31,9 @@ print(f"day replay: {s['received']} messages in {s['wall_s']:.2f} s = {s['messag
       f"step latency p50 {l['p50']:.2f} us, p99 {l['p99']:.2f} us, p99.9 {l['p99.9']:.2f} us, max {l['max']:.0f} us "
       f"(head epochs p50 {h['p50']:.2f}, p99 {h['p99']:.2f}, p99.9 {h['p99.9']:.2f} us); "
       f"peak RSS {int(sys.argv[2]) / 1024:.1f} MB")
+w = s["worker"]
+print(f"  worker: {w['solves']} solves, CPU per solve {w['cpu_s_mean']:.3f} s mean, {w['cpu_s_max']:.3f} s max "
+      f"(wall max {w['wall_s_max']:.3f} s), largest span {w['observations_max']} epochs ({w['observation_mb_max']:.1f} MB)")
 PY
 done
 if [[ $days -gt 1 ]]; then
@@ -58,6 +61,9 @@ import json, sys
 w, days = sys.argv[1], int(sys.argv[2])
 a, b = json.load(open(f"{w}/l_1.json")), json.load(open(f"{w}/l_2.json"))
 rss = [int(x) for x in open(f"{w}/rss_samples_1").read().split() if x.strip()]
+w = a["worker"]
+print(f"worker over {days} days: {w['solves']} solves, CPU per solve {w['cpu_s_mean']:.3f} s mean, {w['cpu_s_max']:.3f} s max, "
+      f"largest span {w['observations_max']} epochs ({w['observation_mb_max']:.1f} MB)")
 print(f"{days}-day replay: {a['received']} messages in {a['wall_s']:.1f} s ({a['messages_per_s']:.0f} messages/s), "
       f"{a['calibrations_published']} calibrations, accounted {a['accounted']}, "
       f"received == used + rejected: {a['received'] == a['used'] + sum(a['rejected'].values())}")

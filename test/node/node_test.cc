@@ -4,6 +4,7 @@
 //
 // Golden file: test/node/golden/replay_short.txt. Regenerate (after a change made on purpose) with
 //   BORESIGHT_UPDATE_GOLDEN=1 ./build/test/node/node_test --gtest_filter='*Golden*'
+#include <boresight/calib/problem.h>
 #include <boresight/io/lcm_log.h>
 #include <boresight/io/overlay_yaml.h>
 #include <boresight/io/level1.h>
@@ -619,6 +620,12 @@ TEST(NodeReplay, TwoReplaysPublishIdenticalPayloadsWithTheWorkerInLockstep) {
   const auto cal = a->out.all<boresight_lcm::calibration_t>("BORESIGHT_CALIBRATION");
   ASSERT_EQ(cal.size(), 3u);  // started after 2 h, 3 h and 4 h of data (the last applied at the end)
   EXPECT_EQ(a->c.calibrations_published, 3u);
+  // The worker's cost is counted per solve: the largest span is the last one's epochs.
+  EXPECT_EQ(a->c.solves, 3u);
+  EXPECT_GT(a->c.solve_cpu_s_max, 0.0);
+  EXPECT_GE(a->c.solve_cpu_s_sum, a->c.solve_cpu_s_max);
+  EXPECT_GE(a->c.solve_observations_max, static_cast<std::uint64_t>(cal.back().epochs));
+  EXPECT_EQ(a->c.solve_observation_bytes_max, a->c.solve_observations_max * sizeof(calib::Observation));
   EXPECT_LT(cal[0].span_end_utime, cal[1].span_end_utime);
   // The last calibration (manoeuvres about all three axes) against the truth: the relative attitude of
   // heads 1 and 2 (what is handed back to the core) within its uncertainty.

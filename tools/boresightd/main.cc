@@ -284,6 +284,12 @@ int run(int argc, char** argv) {
     const Quat qf = n.frameRotation();
     j["frame_rotation_q_B_Bpub"] = {qf.w(), qf.x(), qf.y(), qf.z()};
   }
+  j["worker"] = {{"solves", c.solves},
+                 {"cpu_s_mean", c.solves ? c.solve_cpu_s_sum / static_cast<double>(c.solves) : 0.0},
+                 {"cpu_s_max", c.solve_cpu_s_max},
+                 {"wall_s_max", c.solve_wall_s_max},
+                 {"observations_max", c.solve_observations_max},
+                 {"observation_mb_max", static_cast<double>(c.solve_observation_bytes_max) / 1048576.0}};
   j["ring_high_water"] = c.ring_high_water;
   j["ring_dropped"] = c.ring_dropped;
   j["outputs_failed"] = c.outputs_failed;

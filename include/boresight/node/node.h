@@ -164,6 +164,12 @@ struct Counters {
   std::uint64_t calibrations_superseded = 0;  ///< results solved against nominal mountings replaced since
   std::uint64_t calibrations_held = 0;        ///< results held for a ground command (hold_for_command)
   std::uint64_t commands_accepted = 0, commands_reverted = 0;  ///< ground commands applied
+  /// The worker's solves (published or refused): CPU seconds of the solver thread (sum, largest), the
+  /// largest wall time, the largest span solved (decimated epochs, their bytes). Summary only (wall
+  /// clock: never published in replay).
+  std::uint64_t solves = 0;
+  double solve_cpu_s_sum = 0, solve_cpu_s_max = 0, solve_wall_s_max = 0;
+  std::uint64_t solve_observations_max = 0, solve_observation_bytes_max = 0;
   std::uint64_t rejectedTotal() const {
     std::uint64_t n = 0;
     for (auto v : rejected) n += v;
