@@ -124,6 +124,22 @@ void CalibrationFeed::pushHeads(const core::HeadEpoch& e) {
     ev.q_I_Si = h.q_I_Si;
     raw_.events.push_back(ev);
   }
+  trimRaw(e.t);
+}
+
+void CalibrationFeed::trimRaw(TimeUs newest) {
+  // The raw samples' window: as much data time as the span builder's window of observations (the
+  // oldest dropped in blocks of 1/16 of it, as the builder drops its observations).
+  if (!with_raw_ || so_.max_observations == 0 || raw_.events.empty()) return;
+  const double window_s = static_cast<double>(so_.max_observations) * so_.decimation_s;
+  const double now_s = static_cast<double>(newest - t0_) * 1e-6;
+  if (raw_.events.front().t_s >= now_s - window_s * (1.0 + 1.0 / 16.0)) return;
+  const double cut = now_s - window_s;
+  const auto first = std::find_if(raw_.events.begin(), raw_.events.end(), [cut](const RawData::Event& x) { return x.t_s >= cut; });
+  raw_.events.erase(raw_.events.begin(), first);
+  const TimeUs cut_us = t0_ + static_cast<TimeUs>(std::llround(cut * 1e6)) - 60 * kUsPerSecond;  // orbit: one segment more
+  const auto o = std::find_if(orbit_v_.begin(), orbit_v_.end(), [cut_us](const std::pair<TimeUs, Vec3>& x) { return x.first >= cut_us; });
+  orbit_v_.erase(orbit_v_.begin(), o);
 }
 
 void CalibrationFeed::pushAcc(TimeUs t, const Vec3& a_A) {
@@ -136,6 +152,7 @@ void CalibrationFeed::pushAcc(TimeUs t, const Vec3& a_A) {
   raw_.events.push_back(ev);
   sum_A_ += a_A;
   ++n_acc_;
+  trimRaw(t);
 }
 
 void CalibrationFeed::pushOrbit(const model::OrbitSample& o) {

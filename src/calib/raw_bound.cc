@@ -853,4 +853,29 @@ RawBoundResult RawBound::result() const {
   return out;
 }
 
+RawMountings rawMountings(const RawEstimate& est, const RawBoundConfig& cfg, double not_determined_rad) {
+  RawMountings out;
+  const std::size_t n = cfg.heads.size();
+  const auto n3 = static_cast<Eigen::Index>(3 * n);
+  Eigen::MatrixXd T = Eigen::MatrixXd::Zero(n3, n3);  // head axes -> Si, per head (A^T)
+  for (std::size_t i = 0; i < n; ++i)
+    T.block<3, 3>(static_cast<Eigen::Index>(3 * i), static_cast<Eigen::Index>(3 * i)) = cfg.heads[i].axes_Si.transpose();
+  const bool have = est.bound.covariance.rows() >= n3 && est.mounting_rad.size() >= n;
+  out.covariance_Si = have ? Eigen::MatrixXd(T * est.bound.covariance.topLeftCorner(n3, n3) * T.transpose())
+                           : Eigen::MatrixXd::Constant(n3, n3, std::numeric_limits<double>::quiet_NaN());
+  for (std::size_t i = 0; i < n; ++i) {
+    out.r_Si.push_back(have ? est.mounting_rad[i] : Vec3::Zero());
+    Vec3 sg = Vec3::Constant(std::numeric_limits<double>::quiet_NaN());
+    const bool any = have && i < est.bound.head_sigma_rad.size() && std::isfinite(est.bound.head_sigma_rad[i].maxCoeff());
+    for (int a = 0; a < 3; ++a) {
+      const auto k = static_cast<Eigen::Index>(3 * i) + a;
+      const double s = have ? std::sqrt(std::max(0.0, out.covariance_Si(k, k))) : 0.0;
+      if (any && s < not_determined_rad) sg(a) = s;
+    }
+    out.sigma_Si.push_back(sg);
+  }
+  out.common_determined = have && est.bound.unobservable_B.empty();
+  return out;
+}
+
 }  // namespace boresight::calib

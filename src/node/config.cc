@@ -190,8 +190,31 @@ bool loadTop(const YAML::Node& top, const std::string& path, Reader& r, NodeConf
     CalibrationConfig& k = out.calibration;
     if (!r.keys(c, "calibration", {"enabled", "cadence_s", "min_span_s", "apply_lag_epochs", "decimation_s",
                                     "max_observations", "apply", "apply_common_rotation",
-                                    "frame_change_min_interval_s", "hold_for_command"}))
+                                    "frame_change_min_interval_s", "hold_for_command", "method", "raw_passes"}))
       return done(false);
+    std::string method = "crn";
+    if (!r.str(c, "method", "calibration.method", method)) return done(false);
+    if (method != "crn" && method != "attitude")
+      return done(r.fail("calibration.method", "expected 'crn' (the CRN-domain solver) or 'attitude' (the attitude-domain estimate)",
+                         c["method"]));
+    k.method = method == "attitude" ? CalibrationConfig::Method::kAttitude : CalibrationConfig::Method::kCrn;
+    v = k.raw_passes;
+    if (!r.num(c, "raw_passes", "calibration.raw_passes", v, 1, 10)) return done(false);
+    if (v != std::floor(v)) return done(r.fail("calibration.raw_passes", "expected a whole number", c["raw_passes"]));
+    k.raw_passes = static_cast<int>(v);
+    if (k.method == CalibrationConfig::Method::kAttitude) {
+      // As `boresight calibrate --raw`: the noise in use (platform file, overlay), the bias estimated, the
+      // noise models fitted to the data; not determined above the platform's mounting uncertainty.
+      if (const std::string e = pc.noise_in_use.missing(); !e.empty())
+        return done(r.fail("calibration.method", "attitude needs a noise model for " + e + " (the platform file's noise section)", c["method"]));
+      calib::RawBoundOptions ro;
+      ro.fit_noise = true;
+      const double unobs = pc.mounting_uncertainty_arcsec > 0 ? std::min(pc.mounting_uncertainty_arcsec, 3600.0) : 3600.0;
+      ro.unobservable_sigma_rad = unobs * kRadPerArcsec;
+      out.raw_not_determined_rad = ro.unobservable_sigma_rad;
+      out.raw_config = calib::rawBoundConfig(pc.pipeline, pc.noise_in_use, ro);
+      if (const std::string e = out.raw_config->validate(); !e.empty()) return done(r.fail("calibration.method", e, c["method"]));
+    }
     if (!r.boolean(c, "enabled", "calibration.enabled", k.enabled) || !r.boolean(c, "apply", "calibration.apply", k.apply) ||
         !r.boolean(c, "apply_common_rotation", "calibration.apply_common_rotation", k.apply_common_rotation) ||
         !r.boolean(c, "hold_for_command", "calibration.hold_for_command", k.hold_for_command) ||

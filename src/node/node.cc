@@ -405,7 +405,8 @@ struct Node::Impl {
     const io::OrbitSample& o = msg.orbit;
     seqCheck(ch_orbit, o.seq);
     if (!checked(msg)) return;
-    if (!cfg.thermal_model) return reject(Reject::kNoConsumer);  // the orbit feeds the thermal prediction only
+    // The orbit feeds the thermal prediction and the attitude-domain estimate (the stars' aberration).
+    if (!cfg.thermal_model && !(cfg.calibration.enabled && worker.wantsOrbit())) return reject(Reject::kNoConsumer);
     if (!core_ready) return reject(Reject::kNoMountings);
     stream::Sample x;
     x.kind = stream::Sample::Kind::kOrbit;
@@ -528,6 +529,15 @@ struct Node::Impl {
       it.kind = WorkItem::kAcc;
       it.t = t;
       it.a_A = a_A;
+      m->pushRing(it);
+    }
+    /// The attitude-domain estimate takes the orbit (the stars' aberration), as calibrate's feed does.
+    bool wantsOrbit() const override { return m->worker.wantsOrbit(); }
+    void onOrbit(const model::OrbitSample& o) override {
+      WorkItem& it = m->item;
+      it.kind = WorkItem::kOrbit;
+      it.t = o.t;
+      it.orbit = o;
       m->pushRing(it);
     }
   } feed;
@@ -971,6 +981,13 @@ bool Node::configure(const NodeConfig& cfg, Mode mode, Output* out, std::string*
     if (error) *error = cfg.file + ": calibration.apply_lag_epochs: must be shorter than cadence_s at the head rate";
     return false;
   }
+  if (cfg.calibration.enabled && cfg.calibration.method == CalibrationConfig::Method::kAttitude) {
+    const std::string e = cfg.raw_config ? cfg.raw_config->validate() : "no estimator configuration (NodeConfig::raw_config)";
+    if (!e.empty()) {
+      if (error) *error = cfg.file + ": calibration.method: attitude: " + e;
+      return false;
+    }
+  }
   // A configuration the calibration worker cannot run is refused here with the worker's reason (before:
   // a worker that refused its span builder's configuration never calibrated, and a replay waited for it).
   if (cfg.calibration.enabled && !CalibrationWorker::check(cfg.pipeline, Impl::workerSpanOptions(cfg), error)) {
@@ -1005,6 +1022,8 @@ bool Node::configure(const NodeConfig& cfg, Mode mode, Output* out, std::string*
   if (cfg.calibration.enabled) m.eng->addObserver(&m.feed);
   m.enc.init(8192);
   m.worker.init(cfg.ring_capacity);
+  if (cfg.calibration.enabled && cfg.calibration.method == CalibrationConfig::Method::kAttitude)
+    m.worker.setAttitudeDomain(*cfg.raw_config, cfg.calibration.raw_passes, cfg.raw_not_determined_rad);
   if (!m.readState(error)) return false;
   m.configured = true;
   if (!cfg.mountings_from_log && !m.startCore()) {

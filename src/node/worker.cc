@@ -35,7 +35,7 @@ void CalibrationWorker::workerLoop() {
   calib::CalibrationFeed feed;
   std::string err;
   std::uint64_t gen = 0;
-  bool ok = feed.configure(cfg_, so_, false, &err);  // start() checked it
+  bool ok = feed.configure(cfg_, so_, false, &err, raw_.has_value());  // start() checked it
   std::thread solver([this] { solverLoop(); });
   WorkItem it;
   int idle = 0;
@@ -61,7 +61,7 @@ void CalibrationWorker::workerLoop() {
         h.q_Si_B = it.q_Si_B[static_cast<std::size_t>(k)];
       }
       gen = it.solve_id;
-      ok = feed.configure(cfg_, so_, false, &err);
+      ok = feed.configure(cfg_, so_, false, &err, raw_.has_value());
       std::fprintf(stderr,
                    "boresightd: new nominal mountings applied from data time %lld us (moved: %s arcsec); the "
                    "calibration span starts again, the published frame is the heads' datum again\n",
@@ -73,6 +73,8 @@ void CalibrationWorker::workerLoop() {
       feed.pushHeads(it.heads);
     } else if (it.kind == WorkItem::kAcc) {
       feed.pushAcc(it.t, it.a_A);
+    } else if (it.kind == WorkItem::kOrbit) {
+      feed.pushOrbit(it.orbit);
     } else {
       auto j = std::make_unique<SolveJob>();
       j->feed = std::make_unique<calib::CalibrationFeed>(feed);
@@ -106,6 +108,17 @@ void CalibrationWorker::solverLoop() {
     }
     calib::RunOptions opt;
     opt.solve.threads = 1;
+    if (raw_) {  // the attitude-domain estimate about the nominal mountings the span was built with
+      opt.raw = *raw_;
+      for (std::size_t i = 0; i < opt.raw->heads.size(); ++i) {
+        calib::RawBoundHead& h = opt.raw->heads[i];
+        const int slot = core::slotOf(cfg_.heads, h.id);
+        if (slot < 0) continue;
+        h.C_Si_B = j->nominal[static_cast<std::size_t>(slot)].toRotationMatrix();
+        h.R_axes_B = h.axes_Si * h.C_Si_B;
+      }
+      opt.raw_passes = raw_passes_;
+    }
     timespec c0{}, c1{};
     clock_gettime(CLOCK_THREAD_CPUTIME_ID, &c0);
     const auto w0 = std::chrono::steady_clock::now();
@@ -140,6 +153,7 @@ void CalibrationWorker::fillResult(const calib::CalibrationSpan& sp, const calib
   mail_.solve_id = j.req.solve_id;
   mail_.nominal_gen = j.nominal_gen;
   mail_.ok = run.ok;
+  mail_.method_attitude = false;
   // The reason without the leading "refused: " (the node's summary says it was refused).
   std::string why = run.refusal_text;
   if (why.rfind("refused: ", 0) == 0) why.erase(0, 9);
@@ -181,6 +195,29 @@ void CalibrationWorker::fillResult(const calib::CalibrationSpan& sp, const calib
       for (std::size_t k = 0; k < n3; ++k) m.covariance_arcsec2[i][k] = r.covariance_arcsec2[i * n3 + k];
   m.residual_rms_radps2 = r.residual_rms_radps2;
   mail_.common_determined = r.ok && r.unobservable_directions_B.empty();
+  if (run.raw_estimated && raw_) {
+    // The attitude-domain estimate replaces the CRN solver's mountings, sigmas (its bound at the
+    // estimate, the variance factors applied), covariance and observability (calib::rawMountings, as
+    // `boresight calibrate --raw` reports them); crlb_arcsec carries the same sigmas.
+    const calib::RawMountings rm = calib::rawMountings(run.raw, *raw_, raw_not_determined_rad_);
+    for (std::size_t i = 0; i < raw_->heads.size() && i < rm.r_Si.size(); ++i) {
+      const int slot = core::slotOf(cfg_.heads, raw_->heads[i].id);
+      if (slot < 0) continue;
+      const auto u = static_cast<std::size_t>(slot);
+      mail_.q_Si_B[u] = (core::quatExp(rm.r_Si[i]) * j.nominal[u]).normalized();
+      for (int a = 0; a < 3; ++a) {
+        m.error_angles_arcsec[slot][a] = rm.r_Si[i](a) * kArcsecPerRad;
+        m.sigma_arcsec[slot][a] = rm.sigma_Si[i](a) * kArcsecPerRad;  // NaN: not determined
+        m.crlb_arcsec[slot][a] = m.sigma_arcsec[slot][a];
+        m.observable[slot][a] = std::isfinite(rm.sigma_Si[i](a)) ? 1 : 0;
+      }
+    }
+    for (std::size_t i = 0; i < n3 && static_cast<Eigen::Index>(i) < rm.covariance_Si.rows(); ++i)
+      for (std::size_t k = 0; k < n3; ++k)
+        m.covariance_arcsec2[i][k] = rm.covariance_Si(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(k)) * kArcsecPerRad * kArcsecPerRad;
+    mail_.common_determined = rm.common_determined;
+    mail_.method_attitude = true;
+  }
 }
 
 }  // namespace boresight::node

@@ -19,18 +19,20 @@
 #include <functional>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <thread>
 
 namespace boresight::node {
 
 /// What the real-time thread hands the worker.
 struct WorkItem {
-  enum Kind : std::uint8_t { kHeads, kAcc, kSolve, kStop, kMountings } kind = kHeads;
+  enum Kind : std::uint8_t { kHeads, kAcc, kSolve, kStop, kMountings, kOrbit } kind = kHeads;
   TimeUs t = 0;
   core::HeadEpoch heads{};
   Vec3 a_A = Vec3::Zero();
   std::uint64_t solve_id = 0;  ///< kSolve: the request; kMountings: the nominal generation from here on
   std::array<Quat, core::kMaxHeads> q_Si_B = core::filled<Quat, core::kMaxHeads>(Quat::Identity());  ///< kMountings: the new nominal mountings by slot
+  model::OrbitSample orbit{};  ///< kOrbit: for the attitude-domain estimate (the stars' aberration)
 };
 
 /// The mailbox's state: empty -> being written (solver thread) -> ready -> taken back to empty
@@ -54,6 +56,7 @@ struct Mailbox {
   /// The solve's cost: CPU time of the solver thread in calib::runCalibration, its wall time, and the
   /// span it solved (decimated epochs kept, their bytes: what the solve's copy of the feed holds).
   double cpu_s = 0.0, wall_s = 0.0;
+  bool method_attitude = false;  ///< the attitude-domain estimate's mountings (else the CRN solver's)
   std::uint64_t observations = 0, observation_bytes = 0;
 };
 
@@ -66,6 +69,18 @@ class CalibrationWorker {
 
   /// The ring's storage (before start).
   void init(std::size_t ring_capacity) { ring_.init(ring_capacity); }
+  /// The attitude-domain estimate after each successful CRN solve (before start): its configuration
+  /// (the heads' nominal mountings are replaced by the ones in use at each solve), passes and the sigma
+  /// above which an axis is not determined; its mountings and sigmas are published. Without it: the CRN
+  /// solver's.
+  /// The worker takes the orbit (WorkItem::kOrbit): the attitude-domain estimate removes the stars'
+  /// aberration with the orbit's velocity.
+  bool wantsOrbit() const { return raw_.has_value(); }
+  void setAttitudeDomain(const calib::RawBoundConfig& raw, int passes, double not_determined_rad) {
+    raw_ = raw;
+    raw_passes_ = passes;
+    raw_not_determined_rad_ = not_determined_rad;
+  }
   /// Whether the worker can run this configuration (the feed's configure): false with *error. The node
   /// asks at start-up, so a configuration the worker cannot run is refused there, never found later.
   static bool check(const core::PipelineConfig& pcfg, const calib::SpanOptions& so, std::string* error);
@@ -112,6 +127,9 @@ class CalibrationWorker {
   std::condition_variable job_cv_;
   std::unique_ptr<SolveJob> job_;
   bool job_stop_ = false;
+  std::optional<calib::RawBoundConfig> raw_;
+  int raw_passes_ = 3;
+  double raw_not_determined_rad_ = 0;
 };
 
 }  // namespace boresight::node

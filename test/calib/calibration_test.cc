@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <functional>
 
@@ -295,6 +296,44 @@ TEST(CalibrationFeed, RawSamplesAndTheObserverVelocityAtTheOrbitsSeams) {
   // A copy keeps them.
   const CalibrationFeed copy(f);
   EXPECT_EQ(copy.raw().events.size(), ev.size());
+}
+
+// With a window of observations (SpanOptions::max_observations, the node's), the raw samples keep the
+// same window of data time, so the attitude-domain estimate does not grow without bound; without one
+// they are the whole span. The oldest go in blocks of 1/16 of the window, as the observations do.
+TEST(CalibrationFeed, RawSamplesKeepTheObservationsWindowOfDataTime) {
+  synth::Config c = manoeuvreCase(7);
+  c.duration_s = 900;
+  SpanOptions so = spanOptions(c);
+  so.max_observations = 20;  // 20 x decimation_s of data time
+  const double window_s = static_cast<double>(so.max_observations) * so.decimation_s;
+  ASSERT_LT(window_s * 1.5, c.duration_s);
+  CalibrationFeed f, whole;
+  std::string err;
+  ASSERT_TRUE(f.configure(synth::pipelineConfig(c), so, false, &err, true)) << err;
+  ASSERT_TRUE(whole.configure(synth::pipelineConfig(c), spanOptions(c), false, &err, true)) << err;
+  synth::stream(c, f);
+  synth::stream(c, whole);
+  f.finish();
+  whole.finish();
+  const auto& ev = f.raw().events;
+  const auto& all = whole.raw().events;
+  ASSERT_FALSE(ev.empty());
+  EXPECT_EQ(all.front().t_s, 0.0);
+  const double newest = all.back().t_s;
+  EXPECT_EQ(ev.back().t_s, newest);
+  // What is kept: the last window (and at most a block more), every sample of it, in order.
+  EXPECT_GE(ev.front().t_s, newest - window_s * (1.0 + 1.0 / 16.0) - 1e-9);
+  EXPECT_LE(ev.front().t_s, newest - window_s + 1.0);
+  const auto first = std::find_if(all.begin(), all.end(), [&](const RawData::Event& x) { return x.t_s >= ev.front().t_s; });
+  ASSERT_EQ(static_cast<std::size_t>(all.end() - first), ev.size());
+  for (std::size_t i = 0; i < ev.size(); ++i) {
+    EXPECT_EQ(ev[i].t_s, first[static_cast<std::ptrdiff_t>(i)].t_s);
+    EXPECT_EQ(ev[i].head, first[static_cast<std::ptrdiff_t>(i)].head);
+  }
+  // The observations' window is the same data time.
+  ASSERT_FALSE(f.span().obs.empty());
+  EXPECT_LE(static_cast<double>(f.span().obs.back().t - f.span().obs.front().t) * 1e-6, window_s);
 }
 
 // A configuration the span builder cannot run is refused when the feed is configured, with the reason

@@ -1004,6 +1004,14 @@ TEST(NodeConfig, ClearErrors) {
   EXPECT_NE(err.find("own name"), std::string::npos) << err;
   EXPECT_TRUE(node::loadNodeConfig(write("health_period_s: 5\n"), cfg, &err)) << err;
   EXPECT_EQ(cfg.health_period_s, 5);
+  EXPECT_FALSE(node::loadNodeConfig(write("calibration:\n  method: raw\n"), cfg, &err));
+  EXPECT_NE(err.find(dir + "/n.yaml:3: key 'calibration.method': expected 'crn'"), std::string::npos) << err;
+  EXPECT_FALSE(node::loadNodeConfig(write("calibration:\n  raw_passes: 2.5\n"), cfg, &err));
+  EXPECT_NE(err.find(dir + "/n.yaml:3: key 'calibration.raw_passes': expected a whole number"), std::string::npos) << err;
+  EXPECT_TRUE(node::loadNodeConfig(write("calibration:\n  method: attitude\n"), cfg, &err)) << err;
+  EXPECT_EQ(cfg.calibration.method, node::CalibrationConfig::Method::kAttitude);
+  ASSERT_TRUE(cfg.raw_config.has_value());
+  EXPECT_EQ(cfg.raw_config->heads.size(), 3u);
   // Every error names the file, the line and the key; NaN, duplicated keys and a directory too.
   EXPECT_FALSE(node::loadNodeConfig(write("lookahead_s: 2\nhealth_period_s: .nan\n"), cfg, &err));
   EXPECT_NE(err.find(dir + "/n.yaml:3: key 'health_period_s': must be within"), std::string::npos) << err;
@@ -1123,6 +1131,81 @@ TEST(NodeReplay, TheWorkerCalibratesAsCalibrateDoesOnTheSameData) {
       EXPECT_NEAR(k.sigma_arcsec[h][a], sigmas[uh][ua], 1e-6) << "head " << h << " axis " << a;
       EXPECT_GT(std::abs(k.error_angles_arcsec[h][a]), 1.0);  // a real calibration, not zeros on both sides
     }
+}
+
+// calibration.method: attitude - the worker publishes and applies the attitude-domain estimate from the
+// raw samples (calib::estimateRaw after the CRN solve), and it is `boresight calibrate --raw`'s on the
+// same data: the same orchestration, the same conversion of the estimate into mountings and sigmas
+// (calib::rawMountings). Without the worker's raw path the node publishes the CRN solver's angles, which
+// differ from these by arcseconds.
+TEST(NodeReplay, TheWorkerInTheAttitudeDomainIsCalibrateRawOnTheSameData) {
+  const std::string log = simulate("same_raw", 1500, {}, nullptr, "config/sim_gracefo_node_demo.yaml");
+  // The committed configuration with method: attitude (read through the node's own reader).
+  std::string y = testutil::slurp(src("config/boresightd.yaml"));
+  const auto at = y.find("method: crn");
+  ASSERT_NE(at, std::string::npos);
+  y.replace(at, 11, "method: attitude");
+  const auto pl = y.find("platform: gracefo_ideal.yaml");
+  ASSERT_NE(pl, std::string::npos);
+  y.replace(pl, 28, "platform: " + src("config/gracefo_ideal.yaml"));
+  const std::string dir = makeTempDir("node_same_raw");
+  {
+    std::ofstream f(dir + "/node.yaml");
+    f << y;
+  }
+  node::NodeConfig cfg;
+  std::string err;
+  ASSERT_TRUE(node::loadNodeConfig(dir + "/node.yaml", cfg, &err)) << err;
+  ASSERT_EQ(cfg.calibration.method, node::CalibrationConfig::Method::kAttitude);
+  ASSERT_TRUE(cfg.raw_config.has_value());
+  cfg.calibration.cadence_s = 1e6;
+  cfg.calibration.min_span_s = 1300;
+  cfg.calibration.apply_lag_epochs = 20;
+  const auto r = replay(log, cfg);
+  EXPECT_EQ(noConsumer(r->c), 0u);  // the worker takes the ORBIT messages
+  EXPECT_GT(r->c.orbit_steps, 1000u);
+  const auto cals = r->out.all<boresight_lcm::calibration_t>("BORESIGHT_CALIBRATION");
+  ASSERT_EQ(cals.size(), 1u);
+  const auto& k = cals[0];
+  ASSERT_EQ(k.status, 0);
+  EXPECT_EQ(k.applied, 1);
+  const TimeUs T = k.utime;
+  const std::string cut = editLog(log, "cut.lcm", [&](std::size_t, const Event& e) {
+    std::vector<Event> keep;
+    if (e.ch == "STAR_HEAD") {
+      if (decodeAs<boresight_lcm::star_head_sample_t>(e).utime <= T) keep.push_back(e);
+    } else if (e.ch == "ACCEL") {
+      if (decodeAs<boresight_lcm::accel_sample_t>(e).utime < T) keep.push_back(e);
+    } else if (e.ch == "ORBIT") {  // the orbit before the request: both remove the stars' aberration with it
+      if (decodeAs<boresight_lcm::orbit_sample_t>(e).utime < T) keep.push_back(e);
+    } else if (e.ch == "NOMINAL_MOUNTINGS") {
+      keep.push_back(e);
+    }
+    return keep;
+  });
+  const auto cal = testutil::runProgram(BORESIGHT_CLI, "calibrate --raw --config " + src("config/gracefo_ideal.yaml") +
+                                                           " --json " + dir + "/c.json " + cut);
+  ASSERT_EQ(cal.status, 0) << cal.out;
+  EXPECT_NE(cal.out.find("aberration removed from"), std::string::npos) << cal.out;
+  const std::string j = testutil::slurp(dir + "/c.json");
+  const auto ad = j.find("\"attitude_domain\"");
+  ASSERT_NE(ad, std::string::npos);
+  const auto angles = jsonTriples(j.substr(ad), "error_angles_arcsec"), sigmas = jsonTriples(j.substr(ad), "sigma_arcsec");
+  const auto crn = jsonTriples(j.substr(0, ad), "error_angles_arcsec");  // the CRN solver's heads come first
+  ASSERT_GE(crn.size(), static_cast<std::size_t>(k.n_heads));
+  ASSERT_GE(angles.size(), static_cast<std::size_t>(k.n_heads));
+  ASSERT_GE(sigmas.size(), static_cast<std::size_t>(k.n_heads));
+  double max_from_crn = 0;
+  for (int h = 0; h < k.n_heads; ++h)
+    for (int a = 0; a < 3; ++a) {
+      const auto uh = static_cast<std::size_t>(h), ua = static_cast<std::size_t>(a);
+      EXPECT_NEAR(k.error_angles_arcsec[h][a], angles[uh][ua], 1e-6) << "head " << h << " axis " << a;
+      if (std::isnan(sigmas[uh][ua])) EXPECT_TRUE(std::isnan(k.sigma_arcsec[h][a])) << "head " << h << " axis " << a;
+      else EXPECT_NEAR(k.sigma_arcsec[h][a], sigmas[uh][ua], 1e-6) << "head " << h << " axis " << a;
+      EXPECT_GT(std::abs(k.error_angles_arcsec[h][a]), 1.0);
+      max_from_crn = std::max(max_from_crn, std::abs(crn[uh][ua] - angles[uh][ua]));
+    }
+  EXPECT_GT(max_from_crn, 1.0);  // the attitude-domain angles are not the CRN solver's
 }
 #endif
 

@@ -536,24 +536,23 @@ int runCalibrate(int argc, char** argv) {
                (aberrated ? "removed from " + std::to_string(aberrated) + " head samples (orbit among the inputs)"
                           : std::string("not removed: no orbit among the inputs")) +
                ")\n  head  axis   error [arcsec]   sigma [arcsec]   data sigma [arcsec]\n";
+    // The mountings with their sigmas (an axis is determined when its sigma, the unobservable directions
+    // held, is below the threshold): the node's worker publishes the same conversion.
+    const calib::RawMountings rm = calib::rawMountings(est, rc, raw_unobs * kRadPerArcsec);
     for (std::size_t i = 0; i < rc.heads.size(); ++i) {
       const Mat3& A = rc.heads[i].axes_Si;
       const auto o = static_cast<Eigen::Index>(3 * i);
-      const Mat3 C_axes = est.bound.covariance.block<3, 3>(o, o);
-      const Mat3 C_Si = A.transpose() * C_axes * A;
-      const bool any = std::isfinite(est.bound.head_sigma_rad[i].maxCoeff());
       // The data's own covariance (score blocks) in the same frame.
       const bool have_r = est.robust_covariance.rows() >= o + 3;
       const Mat3 R_Si = have_r ? Mat3(A.transpose() * Mat3(est.robust_covariance.block<3, 3>(o, o)) * A) : Mat3::Zero();
       report::Json hj;
       hj["id"] = rc.heads[i].id;
-      mounting.r_Si[i] = est.mounting_rad[i];
+      mounting.r_Si[i] = rm.r_Si[i];
+      mounting.sigma_Si[i] = rm.sigma_Si[i];
       for (int a = 0; a < 3; ++a) {
-        const double e = est.mounting_rad[i](a) * kArcsecPerRad;
-        const double sg = std::sqrt(std::max(0.0, C_Si(a, a))) * kArcsecPerRad;
-        // An axis is determined when its sigma (the unobservable directions held) is below the threshold.
-        const bool determined = any && sg < raw_unobs;
-        mounting.sigma_Si[i](a) = determined ? sg * kRadPerArcsec : std::numeric_limits<double>::quiet_NaN();
+        const double e = rm.r_Si[i](a) * kArcsecPerRad;
+        const bool determined = std::isfinite(rm.sigma_Si[i](a));
+        const double sg = rm.sigma_Si[i](a) * kArcsecPerRad;
         const double sr = std::sqrt(std::max(0.0, R_Si(a, a))) * kArcsecPerRad;
         hj["error_angles_arcsec"].push_back(e);
         hj["sigma_arcsec"].push_back(determined ? report::Json(sg) : report::Json(nullptr));

@@ -67,8 +67,9 @@ class CalibrationFeed {
   /// heads or more; the orbit must come in the same stream). False with *error: the configuration
   /// cannot be run (said at start-up, never found later).
   /// with_raw: also keep every head and accelerometer sample (and the orbit's velocity, for the stars'
-  /// aberration) for the attitude-domain estimate - the whole span in memory (about 50 MB per day of
-  /// GRACE-FO data), so only when asked.
+  /// aberration) for the attitude-domain estimate - the whole span in memory (about 150 MB per day of
+  /// GRACE-FO data), so only when asked; with SpanOptions::max_observations the same window of data time
+  /// as the observations (max_observations x decimation_s).
   bool configure(const core::PipelineConfig& cfg, const SpanOptions& so, bool with_thermal, std::string* error,
                  bool with_raw = false);
   bool configured() const { return configured_; }
@@ -108,6 +109,9 @@ class CalibrationFeed {
   bool configured_ = false, finished_ = false, with_raw_ = false;
   // The raw samples (with_raw).
   double rawTime(TimeUs t);
+  /// With SpanOptions::max_observations: drops the raw samples (and orbit velocities) older than the
+  /// builder's window in data time (max_observations x decimation_s before `newest`).
+  void trimRaw(TimeUs newest);
   RawData raw_;
   Vec3 sum_A_ = Vec3::Zero();
   std::uint64_t n_acc_ = 0, aberrated_ = 0;

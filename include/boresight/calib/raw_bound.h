@@ -171,6 +171,18 @@ struct RawEstimate {
   std::vector<std::array<model::NoiseModel, 3>> fitted_noise;
 };
 
+/// An attitude-domain estimate as mountings: each head's error angles in its own frame Si, their sigmas
+/// (rad; NaN where the axis is not determined: no information about the head, or a sigma at or above
+/// `not_determined_rad`, with the unobservable common directions held) and the Si-frame covariance of
+/// every head's angles (3n x 3n, rad^2). What `boresight calibrate --raw` reports and the node's worker
+/// publishes (one conversion).
+struct RawMountings {
+  std::vector<Vec3> r_Si, sigma_Si;
+  Eigen::MatrixXd covariance_Si;
+  bool common_determined = false;  ///< every body direction of the common rotation determined
+};
+RawMountings rawMountings(const RawEstimate& est, const RawBoundConfig& cfg, double not_determined_rad);
+
 /// The measured data of a span, in time order (the estimator needs them once per pass).
 struct RawData {
   struct Event {

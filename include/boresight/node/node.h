@@ -43,6 +43,7 @@
 // as a time outlier).
 #pragma once
 
+#include <boresight/calib/raw_bound.h>
 #include <boresight/core/pipeline.h>
 #include <boresight/io/reject.h>
 
@@ -88,6 +89,14 @@ struct CalibrationConfig {
   /// unobservable common directions: none) and at least this much data time since the last change, s;
   /// else it is refused (frame_changes_refused, logged) and only the relative part is applied.
   double frame_change_min_interval_s = 3 * 3600.0;
+  /// crn (default): method A's CRN-domain solver, as `boresight calibrate`. attitude: after a successful
+  /// CRN solve, the attitude-domain estimate from the raw head and accelerometer samples of the same
+  /// window of data time (calib::estimateRaw, as `calibrate --raw`, noise fitted to the data), whose
+  /// mountings and sigmas are the ones published and applied; it keeps every raw sample of the window
+  /// (about 150 MB per day of GRACE-FO data: 112 bytes per sample, 16 samples a second) and costs
+  /// seconds to minutes per solve.
+  enum class Method : std::uint8_t { kCrn, kAttitude } method = Method::kCrn;
+  int raw_passes = 3;  ///< attitude: the estimator's passes (3: the noise models fitted after the second)
 };
 
 struct NodeConfig {
@@ -107,6 +116,11 @@ struct NodeConfig {
   /// The accelerometer's white noise per A axis for the worker's method A (the platform's noise
   /// section, or the overlay's), rad/s^2 per sample.
   Vec3 acc_white_noise_radps2 = Vec3(1.5e-7, 3.0e-8, 5.0e-8);
+  /// calibration.method attitude: the estimator's configuration (the platform's heads and the noise in
+  /// use, the bias estimated, the noise fitted to the data) and the sigma above which an axis is not
+  /// determined (the platform file's heads.mounting_uncertainty_arcsec when smaller than 3600", rad).
+  std::optional<calib::RawBoundConfig> raw_config;
+  double raw_not_determined_rad = 3600.0 * kRadPerArcsec;
   /// The noise and mountings in use with their sources, and the overlay's applied / not applied parts
   /// (io::modelInUseLines): printed at start and written into the summary.
   std::vector<std::string> model_in_use;
