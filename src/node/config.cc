@@ -190,7 +190,8 @@ bool loadTop(const YAML::Node& top, const std::string& path, Reader& r, NodeConf
     CalibrationConfig& k = out.calibration;
     if (!r.keys(c, "calibration", {"enabled", "cadence_s", "min_span_s", "apply_lag_epochs", "decimation_s",
                                     "max_observations", "apply", "apply_common_rotation",
-                                    "frame_change_min_interval_s", "hold_for_command", "method", "raw_passes"}))
+                                    "frame_change_min_interval_s", "frame_change_max_chi2_per_dof", "hold_for_command",
+                                    "method", "raw_passes"}))
       return done(false);
     std::string method = "crn";
     if (!r.str(c, "method", "calibration.method", method)) return done(false);
@@ -221,7 +222,8 @@ bool loadTop(const YAML::Node& top, const std::string& path, Reader& r, NodeConf
         !r.num(c, "cadence_s", "calibration.cadence_s", k.cadence_s, 60, 1e8) ||
         !r.num(c, "min_span_s", "calibration.min_span_s", k.min_span_s, 60, 1e8) ||
         !r.num(c, "decimation_s", "calibration.decimation_s", k.decimation_s, 0.5, 3600) ||
-        !r.num(c, "frame_change_min_interval_s", "calibration.frame_change_min_interval_s", k.frame_change_min_interval_s, 0, 1e8))
+        !r.num(c, "frame_change_min_interval_s", "calibration.frame_change_min_interval_s", k.frame_change_min_interval_s, 0, 1e8) ||
+        !r.num(c, "frame_change_max_chi2_per_dof", "calibration.frame_change_max_chi2_per_dof", k.frame_change_max_chi2_per_dof, 0.01, 1e6))
       return done(false);
     const double head_dt = 1.0 / out.pipeline.crn_attitude.fs_hz;
     if (k.decimation_s < head_dt * (1 - 1e-9))

@@ -129,9 +129,9 @@ struct Node::Impl {
   // flog; the worker thread (or finish(), after it) writes the stderr line.
   Quat q_frame = Quat::Identity(), q_frame_old = Quat::Identity();
   TimeUs frame_from_t = std::numeric_limits<TimeUs>::min();
-  enum class FrameVerdict : std::uint8_t { kOk, kNotDetermined, kTooSoon };
+  enum class FrameVerdict : std::uint8_t { kOk, kNotDetermined, kTooSoon, kChi2 };
   /// What the worker writes on stderr for the real-time thread (frame changes, commands).
-  enum class LogKind : std::uint8_t { kFrameChange, kFrameNotDetermined, kFrameTooSoon, kAccepted, kReverted };
+  enum class LogKind : std::uint8_t { kFrameChange, kFrameNotDetermined, kFrameTooSoon, kFrameChi2, kAccepted, kReverted };
   struct FrameLog {
     TimeUs from_t = 0, cal_t = 0;
     Vec3 common_arcsec = Vec3::Zero();
@@ -160,12 +160,14 @@ struct Node::Impl {
       switch (e.kind) {
         case LogKind::kFrameNotDetermined:
         case LogKind::kFrameTooSoon:
+        case LogKind::kFrameChi2:
           std::fprintf(stderr,
                        "boresightd: frame change refused (calibration of %lld us; common rotation %.2f %.2f %.2f "
                        "arcsec): %s; the relative part is applied, the published frame stays\n",
                        static_cast<long long>(e.cal_t), e.common_arcsec[0], e.common_arcsec[1], e.common_arcsec[2],
-                       e.kind == LogKind::kFrameNotDetermined
-                           ? "the common rotation is not determined about every axis"
+                       e.kind == LogKind::kFrameNotDetermined ? "the common rotation is not determined about every axis"
+                       : e.kind == LogKind::kFrameChi2
+                           ? "the fit's chi-square per degree of freedom is above calibration.frame_change_max_chi2_per_dof"
                            : "less than calibration.frame_change_min_interval_s since the last frame change");
           break;
         case LogKind::kFrameChange:
@@ -637,9 +639,10 @@ struct Node::Impl {
         held_cal.q = mail.q_Si_B;
         held_cal.msg = m;
         held_cal.common_determined = mail.common_determined;
+        held_cal.chi2 = mail.chi2_per_dof_max;
         ++c.calibrations_held;
       } else {
-        applyResult(mail.q_Si_B, m, mail.common_determined, from_t);
+        applyResult(mail.q_Si_B, m, mail.common_determined, mail.chi2_per_dof_max, from_t);
       }
     }
     if (!mail.ok) {
@@ -676,11 +679,14 @@ struct Node::Impl {
     std::array<Quat, kMaxHeads> q = core::filled<Quat, kMaxHeads>(Quat::Identity());
     boresight_lcm::calibration_t msg{};
     bool common_determined = false;
+    double chi2 = std::numeric_limits<double>::quiet_NaN();
   } held_cal;
 
   /// Hands a result's mountings to the core (the datum keeps the relative part), under a new identifier,
   /// with the frame change where configured and allowed; m.applied and its common rotation are filled.
-  void applyResult(const std::array<Quat, kMaxHeads>& q, boresight_lcm::calibration_t& m, bool common_determined, TimeUs from_t) {
+  /// chi2: the fit's largest chi-square per degree of freedom (NaN: the solver has none).
+  void applyResult(const std::array<Quat, kMaxHeads>& q, boresight_lcm::calibration_t& m, bool common_determined, double chi2,
+                   TimeUs from_t) {
     if (pipe().handMountings(q) != core::Status::kOk) return;
     if (n_history == static_cast<int>(history.size())) {  // the oldest goes
       for (std::size_t i = 1; i < history.size(); ++i) history[i - 1] = history[i];
@@ -712,6 +718,7 @@ struct Node::Impl {
     FrameVerdict fv = FrameVerdict::kOk;
     if (cfg.calibration.apply_common_rotation) {
       if (!common.allFinite() || !common_determined) fv = FrameVerdict::kNotDetermined;
+      else if (std::isfinite(chi2) && chi2 > cfg.calibration.frame_change_max_chi2_per_dof) fv = FrameVerdict::kChi2;
       else if (frame_active && frame_epoch != 0 &&  // the last change, this run's or the state file's
                static_cast<double>(from_t - frame_epoch) * 1e-6 < cfg.calibration.frame_change_min_interval_s)
         fv = FrameVerdict::kTooSoon;
@@ -724,7 +731,10 @@ struct Node::Impl {
         frame_epoch = from_t;
         ++c.frame_changes;
       }
-      logEvent(fv == FrameVerdict::kOk ? LogKind::kFrameChange : fv == FrameVerdict::kTooSoon ? LogKind::kFrameTooSoon : LogKind::kFrameNotDetermined,
+      logEvent(fv == FrameVerdict::kOk        ? LogKind::kFrameChange
+               : fv == FrameVerdict::kTooSoon ? LogKind::kFrameTooSoon
+               : fv == FrameVerdict::kChi2    ? LogKind::kFrameChi2
+                                              : LogKind::kFrameNotDetermined,
                from_t, m.utime, common / kRadPerArcsec, 0);
     }
     saveState(m.utime, &m);
@@ -755,7 +765,7 @@ struct Node::Impl {
     if (cmd == 1 && held_cal.have) {
       held_cal.have = false;
       boresight_lcm::calibration_t m = held_cal.msg;
-      applyResult(held_cal.q, m, held_cal.common_determined, t);
+      applyResult(held_cal.q, m, held_cal.common_determined, held_cal.chi2, t);
       if (!m.applied) return;
       ++c.commands_accepted;
       logEvent(LogKind::kAccepted, t, m.utime, Vec3::Zero(), mounting_version);

@@ -154,6 +154,7 @@ void CalibrationWorker::fillResult(const calib::CalibrationSpan& sp, const calib
   mail_.nominal_gen = j.nominal_gen;
   mail_.ok = run.ok;
   mail_.method_attitude = false;
+  mail_.chi2_per_dof_max = std::numeric_limits<double>::quiet_NaN();
   // The reason without the leading "refused: " (the node's summary says it was refused).
   std::string why = run.refusal_text;
   if (why.rfind("refused: ", 0) == 0) why.erase(0, 9);
@@ -217,6 +218,9 @@ void CalibrationWorker::fillResult(const calib::CalibrationSpan& sp, const calib
         m.covariance_arcsec2[i][k] = rm.covariance_Si(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(k)) * kArcsecPerRad * kArcsecPerRad;
     mail_.common_determined = rm.common_determined;
     mail_.method_attitude = true;
+    double chi2 = 0;
+    for (const auto& g : run.raw.chi2_per_dof) chi2 = std::max({chi2, g[0], g[1]});
+    mail_.chi2_per_dof_max = run.raw.chi2_per_dof.empty() ? std::numeric_limits<double>::quiet_NaN() : chi2;
   }
 }
 

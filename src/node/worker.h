@@ -17,6 +17,7 @@
 #include <atomic>
 #include <condition_variable>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -57,6 +58,9 @@ struct Mailbox {
   /// span it solved (decimated epochs kept, their bytes: what the solve's copy of the feed holds).
   double cpu_s = 0.0, wall_s = 0.0;
   bool method_attitude = false;  ///< the attitude-domain estimate's mountings (else the CRN solver's)
+  /// The attitude-domain estimate's largest chi-square per degree of freedom over the heads and their
+  /// groups (cross-boresight, boresight) in its last pass; NaN for the CRN solver (it has none).
+  double chi2_per_dof_max = std::numeric_limits<double>::quiet_NaN();
   std::uint64_t observations = 0, observation_bytes = 0;
 };
 

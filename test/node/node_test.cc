@@ -1008,6 +1008,8 @@ TEST(NodeConfig, ClearErrors) {
   EXPECT_NE(err.find(dir + "/n.yaml:3: key 'calibration.method': expected 'crn'"), std::string::npos) << err;
   EXPECT_FALSE(node::loadNodeConfig(write("calibration:\n  raw_passes: 2.5\n"), cfg, &err));
   EXPECT_NE(err.find(dir + "/n.yaml:3: key 'calibration.raw_passes': expected a whole number"), std::string::npos) << err;
+  EXPECT_FALSE(node::loadNodeConfig(write("calibration:\n  frame_change_max_chi2_per_dof: 0\n"), cfg, &err));
+  EXPECT_NE(err.find(dir + "/n.yaml:3: key 'calibration.frame_change_max_chi2_per_dof': must be within"), std::string::npos) << err;
   EXPECT_TRUE(node::loadNodeConfig(write("calibration:\n  method: attitude\n"), cfg, &err)) << err;
   EXPECT_EQ(cfg.calibration.method, node::CalibrationConfig::Method::kAttitude);
   ASSERT_TRUE(cfg.raw_config.has_value());
@@ -1206,6 +1208,22 @@ TEST(NodeReplay, TheWorkerInTheAttitudeDomainIsCalibrateRawOnTheSameData) {
       max_from_crn = std::max(max_from_crn, std::abs(crn[uh][ua] - angles[uh][ua]));
     }
   EXPECT_GT(max_from_crn, 1.0);  // the attitude-domain angles are not the CRN solver's
+
+  // The frame change's chi-square gate (calibration.frame_change_max_chi2_per_dof): the fit's noise
+  // models describe these data (chi-square per degree of freedom about 1), so a change is made under the
+  // default bound of 2 and refused under a bound of 0.5 - the relative part is applied either way.
+  cfg.calibration.apply_common_rotation = true;
+  const auto ok = replay(log, cfg);
+  EXPECT_EQ(ok->c.frame_changes, 1u);
+  EXPECT_EQ(ok->c.frame_changes_refused, 0u);
+  cfg.calibration.frame_change_max_chi2_per_dof = 0.5;
+  const auto tight = replay(log, cfg);
+  std::printf("frame changes: bound 2: %llu made, %llu refused; bound 0.5: %llu made, %llu refused\n",
+              static_cast<unsigned long long>(ok->c.frame_changes), static_cast<unsigned long long>(ok->c.frame_changes_refused),
+              static_cast<unsigned long long>(tight->c.frame_changes), static_cast<unsigned long long>(tight->c.frame_changes_refused));
+  EXPECT_EQ(tight->c.frame_changes, 0u);
+  EXPECT_EQ(tight->c.frame_changes_refused, 1u);
+  EXPECT_EQ(tight->c.calibrations_applied, 1u);
 }
 #endif
 

@@ -89,6 +89,10 @@ struct CalibrationConfig {
   /// unobservable common directions: none) and at least this much data time since the last change, s;
   /// else it is refused (frame_changes_refused, logged) and only the relative part is applied.
   double frame_change_min_interval_s = 3 * 3600.0;
+  /// A frame change also needs the fit's chi-square per degree of freedom (the attitude-domain estimate's
+  /// largest over the heads and their groups) at most this: a fit whose noise model does not describe
+  /// the data does not move the published frame. The CRN solver has none: not applied to it.
+  double frame_change_max_chi2_per_dof = 2.0;
   /// crn (default): method A's CRN-domain solver, as `boresight calibrate`. attitude: after a successful
   /// CRN solve, the attitude-domain estimate from the raw head and accelerometer samples of the same
   /// window of data time (calib::estimateRaw, as `calibrate --raw`, noise fitted to the data), whose
