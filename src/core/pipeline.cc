@@ -47,6 +47,7 @@ Status Pipeline::configure(const PipelineConfig& cfg) {
 
 void Pipeline::reset() {
   validator_.reset();
+  last_valid_ = false;
   fusion_.reset();
   means_.reset();
   monitor_.reset();
@@ -140,9 +141,11 @@ void Pipeline::resolve() {
 BORESIGHT_CLONES Status Pipeline::stepHeads(const HeadEpoch& in) {
   if (!configured_) {
     health_.record(Status::kNotConfigured);
+    last_valid_ = false;
     return Status::kNotConfigured;
   }
   Status s = validator_.step(in);
+  last_valid_ = s == Status::kOk;
   if (s != Status::kOk) return s;
   const ValidHeads& v = validator_.output();
   PairRelatives rel;  // C_Sa_Sb of every pair, once per epoch for the means and the monitor

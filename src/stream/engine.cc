@@ -9,7 +9,6 @@ namespace boresight::stream {
 Engine::Engine(const AssemblerConfig& acfg)
     : pipe_(std::make_unique<core::Pipeline>()),
       asm_(acfg),
-      obs_validator_(std::make_unique<core::HeadInputValidator>()),
       stars_(std::make_unique<core::StarEpoch>()) {}
 Engine::~Engine() = default;
 
@@ -17,7 +16,6 @@ bool Engine::configure(const core::PipelineConfig& cfg, std::string* error) {
   core::Status st = pipe_->configure(cfg);
   configured_ = st == core::Status::kOk;
   heads_cfg_ = cfg.heads;
-  if (configured_) obs_validator_->configure(cfg.heads);  // no allocation: a driver re-configures between steps
   if (!configured_ && error) *error = std::string("the core rejected the configuration: ") + core::statusName(st);
   return configured_;
 }
@@ -137,9 +135,10 @@ Engine::Result Engine::run() {
           const Clock::time_point t0 = hook_ ? Clock::now() : Clock::time_point{};
           const core::Status st = pipe_->stepHeads(e);
           const double ns = hook_ ? nsSince(t0) : 0.0;
-          if (!observers_.empty() && obs_validator_->step(e) == core::Status::kOk) {
+          const core::ValidHeads* valid = pipe_->lastValidHeads();
+          if (!observers_.empty() && valid != nullptr) {
             // The epoch as the core's validator leaves it (the same checks, the same order of heads).
-            const core::ValidHeads& v = obs_validator_->output();
+            const core::ValidHeads& v = *valid;
             core::HeadEpoch clean;
             clean.t = e.t;
             for (int s = 0; s < heads_cfg_.n_heads; ++s) {

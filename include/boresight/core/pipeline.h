@@ -122,6 +122,10 @@ class Pipeline {
   Health health() const;
   const PipelineConfig& config() const { return cfg_; }
   const HeadFusion& fusion() const { return fusion_; }
+  /// The last head epoch as the validator left it (bad heads dropped, quaternions normalised, samples in
+  /// slot order), or nullptr when the last stepHeads() refused it as a whole (or none came since the last
+  /// reset): what the replay engine hands its observers, without validating the epoch a second time.
+  const ValidHeads* lastValidHeads() const { return last_valid_ ? &validator_.output() : nullptr; }
   const RelativeAttitudeMeans& means() const { return means_; }
   const BoresightMonitor& monitor() const { return monitor_; }
   const AttitudeRates& rates() const { return rates_; }
@@ -156,6 +160,7 @@ class Pipeline {
   PipelineConfig cfg_{};
   bool configured_ = false;
   HeadInputValidator validator_{};
+  bool last_valid_ = false;  ///< the validator accepted the last head epoch (lastValidHeads)
   HeadFusion fusion_{};
   RelativeAttitudeMeans means_{};
   BoresightMonitor monitor_{};

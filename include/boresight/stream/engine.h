@@ -94,7 +94,8 @@ class Engine {
   core::Health health() const;
   const core::Pipeline& pipeline() const { return *pipe_; }
   /// The core, for a driver that changes it between steps (hands mountings, restarts it). Re-configure
-  /// through configure(), which keeps the observers' validator in step with it.
+  /// through configure() (it also keeps the engine's head configuration for the observers' epochs).
+  /// Observers get the core's own validated epoch (Pipeline::lastValidHeads): nothing to keep in step.
   core::Pipeline& pipeline() { return *pipe_; }
 
   // A driver of a live source (stream::PushSource) between pushes and runs:
@@ -107,8 +108,8 @@ class Engine {
     return asm_.lastHandedOut(t, k);
   }
   /// A re-synchronisation (a confirmed clock step back): what the assembler holds goes to the core,
-  /// the core's pending rows go to the sinks, then the assembler forgets its time and the core and the
-  /// observers' validator start again (filters empty; the core's health counts restart too, so a driver
+  /// the core's pending rows go to the sinks, then the assembler forgets its time and the core (its
+  /// validator, whose epochs the observers get, included) starts again (filters empty; its health counts restart too, so a driver
   /// adds them up before). `before_reset` runs between the flush and the reset (the driver's last look
   /// at the core). kError as run().
   template <typename F>
@@ -119,7 +120,6 @@ class Engine {
     if (!flushCore()) return Result::kError;
     before_reset();
     pipe_->reset();
-    obs_validator_->reset();
     return r;
   }
   /// The core's pending rows (Pipeline::flush) to the sinks, at a boundary where the driver changes the
@@ -134,7 +134,6 @@ class Engine {
   std::vector<RowSink*> sinks_;
   std::vector<InputObserver*> observers_;
   StepHook* hook_ = nullptr;
-  std::unique_ptr<core::HeadInputValidator> obs_validator_;  ///< the core's validator, for observers
   core::HeadSetConfig heads_cfg_{};
   std::string error_;
   bool configured_ = false, begun_ = false, finished_ = false;
