@@ -5,6 +5,7 @@
 #include <boresight/core/pipeline.h>
 #include <boresight/model/effects.h>
 #include <boresight/model/overlay.h>
+#include <boresight/model/parallel.h>
 #include <boresight/model/rotation.h>
 #include <boresight/model/sensors.h>
 
@@ -699,8 +700,10 @@ RawEstimate estimateRaw(const RawBoundConfig& cfg0, const RawData& data, const V
       fo.band_lo = 3;   // a correlation time counts as determined when the span holds 3 of its periods
       const std::vector<model::NoiseStructure> st = {model::NoiseStructure::White, model::NoiseStructure::WhiteGaussMarkov,
                                                      model::NoiseStructure::WhitePowerLaw};
-      for (std::size_t i = 0; i < nh; ++i) {
-        for (std::size_t j = 0; j < 3; ++j) {
+      // One fit per head axis, independent of the others: on options.threads threads.
+      model::parallelFor(3 * nh, cfg.options.threads, [&](std::size_t ij) {
+        const std::size_t i = ij / 3, j = ij % 3;
+        {
           // At most 16384 samples (every k-th): the exact likelihood's cost is linear in them, and what
           // the fit determines (times from 20 intervals up) does not need every 0.5 s sample.
           const model::NoiseSeries& full = b.innovations_[3 * i + j];
@@ -712,7 +715,7 @@ RawEstimate estimateRaw(const RawBoundConfig& cfg0, const RawData& data, const V
           }
           if (sr.size() < 200) {
             out.fitted_noise[i][j] = cfg0.heads[i].noise[j];
-            continue;
+            return;
           }
           const Eigen::MatrixXd X = Eigen::MatrixXd::Ones(static_cast<Eigen::Index>(sr.size()), 1);
           // The smallest BIC among the fits whose every parameter the span and sampling determine: a
@@ -728,8 +731,8 @@ RawEstimate estimateRaw(const RawBoundConfig& cfg0, const RawData& data, const V
           }
           out.fitted_noise[i][j] = best != nullptr ? best->model : cfg0.heads[i].noise[j];
         }
-        factor[i] = {1.0, 1.0};
-      }
+      });
+      for (std::size_t i = 0; i < nh; ++i) factor[i] = {1.0, 1.0};
       for (std::size_t i = 0; i < nh; ++i)
         for (std::size_t j = 0; j < 3; ++j) base[i][j] = out.fitted_noise[i][j];
     }

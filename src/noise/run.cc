@@ -2,6 +2,7 @@
 #include <boresight/core/rotation.h>
 #include <boresight/io/core_config.h>
 #include <boresight/io/overlay_apply.h>
+#include <boresight/model/parallel.h>
 #include <boresight/noise/joint_white.h>
 #include <boresight/noise/run.h>
 #include <boresight/stream/engine.h>
@@ -16,7 +17,6 @@
 #include <limits>
 #include <map>
 #include <tuple>
-#include <thread>
 
 namespace boresight::noise {
 namespace {
@@ -347,19 +347,6 @@ model::NoiseModel scaled(const model::NoiseModel& m, double w) {
   return o;
 }
 
-/// Runs f(i) for i in [0, n) on two threads.
-template <class F>
-void parallelFor(std::size_t n, F f) {
-  std::vector<std::thread> th;
-  const unsigned workers = std::max(1u, std::min(2u, std::thread::hardware_concurrency()));
-  std::atomic<std::size_t> next{0};
-  for (unsigned w = 0; w < workers; ++w)
-    th.emplace_back([&] {
-      for (std::size_t i = next++; i < n; i = next++) f(i);
-    });
-  for (auto& t : th) t.join();
-}
-
 }  // namespace
 
 std::vector<BandPoint> bandSpectrum(const AxisResult& a) {
@@ -587,7 +574,7 @@ bool runNoise(const NoiseRequest& req, NoiseOutput& out, std::string* error) {
     // uses the likelihood asked for.
     NoiseOptions pass_opt = req.options;
     if (pass + 1 < passes) pass_opt.likelihood = model::NoiseLikelihood::Whittle;
-    parallelFor(static_cast<std::size_t>(3 * n), [&](std::size_t idx) {
+    model::parallelFor(static_cast<std::size_t>(3 * n), model::defaultThreads(), [&](std::size_t idx) {
       const int i = static_cast<int>(idx) / 3, k = static_cast<int>(idx) % 3;
       const model::NoiseModel fixed = contaminationOf(i, k);
       AxisResult a;
@@ -624,7 +611,7 @@ bool runNoise(const NoiseRequest& req, NoiseOutput& out, std::string* error) {
   // Accelerometer: the white level per A axis from the raw differences; the slow part from blocks.
   if (acc.samples() > 0) {
     std::vector<AxisResult> acc_axes(6);
-    parallelFor(6, [&](std::size_t idx) {
+    model::parallelFor(6, model::defaultThreads(), [&](std::size_t idx) {
       const int k = static_cast<int>(idx % 3);
       AxisResult a;
       a.sensor = "accelerometer";

@@ -470,6 +470,36 @@ TEST(RawEstimator, VarianceComponentsTakeTheNoiseLevelsFromTheData) {
   EXPECT_NEAR(ratio_robust, 1.0, 0.3);
 }
 
+/// The noise fits of the third pass run one per head axis on options.threads threads: the estimate is
+/// the one-thread estimate to the bit (each fit the same arithmetic whichever thread runs it), and the
+/// fitted models are the same.
+TEST(RawEstimator, TheNoiseFitsOnTwoThreadsGiveTheOneThreadEstimateToTheBit) {
+  sim::Scenario sc;
+  std::string err;
+  ASSERT_TRUE(sim::loadScenario(std::string(BORESIGHT_SOURCE_DIR) + "/config/sim_gracefo_calibration_short.yaml", sc, &err)) << err;
+  sim::Simulator simu;
+  ASSERT_TRUE(simu.init(sc, 3, 860, &err)) << err;
+  RawBoundOptions opt;
+  opt.fit_noise = true;
+  opt.time_offset = true;
+  const RawBoundConfig one = rawBoundConfig(simu.heads(), simu.accel(), opt);
+  RawBoundResult at_truth;
+  const RawData recorded = runWithBound(simu, one, false, at_truth);
+  RawBoundConfig two = one;
+  two.options.threads = 2;
+  const Vec3 bias0 = simu.accel().config().bias_rad_s2;
+  const RawEstimate a = estimateRaw(one, recorded, bias0, 3), b = estimateRaw(two, recorded, bias0, 3);
+  ASSERT_EQ(a.fitted_noise.size(), 3u);
+  ASSERT_EQ(b.fitted_noise.size(), 3u);
+  for (std::size_t i = 0; i < 3; ++i) {
+    EXPECT_EQ(a.mounting_rad[i], b.mounting_rad[i]) << "head " << i;
+    EXPECT_EQ(a.bound.head_sigma_rad[i], b.bound.head_sigma_rad[i]) << "head " << i;
+    for (std::size_t j = 0; j < 3; ++j) EXPECT_EQ(a.fitted_noise[i][j].describe(), b.fitted_noise[i][j].describe()) << i << " " << j;
+  }
+  EXPECT_EQ(a.time_offset_s, b.time_offset_s);
+  EXPECT_EQ(a.chi2_per_obs, b.chi2_per_obs);
+}
+
 TEST(RawBound, RefusesAConfigurationWithoutWhiteNoise) {
   RawBoundConfig c = oneHead(model::NoiseModel::white(1e-5), model::NoiseModel::white(1e-8));
   EXPECT_EQ(c.validate(), "");

@@ -2,6 +2,7 @@
 // numerical gradient on two threads is the one-thread gradient to the bit (the audit's head-noise fits
 // run on two threads and must give the same results), an exception in either thread reaches the caller.
 #include <boresight/model/minimise.h>
+#include <boresight/model/parallel.h>
 
 #include <gtest/gtest.h>
 
@@ -9,6 +10,7 @@
 #include <cmath>
 #include <stdexcept>
 #include <thread>
+#include <vector>
 
 namespace {
 
@@ -73,6 +75,24 @@ TEST(Minimise, AnExceptionInTheOtherThreadReachesTheCaller) {
   };
   EXPECT_THROW(centralGradient(f, x, 1e-4, 2), std::runtime_error);
   EXPECT_THROW(centralGradient(f, x, 1e-4, 1), std::runtime_error);
+}
+
+TEST(ParallelFor, EveryIndexRunsOnceAndTheFirstExceptionReachesTheCaller) {
+  for (const unsigned threads : {1u, 2u, 5u}) {
+    std::vector<std::atomic<int>> hits(1000);
+    boresight::model::parallelFor(hits.size(), threads, [&](std::size_t i) { ++hits[i]; });
+    for (std::size_t i = 0; i < hits.size(); ++i) ASSERT_EQ(hits[i].load(), 1) << "index " << i << ", " << threads << " threads";
+  }
+  boresight::model::parallelFor(0, 2, [](std::size_t) { FAIL() << "no index to run"; });
+  std::atomic<int> ran{0};
+  EXPECT_THROW(boresight::model::parallelFor(100, 2,
+                                             [&](std::size_t i) {
+                                               ++ran;
+                                               if (i == 7) throw std::runtime_error("index 7");
+                                             }),
+               std::runtime_error);
+  EXPECT_LE(ran.load(), 100);
+  EXPECT_GE(ran.load(), 8);
 }
 
 }  // namespace

@@ -96,6 +96,9 @@ struct RawBoundOptions {
   /// to that pass's innovations (model::selectNoise: white, white + Gauss-Markov, white + power law,
   /// by BIC) and replaces the model in use for the following passes (RawEstimate::fitted_noise).
   bool fit_noise = false;
+  /// estimateRaw: the noise fits (one per head axis, independent) run on this many threads; the result
+  /// does not depend on it (each fit is the same arithmetic on whichever thread runs it).
+  unsigned threads = 1;
 };
 
 struct RawBoundConfig {
