@@ -191,7 +191,7 @@ bool loadTop(const YAML::Node& top, const std::string& path, Reader& r, NodeConf
     if (!r.keys(c, "calibration", {"enabled", "cadence_s", "min_span_s", "apply_lag_epochs", "decimation_s",
                                     "max_observations", "apply", "apply_common_rotation",
                                     "frame_change_min_interval_s", "frame_change_max_chi2_per_dof", "hold_for_command",
-                                    "method", "raw_passes"}))
+                                    "method", "raw_passes", "time_offset", "acc_scale"}))
       return done(false);
     std::string method = "crn";
     if (!r.str(c, "method", "calibration.method", method)) return done(false);
@@ -203,13 +203,19 @@ bool loadTop(const YAML::Node& top, const std::string& path, Reader& r, NodeConf
     if (!r.num(c, "raw_passes", "calibration.raw_passes", v, 1, 10)) return done(false);
     if (v != std::floor(v)) return done(r.fail("calibration.raw_passes", "expected a whole number", c["raw_passes"]));
     k.raw_passes = static_cast<int>(v);
+    if (!r.boolean(c, "time_offset", "calibration.time_offset", k.raw_time_offset) ||
+        !r.boolean(c, "acc_scale", "calibration.acc_scale", k.raw_acc_scale))
+      return done(false);
     if (k.method == CalibrationConfig::Method::kAttitude) {
-      // As `boresight calibrate --raw`: the noise in use (platform file, overlay), the bias estimated, the
-      // noise models fitted to the data; not determined above the platform's mounting uncertainty.
+      // As `boresight calibrate --method attitude`: the noise in use (platform file, overlay), the bias and
+      // (time_offset, acc_scale) the accelerometer's time offset and scale estimated, the noise models
+      // fitted to the data; not determined above the platform's mounting uncertainty.
       if (const std::string e = pc.noise_in_use.missing(); !e.empty())
         return done(r.fail("calibration.method", "attitude needs a noise model for " + e + " (the platform file's noise section)", c["method"]));
       calib::RawBoundOptions ro;
       ro.fit_noise = true;
+      ro.time_offset = k.raw_time_offset;
+      ro.scale = k.raw_acc_scale;
       const double unobs = pc.mounting_uncertainty_arcsec > 0 ? std::min(pc.mounting_uncertainty_arcsec, 3600.0) : 3600.0;
       ro.unobservable_sigma_rad = unobs * kRadPerArcsec;
       out.raw_not_determined_rad = ro.unobservable_sigma_rad;

@@ -1010,9 +1010,17 @@ TEST(NodeConfig, ClearErrors) {
   EXPECT_NE(err.find(dir + "/n.yaml:3: key 'calibration.raw_passes': expected a whole number"), std::string::npos) << err;
   EXPECT_FALSE(node::loadNodeConfig(write("calibration:\n  frame_change_max_chi2_per_dof: 0\n"), cfg, &err));
   EXPECT_NE(err.find(dir + "/n.yaml:3: key 'calibration.frame_change_max_chi2_per_dof': must be within"), std::string::npos) << err;
+  EXPECT_FALSE(node::loadNodeConfig(write("calibration:\n  time_offset: often\n"), cfg, &err));
+  EXPECT_NE(err.find(dir + "/n.yaml:3: key 'calibration.time_offset'"), std::string::npos) << err;
+  EXPECT_TRUE(node::loadNodeConfig(write("calibration:\n  method: attitude\n  acc_scale: false\n  time_offset: false\n"), cfg, &err)) << err;
+  ASSERT_TRUE(cfg.raw_config.has_value());
+  EXPECT_FALSE(cfg.raw_config->options.scale);
+  EXPECT_FALSE(cfg.raw_config->options.time_offset);
   EXPECT_TRUE(node::loadNodeConfig(write("calibration:\n  method: attitude\n"), cfg, &err)) << err;
   EXPECT_EQ(cfg.calibration.method, node::CalibrationConfig::Method::kAttitude);
   ASSERT_TRUE(cfg.raw_config.has_value());
+  EXPECT_TRUE(cfg.raw_config->options.time_offset) << "the attitude domain takes the time offset by default";
+  EXPECT_TRUE(cfg.raw_config->options.scale) << "and the scale factors";
   EXPECT_EQ(cfg.raw_config->heads.size(), 3u);
   // Every error names the file, the line and the key; NaN, duplicated keys and a directory too.
   EXPECT_FALSE(node::loadNodeConfig(write("lookahead_s: 2\nhealth_period_s: .nan\n"), cfg, &err));

@@ -270,6 +270,37 @@ TEST(Calibrate, RawEstimatesInTheAttitudeDomainBesideTheCrnAndErrsLess) {
   EXPECT_EQ(run("calibrate --config " + kConfig + " " + level1() + " --raw --raw-noise magic").status, 2);
 }
 
+TEST(Calibrate, MethodAttitudeEstimatesTheTimeOffsetAndScaleUnlessTold) {
+  // --method attitude takes the accelerometer's time offset and scale factors by default (either left
+  // out reads as mounting error); --no-time-offset, --no-acc-scale hold them; a flag with its negation
+  // is a usage error. The short span carries a 15 ms offset.
+  const std::string out = testutil::makeTempDir("calibrate_method");
+  const CliRun a = run("calibrate --config " + kConfig + " " + level1() + " " + sim().gnv + " --method attitude --json " + out + "/a.json");
+  ASSERT_EQ(a.status, 0) << a.out;
+  const auto ja = readJson(out + "/a.json");
+  ASSERT_TRUE(ja.contains("attitude_domain")) << ja.dump();
+  ASSERT_TRUE(ja["attitude_domain"].contains("time_offset_s")) << ja["attitude_domain"].dump();
+  EXPECT_NEAR(ja["attitude_domain"]["time_offset_s"].get<double>(), 0.015, 0.002);
+  EXPECT_GT(ja["attitude_domain"]["time_offset_sigma_s"].get<double>(), 0.0);
+  EXPECT_FALSE(ja.contains("time_offset_s") && !ja["time_offset_s"].is_null()) << "the CRN solver estimates it only when asked";
+  EXPECT_EQ(ja["mountings_written_from"], "attitude-domain estimate (--method attitude)");
+  const CliRun b = run("calibrate --config " + kConfig + " " + level1() + " " + sim().gnv +
+                       " --method attitude --no-time-offset --json " + out + "/b.json");
+  ASSERT_EQ(b.status, 0) << b.out;
+  EXPECT_FALSE(readJson(out + "/b.json")["attitude_domain"].contains("time_offset_s"));
+  EXPECT_TRUE(ja["attitude_domain"].contains("acc_scale")) << "the scale factors by default";
+  EXPECT_TRUE(readJson(out + "/b.json")["attitude_domain"].contains("acc_scale"));
+  const CliRun d = run("calibrate --config " + kConfig + " " + level1() + " --method attitude --no-acc-scale --json " + out + "/d.json");
+  ASSERT_EQ(d.status, 0) << d.out;
+  EXPECT_FALSE(readJson(out + "/d.json")["attitude_domain"].contains("acc_scale"));
+  EXPECT_EQ(run("calibrate --config " + kConfig + " " + level1() + " --acc-scale --no-acc-scale --json " + out + "/c.json").status, 2);
+  EXPECT_EQ(run("calibrate --config " + kConfig + " " + level1() + " --method attitude --time-offset --no-time-offset --json " + out +
+                "/c.json")
+                .status,
+            2);
+  EXPECT_EQ(run("calibrate --config " + kConfig + " " + level1() + " --method bspline --json " + out + "/c.json").status, 2);
+}
+
 TEST(Calibrate, WritesTheCalibratedMountingsAsAQsa1bThatAnotherRunTakesAsNominal) {
   // --write-qsa1b with --raw: the attitude-domain estimate's mountings as a QSA1B file. Run again on the
   // same data with that file in place of the nominal QSA1B, the estimate finds (almost) nothing left:
@@ -281,7 +312,7 @@ TEST(Calibrate, WritesTheCalibratedMountingsAsAQsa1bThatAnotherRunTakesAsNominal
   ASSERT_EQ(a.status, 0) << a.out;
   EXPECT_NE(a.out.find("mountings written from the attitude-domain estimate"), std::string::npos) << a.out;
   const auto ja = readJson(out + "/a.json");
-  EXPECT_EQ(ja["mountings_written_from"], "attitude-domain estimate (--raw)");
+  EXPECT_EQ(ja["mountings_written_from"], "attitude-domain estimate (--method attitude)");
   const std::string text = testutil::slurp(out + "/QSA1B_calibrated.txt");
   EXPECT_NE(text.find(" D "), std::string::npos) << text;
   const CliRun b = run("calibrate --config " + kConfig + " " + sim().sca + " " + sim().acc + " " + out + "/QSA1B_calibrated.txt " +
