@@ -62,6 +62,7 @@ CalibrationFeed::CalibrationFeed(const CalibrationFeed& o)
       n_acc_(o.n_acc_),
       aberrated_(o.aberrated_),
       orbit_v_(o.orbit_v_),
+      orbit_line_(o.orbit_line_),
       t0_(o.t0_),
       have_t0_(o.have_t0_) {}
 
@@ -85,6 +86,7 @@ bool CalibrationFeed::configure(const core::PipelineConfig& cfg, const SpanOptio
   sum_A_ = Vec3::Zero();
   n_acc_ = aberrated_ = 0;
   orbit_v_.clear();
+  orbit_line_ = OrbitLine{};
   have_t0_ = false;
   cfg_ = cfg;
   so_ = so;
@@ -138,7 +140,7 @@ void CalibrationFeed::trimRaw(TimeUs newest) {
   const auto first = std::find_if(raw_.events.begin(), raw_.events.end(), [cut](const RawData::Event& x) { return x.t_s >= cut; });
   raw_.events.erase(raw_.events.begin(), first);
   const TimeUs cut_us = t0_ + static_cast<TimeUs>(std::llround(cut * 1e6)) - 60 * kUsPerSecond;  // orbit: one segment more
-  const auto o = std::find_if(orbit_v_.begin(), orbit_v_.end(), [cut_us](const std::pair<TimeUs, Vec3>& x) { return x.first >= cut_us; });
+  const auto o = std::find_if(orbit_v_.begin(), orbit_v_.end(), [cut_us](const OrbitPoint& x) { return x.t >= cut_us; });
   orbit_v_.erase(orbit_v_.begin(), o);
 }
 
@@ -158,7 +160,7 @@ void CalibrationFeed::pushAcc(TimeUs t, const Vec3& a_A) {
 void CalibrationFeed::pushOrbit(const model::OrbitSample& o) {
   if (!configured_ || finished_ || !wantsOrbit()) return;
   if (thermal_) thermal_->pushOrbit(o);
-  if (with_raw_) orbit_v_.emplace_back(o.t, o.v_I);
+  if (with_raw_) orbit_v_.push_back(OrbitPoint{o.t, o.v_I, o.u_rad, o.u_rate_rad_s});
   ++orbit_samples_;
 }
 
@@ -169,28 +171,65 @@ void CalibrationFeed::finish() {
   if (!with_raw_ || orbit_v_.size() < 2 || !have_t0_) return;
   // Every head sample inside the orbit's span gets the observer velocity (the satellite's, linear
   // between orbit samples, and the Earth's), so that the estimate removes the stars' aberration.
-  std::stable_sort(orbit_v_.begin(), orbit_v_.end(),
-                   [](const std::pair<TimeUs, Vec3>& a, const std::pair<TimeUs, Vec3>& b) { return a.first < b.first; });
+  std::stable_sort(orbit_v_.begin(), orbit_v_.end(), [](const OrbitPoint& a, const OrbitPoint& b) { return a.t < b.t; });
+  fitOrbitLine();
   // Segment j is [orbit j, orbit j+1]; it serves t inside it unless it spans an orbit gap (> 60 s).
   const auto serves = [&](std::size_t j, TimeUs t) {
-    const TimeUs ta = orbit_v_[j].first, tb = orbit_v_[j + 1].first;
+    const TimeUs ta = orbit_v_[j].t, tb = orbit_v_[j + 1].t;
     return t >= ta && t <= tb && tb > ta && tb - ta <= 60 * kUsPerSecond;
   };
   std::size_t k = 0;
   for (auto& ev : raw_.events) {  // in time order, as the orbit
     if (ev.head < 0) continue;
     const TimeUs t = t0_ + static_cast<TimeUs>(std::llround(ev.t_s * 1e6));
-    while (k + 2 < orbit_v_.size() && orbit_v_[k + 1].first < t) ++k;
+    while (k + 2 < orbit_v_.size() && orbit_v_[k + 1].t < t) ++k;
     // A sample at an orbit sample's time belongs to either segment: the next one when this one is a gap.
     std::size_t j = k;
     if (!serves(j, t) && j + 2 < orbit_v_.size() && serves(j + 1, t)) ++j;
     if (!serves(j, t)) continue;  // outside the orbit's span, or in an orbit gap
-    const auto& [ta, va] = orbit_v_[j];
-    const auto& [tb, vb] = orbit_v_[j + 1];
-    const double f = static_cast<double>(t - ta) / static_cast<double>(tb - ta);
-    ev.v_obs_I = va + f * (vb - va) + model::earthVelocityLowPrecision(toSeconds(t));
+    const OrbitPoint& a = orbit_v_[j];
+    const OrbitPoint& b = orbit_v_[j + 1];
+    const double f = static_cast<double>(t - a.t) / static_cast<double>(b.t - a.t);
+    ev.v_obs_I = a.v_I + f * (b.v_I - a.v_I) + model::earthVelocityLowPrecision(toSeconds(t));
     ++aberrated_;
   }
+}
+
+void CalibrationFeed::fitOrbitLine() {
+  orbit_line_ = OrbitLine{};
+  if (orbit_v_.size() < 2) return;
+  // Unwrap: between two samples u moves by about the mean of their rates times the interval (across any
+  // gap); the turns added are those that bring the step nearest to that.
+  std::vector<double> t(orbit_v_.size()), u(orbit_v_.size());
+  for (std::size_t k = 0; k < orbit_v_.size(); ++k) {
+    t[k] = static_cast<double>(orbit_v_[k].t - t0_) * 1e-6;
+    u[k] = orbit_v_[k].u;
+    if (k == 0) continue;
+    const double expected = 0.5 * (orbit_v_[k].u_rate + orbit_v_[k - 1].u_rate) * (t[k] - t[k - 1]);
+    u[k] += 2 * kPi * std::round((u[k - 1] + expected - u[k]) / (2 * kPi));
+  }
+  // u = phase + rate t by least squares (about the means: well conditioned over any span).
+  const double n = static_cast<double>(t.size());
+  double tm = 0, um = 0;
+  for (std::size_t k = 0; k < t.size(); ++k) {
+    tm += t[k] / n;
+    um += u[k] / n;
+  }
+  double stt = 0, stu = 0;
+  for (std::size_t k = 0; k < t.size(); ++k) {
+    stt += (t[k] - tm) * (t[k] - tm);
+    stu += (t[k] - tm) * (u[k] - um);
+  }
+  if (!(stt > 0)) return;
+  OrbitLine& l = orbit_line_;
+  l.rate_rad_s = stu / stt;
+  l.phase_rad = um - l.rate_rad_s * tm;
+  double ss = 0;
+  for (std::size_t k = 0; k < t.size(); ++k) ss += std::pow(u[k] - l.phase_rad - l.rate_rad_s * t[k], 2);
+  l.rms_rad = std::sqrt(ss / n);
+  l.span_s = t.back() - t.front();
+  l.samples = t.size();
+  l.ok = l.rate_rad_s > 0 && std::isfinite(l.phase_rad);
 }
 
 // ------------------------------------------------------------------------------------------------
@@ -252,7 +291,23 @@ CalibrationRun runCalibration(CalibrationFeed& feed, const RunOptions& o) {
   }
   run.ok = true;
   if (o.raw && feed.collectsRaw()) {
-    run.raw = estimateRaw(*o.raw, feed.raw(), feed.rawMeanAcc(), o.raw_passes);
+    run.raw_config = *o.raw;
+    if (o.raw_harmonics > 0 && run.raw_config.heads.size() > 1) {
+      // The relative alignment's orbit harmonics need the orbit's phase over at least one revolution.
+      const CalibrationFeed::OrbitLine& l = feed.rawOrbitLine();
+      if (!l.ok) {
+        run.raw_harmonics_note = "no orbit among the inputs (GNI1B / GNV1B, ORBIT messages): the relative alignment's orbit "
+                                 "harmonics not estimated";
+      } else if (l.span_s * l.rate_rad_s < 2 * kPi) {
+        run.raw_harmonics_note = "the orbit covers " + fmt("%.2f", l.span_s * l.rate_rad_s / (2 * kPi)) +
+                                 " revolutions of the span (at least one needed): the relative alignment's orbit harmonics not estimated";
+      } else {
+        run.raw_config.options.harmonics = o.raw_harmonics;
+        run.raw_config.options.orbit_rate_rad_s = l.rate_rad_s;
+        run.raw_config.options.orbit_phase_rad = l.phase_rad;
+      }
+    }
+    run.raw = estimateRaw(run.raw_config, feed.raw(), feed.rawMeanAcc(), o.raw_passes);
     run.raw_estimated = true;
   }
   if (o.thermal_fit && feed.thermal() && feed.orbitSamples() > 0) {

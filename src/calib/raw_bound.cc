@@ -373,7 +373,7 @@ void RawBound::observe(std::size_t i, int j, double t_s, double y) {
   u(static_cast<Eigen::Index>(3 * i + jj)) += 1;
   const int K = cfg_.options.harmonics;
   if (i > 0 && K > 0) {
-    const double ang = cfg_.options.orbit_rate_rad_s * t_s;
+    const double ang = cfg_.options.orbit_phase_rad + cfg_.options.orbit_rate_rad_s * t_s;
     const auto base = static_cast<Eigen::Index>(col_harm_ + ((i - 1) * 3 + jj) * 2 * static_cast<std::size_t>(K));
     for (int k = 1; k <= K; ++k) {
       u(base + 2 * (k - 1)) += std::cos(k * ang);
@@ -389,7 +389,11 @@ void RawBound::observe(std::size_t i, int j, double t_s, double y) {
   }
   if (!data_) info_.noalias() += u.transpose() * (u / F);  // data mode: the sum of the groups' (finishData)
   if (data_) {
-    double v = y - r.dot(x_.head<3>());
+    // What this axis's noise is seen as: the data less the trajectory's prediction. The innovation v
+    // takes the noise states' prediction off it as well; the noise fit must see the noise, not what the
+    // model in use leaves of it (a fit of v under a coloured model in use finds it white).
+    const double seen = y - r.dot(x_.head<3>());
+    double v = seen;
     for (Eigen::Index s2 = b; s2 < e; ++s2) v -= x_(s2);
     x_.noalias() += Ph * (v / F);
     chi2_ += v * v / F;
@@ -410,7 +414,7 @@ void RawBound::observe(std::size_t i, int j, double t_s, double y) {
       auto& sr = innovations_[3 * i + jj];
       if (sr.t_s.empty() || t_s > sr.t_s.back()) {
         sr.t_s.push_back(t_s);
-        sr.y.push_back(v);
+        sr.y.push_back(seen);
       }
     }
     if (collect_blocks_ && cfg_.options.score_block_s > 0) {
@@ -452,6 +456,20 @@ void RawBound::enableData(const std::vector<Mat3>& C_Si_B_applied, const Vec3& b
   }
 }
 
+Mat3 RawBound::appliedMounting(std::size_t index, double t_s) const {
+  const int K = cfg_.options.harmonics;
+  if (index == 0 || K <= 0 || harm_applied_.size() == 0) return C_Si_B_applied_[index];
+  // The harmonic parameters of this head (head axes e1, e2, b) enter each axis's observation as the
+  // mounting's do (parameter theta: the rotation -axes^T theta in Si), so the pass applies -axes^T H(t).
+  const double ang = cfg_.options.orbit_phase_rad + cfg_.options.orbit_rate_rad_s * t_s;
+  Vec3 H = Vec3::Zero();
+  for (int j = 0; j < 3; ++j) {
+    const auto base = static_cast<Eigen::Index>(((index - 1) * 3 + static_cast<std::size_t>(j)) * 2 * static_cast<std::size_t>(K));
+    for (int k = 1; k <= K; ++k) H(j) += harm_applied_(base + 2 * (k - 1)) * std::cos(k * ang) + harm_applied_(base + 2 * (k - 1) + 1) * std::sin(k * ang);
+  }
+  return core::quatExp(Vec3(-cfg_.heads[index].axes_Si.transpose() * H)).toRotationMatrix() * C_Si_B_applied_[index];
+}
+
 void RawBound::accelData(double t_s, const Vec3& z_A, const Vec3& jerk_A) {
   ++acc_samples_;
   if (!started_) return;  // the reference starts at the first head sample
@@ -462,18 +480,19 @@ void RawBound::accelData(double t_s, const Vec3& z_A, const Vec3& jerk_A) {
 void RawBound::headData(double t_s, std::size_t index, const Quat& q_I_Si) {
   if (index >= cfg_.heads.size()) return;
   const Mat3 C_meas = q_I_Si.normalized().toRotationMatrix();
+  const Mat3 C_Si_B = appliedMounting(index, t_s);
   if (!started_) {
     started_ = true;
     t_cur_ = t_flush_ = t_acc_ = first_t_ = last_t_ = t_s;
     alpha_.setZero();
     w_.setZero();
-    q_nom_ = Quat(Mat3(C_meas * C_Si_B_applied_[index])).normalized();
+    q_nom_ = Quat(Mat3(C_meas * C_Si_B)).normalized();
     block_t0_ = t_s;
   }
   if (t_s < t_cur_) t_s = t_cur_;
   advance(t_s);
   flush(t_s);
-  const Mat3 C_hat = q_nom_.toRotationMatrix() * C_Si_B_applied_[index].transpose();  // C_I_Si predicted
+  const Mat3 C_hat = q_nom_.toRotationMatrix() * C_Si_B.transpose();  // C_I_Si predicted
   const Vec3 y = cfg_.heads[index].axes_Si * core::so3Log(Mat3(C_hat.transpose() * C_meas));
   // Gate on the marginal innovations before any update.
   const Mat3& R = cfg_.heads[index].R_axes_B;
@@ -611,6 +630,7 @@ RawEstimate estimateRaw(const RawBoundConfig& cfg0, const RawData& data, const V
   std::vector<Vec3> eps(nh, Vec3::Zero());
   std::vector<Mat3> applied(nh);
   Vec3 bias = bias0, scale = Vec3::Zero();
+  Eigen::VectorXd harm;  // the orbit harmonics' parameters (options.harmonics), applied from the second pass
   RawEstimate out;
   std::vector<std::array<double, 2>> factor(nh, {1.0, 1.0});
   std::vector<std::array<model::NoiseModel, 3>> base(nh);  // the noise models the factors apply to
@@ -635,6 +655,7 @@ RawEstimate estimateRaw(const RawBoundConfig& cfg0, const RawData& data, const V
     }
     RawBound b(cfg);
     b.enableData(applied, bias, scale);
+    if (harm.size() > 0) b.harm_applied_ = harm;
     // The first pass runs with the nominal mountings: the heads disagree by their relative errors (up to
     // some 1000"), which the filter (theta = 0) cannot tell from outliers; no gate there.
     b.gate_sigma_ = pass == 0 ? 0.0 : 6.0;
@@ -663,6 +684,11 @@ RawEstimate estimateRaw(const RawBoundConfig& cfg0, const RawData& data, const V
     if (cfg.options.bias) bias += th.segment<3>(static_cast<Eigen::Index>(b.col_bias_));
     if (cfg.options.scale) scale += th.segment<3>(static_cast<Eigen::Index>(b.col_scale_));
     if (cfg.options.time_offset) tau += th(static_cast<Eigen::Index>(b.col_tau_));
+    if (b.col_start_ > b.col_harm_) {
+      const auto nk = static_cast<Eigen::Index>(b.col_start_ - b.col_harm_);
+      if (harm.size() == 0) harm = Eigen::VectorXd::Zero(nk);
+      harm += th.segment(static_cast<Eigen::Index>(b.col_harm_), nk);
+    }
     out.chi2_per_obs = b.chi2_n_ ? b.chi2_ / static_cast<double>(b.chi2_n_) : 0;
     out.head_samples_rejected = b.rejected_;
     out.passes = pass + 1;
@@ -757,6 +783,7 @@ RawEstimate estimateRaw(const RawBoundConfig& cfg0, const RawData& data, const V
     }
   }
   out.mounting_rad = eps;
+  out.harmonics = harm;
   out.bias_rad_s2 = bias;
   out.scale = scale;
   out.time_offset_s = -tau;  // tags late: the sample tagged t is the mean about t - offset

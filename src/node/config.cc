@@ -191,7 +191,7 @@ bool loadTop(const YAML::Node& top, const std::string& path, Reader& r, NodeConf
     if (!r.keys(c, "calibration", {"enabled", "cadence_s", "min_span_s", "apply_lag_epochs", "decimation_s",
                                     "max_observations", "apply", "apply_common_rotation",
                                     "frame_change_min_interval_s", "frame_change_max_chi2_per_dof", "hold_for_command",
-                                    "method", "raw_passes", "time_offset", "acc_scale"}))
+                                    "method", "raw_passes", "time_offset", "acc_scale", "harmonics"}))
       return done(false);
     std::string method = "crn";
     if (!r.str(c, "method", "calibration.method", method)) return done(false);
@@ -203,6 +203,10 @@ bool loadTop(const YAML::Node& top, const std::string& path, Reader& r, NodeConf
     if (!r.num(c, "raw_passes", "calibration.raw_passes", v, 1, 10)) return done(false);
     if (v != std::floor(v)) return done(r.fail("calibration.raw_passes", "expected a whole number", c["raw_passes"]));
     k.raw_passes = static_cast<int>(v);
+    v = k.raw_harmonics;
+    if (!r.num(c, "harmonics", "calibration.harmonics", v, 0, 8)) return done(false);
+    if (v != std::floor(v)) return done(r.fail("calibration.harmonics", "expected a whole number", c["harmonics"]));
+    k.raw_harmonics = static_cast<int>(v);
     if (!r.boolean(c, "time_offset", "calibration.time_offset", k.raw_time_offset) ||
         !r.boolean(c, "acc_scale", "calibration.acc_scale", k.raw_acc_scale))
       return done(false);

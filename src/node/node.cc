@@ -1033,7 +1033,7 @@ bool Node::configure(const NodeConfig& cfg, Mode mode, Output* out, std::string*
   m.enc.init(8192);
   m.worker.init(cfg.ring_capacity);
   if (cfg.calibration.enabled && cfg.calibration.method == CalibrationConfig::Method::kAttitude)
-    m.worker.setAttitudeDomain(*cfg.raw_config, cfg.calibration.raw_passes, cfg.raw_not_determined_rad);
+    m.worker.setAttitudeDomain(*cfg.raw_config, cfg.calibration.raw_passes, cfg.raw_not_determined_rad, cfg.calibration.raw_harmonics);
   if (!m.readState(error)) return false;
   m.configured = true;
   if (!cfg.mountings_from_log && !m.startCore()) {

@@ -118,6 +118,7 @@ void CalibrationWorker::solverLoop() {
         h.R_axes_B = h.axes_Si * h.C_Si_B;
       }
       opt.raw_passes = raw_passes_;
+      opt.raw_harmonics = raw_harmonics_;
     }
     timespec c0{}, c1{};
     clock_gettime(CLOCK_THREAD_CPUTIME_ID, &c0);

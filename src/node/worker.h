@@ -80,9 +80,10 @@ class CalibrationWorker {
   /// The worker takes the orbit (WorkItem::kOrbit): the attitude-domain estimate removes the stars'
   /// aberration with the orbit's velocity.
   bool wantsOrbit() const { return raw_.has_value(); }
-  void setAttitudeDomain(const calib::RawBoundConfig& raw, int passes, double not_determined_rad) {
+  void setAttitudeDomain(const calib::RawBoundConfig& raw, int passes, double not_determined_rad, int harmonics = 0) {
     raw_ = raw;
     raw_passes_ = passes;
+    raw_harmonics_ = harmonics;
     raw_not_determined_rad_ = not_determined_rad;
   }
   /// Whether the worker can run this configuration (the feed's configure): false with *error. The node
@@ -133,6 +134,7 @@ class CalibrationWorker {
   bool job_stop_ = false;
   std::optional<calib::RawBoundConfig> raw_;
   int raw_passes_ = 3;
+  int raw_harmonics_ = 0;  ///< the relative alignment's orbit harmonics (calib::RunOptions::raw_harmonics)
   double raw_not_determined_rad_ = 0;
 };
 

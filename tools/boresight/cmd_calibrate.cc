@@ -140,6 +140,10 @@ const char* kUsage =
     "                           fitted to the data (--raw-noise) and, beside them, from the data's own\n"
     "                           scores over 600 s blocks (sigma_score_blocks_arcsec); variance factors\n"
     "                           and chi-square per degree of freedom per head, cross and about\n"
+    "  --raw-harmonics K        the attitude-domain estimate's model of heads 2..n's alignment: constant\n"
+    "                           plus harmonics 1..K of the argument of latitude (the thermal motion, so\n"
+    "                           that the relative sigmas include it; default 2, 0: constant), when an\n"
+    "                           orbit among the inputs covers at least one revolution of the span\n"
     "  --raw-noise MODE         fit (default): every head axis's noise model fitted to the second pass's\n"
     "                           innovations (white, + Gauss-Markov, + power law, by BIC) and used in the\n"
     "                           third; in-use: the noise models in use (platform file, --overlay) scaled\n"
@@ -354,6 +358,7 @@ int runCalibrate(int argc, char** argv) {
   double huber = 5.0, decimation = 10.0, unobs = 3600.0, lookahead_s = 2.0, plan_exc = 4.9e-5, plan_sigma = 30.0;
   std::size_t max_obs = 0;
   double crn_bw = 0.0, crn_len = 0.0;
+  int raw_harmonics = 2;
   app.add_option("--config", config)->required();
   app.add_option("--json", json_path)->required();
   app.add_option("--yaml", yaml_path);
@@ -384,6 +389,7 @@ int runCalibrate(int argc, char** argv) {
   app.add_flag("--strict", strict);
   app.add_flag("--raw", raw);
   app.add_option("--raw-noise", raw_noise)->check(CLI::IsMember({"fit", "in-use"}));
+  app.add_option("--raw-harmonics", raw_harmonics)->check(CLI::Range(0, 8));
   app.add_option("inputs", files)->required();
   if (int st = parseCommandLine(app, argc, argv, "calibrate", kUsage); st >= 0) return st;
   for (const auto& [yes, no, what] : {std::make_tuple(time_offset, no_time_offset, "--time-offset and --no-time-offset"),
@@ -518,6 +524,7 @@ int runCalibrate(int argc, char** argv) {
   ro_run.plan_sigma_arcsec = plan_sigma;
   ro_run.plan_excitation_name = "--plan-excitation";
   ro_run.raw = raw_cfg;  // --raw: the attitude-domain estimate from the raw samples after the CRN solve
+  ro_run.raw_harmonics = raw_harmonics;
   calib::CalibrationRun run = calib::runCalibration(cal, ro_run);
   stages.mark(raw && run.ok ? "solve and attitude-domain estimate" : "solve");
   if (!run.ok) return fail(run.refusal_text);
@@ -568,7 +575,7 @@ int runCalibrate(int argc, char** argv) {
     // The attitude-domain estimate from the raw samples (calib::estimateRaw in runCalibration; no CRN,
     // no decimation).
     const calib::RawEstimate& est = run.raw;
-    const calib::RawBoundConfig& rc = *raw_cfg;
+    const calib::RawBoundConfig& rc = run.raw_config;  // with the orbit harmonics when they were estimated
     const std::uint64_t aberrated = cal.aberratedSamples();
     report::Json jr;
     jr["method"] = "attitude domain: raw head samples and accelerometer angular accelerations at their rates, "
@@ -664,6 +671,61 @@ int runCalibrate(int argc, char** argv) {
           jr["time_offset_sigma_s"] = sg;
           raw_text += "  time offset " + fmt("%.4f", est.time_offset_s) + " s +- " + fmt("%.4f", sg) + " s (accelerometer tags late)\n";
         }
+    }
+    // The relative alignment's orbit harmonics: head i's mounting rotates against the others by
+    // sum_k c_k cos(k u) + s_k sin(k u) (Si axes x, y, z, as the error angles; the estimate's head-axis
+    // parameters H enter as -axes_Si^T H, RawEstimate::harmonics), u the argument of latitude.
+    const int K = rc.options.harmonics;
+    if (K > 0 && est.harmonics.size() > 0) {
+      report::Json jh;
+      jh["argument"] = "argument of latitude u = phase + rate t (the orbit's, fitted over the span)";
+      jh["rate_rad_s"] = rc.options.orbit_rate_rad_s;
+      jh["phase_rad"] = rc.options.orbit_phase_rad;  // u at the span's first sample
+      jh["relative_to_head"] = rc.heads[0].id;
+      jh["frame"] = "each head's own frame Si (x, y, z), as error_angles_arcsec";
+      raw_text += "  relative alignment's orbit harmonics (rotation of the mounting in its own frame x, y, z; arcsec +- sigma):\n";
+      const Eigen::Index hb = static_cast<Eigen::Index>(3 * rc.heads.size()) + (ro.bias ? 3 : 0) + (ro.scale ? 3 : 0) + (ro.time_offset ? 1 : 0);
+      for (std::size_t i = 1; i < rc.heads.size(); ++i) {
+        const Mat3& A = rc.heads[i].axes_Si;
+        report::Json hh;
+        hh["id"] = rc.heads[i].id;
+        for (int k = 1; k <= K; ++k) {
+          report::Json tk;
+          tk["harmonic"] = k;
+          std::string line = "    head " + std::to_string(rc.heads[i].id) + " " + std::to_string(k) + "/rev:";
+          for (int c = 0; c < 2; ++c) {
+            const char* cs = c == 0 ? "cos" : "sin";
+            // The three head axes' parameters of this term: index in est.harmonics, and in the covariance.
+            Vec3 hv;
+            Mat3 C;
+            Eigen::Index idx[3];
+            for (int ax = 0; ax < 3; ++ax) {
+              idx[ax] = static_cast<Eigen::Index>(((i - 1) * 3 + static_cast<std::size_t>(ax)) * 2 * static_cast<std::size_t>(K) +
+                                                  2 * static_cast<std::size_t>(k - 1) + static_cast<std::size_t>(c));
+              hv(ax) = est.harmonics(idx[ax]);
+            }
+            for (int a = 0; a < 3; ++a)
+              for (int b2 = 0; b2 < 3; ++b2) C(a, b2) = est.bound.covariance(hb + idx[a], hb + idx[b2]);
+            const Vec3 v = -A.transpose() * hv * kArcsecPerRad;
+            const Mat3 Cs = A.transpose() * C * A;
+            line += " " + std::string(cs) + " (";
+            for (int a = 0; a < 3; ++a) {
+              const double sg = std::sqrt(std::max(0.0, Cs(a, a))) * kArcsecPerRad;
+              tk[std::string(cs) + "_arcsec"].push_back(v(a));
+              tk[std::string(cs) + "_sigma_arcsec"].push_back(sg);
+              line += (a ? ", " : "") + fmt("%.2f", v(a)) + " +- " + fmt("%.2f", sg);
+            }
+            line += ")";
+          }
+          hh["terms"].push_back(tk);
+          raw_text += line + "\n";
+        }
+        jh["heads"].push_back(hh);
+      }
+      jr["orbit_harmonics"] = jh;
+    } else {
+      jr["orbit_harmonics"] = {{"status", run.raw_harmonics_note.empty() ? std::string("not estimated (--raw-harmonics 0)") : run.raw_harmonics_note}};
+      if (!run.raw_harmonics_note.empty()) raw_text += "  " + run.raw_harmonics_note + "\n";
     }
     j["attitude_domain"] = jr;
     mounting.source = "attitude-domain estimate (--method attitude)";

@@ -99,6 +99,16 @@ class CalibrationFeed {
   Vec3 rawMeanAcc() const { return n_acc_ ? Vec3(sum_A_ / static_cast<double>(n_acc_)) : Vec3::Zero(); }
   /// Head samples given an observer velocity (finish()).
   std::uint64_t aberratedSamples() const { return aberrated_; }
+  /// The orbit's argument of latitude over the raw samples' window as a line in the raw time (finish()):
+  /// u(t) = phase + rate t, unwrapped with each sample's own rate, fitted by least squares; rms is the
+  /// line's residual (the eccentricity's part: about 2 e rad). Not ok without two orbit samples in the
+  /// window. What the attitude-domain estimate's orbit harmonics take (RawBoundOptions::harmonics).
+  struct OrbitLine {
+    bool ok = false;
+    double rate_rad_s = 0, phase_rad = 0, rms_rad = 0, span_s = 0;
+    std::size_t samples = 0;
+  };
+  const OrbitLine& rawOrbitLine() const { return orbit_line_; }
 
  private:
   core::PipelineConfig cfg_;
@@ -112,10 +122,17 @@ class CalibrationFeed {
   /// With SpanOptions::max_observations: drops the raw samples (and orbit velocities) older than the
   /// builder's window in data time (max_observations x decimation_s before `newest`).
   void trimRaw(TimeUs newest);
+  void fitOrbitLine();  ///< orbit_line_ from orbit_v_ (sorted)
   RawData raw_;
   Vec3 sum_A_ = Vec3::Zero();
   std::uint64_t n_acc_ = 0, aberrated_ = 0;
-  std::vector<std::pair<TimeUs, Vec3>> orbit_v_;  ///< (t, v_I) of the orbit samples
+  struct OrbitPoint {
+    TimeUs t = 0;
+    Vec3 v_I = Vec3::Zero();
+    double u = 0, u_rate = 0;
+  };
+  std::vector<OrbitPoint> orbit_v_;  ///< the orbit samples of the raw window
+  OrbitLine orbit_line_;
   TimeUs t0_ = 0;
   bool have_t0_ = false;
 };
@@ -134,6 +151,11 @@ struct RunOptions {
   /// passes.
   std::optional<RawBoundConfig> raw;
   int raw_passes = 3;
+  /// The attitude-domain estimate's orbit harmonics 1..K of heads 2..n's alignment (the thermal motion of
+  /// the relative alignment, in its model and so in its covariance): used when the feed saw an orbit
+  /// over at least one revolution of the raw window (CalibrationFeed::rawOrbitLine), else none and said
+  /// in CalibrationRun::raw_harmonics_note. 0: none.
+  int raw_harmonics = 0;
 };
 
 struct CalibrationRun {
@@ -151,6 +173,8 @@ struct CalibrationRun {
   ThermalFitResult thermal;                ///< when thermal_fitted
   bool raw_estimated = false;
   RawEstimate raw;                         ///< when raw_estimated
+  RawBoundConfig raw_config;               ///< the configuration it ran with (harmonics and orbit line set)
+  std::string raw_harmonics_note;          ///< why RunOptions::raw_harmonics were not used ("" when they were)
 };
 
 /// Solves the feed's span (finishing the feed first) and, when ok and wanted, runs the attitude-domain

@@ -76,7 +76,10 @@ struct RawBoundOptions {
   bool scale = false;        ///< a scale error per A axis
   bool time_offset = false;  ///< the accelerometer's time offset
   int harmonics = 0;         ///< orbit harmonics 1..K of heads 2..n's alignment (cos and sin per axis)
+  /// Their argument: u = orbit_phase_rad + orbit_rate_rad_s t (t the samples' time; with the orbit's
+  /// phase the terms are harmonics of the argument of latitude).
   double orbit_rate_rad_s = 0;
+  double orbit_phase_rad = 0;
   double gap_sigma_rad_s2 = 1e-3;  ///< angular acceleration where the accelerometer has no sample
   /// A body direction of the common rotation whose sigma exceeds this is not observable: it is held at
   /// its nominal value (projected out of the covariance and of estimateRaw's update) and listed in
@@ -93,8 +96,9 @@ struct RawBoundOptions {
   /// correlations shorter than a block are counted. 0: none.
   double score_block_s = 600;
   /// estimateRaw with 3 passes or more: after the second pass, every head axis's noise model is fitted
-  /// to that pass's innovations (model::selectNoise: white, white + Gauss-Markov, white + power law,
-  /// by BIC) and replaces the model in use for the following passes (RawEstimate::fitted_noise).
+  /// to that pass's data less the trajectory's prediction (model::selectNoise: white, white +
+  /// Gauss-Markov, white + power law, by BIC) and replaces the model in use for the following passes
+  /// (RawEstimate::fitted_noise).
   bool fit_noise = false;
   /// estimateRaw: the noise fits (one per head axis, independent) run on this many threads; the result
   /// does not depend on it (each fit is the same arithmetic on whichever thread runs it).
@@ -152,6 +156,11 @@ struct RawEstimate {
   RawBoundResult bound;            ///< information and sigmas at this estimate's linearisation
   std::vector<Vec3> mounting_rad;  ///< per head r, C_Si_B(true) = Exp(r) C_Si_B(nominal), Si axes; datum: the accelerometer
   Vec3 bias_rad_s2 = Vec3::Zero(), scale = Vec3::Zero();
+  /// options.harmonics: the harmonic parameters in the order of bound.names (head 2's e1 h1 cos, sin,
+  /// h2 ..., e2 ..., b ..., then head 3 ...); head i's alignment against the others moves by the rotation
+  /// -axes_Si^T H(t) (Si), H its per-axis sum of the terms: as the mounting's parameter enters. Empty
+  /// without harmonics.
+  Eigen::VectorXd harmonics;
   double time_offset_s = 0;  ///< accelerometer tags late by this (s); with options.time_offset
   double chi2_per_obs = 0;  ///< sum v^2 / F over the head axes used, divided by their number
   std::uint64_t head_samples_rejected = 0;
@@ -168,9 +177,10 @@ struct RawEstimate {
   Eigen::MatrixXd robust_covariance;
   std::vector<Vec3> robust_head_sigma_rad;  ///< per head, head axes; infinite where not determined
   std::size_t score_blocks = 0;             ///< blocks with head samples
-  /// options.fit_noise: per head and axis (e1, e2, b) the model fitted to the innovations (rad); empty
-  /// otherwise. An approximation: the innovation of a head axis is its noise less what the fused
-  /// trajectory took of it, so slow parts common to the trajectory are seen reduced.
+  /// options.fit_noise: per head and axis (e1, e2, b) the model fitted to the data less the trajectory's
+  /// prediction (rad; not the innovation, which the noise states of a coloured model in use have
+  /// whitened); empty otherwise. An approximation: the fused trajectory took part of each head's noise,
+  /// so slow parts common to the trajectory are seen reduced.
   std::vector<std::array<model::NoiseModel, 3>> fitted_noise;
 };
 
@@ -239,6 +249,9 @@ class RawBound {
   /// previous pass.
   void enableData(const std::vector<Mat3>& C_Si_B_applied, const Vec3& bias, const Vec3& scale);
   void accelData(double t_s, const Vec3& z_A, const Vec3& jerk_A);
+  /// Head `index`'s mounting at t as this pass applies it: the applied constant with, for heads 2..n,
+  /// the orbit harmonics of the passes before (harm_applied_).
+  Mat3 appliedMounting(std::size_t index, double t_s) const;
   void headData(double t_s, std::size_t index, const Quat& q_I_Si);
   Eigen::VectorXd solveParameters(const RawBoundResult& r) const;
   /// Data mode, before result(): the information and sum u^T v / F from the variance groups.
@@ -277,6 +290,7 @@ class RawBound {
   bool data_ = false;
   std::vector<Mat3> C_Si_B_applied_;
   Vec3 bias_applied_ = Vec3::Zero(), scale_applied_ = Vec3::Zero();
+  Eigen::VectorXd harm_applied_;  ///< the harmonics' parameters of the passes before (empty: none)
   Quat q_nom_ = Quat::Identity();  ///< q_I_B of the reference trajectory (w_ is its rate)
   Eigen::VectorXd x_, bvec_;       ///< the filter's error state; sum u^T v / F (data mode: finishData)
   double chi2_ = 0;
@@ -291,7 +305,7 @@ class RawBound {
   std::vector<Acc> groups_, blocks_;
   double block_t0_ = 0;
   bool record_innovations_ = false, collect_blocks_ = false;
-  std::vector<model::NoiseSeries> innovations_;  ///< per head axis 3 i + j: t, v (not normalised)
+  std::vector<model::NoiseSeries> innovations_;  ///< per head axis 3 i + j: t, data less the trajectory prediction (the noise fit)
   double gate_sigma_ = 6;  ///< head samples with an innovation beyond this many sigma are rejected (0: none)
 };
 

@@ -107,6 +107,10 @@ struct CalibrationConfig {
   /// 0.05-0.2 % put the published angles 5 sigma off (13" RMS against a 3.5-4.2" bound).
   bool raw_time_offset = true;
   bool raw_acc_scale = true;
+  /// attitude: heads 2..n's alignment as a constant plus this many harmonics of the argument of latitude
+  /// (from the ORBIT messages; none when the window holds less than one revolution of orbit), as
+  /// `calibrate --raw-harmonics`.
+  int raw_harmonics = 2;
 };
 
 struct NodeConfig {
