@@ -537,6 +537,48 @@ TEST(RawEstimator, TheNoiseFitSeesTheColourTheModelInUseAlreadyHas) {
     }
 }
 
+// Noise slower than the span resolves cannot be fitted: the data cannot tell it from a constant mounting
+// error. Stated in the model given to the estimator, it stays beside the fitted model and widens each
+// head axis's sigma as a constant error of that size would (tau 1e5 s over 860 s: a constant).
+TEST(RawEstimator, NoiseTooSlowForTheSpanIsKeptFromTheStatedModel) {
+  sim::Scenario sc;
+  std::string err;
+  ASSERT_TRUE(sim::loadScenario(std::string(BORESIGHT_SOURCE_DIR) + "/config/sim_gracefo_calibration_short.yaml", sc, &err)) << err;
+  sc.effects.erase(std::remove_if(sc.effects.begin(), sc.effects.end(),
+                                  [&](const model::EffectSpec& e) { return e.name == "thermal_periodic" || e.name == "aberration"; }),
+                   sc.effects.end());
+  sim::Simulator simu;
+  ASSERT_TRUE(simu.init(sc, 4, 860, &err)) << err;
+  RawBoundOptions opt;
+  opt.fit_noise = true;
+  RawBoundConfig cfg = rawBoundConfig(simu.heads(), simu.accel(), opt);
+  RawBoundResult at_truth;
+  const RawData recorded = runWithBound(simu, cfg, false, at_truth);
+  const double slow = 2 * kRadPerArcsec, tau = 1e5;
+  for (auto& h : cfg.heads)
+    for (auto& m : h.noise) m.add(model::NoiseTerm::gaussMarkov(slow, tau));
+  const RawEstimate kept = estimateRaw(cfg, recorded, simu.accel().config().bias_rad_s2, 3);
+  cfg.options.keep_slow_noise = false;
+  const RawEstimate dropped = estimateRaw(cfg, recorded, simu.accel().config().bias_rad_s2, 3);
+  ASSERT_EQ(kept.fitted_noise.size(), 3u);
+  for (std::size_t i = 0; i < 3; ++i)
+    for (std::size_t j = 0; j < 3; ++j) {
+      const auto has_slow = [&](const model::NoiseModel& m) {
+        for (const auto& t : m.terms)
+          if (t.kind == model::NoiseKind::GaussMarkov && t.tau_s == tau && std::abs(t.sigma - slow) < 1e-12) return true;
+        return false;
+      };
+      EXPECT_TRUE(has_slow(kept.fitted_noise[i][j])) << "head " << i + 1 << " axis " << j;
+      EXPECT_FALSE(has_slow(dropped.fitted_noise[i][j])) << "head " << i + 1 << " axis " << j;
+      const double sk = kept.bound.head_sigma_rad[i](static_cast<Eigen::Index>(j));
+      const double sd = dropped.bound.head_sigma_rad[i](static_cast<Eigen::Index>(j));
+      const double added = std::sqrt(std::max(sk * sk - sd * sd, 0.0));
+      std::printf("head %zu axis %zu: sigma %.2f\" kept, %.2f\" dropped: %.2f\" added in quadrature\n", i + 1, j,
+                  sk / kRadPerArcsec, sd / kRadPerArcsec, added / kRadPerArcsec);
+      EXPECT_NEAR(added, slow, 0.25 * slow) << "head " << i + 1 << " axis " << j;
+    }
+}
+
 TEST(RawBound, RefusesAConfigurationWithoutWhiteNoise) {
   RawBoundConfig c = oneHead(model::NoiseModel::white(1e-5), model::NoiseModel::white(1e-8));
   EXPECT_EQ(c.validate(), "");

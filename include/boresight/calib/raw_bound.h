@@ -100,6 +100,12 @@ struct RawBoundOptions {
   /// Gauss-Markov, white + power law, by BIC) and replaces the model in use for the following passes
   /// (RawEstimate::fitted_noise).
   bool fit_noise = false;
+  /// With fit_noise: the model in use before the fit (the platform file's, or an overlay's) keeps its
+  /// Gauss-Markov parts (power laws expanded) too slow for the span to determine - a corner frequency
+  /// below the fit's band, band_lo / span - beside the fitted model. The data cannot tell such noise from
+  /// a constant mounting error, so no fit finds it; only a model stated beforehand puts it in the
+  /// covariance (a white-only platform file adds nothing).
+  bool keep_slow_noise = true;
   /// estimateRaw: the noise fits (one per head axis, independent) run on this many threads; the result
   /// does not depend on it (each fit is the same arithmetic on whichever thread runs it).
   unsigned threads = 1;
@@ -303,6 +309,15 @@ class RawBound {
     double vv = 0, n = 0;
   };
   std::vector<Acc> groups_, blocks_;
+  /// The information's rank-one terms u^T u / F, buffered per variance group as columns u / sqrt(F) and
+  /// added as one product (to the group and to the score block of their time) when a buffer fills, the
+  /// block changes, or finishData() runs: some 4x fewer operations than a rank-one update per sample
+  /// into each of two matrices.
+  std::vector<Eigen::MatrixXd> pending_;
+  std::vector<int> pending_n_;
+  std::size_t pending_block_ = 0;
+  Eigen::MatrixXd pending_sum_;
+  void flushPending();
   double block_t0_ = 0;
   bool record_innovations_ = false, collect_blocks_ = false;
   std::vector<model::NoiseSeries> innovations_;  ///< per head axis 3 i + j: t, data less the trajectory prediction (the noise fit)

@@ -16,6 +16,8 @@
 // head) and the accelerometer's white levels only - what a platform file without a noise overlay
 // gives: its sigmas at the model in use, after the variance components and from the score blocks
 // (RawEstimate::robust_covariance) are compared with the errors.
+// --no-slow-noise: with --fit-noise, the fitted models only (RawBoundOptions::keep_slow_noise off): the
+// noise slower than the span resolves, stated in the model given to the estimator, is dropped.
 // --passes P (default 3): passes of estimateRaw; --no-vce: no variance components applied.
 // --drop NAME removes the scenario's effects of that name (e.g. aberration, thermal_periodic: a world
 // inside the estimator's model, to see its efficiency apart from its model errors).
@@ -45,7 +47,8 @@ namespace {
 int usage() {
   std::fprintf(stderr, "usage: raw_mc --scenario FILE [--duration S] [--runs N] [--seed S0] [--effect SPEC]... "
                        "[--drop NAME]... [--scale] [--time-offset] [--harmonics K] [--passes P] [--correct-aberration]\n"
-                       "              [--fov-mean-in-truth] [--white-model CROSS,ABOUT] [--no-vce] [--score-block S] [--fit-noise]\n");
+                       "              [--fov-mean-in-truth] [--white-model CROSS,ABOUT] [--no-vce] [--score-block S] [--fit-noise]\n"
+                       "              [--no-slow-noise]\n");
   return 2;
 }
 
@@ -77,6 +80,7 @@ int main(int argc, char** argv) {
     else if (a == "--fov-mean-in-truth") fov_mean_in_truth = true;
     else if (a == "--no-vce") opt.variance_components = false;
     else if (a == "--fit-noise") opt.fit_noise = true;
+    else if (a == "--no-slow-noise") opt.keep_slow_noise = false;
     else if (a == "--score-block" && has) opt.score_block_s = std::atof(argv[++i]);
     else if (a == "--white-model" && has) {
       if (std::sscanf(argv[++i], "%lf,%lf", &white_cross, &white_about) != 2 || !(white_cross > 0) || !(white_about > 0)) return usage();
