@@ -261,36 +261,18 @@ CalibrationRun runCalibration(CalibrationFeed& feed, const RunOptions& o) {
   };
   const std::string plan_need = needText(run.need, o.plan_excitation_radps2, o.plan_excitation_name.c_str());
 
-  if (span.epochs_total == 0) {
-    const double span_s = span.head_epochs ? static_cast<double>(span.t_last - span.t_first) * 1e-6 : 0.0;
-    run.result.ok = false;
-    run.result.refusal = Refusal::kTooFewEpochs;
-    run.result.message = "the span is too short (" + fmt("%.1f", span_s) +
-                         " s of head data, no CRN angular acceleration in it)";
-    run.refusal_text = "refused: " + run.result.message +
-                       ".\nNeeded: the CRN gives an angular acceleration only with Tf = " + fmt("%.1f", run.need.crn_s) +
-                       " s of head and accelerometer data centred on it; " + plan_need + " of excited data.";
-    return run;
-  }
-
-  run.result = solve(span, o.solve);
-  // From the moments the solver reports no epochs (it counts kept observations): the span made them.
-  if (run.result.ok && run.result.epochs == 0) run.result.epochs = static_cast<std::size_t>(span.epochs_total);
-  if (!run.result.ok) {
-    // What the bound needs is said for the refusals about the data's length or excitation; other
-    // refusals (a head never seen with the others, ...) carry their own remedy.
-    const Refusal why = run.result.refusal;
-    run.refusal_text = "refused: " + run.result.message;
-    if (why == Refusal::kTooFewEpochs || why == Refusal::kTooQuiet)
-      run.refusal_text += "\nNeeded: " + plan_need + "; at this span's weakest-axis excitation " +
-                          (run.weakest_excitation_radps2 > 0
-                               ? needText(run.need_own, run.weakest_excitation_radps2, "this span")
-                               : std::string("(none)")) +
-                          ".";
-    return run;
-  }
-  run.ok = true;
-  if (o.raw && feed.collectsRaw()) {
+  // The attitude-domain estimate: from the raw samples alone, so it runs whatever the CRN solver says
+  // (a span the CRN refuses - too short for its filter, too quiet for its bound - still gets the
+  // estimate, with sigmas that say what the data determine).
+  const auto runRaw = [&]() {
+    if (!o.raw || !feed.collectsRaw()) return;
+    std::size_t n_head = 0, n_acc = 0;
+    for (const auto& e : feed.raw().events) (e.head < 0 ? n_acc : n_head) += 1;
+    if (n_head < 2 || n_acc < 2) {
+      run.raw_note = "the attitude-domain estimate needs head and accelerometer samples (" + std::to_string(n_head) + " and " +
+                     std::to_string(n_acc) + " in the window)";
+      return;
+    }
     run.raw_config = *o.raw;
     if (o.raw_harmonics > 0 && run.raw_config.heads.size() > 1) {
       // The relative alignment's orbit harmonics need the orbit's phase over at least one revolution.
@@ -309,7 +291,40 @@ CalibrationRun runCalibration(CalibrationFeed& feed, const RunOptions& o) {
     }
     run.raw = estimateRaw(run.raw_config, feed.raw(), feed.rawMeanAcc(), o.raw_passes);
     run.raw_estimated = true;
+  };
+
+  if (span.epochs_total == 0) {
+    const double span_s = span.head_epochs ? static_cast<double>(span.t_last - span.t_first) * 1e-6 : 0.0;
+    run.result.ok = false;
+    run.result.refusal = Refusal::kTooFewEpochs;
+    run.result.message = "the span is too short (" + fmt("%.1f", span_s) +
+                         " s of head data, no CRN angular acceleration in it)";
+    run.refusal_text = "refused: " + run.result.message +
+                       ".\nNeeded: the CRN gives an angular acceleration only with Tf = " + fmt("%.1f", run.need.crn_s) +
+                       " s of head and accelerometer data centred on it; " + plan_need + " of excited data.";
+    runRaw();
+    return run;
   }
+
+  run.result = solve(span, o.solve);
+  // From the moments the solver reports no epochs (it counts kept observations): the span made them.
+  if (run.result.ok && run.result.epochs == 0) run.result.epochs = static_cast<std::size_t>(span.epochs_total);
+  if (!run.result.ok) {
+    // What the bound needs is said for the refusals about the data's length or excitation; other
+    // refusals (a head never seen with the others, ...) carry their own remedy.
+    const Refusal why = run.result.refusal;
+    run.refusal_text = "refused: " + run.result.message;
+    if (why == Refusal::kTooFewEpochs || why == Refusal::kTooQuiet)
+      run.refusal_text += "\nNeeded: " + plan_need + "; at this span's weakest-axis excitation " +
+                          (run.weakest_excitation_radps2 > 0
+                               ? needText(run.need_own, run.weakest_excitation_radps2, "this span")
+                               : std::string("(none)")) +
+                          ".";
+    runRaw();
+    return run;
+  }
+  run.ok = true;
+  runRaw();
   if (o.thermal_fit && feed.thermal() && feed.orbitSamples() > 0) {
     run.thermal = feed.thermal()->fit();
     run.thermal_fitted = true;

@@ -153,23 +153,27 @@ void CalibrationWorker::fillResult(const calib::CalibrationSpan& sp, const calib
   m = boresight_lcm::calibration_t{};
   mail_.solve_id = j.req.solve_id;
   mail_.nominal_gen = j.nominal_gen;
-  mail_.ok = run.ok;
+  // With method attitude the result is the attitude-domain estimate, which needs no CRN row: a window
+  // the CRN solver refuses (too short for its filter, too few epochs) is still calibrated.
+  const bool attitude = raw_ && run.raw_estimated;
+  mail_.ok = run.ok || attitude;
   mail_.method_attitude = false;
   mail_.chi2_per_dof_max = std::numeric_limits<double>::quiet_NaN();
   // The reason without the leading "refused: " (the node's summary says it was refused).
   std::string why = run.refusal_text;
+  if (!run.raw_note.empty()) why += (why.empty() ? "" : "; ") + run.raw_note;
   if (why.rfind("refused: ", 0) == 0) why.erase(0, 9);
-  const std::size_t n = std::min(why.size(), mail_.reason.size() - 1);
+  const std::size_t n = mail_.ok ? 0 : std::min(why.size(), mail_.reason.size() - 1);
   std::copy(why.begin(), why.begin() + static_cast<std::ptrdiff_t>(n), mail_.reason.begin());
   mail_.reason[n] = '\0';
   if (!run.ok)  // the solver's own thread, never the real-time one
-    std::fprintf(stderr, "boresightd: calibration at data time %lld us refused: %s\n", static_cast<long long>(j.req.t),
-                 why.c_str());
+    std::fprintf(stderr, "boresightd: calibration at data time %lld us %s: %s\n", static_cast<long long>(j.req.t),
+                 attitude ? "by the attitude-domain estimate; the CRN solver refused" : "refused", why.c_str());
   m.utime = j.req.t;
   m.span_start_utime = sp.t_first;
   m.span_end_utime = sp.t_last;
   m.epochs = static_cast<int32_t>(r.epochs);
-  m.status = r.ok ? 0 : 1;
+  m.status = mail_.ok ? 0 : 1;
   const int n_heads = cfg_.heads.n_heads;
   m.n_heads = static_cast<int8_t>(n_heads);
   const double nan = std::numeric_limits<double>::quiet_NaN();

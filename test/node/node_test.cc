@@ -1232,6 +1232,23 @@ TEST(NodeReplay, TheWorkerInTheAttitudeDomainIsCalibrateRawOnTheSameData) {
   EXPECT_EQ(tight->c.frame_changes, 0u);
   EXPECT_EQ(tight->c.frame_changes_refused, 1u);
   EXPECT_EQ(tight->c.calibrations_applied, 1u);
+
+  // One CRN row per 1000 s leaves the CRN solver too few epochs: it refuses, and the attitude-domain
+  // estimate, which uses no CRN row, is published and applied as before, the same to the bit.
+  cfg.calibration.frame_change_max_chi2_per_dof = 2;
+  cfg.calibration.apply_common_rotation = false;
+  cfg.calibration.decimation_s = 1000;
+  const auto nocrn = replay(log, cfg);
+  const auto cals2 = nocrn->out.all<boresight_lcm::calibration_t>("BORESIGHT_CALIBRATION");
+  ASSERT_EQ(cals2.size(), 1u);
+  EXPECT_EQ(cals2[0].status, 0);
+  EXPECT_EQ(cals2[0].applied, 1);
+  EXPECT_EQ(nocrn->c.calibrations_refused, 0u);
+  for (int h = 0; h < k.n_heads; ++h)
+    for (int a = 0; a < 3; ++a) {
+      EXPECT_EQ(cals2[0].error_angles_arcsec[h][a], k.error_angles_arcsec[h][a]) << "head " << h << " axis " << a;
+      EXPECT_EQ(cals2[0].sigma_arcsec[h][a], k.sigma_arcsec[h][a]) << "head " << h << " axis " << a;
+    }
 }
 #endif
 

@@ -499,6 +499,42 @@ TEST(Calibrate, HardConstraintAndPriorAgreeAndTheLcmLogGivesTheLevel1Result) {
     }
 }
 
+TEST(Calibrate, TheAttitudeDomainEstimateDoesNotNeedTheCrnSolver) {
+  // One observation per 1000 s leaves the CRN solver too few epochs on the 860 s span: it refuses. The
+  // attitude-domain estimate uses no CRN row, so --method attitude still runs, writes its mountings and
+  // gives the estimate of the run the CRN solver accepted, to the bit.
+  const std::string out = testutil::makeTempDir("calibrate_nocrn");
+  const std::string in = level1() + " " + sim().gnv + " --method attitude";
+  const CliRun a = run("calibrate --config " + kConfig + " " + in + " --json " + out + "/a.json");
+  ASSERT_EQ(a.status, 0) << a.out;
+  const CliRun b = run("calibrate --config " + kConfig + " " + in + " --decimation 1000 --json " + out + "/b.json --report " + out +
+                       "/rep --write-model " + out + "/m.yaml");
+  ASSERT_EQ(b.status, 0) << b.out;
+  EXPECT_NE(b.out.find("CRN solver refused: too few epochs"), std::string::npos) << b.out;
+  const auto ja = readJson(out + "/a.json"), jb = readJson(out + "/b.json");
+  EXPECT_TRUE(ja["ok"].get<bool>());
+  EXPECT_FALSE(jb["ok"].get<bool>()) << "ok is the CRN solver's";
+  EXPECT_NE(jb["crn_solver"].get<std::string>().find("too few epochs"), std::string::npos);
+  EXPECT_EQ(jb["mountings_written_from"], "attitude-domain estimate (--method attitude)");
+  const auto& ha = ja["attitude_domain"]["heads"];
+  const auto& hb = jb["attitude_domain"]["heads"];
+  ASSERT_EQ(ha.size(), 3u);
+  ASSERT_EQ(hb.size(), 3u);
+  for (std::size_t i = 0; i < 3; ++i)
+    for (std::size_t k = 0; k < 3; ++k) {
+      EXPECT_EQ(ha[i]["error_angles_arcsec"][k].get<double>(), hb[i]["error_angles_arcsec"][k].get<double>());
+      EXPECT_EQ(ha[i]["sigma_arcsec"][k].get<double>(), hb[i]["sigma_arcsec"][k].get<double>());
+    }
+  // The overlay carries every head's mounting; the report says what was refused.
+  const std::string m = testutil::slurp(out + "/m.yaml");
+  for (const char* h : {"head: 1", "head: 2", "head: 3"}) EXPECT_NE(m.find(h), std::string::npos) << m;
+  EXPECT_NE(testutil::slurp(out + "/rep/report.md").find("CRN solver refused"), std::string::npos);
+  // Without --method attitude the refusal ends the run, nothing written.
+  const CliRun c = run("calibrate --config " + kConfig + " " + level1() + " --decimation 1000 --json " + out + "/c.json");
+  EXPECT_EQ(c.status, 1) << c.out;
+  EXPECT_TRUE(testutil::slurp(out + "/c.json").empty());
+}
+
 TEST(Calibrate, ASpanShorterThanTheCrnIsRefusedWithWhatWouldBeNeeded) {
   const std::string d = testutil::makeTempDir("calibrate_short");
   ASSERT_EQ(run("simulate --scenario " + kSrc + "/config/sim_gracefo_calibration_short.yaml --seed 2 --duration 50 " +

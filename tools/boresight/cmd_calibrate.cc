@@ -31,6 +31,7 @@
 #include <limits>
 #include <optional>
 #include <cmath>
+#include <filesystem>
 #include <cstdio>
 #include <fstream>
 #include <string>
@@ -127,7 +128,9 @@ const char* kUsage =
     "  --method MODE            crn (default): the CRN-domain solver alone; attitude: also the\n"
     "                           attitude-domain estimate below, whose mountings are the ones written\n"
     "                           (--write-model, --write-qsa1b); the accelerometer's time offset and\n"
-    "                           scale factors estimated in it unless --no-time-offset, --no-acc-scale\n"
+    "                           scale factors estimated in it unless --no-time-offset, --no-acc-scale;\n"
+    "                           it uses no CRN row, so a span the CRN solver refuses is still\n"
+    "                           calibrated by it (the refusal printed, JSON ok false and crn_solver)\n"
     "  --raw                    the same as --method attitude\n"
     "                           The attitude-domain estimate (beside the CRN result, JSON key\n"
     "                           attitude_domain): the raw head samples and accelerometer angular\n"
@@ -135,8 +138,8 @@ const char* kUsage =
     "                           accelerometer, weighted with the noise models in use, no filter or\n"
     "                           decimation (calib/raw_bound.h; bias, time offset and scale unless\n"
     "                           --no-time-offset, --no-acc-scale; the stars' aberration removed where an orbit\n"
-    "                           (GNI1B / GNV1B, ORBIT messages) gives the velocity; no thermal\n"
-    "                           harmonics in its model yet). Three passes; sigmas at the noise model\n"
+    "                           (GNI1B / GNV1B, ORBIT messages) gives the velocity; orbit harmonics\n"
+    "                           of the relative alignment, --raw-harmonics). Three passes; sigmas at the noise model\n"
     "                           fitted to the data (--raw-noise) and, beside them, from the data's own\n"
     "                           scores over 600 s blocks (sigma_score_blocks_arcsec); variance factors\n"
     "                           and chi-square per degree of freedom per head, cross and about\n"
@@ -145,12 +148,14 @@ const char* kUsage =
     "                           that the relative sigmas include it; default 2, 0: constant), when an\n"
     "                           orbit among the inputs covers at least one revolution of the span\n"
     "  --raw-noise MODE         fit (default): every head axis's noise model fitted to the second pass's\n"
-    "                           innovations (white, + Gauss-Markov, + power law, by BIC) and used in the\n"
-    "                           third; in-use: the noise models in use (platform file, --overlay) scaled\n"
-    "                           by the variance factors estimated in the second pass\n"
+    "                           data less the trajectory's prediction (white, + Gauss-Markov, + power\n"
+    "                           law, by BIC) and used in the third, with the slow parts of the models in\n"
+    "                           use that the span cannot resolve kept beside it; in-use: the noise\n"
+    "                           models in use (platform file, --overlay) scaled by the variance factors\n"
+    "                           estimated in the second pass\n"
     "\n"
-    "Exit status: 0 calibrated; 1 refused (span too short or too quiet: the reason and what would be\n"
-    "needed) or bad input (the reason); 2 usage error.\n";
+    "Exit status: 0 calibrated; 1 refused (span too short or too quiet for the CRN solver without\n"
+    "--method attitude: the reason and what would be needed) or bad input (the reason); 2 usage error.\n";
 
 /// The engine's inputs into method A's feed (calib/calibration.h): head epochs as the core's validator
 /// leaves them, the accelerometer samples the core accepted, the orbit from the same stream when the
@@ -259,12 +264,18 @@ model::Overlay resultOverlay(const calib::SolveResult& r, const io::PlatformConf
   model::Validity span;
   span.from = t0;
   span.to = t1;
-  for (std::size_t k = 0; k < r.heads.size(); ++k) {
-    const calib::HeadResult& hr = r.heads[k];
-    const int s = core::slotOf(pc.pipeline.heads, hr.id);
+  // The heads the mountings came for: the CRN solver's, or with the attitude-domain estimate every
+  // configured head (it runs also where the CRN solver refused).
+  std::vector<int> ids;
+  if (mr.attitude)
+    for (int s = 0; s < pc.pipeline.heads.n_heads; ++s) ids.push_back(pc.pipeline.heads.head[static_cast<std::size_t>(s)].id);
+  else
+    for (const auto& hr : r.heads) ids.push_back(hr.id);
+  for (const int id : ids) {
+    const int s = core::slotOf(pc.pipeline.heads, id);
     if (s < 0) continue;
     model::MountingEntry m;
-    m.head = hr.id;
+    m.head = id;
     m.q_Si_B = calibratedMounting(pc, mr, static_cast<std::size_t>(s));
     m.datum = model::MountingDatum::Accelerometer;
     m.epoch = t0 + (t1 - t0) / 2;
@@ -526,8 +537,14 @@ int runCalibrate(int argc, char** argv) {
   ro_run.raw = raw_cfg;  // --raw: the attitude-domain estimate from the raw samples after the CRN solve
   ro_run.raw_harmonics = raw_harmonics;
   calib::CalibrationRun run = calib::runCalibration(cal, ro_run);
-  stages.mark(raw && run.ok ? "solve and attitude-domain estimate" : "solve");
-  if (!run.ok) return fail(run.refusal_text);
+  stages.mark(raw && run.raw_estimated ? "solve and attitude-domain estimate" : "solve");
+  // A span the CRN solver refuses still has the attitude-domain estimate with --method attitude: the
+  // refusal is reported and the outputs take that estimate; without it the refusal ends the run.
+  const bool crn_ok = run.ok;
+  if (!crn_ok && !(raw && run.raw_estimated)) return fail(run.refusal_text + (run.raw_note.empty() ? "" : "\n" + run.raw_note));
+  if (!crn_ok)
+    std::printf("CRN solver %s\n(the attitude-domain estimate below does not use the CRN: its outputs are written)\n",
+                run.refusal_text.c_str());
   const calib::SolveResult& r = run.result;
 
   std::string thermal_text;
@@ -548,7 +565,8 @@ int runCalibrate(int argc, char** argv) {
     stages.mark("thermal fit");
     for (const auto& f : in.orbit) ctx.inputs.push_back(f);
   } else {
-    ctx.thermal = {{"status", pc.pipeline.heads.n_heads < 2 ? "not computed: one head"
+    ctx.thermal = {{"status", !crn_ok ? "not computed: the CRN solver refused the span (the thermal fit follows its solve)"
+                              : pc.pipeline.heads.n_heads < 2 ? "not computed: one head"
                                                                : "not computed: no orbit among the inputs (GNI1B or GNV1B "
                                                                  "files, ORBIT messages; the harmonic model needs the "
                                                                  "argument of latitude)"}};
@@ -557,13 +575,14 @@ int runCalibrate(int argc, char** argv) {
   for (const auto& ig : in.ignored)
     if (ig.second != "GNV1B" && ig.second != "GNI1B") ctx.ignored.push_back(ig);
   report::Json j = report::calibrationJson(r, ctx);
+  if (!crn_ok) j["crn_solver"] = run.refusal_text;
   j["model_in_use"] = modelInUseJson(pc, ovu);
   // The mountings the outputs take: the CRN solver's, replaced by the attitude-domain estimate's with --raw.
   MountingResult mounting;
   mounting.source = "CRN solver";
   for (int s = 0; s < pc.pipeline.heads.n_heads; ++s) {
     const auto slot = static_cast<std::size_t>(s);
-    mounting.r_Si.push_back(r.estimate.r_S[slot]);
+    mounting.r_Si.push_back(crn_ok && slot < r.estimate.r_S.size() ? r.estimate.r_S[slot] : Vec3::Zero());
     Vec3 sg = Vec3::Constant(std::numeric_limits<double>::quiet_NaN());
     for (const auto& hr : r.heads)
       if (hr.id == pc.pipeline.heads.head[slot].id)
@@ -584,7 +603,7 @@ int runCalibrate(int argc, char** argv) {
     jr["chi2_per_observation"] = est.chi2_per_obs;
     jr["head_samples_rejected"] = est.head_samples_rejected;
     jr["aberration_removed_head_samples"] = aberrated;
-    jr["noise"] = ro.fit_noise ? "fitted to the innovations of the second pass" : "in use, scaled by the variance factors";
+    jr["noise"] = ro.fit_noise ? "fitted to the second pass's data less the trajectory's prediction, with the slow parts of the models in use that the span cannot resolve" : "in use, scaled by the variance factors";
     jr["score_blocks"] = est.score_blocks;
     raw_text = "\nattitude domain (--raw: raw samples, no CRN; noise " +
                std::string(ro.fit_noise ? "fitted to the data" : "in use with variance factors") + "; chi2 per observation " +
@@ -734,7 +753,18 @@ int runCalibrate(int argc, char** argv) {
   if (!writeText(json_path, j.dump(2) + "\n", &err)) return fail(err);
   if (!yaml_path.empty() && !writeText(yaml_path, report::toYaml(j), &err)) return fail(err);
   if (!report_dir.empty()) {
-    if (!report::writeCalibrationReport(report_dir, span, r, j, &err)) return fail(err);
+    // The report's plots are the CRN solver's (its residuals and its estimates); refused, a report that
+    // says so and where the attitude-domain estimate is.
+    if (crn_ok && !report::writeCalibrationReport(report_dir, span, r, j, &err)) return fail(err);
+    if (!crn_ok) {
+      std::error_code ec;
+      std::filesystem::create_directories(report_dir, ec);
+      if (!io::writeFileAtomic(report_dir + "/report.md",
+                               "# Method A calibration\n\nCRN solver " + run.refusal_text +
+                                   "\n\nThe attitude-domain estimate (`attitude_domain` in " + json_path + "):\n\n```\n" + raw_text + "```\n",
+                               &err))
+        return fail(err);
+    }
     std::string text = "\n## Model in use\n\n```\n";
     for (const auto& l : io::modelInUseLines(pc, ovu)) text += l + "\n";
     // Appended by rewriting the whole file (whole or not at all, as every output).
@@ -751,19 +781,20 @@ int runCalibrate(int argc, char** argv) {
   if (!write_qsa1b.empty() && !writeMountingsQsa1b(write_qsa1b, pc, mounting, span.t_first, satellite[0], &err)) return fail(err);
   stages.mark("output");
 
-  std::printf("\n%s (%zu epochs over %.1f s, residual RMS %.3e rad/s^2, relative attitude as a %s)\n",
+  if (!crn_ok) std::printf("\nCRN solver: refused (above)\n");
+  else std::printf("\n%s (%zu epochs over %.1f s, residual RMS %.3e rad/s^2, relative attitude as a %s)\n",
               r.message.c_str(), r.epochs, r.span_s, r.residual_rms_radps2,
               so.relative == calib::RelativeMode::kPrior ? "prior" : "hard constraint");
-  std::printf("  head  axis   error [arcsec]   sigma [arcsec]   CRLB [arcsec]\n");
+  if (crn_ok) std::printf("  head  axis   error [arcsec]   sigma [arcsec]   CRLB [arcsec]\n");
   const char* ax = "xyz";
-  for (const auto& hr : r.heads)
+  for (const auto& hr : crn_ok ? r.heads : std::vector<calib::HeadResult>{})
     for (std::size_t a = 0; a < 3; ++a)
       std::printf("  %4d  %c     %14.2f   %14s   %13s\n", hr.id, ax[a], hr.error_angles_arcsec[a],
                   hr.sigma_arcsec[a] ? fmt("%.2f", *hr.sigma_arcsec[a]).c_str() : "not determined",
                   std::isfinite(hr.crlb_arcsec[a]) ? fmt("%.2f", hr.crlb_arcsec[a]).c_str() : "inf");
-  for (const auto& d : r.unobservable_directions_B)
+  for (const auto& d : crn_ok ? r.unobservable_directions_B : std::vector<Vec3>{})
     std::printf("  not observable: body direction (%.3f, %.3f, %.3f) has no excitation\n", d.x(), d.y(), d.z());
-  if (r.time_offset_s)
+  if (crn_ok && r.time_offset_s)
     std::printf("  time offset %.4f s +- %.4f s (accelerometer tags late)\n", *r.time_offset_s,
                 r.time_offset_sigma_s.value_or(NAN));
   if (!raw_text.empty()) std::printf("%s", raw_text.c_str());

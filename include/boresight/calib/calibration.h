@@ -146,9 +146,9 @@ struct RunOptions {
   std::string plan_excitation_name = "the planning excitation";  ///< how the advice names it
   /// Fit the thermal harmonic model when the feed collected it and saw an orbit.
   bool thermal_fit = true;
-  /// The attitude-domain estimate from the feed's raw samples (the feed must collect them), after the
-  /// CRN solve succeeded: its configuration (rawBoundConfig of the platform and the noise in use) and
-  /// passes.
+  /// The attitude-domain estimate from the feed's raw samples (the feed must collect them), whether the
+  /// CRN solver solved or refused the span (the estimate needs neither its filter nor its rows): its
+  /// configuration (rawBoundConfig of the platform and the noise in use) and passes.
   std::optional<RawBoundConfig> raw;
   int raw_passes = 3;
   /// The attitude-domain estimate's orbit harmonics 1..K of heads 2..n's alignment (the thermal motion of
@@ -175,10 +175,12 @@ struct CalibrationRun {
   RawEstimate raw;                         ///< when raw_estimated
   RawBoundConfig raw_config;               ///< the configuration it ran with (harmonics and orbit line set)
   std::string raw_harmonics_note;          ///< why RunOptions::raw_harmonics were not used ("" when they were)
+  std::string raw_note;                    ///< why RunOptions::raw was asked for and not estimated ("" otherwise)
 };
 
-/// Solves the feed's span (finishing the feed first) and, when ok and wanted, runs the attitude-domain
-/// estimate and fits the thermal model.
+/// Solves the feed's span (finishing the feed first), runs the attitude-domain estimate when wanted
+/// (also on a span the CRN solver refuses: `ok` false, `raw_estimated` true) and, when the solve is ok,
+/// fits the thermal model.
 CalibrationRun runCalibration(CalibrationFeed& feed, const RunOptions& o);
 
 }  // namespace boresight::calib
