@@ -300,15 +300,20 @@ void RawBound::flush(double t_s) {
   const double dt = t_s - t_flush_;
   if (!(dt > 0)) return;  // a second head at the same epoch: nothing has moved
   const auto n = static_cast<Eigen::Index>(n_), ka = static_cast<Eigen::Index>(ka_), nn = n - 6;
-  Eigen::VectorXd d(nn), q(nn);
+  Eigen::VectorXd& d = dd_;
+  Eigen::VectorXd& q = qq_;
+  d.resize(nn);
+  q.resize(nn);
   for (Eigen::Index k = 0; k < nn; ++k) {
     const auto kk = static_cast<std::size_t>(k);
     d(k) = std::exp(-dt / tau_[kk]);
     q(k) = var_[kk] * (1 - d(k) * d(k));
   }
-  Eigen::MatrixXd Psig(6, ka);
+  Eigen::MatrixXd& Psig = psig_;
+  Psig.resize(6, ka);
   for (Eigen::Index k = 0; k < ka; ++k) Psig.col(k) = Psi3_.col(acc_axis_[static_cast<std::size_t>(k)]) * (0.5 * (1 + d(k)));
-  Eigen::MatrixXd G6 = Eigen::MatrixXd::Zero(6, static_cast<Eigen::Index>(p_));
+  Eigen::MatrixXd& G6 = g6_;
+  G6.setZero(6, static_cast<Eigen::Index>(p_));
   if (cfg_.options.bias) G6.middleCols(static_cast<Eigen::Index>(col_bias_), 3) = Psi3_;
   if (cfg_.options.scale) G6.middleCols(static_cast<Eigen::Index>(col_scale_), 3) = Sc3_;
   if (cfg_.options.time_offset) G6.col(static_cast<Eigen::Index>(col_tau_)) = Tau1_;
@@ -326,10 +331,14 @@ void RawBound::flush(double t_s) {
   }
 
   // P <- T P T^T + Q, T = [[Phi6, Psig, 0], [0, diag(d)]].
-  Eigen::MatrixXd top = Phi6_ * P_.topRows(6) + Psig * P_.middleRows(6, ka);
+  Eigen::MatrixXd& top = top_;
+  top.noalias() = Phi6_ * P_.topRows(6);
+  top.noalias() += Psig * P_.middleRows(6, ka);
   P_.bottomRows(nn) = d.asDiagonal() * P_.bottomRows(nn);
   P_.topRows(6) = top;
-  Eigen::MatrixXd left = P_.leftCols(6) * Phi6_.transpose() + P_.middleCols(6, ka) * Psig.transpose();
+  Eigen::MatrixXd& left = left_;
+  left.noalias() = P_.leftCols(6) * Phi6_.transpose();
+  left.noalias() += P_.middleCols(6, ka) * Psig.transpose();
   P_.rightCols(nn) = P_.rightCols(nn) * d.asDiagonal();
   P_.leftCols(6) = left;
   P_.topLeftCorner(6, 6) += Q6_;
@@ -341,7 +350,9 @@ void RawBound::flush(double t_s) {
     x_.head(6) = xt;
   }
   // E <- T E + [G, 0].
-  Eigen::MatrixXd etop = Phi6_ * E_.topRows(6) + Psig * E_.middleRows(6, ka);
+  Eigen::MatrixXd& etop = etop_;
+  etop.noalias() = Phi6_ * E_.topRows(6);
+  etop.noalias() += Psig * E_.middleRows(6, ka);
   etop.leftCols(static_cast<Eigen::Index>(p_)) += G6;
   E_.bottomRows(nn) = d.asDiagonal() * E_.bottomRows(nn);
   E_.topRows(6) = etop;
@@ -359,8 +370,10 @@ void RawBound::observe(std::size_t i, int j, double t_s, double y) {
   const auto b = static_cast<Eigen::Index>(head_state_begin_[i][jj]), e = static_cast<Eigen::Index>(head_state_end_[i][jj]);
   const Eigen::RowVector3d r = cfg_.heads[i].R_axes_B.row(j);
   // P h and E^T h for h = [r, 0.., 1 on this axis's noise states, 0..].
-  Eigen::VectorXd Ph = P_.leftCols(3) * r.transpose();
-  Eigen::RowVectorXd u = r * E_.topRows(3);
+  Eigen::VectorXd& Ph = ph_;
+  Ph.noalias() = P_.leftCols(3) * r.transpose();
+  Eigen::RowVectorXd& u = u_;
+  u.noalias() = r * E_.topRows(3);
   for (Eigen::Index s = b; s < e; ++s) {
     Ph += P_.col(s);
     u += E_.row(s);
@@ -368,16 +381,16 @@ void RawBound::observe(std::size_t i, int j, double t_s, double y) {
   const double rw = head_white_[i][jj];
   double F = r.dot(Ph.head<3>()) + rw;
   for (Eigen::Index s = b; s < e; ++s) F += Ph(s);
-  const Eigen::RowVectorXd hE = recorder_ ? Eigen::RowVectorXd(u) : Eigen::RowVectorXd();  // h^T E, for the recorder
+  if (recorder_) hE_ = u;  // h^T E, for the recorder
+  const Eigen::RowVectorXd& hE = hE_;
   // d: the mounting error of this axis, and the harmonics of heads 2..n.
   u(static_cast<Eigen::Index>(3 * i + jj)) += 1;
   const int K = cfg_.options.harmonics;
-  if (i > 0 && K > 0) {
-    const double ang = cfg_.options.orbit_phase_rad + cfg_.options.orbit_rate_rad_s * t_s;
+  if (i > 0 && K > 0) {  // cos(k u), sin(k u) at t_s: setHarmonics
     const auto base = static_cast<Eigen::Index>(col_harm_ + ((i - 1) * 3 + jj) * 2 * static_cast<std::size_t>(K));
     for (int k = 1; k <= K; ++k) {
-      u(base + 2 * (k - 1)) += std::cos(k * ang);
-      u(base + 2 * (k - 1) + 1) += std::sin(k * ang);
+      u(base + 2 * (k - 1)) += harm_cos_[static_cast<std::size_t>(k - 1)];
+      u(base + 2 * (k - 1) + 1) += harm_sin_[static_cast<std::size_t>(k - 1)];
     }
   }
   if (recorder_) {
@@ -443,6 +456,7 @@ void RawBound::head(double t_s, std::size_t index) {
   if (t_s < t_cur_) t_s = t_cur_;
   advance(t_s);
   flush(t_s);
+  setHarmonics(t_s);
   for (int j = 0; j < 3; ++j) observe(index, j, t_s, 0.0);
   ++head_samples_[index];
   last_t_ = std::max(last_t_, t_s);
@@ -466,16 +480,31 @@ void RawBound::enableData(const std::vector<Mat3>& C_Si_B_applied, const Vec3& b
   }
 }
 
+void RawBound::setHarmonics(double t_s) {
+  const int K = cfg_.options.harmonics;
+  if (K <= 0) return;
+  harm_cos_.resize(static_cast<std::size_t>(K));
+  harm_sin_.resize(static_cast<std::size_t>(K));
+  const double ang = cfg_.options.orbit_phase_rad + cfg_.options.orbit_rate_rad_s * t_s;
+  for (int k = 1; k <= K; ++k) {
+    harm_cos_[static_cast<std::size_t>(k - 1)] = std::cos(k * ang);
+    harm_sin_[static_cast<std::size_t>(k - 1)] = std::sin(k * ang);
+  }
+}
+
 Mat3 RawBound::appliedMounting(std::size_t index, double t_s) const {
   const int K = cfg_.options.harmonics;
   if (index == 0 || K <= 0 || harm_applied_.size() == 0) return C_Si_B_applied_[index];
   // The harmonic parameters of this head (head axes e1, e2, b) enter each axis's observation as the
   // mounting's do (parameter theta: the rotation -axes^T theta in Si), so the pass applies -axes^T H(t).
-  const double ang = cfg_.options.orbit_phase_rad + cfg_.options.orbit_rate_rad_s * t_s;
+  (void)t_s;  // cos(k u), sin(k u) at t_s: setHarmonics
   Vec3 H = Vec3::Zero();
   for (int j = 0; j < 3; ++j) {
     const auto base = static_cast<Eigen::Index>(((index - 1) * 3 + static_cast<std::size_t>(j)) * 2 * static_cast<std::size_t>(K));
-    for (int k = 1; k <= K; ++k) H(j) += harm_applied_(base + 2 * (k - 1)) * std::cos(k * ang) + harm_applied_(base + 2 * (k - 1) + 1) * std::sin(k * ang);
+    for (int k = 1; k <= K; ++k) {
+      const auto kk = static_cast<std::size_t>(k - 1);
+      H(j) += harm_applied_(base + 2 * (k - 1)) * harm_cos_[kk] + harm_applied_(base + 2 * (k - 1) + 1) * harm_sin_[kk];
+    }
   }
   return core::quatExp(Vec3(-cfg_.heads[index].axes_Si.transpose() * H)).toRotationMatrix() * C_Si_B_applied_[index];
 }
@@ -490,6 +519,7 @@ void RawBound::accelData(double t_s, const Vec3& z_A, const Vec3& jerk_A) {
 void RawBound::headData(double t_s, std::size_t index, const Quat& q_I_Si) {
   if (index >= cfg_.heads.size()) return;
   const Mat3 C_meas = q_I_Si.normalized().toRotationMatrix();
+  setHarmonics(std::max(t_s, t_cur_));  // the time the sample is taken in at (below)
   const Mat3 C_Si_B = appliedMounting(index, t_s);
   if (!started_) {
     started_ = true;
@@ -506,19 +536,19 @@ void RawBound::headData(double t_s, std::size_t index, const Quat& q_I_Si) {
   const Vec3 y = cfg_.heads[index].axes_Si * core::so3Log(Mat3(C_hat.transpose() * C_meas));
   // Gate on the marginal innovations before any update.
   const Mat3& R = cfg_.heads[index].R_axes_B;
-  for (int j = 0; j < 3; ++j) {
+  for (int j = 0; j < 3 && gate_sigma_ > 0; ++j) {
     const auto jj = static_cast<std::size_t>(j);
     const auto b = static_cast<Eigen::Index>(head_state_begin_[index][jj]), e = static_cast<Eigen::Index>(head_state_end_[index][jj]);
     const Eigen::RowVector3d r = R.row(j);
-    Eigen::VectorXd Ph = P_.leftCols(3) * r.transpose();
+    // F0 = h^T P h over the few states h touches (attitude and this axis's noise states).
     double v0 = y(j) - r.dot(x_.head<3>());
+    for (Eigen::Index s2 = b; s2 < e; ++s2) v0 -= x_(s2);
+    double F0 = r.dot(P_.topLeftCorner<3, 3>() * r.transpose()) + head_white_[index][jj];
     for (Eigen::Index s2 = b; s2 < e; ++s2) {
-      Ph += P_.col(s2);
-      v0 -= x_(s2);
+      F0 += 2 * r.dot(P_.block<3, 1>(0, s2));
+      for (Eigen::Index s3 = b; s3 < e; ++s3) F0 += P_(s3, s2);
     }
-    double F0 = r.dot(Ph.head<3>()) + head_white_[index][jj];
-    for (Eigen::Index s2 = b; s2 < e; ++s2) F0 += Ph(s2);
-    if (gate_sigma_ > 0 && v0 * v0 > gate_sigma_ * gate_sigma_ * F0) {
+    if (v0 * v0 > gate_sigma_ * gate_sigma_ * F0) {
       ++rejected_;
       return;
     }

@@ -297,6 +297,13 @@ class RawBound {
   std::vector<Mat3> C_Si_B_applied_;
   Vec3 bias_applied_ = Vec3::Zero(), scale_applied_ = Vec3::Zero();
   Eigen::VectorXd harm_applied_;  ///< the harmonics' parameters of the passes before (empty: none)
+  /// cos(k u), sin(k u), k = 1..options.harmonics, at the head sample in hand (setHarmonics).
+  std::vector<double> harm_cos_, harm_sin_;
+  void setHarmonics(double t_s);
+  /// Scratch of observe() and flush(), sized once (no allocation per sample).
+  Eigen::VectorXd ph_, dd_, qq_;
+  Eigen::RowVectorXd u_, hE_;
+  Eigen::MatrixXd psig_, g6_, top_, left_, etop_;
   Quat q_nom_ = Quat::Identity();  ///< q_I_B of the reference trajectory (w_ is its rate)
   Eigen::VectorXd x_, bvec_;       ///< the filter's error state; sum u^T v / F (data mode: finishData)
   double chi2_ = 0;
