@@ -120,11 +120,7 @@ void CalibrationFeed::pushHeads(const core::HeadEpoch& e) {
     const auto& h = e.sample[static_cast<std::size_t>(k)];
     const int slot = core::slotOf(cfg_.heads, h.head_id);
     if (slot < 0) continue;
-    RawData::Event ev;
-    ev.t_s = rawTime(e.t);
-    ev.head = slot;
-    ev.q_I_Si = h.q_I_Si;
-    raw_.events.push_back(ev);
+    raw_.events.push_back(RawData::Event::headSample(rawTime(e.t), slot, h.q_I_Si));
   }
   trimRaw(e.t);
 }
@@ -148,10 +144,7 @@ void CalibrationFeed::pushAcc(TimeUs t, const Vec3& a_A) {
   if (!configured_ || finished_) return;
   builder_.pushAcc(t, a_A);
   if (!with_raw_) return;
-  RawData::Event ev;
-  ev.t_s = rawTime(t);
-  ev.z_A = a_A;
-  raw_.events.push_back(ev);
+  raw_.events.push_back(RawData::Event::accel(rawTime(t), a_A));
   sum_A_ += a_A;
   ++n_acc_;
   trimRaw(t);
@@ -190,7 +183,7 @@ void CalibrationFeed::finish() {
     const OrbitPoint& a = orbit_v_[j];
     const OrbitPoint& b = orbit_v_[j + 1];
     const double f = static_cast<double>(t - a.t) / static_cast<double>(b.t - a.t);
-    ev.v_obs_I = a.v_I + f * (b.v_I - a.v_I) + model::earthVelocityLowPrecision(toSeconds(t));
+    ev.setObserverVelocity(a.v_I + f * (b.v_I - a.v_I) + model::earthVelocityLowPrecision(toSeconds(t)));
     ++aberrated_;
   }
 }

@@ -627,7 +627,7 @@ std::vector<Vec3> smoothedJerk(const RawData& data) {
     const double n = static_cast<double>(hi - lo + 1);
     for (std::size_t q = lo; q <= hi; ++q) {
       st += data.events[acc[q]].t_s;
-      sz += data.events[acc[q]].z_A;
+      sz += data.events[acc[q]].z_A();
     }
     const double tm = st / n;
     const Vec3 zm = sz / n;
@@ -636,7 +636,7 @@ std::vector<Vec3> smoothedJerk(const RawData& data) {
     for (std::size_t q = lo; q <= hi; ++q) {
       const double dt = data.events[acc[q]].t_s - tm;
       stt += dt * dt;
-      stz += dt * (data.events[acc[q]].z_A - zm);
+      stz += dt * (data.events[acc[q]].z_A() - zm);
     }
     if (stt > 0) out[acc[m]] = stz / stt;
   }
@@ -698,20 +698,20 @@ RawEstimate estimateRaw(const RawBoundConfig& cfg0, const RawData& data, const V
   // With a time offset tau the sample tagged t is the mean about t + tau.
   const double half = 0.5 * cfg.acc_interval_s;
   double tau = 0;
-  std::vector<std::size_t> order(data.events.size());
+  std::vector<std::uint32_t> order(data.events.size());  // 4 bytes an event (a day: 1.4 million)
   // The head events and the accelerometer's, each in time order once; a pass merges the two with the
   // accelerometer shifted by its offset (ties in the events' order): linear, where a sort of the whole
   // was 5 % of a day's estimate.
-  std::vector<std::size_t> head_ev, acc_ev;
-  for (std::size_t k = 0; k < data.events.size(); ++k) (data.events[k].head < 0 ? acc_ev : head_ev).push_back(k);
-  const auto by_time = [&](std::size_t a, std::size_t b) { return data.events[a].t_s < data.events[b].t_s; };
+  std::vector<std::uint32_t> head_ev, acc_ev;
+  for (std::size_t k = 0; k < data.events.size(); ++k) (data.events[k].head < 0 ? acc_ev : head_ev).push_back(static_cast<std::uint32_t>(k));
+  const auto by_time = [&](std::uint32_t a, std::uint32_t b) { return data.events[a].t_s < data.events[b].t_s; };
   std::stable_sort(head_ev.begin(), head_ev.end(), by_time);
   std::stable_sort(acc_ev.begin(), acc_ev.end(), by_time);
   const int npass = std::max(passes, 1);
   for (int pass = 0; pass < npass; ++pass) {
-    const auto key = [&](std::size_t k) { const auto& e = data.events[k]; return e.head < 0 ? e.t_s + tau - half : e.t_s; };
+    const auto key = [&](std::uint32_t k) { const auto& e = data.events[k]; return e.head < 0 ? e.t_s + tau - half : e.t_s; };
     std::merge(head_ev.begin(), head_ev.end(), acc_ev.begin(), acc_ev.end(), order.begin(),
-               [&](std::size_t a, std::size_t b) { return key(a) < key(b) || (!(key(b) < key(a)) && a < b); });
+               [&](std::uint32_t a, std::uint32_t b) { return key(a) < key(b) || (!(key(b) < key(a)) && a < b); });
     for (std::size_t i = 0; i < nh; ++i) {
       applied[i] = core::quatExp(eps[i]).toRotationMatrix() * cfg.heads[i].C_Si_B;
       for (std::size_t j = 0; j < 3; ++j) cfg.heads[i].noise[j] = scaledNoise(base[i][j], factor[i][j == 2 ? 1 : 0]);
@@ -728,16 +728,16 @@ RawEstimate estimateRaw(const RawBoundConfig& cfg0, const RawData& data, const V
     for (const std::size_t k : order) {
       const auto& ev = data.events[k];
       if (ev.head < 0) {
-        b.accelData(ev.t_s + tau - half, ev.z_A, jerk[k]);
-      } else if (ev.v_obs_I.isZero()) {
-        b.headData(ev.t_s, static_cast<std::size_t>(ev.head), ev.q_I_Si);
+        b.accelData(ev.t_s + tau - half, ev.z_A(), jerk[k]);
+      } else if (ev.v_obs_I().isZero()) {
+        b.headData(ev.t_s, static_cast<std::size_t>(ev.head), ev.q_I_Si());
       } else {
         // Remove the aberration: q_meas = q_true Exp(C_Si_I (b_I x v / c)).
         const auto hi = static_cast<std::size_t>(ev.head);
-        const Mat3 C_I_Si = ev.q_I_Si.normalized().toRotationMatrix();
+        const Mat3 C_I_Si = ev.q_I_Si().normalized().toRotationMatrix();
         const Vec3 b_I = C_I_Si * Vec3(cfg.heads[hi].axes_Si.row(2).transpose());
-        const Vec3 phi = C_I_Si.transpose() * (b_I.cross(ev.v_obs_I) / model::kSpeedOfLight);
-        b.headData(ev.t_s, hi, ev.q_I_Si.normalized() * core::quatExp(-phi));
+        const Vec3 phi = C_I_Si.transpose() * (b_I.cross(ev.v_obs_I()) / model::kSpeedOfLight);
+        b.headData(ev.t_s, hi, ev.q_I_Si().normalized() * core::quatExp(-phi));
       }
     }
     b.finishData();

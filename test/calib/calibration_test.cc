@@ -272,20 +272,20 @@ TEST(CalibrationFeed, RawSamplesAndTheObserverVelocityAtTheOrbitsSeams) {
     last_t = e.t_s;
     if (e.head < 0) {
       ++acc;
-      sum += e.z_A;
-      EXPECT_EQ(e.v_obs_I, Vec3::Zero());
+      sum += e.z_A();
+      EXPECT_EQ(e.v_obs_I(), Vec3::Zero());
       continue;
     }
     ++heads;
     const bool inside = (e.t_s >= 100.0 && e.t_s <= 200.0) || (e.t_s >= 290.0 && e.t_s <= 300.0);
     if (!inside) {
-      EXPECT_EQ(e.v_obs_I, Vec3::Zero()) << e.t_s;
+      EXPECT_EQ(e.v_obs_I(), Vec3::Zero()) << e.t_s;
       continue;
     }
     ++with_v;
     const Vec3 want = Vec3(1000.0 * e.t_s, 7000.0, 0.0) +
                       model::earthVelocityLowPrecision(toSeconds(c.t0) + e.t_s);
-    EXPECT_LT((e.v_obs_I - want).norm(), 1e-6) << e.t_s;
+    EXPECT_LT((e.v_obs_I() - want).norm(), 1e-6) << e.t_s;
   }
   EXPECT_EQ(ev.front().t_s, 0.0);
   EXPECT_EQ(heads, static_cast<std::size_t>(c.duration_s * c.head_rate_hz) * 3);

@@ -67,8 +67,8 @@ class CalibrationFeed {
   /// heads or more; the orbit must come in the same stream). False with *error: the configuration
   /// cannot be run (said at start-up, never found later).
   /// with_raw: also keep every head and accelerometer sample (and the orbit's velocity, for the stars'
-  /// aberration) for the attitude-domain estimate - the whole span in memory (about 150 MB per day of
-  /// GRACE-FO data), so only when asked; with SpanOptions::max_observations the same window of data time
+  /// aberration) for the attitude-domain estimate - the whole span in memory (72 bytes a sample, about
+  /// 100 MB per day of GRACE-FO data), so only when asked; with SpanOptions::max_observations the same window of data time
   /// as the observations (max_observations x decimation_s).
   bool configure(const core::PipelineConfig& cfg, const SpanOptions& so, bool with_thermal, std::string* error,
                  bool with_raw = false);

@@ -204,15 +204,41 @@ RawMountings rawMountings(const RawEstimate& est, const RawBoundConfig& cfg, dou
 
 /// The measured data of a span, in time order (the estimator needs them once per pass).
 struct RawData {
+  /// One sample, 72 bytes (a day of GRACE-FO data is 1.4 million of them): an accelerometer sample
+  /// keeps its angular acceleration and a head sample its attitude and observer velocity in the same
+  /// three numbers.
   struct Event {
     double t_s = 0;
-    int head = -1;            ///< -1: accelerometer sample (z_A), else head index (q_I_Si)
-    Vec3 z_A = Vec3::Zero();  ///< rad/s^2, A
-    Quat q_I_Si = Quat::Identity();
-    /// Head events: the observer's inertial velocity (m/s; the Earth's and the satellite's) when the
+    int head = -1;  ///< -1: accelerometer sample (z_A), else head index (q_I_Si, v_obs_I)
+
+    static Event accel(double t_s, const Vec3& z_A) {
+      Event e;
+      e.t_s = t_s;
+      e.vec_ = {z_A.x(), z_A.y(), z_A.z()};
+      return e;
+    }
+    static Event headSample(double t_s, int head, const Quat& q_I_Si) {
+      Event e;
+      e.t_s = t_s;
+      e.head = head;
+      e.q_ = {q_I_Si.w(), q_I_Si.x(), q_I_Si.y(), q_I_Si.z()};
+      return e;
+    }
+    /// Accelerometer samples: rad/s^2, A (zero for a head sample).
+    Vec3 z_A() const { return head < 0 ? Vec3(vec_[0], vec_[1], vec_[2]) : Vec3::Zero(); }
+    /// Head samples: the attitude (identity for an accelerometer sample).
+    Quat q_I_Si() const { return Quat(q_[0], q_[1], q_[2], q_[3]); }
+    /// Head samples: the observer's inertial velocity (m/s; the Earth's and the satellite's) when the
     /// attitude carries the stars' aberration, which estimateRaw then removes (model/effects.h's
     /// aberration: the apparent boresight turned by b x v / c); zero: none to remove.
-    Vec3 v_obs_I = Vec3::Zero();
+    Vec3 v_obs_I() const { return head >= 0 ? Vec3(vec_[0], vec_[1], vec_[2]) : Vec3::Zero(); }
+    void setObserverVelocity(const Vec3& v) {
+      if (head >= 0) vec_ = {v.x(), v.y(), v.z()};
+    }
+
+   private:
+    std::array<double, 3> vec_{};            ///< z_A or v_obs_I
+    std::array<double, 4> q_{1.0, 0, 0, 0};  ///< q_I_Si (w, x, y, z)
   };
   std::vector<Event> events;
 };

@@ -45,23 +45,19 @@ class RawDataSimSink : public sim::SimSink {
   void head(const sim::HeadSampleOut& h) override {
     const auto it = index_.find(h.head);
     if (h.blind != sim::kBlindNone || it == index_.end()) return;
-    RawData::Event e;
-    e.t_s = seconds(h.tag);
-    e.head = it->second;
-    e.q_I_Si = h.q_I_Si;
+    RawData::Event e = RawData::Event::headSample(seconds(h.tag), it->second, h.q_I_Si);
     if (aberration_) {
       const auto& eff = sim_.heads()[static_cast<std::size_t>(it->second)].effects();
       const model::OrbitContext c = sim_.context(h.t_true_s);
-      if (eff.aberration_annual) e.v_obs_I += c.v_earth_I;
-      if (eff.aberration_orbital) e.v_obs_I += c.v_sat_I;
+      Vec3 v = Vec3::Zero();
+      if (eff.aberration_annual) v += c.v_earth_I;
+      if (eff.aberration_orbital) v += c.v_sat_I;
+      e.setObserverVelocity(v);
     }
     data.events.push_back(e);
   }
   void accel(const sim::AccSampleOut& a) override {
-    RawData::Event e;
-    e.t_s = seconds(a.tag);
-    e.z_A = a.ang_A;
-    data.events.push_back(e);
+    data.events.push_back(RawData::Event::accel(seconds(a.tag), a.ang_A));
   }
   RawData data;
 
