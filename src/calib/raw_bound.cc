@@ -609,13 +609,11 @@ Eigen::VectorXd RawBound::solveParameters(const RawBoundResult& r) const {
 
 namespace {
 
-/// The accelerometer's angular jerk at each of its samples (A, rad/s^3): the least-squares slope over the
-/// samples within +-1 s (the time offset's column; zero for head events).
-std::vector<Vec3> smoothedJerk(const RawData& data) {
-  std::vector<std::size_t> acc;
-  for (std::size_t k = 0; k < data.events.size(); ++k)
-    if (data.events[k].head < 0) acc.push_back(k);
-  std::vector<Vec3> out(data.events.size(), Vec3::Zero());
+/// The accelerometer's angular jerk at each of its samples (A, rad/s^3), in the order of `acc` (the
+/// accelerometer events in time order): the least-squares slope over the samples within +-1 s (the time
+/// offset's column).
+std::vector<Vec3> smoothedJerk(const RawData& data, const std::vector<std::uint32_t>& acc) {
+  std::vector<Vec3> out(acc.size(), Vec3::Zero());
   std::size_t lo = 0, hi = 0;
   for (std::size_t m = 0; m < acc.size(); ++m) {
     const double t = data.events[acc[m]].t_s;
@@ -638,7 +636,7 @@ std::vector<Vec3> smoothedJerk(const RawData& data) {
       stt += dt * dt;
       stz += dt * (data.events[acc[q]].z_A() - zm);
     }
-    if (stt > 0) out[acc[m]] = stz / stt;
+    if (stt > 0) out[m] = stz / stt;
   }
   return out;
 }
@@ -683,7 +681,6 @@ Eigen::MatrixXd robustCovariance(const Eigen::MatrixXd& C, const std::vector<Eig
 RawEstimate estimateRaw(const RawBoundConfig& cfg0, const RawData& data, const Vec3& bias0, int passes) {
   const std::size_t nh = cfg0.heads.size();
   RawBoundConfig cfg = cfg0;
-  const std::vector<Vec3> jerk = cfg.options.time_offset ? smoothedJerk(data) : std::vector<Vec3>(data.events.size(), Vec3::Zero());
   std::vector<Vec3> eps(nh, Vec3::Zero());
   std::vector<Mat3> applied(nh);
   Vec3 bias = bias0, scale = Vec3::Zero();
@@ -698,20 +695,31 @@ RawEstimate estimateRaw(const RawBoundConfig& cfg0, const RawData& data, const V
   // With a time offset tau the sample tagged t is the mean about t + tau.
   const double half = 0.5 * cfg.acc_interval_s;
   double tau = 0;
-  std::vector<std::uint32_t> order(data.events.size());  // 4 bytes an event (a day: 1.4 million)
-  // The head events and the accelerometer's, each in time order once; a pass merges the two with the
-  // accelerometer shifted by its offset (ties in the events' order): linear, where a sort of the whole
-  // was 5 % of a day's estimate.
+  // The head events and the accelerometer's, each in time order once (4-byte indices: a day holds 1.4
+  // million events); a pass merges the two with the accelerometer shifted by its offset (ties in the
+  // events' order): linear, where a sort of the whole was 5 % of a day's estimate. In `order` an
+  // accelerometer entry is kAcc | its position in acc_ev (the jerk's index).
+  constexpr std::uint32_t kAcc = 0x80000000u;
   std::vector<std::uint32_t> head_ev, acc_ev;
   for (std::size_t k = 0; k < data.events.size(); ++k) (data.events[k].head < 0 ? acc_ev : head_ev).push_back(static_cast<std::uint32_t>(k));
   const auto by_time = [&](std::uint32_t a, std::uint32_t b) { return data.events[a].t_s < data.events[b].t_s; };
   std::stable_sort(head_ev.begin(), head_ev.end(), by_time);
   std::stable_sort(acc_ev.begin(), acc_ev.end(), by_time);
+  const std::vector<Vec3> jerk = cfg.options.time_offset ? smoothedJerk(data, acc_ev) : std::vector<Vec3>(acc_ev.size(), Vec3::Zero());
+  std::vector<std::uint32_t> order(data.events.size());
   const int npass = std::max(passes, 1);
   for (int pass = 0; pass < npass; ++pass) {
-    const auto key = [&](std::uint32_t k) { const auto& e = data.events[k]; return e.head < 0 ? e.t_s + tau - half : e.t_s; };
-    std::merge(head_ev.begin(), head_ev.end(), acc_ev.begin(), acc_ev.end(), order.begin(),
-               [&](std::uint32_t a, std::uint32_t b) { return key(a) < key(b) || (!(key(b) < key(a)) && a < b); });
+    {
+      std::size_t i = 0, m = 0, o = 0;
+      while (i < head_ev.size() || m < acc_ev.size()) {
+        bool take_acc = i == head_ev.size();
+        if (!take_acc && m < acc_ev.size()) {
+          const double ka = data.events[acc_ev[m]].t_s + tau - half, kh = data.events[head_ev[i]].t_s;
+          take_acc = ka < kh || (!(kh < ka) && acc_ev[m] < head_ev[i]);
+        }
+        order[o++] = take_acc ? (kAcc | static_cast<std::uint32_t>(m++)) : head_ev[i++];
+      }
+    }
     for (std::size_t i = 0; i < nh; ++i) {
       applied[i] = core::quatExp(eps[i]).toRotationMatrix() * cfg.heads[i].C_Si_B;
       for (std::size_t j = 0; j < 3; ++j) cfg.heads[i].noise[j] = scaledNoise(base[i][j], factor[i][j == 2 ? 1 : 0]);
@@ -725,11 +733,15 @@ RawEstimate estimateRaw(const RawBoundConfig& cfg0, const RawData& data, const V
     const bool fit_now = cfg.options.fit_noise && pass == 1 && npass > 2;
     b.record_innovations_ = fit_now;
     b.collect_blocks_ = pass + 1 == npass;  // the score blocks serve the last pass's covariance only
-    for (const std::size_t k : order) {
-      const auto& ev = data.events[k];
-      if (ev.head < 0) {
-        b.accelData(ev.t_s + tau - half, ev.z_A(), jerk[k]);
-      } else if (ev.v_obs_I().isZero()) {
+    for (const std::uint32_t o : order) {
+      if (o & kAcc) {
+        const std::uint32_t m = o & ~kAcc;
+        const auto& ev = data.events[acc_ev[m]];
+        b.accelData(ev.t_s + tau - half, ev.z_A(), jerk[m]);
+        continue;
+      }
+      const auto& ev = data.events[o];
+      if (ev.v_obs_I().isZero()) {
         b.headData(ev.t_s, static_cast<std::size_t>(ev.head), ev.q_I_Si());
       } else {
         // Remove the aberration: q_meas = q_true Exp(C_Si_I (b_I x v / c)).
