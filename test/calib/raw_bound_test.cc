@@ -309,6 +309,17 @@ RawData runWithBound(sim::Simulator& simu, const RawBoundConfig& cfg, bool aberr
   return rec.data;
 }
 
+/// The short calibration scenario without its orbit-periodic deformation and the stars' aberration.
+sim::Scenario shortScenarioInsideTheModel() {
+  sim::Scenario sc;
+  std::string err;
+  EXPECT_TRUE(sim::loadScenario(std::string(BORESIGHT_SOURCE_DIR) + "/config/sim_gracefo_calibration_short.yaml", sc, &err)) << err;
+  sc.effects.erase(std::remove_if(sc.effects.begin(), sc.effects.end(),
+                                  [&](const model::EffectSpec& e) { return e.name == "thermal_periodic" || e.name == "aberration"; }),
+                   sc.effects.end());
+  return sc;
+}
+
 /// The short calibration scenario (5-deg manoeuvres about each axis, 860 s) without its orbit-periodic
 /// head deformation (over 860 s a constant the truth's constant term does not include), the aberration
 /// either left out or in the data with its observer velocity for the estimator to remove, and the
@@ -417,12 +428,8 @@ TEST(RawEstimator, GapsAtTheAccelerationPeaksAndDropoutsAreHolesNotErrors) { sho
 /// the model's when the model is right
 /// (20 s blocks: the sandwich needs blocks well beyond the parameters' count).
 TEST(RawEstimator, VarianceComponentsTakeTheNoiseLevelsFromTheData) {
-  sim::Scenario sc;
+  sim::Scenario sc = shortScenarioInsideTheModel();
   std::string err;
-  ASSERT_TRUE(sim::loadScenario(std::string(BORESIGHT_SOURCE_DIR) + "/config/sim_gracefo_calibration_short.yaml", sc, &err)) << err;
-  sc.effects.erase(std::remove_if(sc.effects.begin(), sc.effects.end(),
-                                  [&](const model::EffectSpec& e) { return e.name == "thermal_periodic" || e.name == "aberration"; }),
-                   sc.effects.end());
   sim::Simulator simu;
   ASSERT_TRUE(simu.init(sc, 2, 860, &err)) << err;
   RawBoundOptions opt;
@@ -509,12 +516,8 @@ TEST(RawEstimator, TheNoiseFitsOnTwoThreadsGiveTheOneThreadEstimateToTheBit) {
 /// realistic day: NEES per degree of freedom 3000 instead of 3). Fitted to the data less the trajectory's
 /// prediction, every head axis keeps most of its coloured variance.
 TEST(RawEstimator, TheNoiseFitSeesTheColourTheModelInUseAlreadyHas) {
-  sim::Scenario sc;
+  sim::Scenario sc = shortScenarioInsideTheModel();
   std::string err;
-  ASSERT_TRUE(sim::loadScenario(std::string(BORESIGHT_SOURCE_DIR) + "/config/sim_gracefo_calibration_short.yaml", sc, &err)) << err;
-  sc.effects.erase(std::remove_if(sc.effects.begin(), sc.effects.end(),
-                                  [&](const model::EffectSpec& e) { return e.name == "thermal_periodic" || e.name == "aberration"; }),
-                   sc.effects.end());
   ASSERT_TRUE(sim::addEffectArgs(sc, {"coloured_noise:sensor=all,cross_arcsec=6,about_arcsec=30,alpha=1,f_lo_hz=0.005,f_hi_hz=0.05"}, &err))
       << err;
   sim::Simulator simu;
@@ -543,12 +546,8 @@ TEST(RawEstimator, TheNoiseFitSeesTheColourTheModelInUseAlreadyHas) {
 // error. Stated in the model given to the estimator, it stays beside the fitted model and widens each
 // head axis's sigma as a constant error of that size would (tau 1e5 s over 860 s: a constant).
 TEST(RawEstimator, NoiseTooSlowForTheSpanIsKeptFromTheStatedModel) {
-  sim::Scenario sc;
+  sim::Scenario sc = shortScenarioInsideTheModel();
   std::string err;
-  ASSERT_TRUE(sim::loadScenario(std::string(BORESIGHT_SOURCE_DIR) + "/config/sim_gracefo_calibration_short.yaml", sc, &err)) << err;
-  sc.effects.erase(std::remove_if(sc.effects.begin(), sc.effects.end(),
-                                  [&](const model::EffectSpec& e) { return e.name == "thermal_periodic" || e.name == "aberration"; }),
-                   sc.effects.end());
   sim::Simulator simu;
   ASSERT_TRUE(simu.init(sc, 4, 860, &err)) << err;
   RawBoundOptions opt;
