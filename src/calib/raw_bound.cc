@@ -975,6 +975,7 @@ RawMountings rawMountings(const RawEstimate& est, const RawBoundConfig& cfg, dou
   const bool have = est.bound.covariance.rows() >= n3 && est.mounting_rad.size() >= n;
   out.covariance_Si = have ? Eigen::MatrixXd(T * est.bound.covariance.topLeftCorner(n3, n3) * T.transpose())
                            : Eigen::MatrixXd::Constant(n3, n3, std::numeric_limits<double>::quiet_NaN());
+  if (have) out.covariance_Si = Eigen::MatrixXd(0.5 * (out.covariance_Si + out.covariance_Si.transpose()));  // exactly symmetric
   for (std::size_t i = 0; i < n; ++i) {
     out.r_Si.push_back(have ? est.mounting_rad[i] : Vec3::Zero());
     Vec3 sg = Vec3::Constant(std::numeric_limits<double>::quiet_NaN());

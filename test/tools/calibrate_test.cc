@@ -284,6 +284,15 @@ TEST(Calibrate, MethodAttitudeEstimatesTheTimeOffsetAndScaleUnlessTold) {
   EXPECT_GT(ja["attitude_domain"]["time_offset_sigma_s"].get<double>(), 0.0);
   EXPECT_FALSE(ja.contains("time_offset_s") && !ja["time_offset_s"].is_null()) << "the CRN solver estimates it only when asked";
   EXPECT_EQ(ja["mountings_written_from"], "attitude-domain estimate (--method attitude)");
+  // The covariance of all head angles (Si frames, head after head): symmetric, its diagonal the sigmas.
+  const auto& cov = ja["attitude_domain"]["covariance_arcsec2"];
+  ASSERT_EQ(cov.size(), 9u);
+  for (std::size_t p = 0; p < 9; ++p) {
+    ASSERT_EQ(cov[p].size(), 9u);
+    const double sg = ja["attitude_domain"]["heads"][p / 3]["sigma_arcsec"][p % 3].get<double>();
+    EXPECT_NEAR(cov[p][p].get<double>(), sg * sg, 1e-9 * sg * sg) << p;
+    for (std::size_t q = 0; q < 9; ++q) EXPECT_EQ(cov[p][q].get<double>(), cov[q][p].get<double>()) << p << " " << q;
+  }
   // 860 s hold 0.15 revolutions: no orbit harmonics, and the reason.
   EXPECT_NE(ja["attitude_domain"]["orbit_harmonics"]["status"].get<std::string>().find("revolutions of the span"), std::string::npos)
       << ja["attitude_domain"]["orbit_harmonics"].dump();

@@ -646,6 +646,23 @@ int runCalibrate(int argc, char** argv) {
                   " (variance factors applied " + fmt("%.3f", est.variance_factor[i][0]) + ", " + fmt("%.3f", est.variance_factor[i][1]) + ")\n";
       jr["heads"].push_back(hj);
     }
+    // The covariance of every head's angles (Si frames, head after head, x y z; arcsec^2), null where an
+    // axis is not determined: what a user needs to combine spans or to carry the mountings on.
+    {
+      report::Json cov = report::Json::array();
+      const Eigen::Index n3 = rm.covariance_Si.rows();
+      for (Eigen::Index a = 0; a < n3; ++a) {
+        report::Json row = report::Json::array();
+        const bool da = std::isfinite(rm.sigma_Si[static_cast<std::size_t>(a / 3)](a % 3));
+        for (Eigen::Index b = 0; b < n3; ++b) {
+          const bool db = std::isfinite(rm.sigma_Si[static_cast<std::size_t>(b / 3)](b % 3));
+          const double v = rm.covariance_Si(a, b) * kArcsecPerRad * kArcsecPerRad;
+          row.push_back(da && db && std::isfinite(v) ? report::Json(v) : report::Json(nullptr));
+        }
+        cov.push_back(row);
+      }
+      jr["covariance_arcsec2"] = cov;
+    }
     for (int k = 0; k < 3; ++k) {
       const Vec3 u = est.bound.common_axes_B.col(k);
       const double sg = est.bound.common_sigma_rad(k);
