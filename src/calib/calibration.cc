@@ -284,6 +284,14 @@ CalibrationRun runCalibration(CalibrationFeed& feed, const RunOptions& o) {
     }
     run.raw = estimateRaw(run.raw_config, feed.raw(), feed.rawMeanAcc(), o.raw_passes);
     run.raw_estimated = true;
+    // No body direction of the common rotation determined (no excitation the accelerometer sees): the
+    // heads' alignment to the accelerometer's datum, which method A calibrates, is not in the span; the
+    // time offset and the scale factors are not either.
+    if (run.raw.bound.unobservable_B.size() >= 3) {
+      run.raw_estimated = false;
+      run.raw_note = "the attitude-domain estimate determines no body direction of the common rotation (the span has no "
+                     "angular acceleration the accelerometer sees above its noise): refused as well";
+    }
   };
 
   if (span.epochs_total == 0) {

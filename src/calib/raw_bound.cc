@@ -983,7 +983,7 @@ RawMountings rawMountings(const RawEstimate& est, const RawBoundConfig& cfg, dou
     for (int a = 0; a < 3; ++a) {
       const auto k = static_cast<Eigen::Index>(3 * i) + a;
       const double s = have ? std::sqrt(std::max(0.0, out.covariance_Si(k, k))) : 0.0;
-      if (any && s < not_determined_rad) sg(a) = s;
+      if (any && s > 0 && s < not_determined_rad) sg(a) = s;  // 0: an axis held with the common directions
     }
     out.sigma_Si.push_back(sg);
   }

@@ -574,6 +574,15 @@ TEST(Calibrate, AQuietSpanIsRefusedWithWhatWouldBeNeeded) {
   EXPECT_NE(r.out.find("Needed: the Cramer-Rao bound needs about"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("at this span's weakest-axis excitation"), std::string::npos) << r.out;
   EXPECT_TRUE(testutil::slurp(d + "/r.json").empty());
+  // The attitude-domain estimate, which runs where the CRN solver refuses, determines no body direction
+  // here either (the heads' alignment to the accelerometer is not in the span): refused too, with both
+  // reasons, nothing written.
+  const CliRun a = run("calibrate --config " + kConfig + " " + glob1(d, "SCA1A") + " " + glob1(d, "ACC1A") + " " +
+                       glob1(d, "QSA1B") + " --method attitude --json " + d + "/a.json");
+  EXPECT_EQ(a.status, 1) << a.out;
+  EXPECT_NE(a.out.find("refused: too quiet"), std::string::npos) << a.out;
+  EXPECT_NE(a.out.find("determines no body direction of the common rotation"), std::string::npos) << a.out;
+  EXPECT_TRUE(testutil::slurp(d + "/a.json").empty());
 }
 
 TEST(Calibrate, OneManoeuvreAxisLeavesThatBodyDirectionNotObservable) {

@@ -590,7 +590,13 @@ int runCalibrate(int argc, char** argv) {
     mounting.sigma_Si.push_back(sg);
   }
   std::string raw_text;
-  if (raw) {
+  if (raw && !run.raw_estimated) {
+    // Asked for and not made (no samples, or no body direction determined): said, and the CRN
+    // solver's mountings are the ones written.
+    j["attitude_domain"] = {{"status", "not estimated: " + run.raw_note}};
+    raw_text = "\nattitude domain: not estimated: " + run.raw_note + "\n";
+  }
+  if (raw && run.raw_estimated) {
     // The attitude-domain estimate from the raw samples (calib::estimateRaw in runCalibration; no CRN,
     // no decimation).
     const calib::RawEstimate& est = run.raw;
