@@ -703,16 +703,20 @@ int runCalibrate(int argc, char** argv) {
     };
     if (ro.bias) mounting.bias = terms(est.bias_rad_s2, "acc_bias.");
     if (ro.scale) mounting.scale = terms(est.scale, "acc_scale.");
-    if (ro.time_offset) mounting.time_offset_s = std::make_pair(est.time_offset_s, sigmaOfName("acc_time_offset"));
     if (ro.time_offset) {
-      jr["time_offset_s"] = est.time_offset_s;
-      const auto to = static_cast<Eigen::Index>(est.bound.names.size());
-      for (Eigen::Index k = 0; k < to; ++k)
-        if (est.bound.names[static_cast<std::size_t>(k)] == "acc_time_offset") {
-          const double sg = std::sqrt(std::max(0.0, est.bound.covariance(k, k)));
-          jr["time_offset_sigma_s"] = sg;
-          raw_text += "  time offset " + fmt("%.4f", est.time_offset_s) + " s +- " + fmt("%.4f", sg) + " s (accelerometer tags late)\n";
-        }
+      // A sigma of zero is the pseudo-inverse's null space: the span does not determine the offset (no
+      // angular jerk the accelerometer sees). Reported so, and not written to the overlay.
+      const double sg = sigmaOfName("acc_time_offset");
+      if (sg > 0) {
+        mounting.time_offset_s = std::make_pair(est.time_offset_s, sg);
+        jr["time_offset_s"] = est.time_offset_s;
+        jr["time_offset_sigma_s"] = sg;
+        raw_text += "  time offset " + fmt("%.4f", est.time_offset_s) + " s +- " + fmt("%.4f", sg) + " s (accelerometer tags late)\n";
+      } else {
+        jr["time_offset_s"] = nullptr;
+        jr["time_offset_sigma_s"] = nullptr;
+        raw_text += "  time offset: not determined by the span (not reported, not written)\n";
+      }
     }
     // The relative alignment's orbit harmonics: head i's mounting rotates against the others by
     // sum_k c_k cos(k u) + s_k sin(k u) (Si axes x, y, z, as the error angles; the estimate's head-axis
