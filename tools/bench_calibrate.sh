@@ -12,6 +12,7 @@
 # domain on the realistic preset:
 #   tools/bench_calibrate.sh --runs 3 --spans "21600 86400" --scenario config/sim_gracefo_calibration_realistic.yaml \
 #     --config config/gracefo.yaml --orbit -- --method attitude
+# BORESIGHT_CLI=PATH runs another build's boresight on the same files (an earlier commit, to compare).
 # Each span is simulated once (seed 7, no LCM log) into $BORESIGHT_BENCH_DIR (default
 # ${TMPDIR:-/tmp}/boresight-bench; 3 days take about a minute and 1 GB) and reused; then calibrate runs
 # N times (default 5) under GNU time (/usr/bin/time): wall time, CPU time (user + system, all threads) and
@@ -37,7 +38,7 @@ while [[ $# -gt 0 ]]; do
     *) echo "bench_calibrate.sh: unknown argument $1" >&2; exit 2 ;;
   esac
 done
-cli="$root/build/tools/boresight"
+cli="${BORESIGHT_CLI:-$root/build/tools/boresight}"  # another build's binary, to compare
 [[ -x "$cli" ]] || { echo "bench_calibrate.sh: build first (tools/build.sh)" >&2; exit 1; }
 "$cli" calibrate --help >/dev/null 2>&1 || { echo "bench_calibrate.sh: this build has no calibrate command" >&2; exit 1; }
 [[ -x /usr/bin/time ]] || { echo "bench_calibrate.sh: needs GNU time (/usr/bin/time)" >&2; exit 1; }

@@ -365,6 +365,12 @@ void RawBound::flush(double t_s) {
   t_flush_ = t_s;
 }
 
+/// The first of head `index`'s (1..n-1) axis-`j` harmonic parameters inside the harmonic block (cos, sin
+/// of k = 1..K in turn): the one layout observe(), appliedMounting() and the names (result()) share.
+static std::size_t harmonicOffset(std::size_t index, std::size_t j, int K) {
+  return ((index - 1) * 3 + j) * 2 * static_cast<std::size_t>(K);
+}
+
 void RawBound::observe(std::size_t i, int j, double t_s, double y) {
   const auto jj = static_cast<std::size_t>(j);
   const auto b = static_cast<Eigen::Index>(head_state_begin_[i][jj]), e = static_cast<Eigen::Index>(head_state_end_[i][jj]);
@@ -387,7 +393,7 @@ void RawBound::observe(std::size_t i, int j, double t_s, double y) {
   u(static_cast<Eigen::Index>(3 * i + jj)) += 1;
   const int K = cfg_.options.harmonics;
   if (i > 0 && K > 0) {  // cos(k u), sin(k u) at t_s: setHarmonics
-    const auto base = static_cast<Eigen::Index>(col_harm_ + ((i - 1) * 3 + jj) * 2 * static_cast<std::size_t>(K));
+    const auto base = static_cast<Eigen::Index>(col_harm_ + harmonicOffset(i, jj, K));
     for (int k = 1; k <= K; ++k) {
       u(base + 2 * (k - 1)) += harm_cos_[static_cast<std::size_t>(k - 1)];
       u(base + 2 * (k - 1) + 1) += harm_sin_[static_cast<std::size_t>(k - 1)];
@@ -492,15 +498,15 @@ void RawBound::setHarmonics(double t_s) {
   }
 }
 
-Mat3 RawBound::appliedMounting(std::size_t index, double t_s) const {
+Mat3 RawBound::appliedMounting(std::size_t index) const {
   const int K = cfg_.options.harmonics;
   if (index == 0 || K <= 0 || harm_applied_.size() == 0) return C_Si_B_applied_[index];
   // The harmonic parameters of this head (head axes e1, e2, b) enter each axis's observation as the
   // mounting's do (parameter theta: the rotation -axes^T theta in Si), so the pass applies -axes^T H(t).
-  (void)t_s;  // cos(k u), sin(k u) at t_s: setHarmonics
+  // cos(k u), sin(k u) at the sample's time: setHarmonics, called first
   Vec3 H = Vec3::Zero();
   for (int j = 0; j < 3; ++j) {
-    const auto base = static_cast<Eigen::Index>(((index - 1) * 3 + static_cast<std::size_t>(j)) * 2 * static_cast<std::size_t>(K));
+    const auto base = static_cast<Eigen::Index>(harmonicOffset(index, static_cast<std::size_t>(j), K));
     for (int k = 1; k <= K; ++k) {
       const auto kk = static_cast<std::size_t>(k - 1);
       H(j) += harm_applied_(base + 2 * (k - 1)) * harm_cos_[kk] + harm_applied_(base + 2 * (k - 1) + 1) * harm_sin_[kk];
@@ -520,7 +526,7 @@ void RawBound::headData(double t_s, std::size_t index, const Quat& q_I_Si) {
   if (index >= cfg_.heads.size()) return;
   const Mat3 C_meas = q_I_Si.normalized().toRotationMatrix();
   setHarmonics(std::max(t_s, t_cur_));  // the time the sample is taken in at (below)
-  const Mat3 C_Si_B = appliedMounting(index, t_s);
+  const Mat3 C_Si_B = appliedMounting(index);
   if (!started_) {
     started_ = true;
     t_cur_ = t_flush_ = t_acc_ = first_t_ = last_t_ = t_s;

@@ -29,6 +29,7 @@
 #include <algorithm>
 #include <chrono>
 #include <limits>
+#include <map>
 #include <optional>
 #include <cmath>
 #include <filesystem>
@@ -730,7 +731,15 @@ int runCalibrate(int argc, char** argv) {
       jh["relative_to_head"] = rc.heads[0].id;
       jh["frame"] = "each head's own frame Si (x, y, z), as error_angles_arcsec";
       raw_text += "  relative alignment's orbit harmonics (rotation of the mounting in its own frame x, y, z; arcsec +- sigma):\n";
-      const Eigen::Index hb = static_cast<Eigen::Index>(3 * rc.heads.size()) + (ro.bias ? 3 : 0) + (ro.scale ? 3 : 0) + (ro.time_offset ? 1 : 0);
+      // The terms' columns by the names the estimate gives them (raw_bound.cc result()), not by a copy of
+      // its column layout; est.harmonics holds the same terms in the same order from the first one.
+      std::map<std::string, Eigen::Index> col;
+      for (std::size_t q = 0; q < est.bound.names.size(); ++q) col[est.bound.names[q]] = static_cast<Eigen::Index>(q);
+      static const char* kAxName[3] = {"e1", "e2", "b"};
+      const auto colOf = [&](std::size_t i, int ax, int k, const char* cs) {
+        return col.at("head" + std::to_string(rc.heads[i].id) + "." + kAxName[ax] + ".h" + std::to_string(k) + cs);
+      };
+      const Eigen::Index hb = colOf(1, 0, 1, "cos");
       for (std::size_t i = 1; i < rc.heads.size(); ++i) {
         const Mat3& A = rc.heads[i].axes_Si;
         report::Json hh;
@@ -746,12 +755,11 @@ int runCalibrate(int argc, char** argv) {
             Mat3 C;
             Eigen::Index idx[3];
             for (int ax = 0; ax < 3; ++ax) {
-              idx[ax] = static_cast<Eigen::Index>(((i - 1) * 3 + static_cast<std::size_t>(ax)) * 2 * static_cast<std::size_t>(K) +
-                                                  2 * static_cast<std::size_t>(k - 1) + static_cast<std::size_t>(c));
-              hv(ax) = est.harmonics(idx[ax]);
+              idx[ax] = colOf(i, ax, k, cs);
+              hv(ax) = est.harmonics(idx[ax] - hb);
             }
             for (int a = 0; a < 3; ++a)
-              for (int b2 = 0; b2 < 3; ++b2) C(a, b2) = est.bound.covariance(hb + idx[a], hb + idx[b2]);
+              for (int b2 = 0; b2 < 3; ++b2) C(a, b2) = est.bound.covariance(idx[a], idx[b2]);
             const Vec3 v = -A.transpose() * hv * kArcsecPerRad;
             const Mat3 Cs = A.transpose() * C * A;
             line += " " + std::string(cs) + " (";

@@ -281,9 +281,9 @@ class RawBound {
   /// previous pass.
   void enableData(const std::vector<Mat3>& C_Si_B_applied, const Vec3& bias, const Vec3& scale);
   void accelData(double t_s, const Vec3& z_A, const Vec3& jerk_A);
-  /// Head `index`'s mounting at t as this pass applies it: the applied constant with, for heads 2..n,
-  /// the orbit harmonics of the passes before (harm_applied_).
-  Mat3 appliedMounting(std::size_t index, double t_s) const;
+  /// Head `index`'s mounting as this pass applies it at the time setHarmonics was last given: the
+  /// applied constant with, for heads 2..n, the orbit harmonics of the passes before (harm_applied_).
+  Mat3 appliedMounting(std::size_t index) const;
   void headData(double t_s, std::size_t index, const Quat& q_I_Si);
   Eigen::VectorXd solveParameters(const RawBoundResult& r) const;
   /// Data mode, before result(): the information and sum u^T v / F from the variance groups.
