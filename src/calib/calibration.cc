@@ -103,6 +103,26 @@ bool CalibrationFeed::configure(const core::PipelineConfig& cfg, const SpanOptio
   return true;
 }
 
+void CalibrationFeed::restart(TimeUs keep_orbit_from) {
+  if (!configured_) return;
+  std::string error;
+  builder_ = SpanBuilder();
+  builder_.configure(cfg_, so_, &error);  // accepted at configure(): the same configuration again
+  if (thermal_) {
+    thermal_ = std::make_unique<ThermalCollector>();
+    thermal_->configure(cfg_.heads, ThermalFitConfig{}, &error);
+  }
+  finished_ = false;
+  raw_.events.clear();  // the capacity stays
+  sum_A_ = Vec3::Zero();
+  n_acc_ = aberrated_ = 0;
+  orbit_line_ = OrbitLine{};
+  have_t0_ = false;
+  orbit_v_.erase(orbit_v_.begin(), std::find_if(orbit_v_.begin(), orbit_v_.end(),
+                                                [keep_orbit_from](const OrbitPoint& x) { return x.t >= keep_orbit_from; }));
+  orbit_samples_ = orbit_v_.size();
+}
+
 double CalibrationFeed::rawTime(TimeUs t) {
   if (!have_t0_) {
     t0_ = t;

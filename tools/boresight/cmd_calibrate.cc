@@ -7,6 +7,7 @@
 #include <boresight/calib/solver.h>
 #include <boresight/calib/span_builder.h>
 #include <boresight/calib/thermal_fit.h>
+#include <boresight/calib/windows.h>
 #include <boresight/core/rotation.h>
 #include <boresight/model/orbit_context.h>
 #include <boresight/model/parallel.h>
@@ -18,6 +19,7 @@
 #include <boresight/io/overlay_yaml.h>
 #include <boresight/io/time_format.h>
 #include <boresight/report/calibration.h>
+#include <boresight/report/svg_plot.h>
 #include <boresight/stream/engine.h>
 #include <boresight/stream/replay.h>
 
@@ -51,7 +53,7 @@ const char* kUsage =
     "                           [--method crn|attitude] [--time-offset|--no-time-offset] [--huber S] [--no-whiten] [--decimation S] [--max-observations N]\n"
     "                           [--crn-bandwidth HZ --crn-length S] [--moments]\n"
     "                           [--unobservable-sigma ARCSEC] [--plan-excitation RADPS2] [--plan-sigma ARCSEC]\n"
-    "                           [--lookahead S] [--strict]\n"
+    "                           [--lookahead S] [--strict] [--window S]\n"
     "\n"
     "Method A: estimates how each star-camera head is really mounted from each head's angular\n"
     "acceleration (the CRN differentiator on that head's attitude, in its own frame) against the\n"
@@ -148,6 +150,16 @@ const char* kUsage =
     "                           plus harmonics 1..K of the argument of latitude (the thermal motion, so\n"
     "                           that the relative sigmas include it; default 2, 0: constant), when an\n"
     "                           orbit among the inputs covers at least one revolution of the span\n"
+    "  --window S               with --method attitude: calibrate window after window of S seconds of data\n"
+    "                           (whole multiples of S after 00:00 GPS: 86400 gives GPS days, as the daily\n"
+    "                           Level-1 files), each window on its own (its own trajectory, bias, scale, time\n"
+    "                           offset and noise fit; memory: one window's, whatever the record's length),\n"
+    "                           and the windows combined: JSON windows[] (the time series) and joint (the\n"
+    "                           information-weighted mean, the windows' scatter about it - chi-square per\n"
+    "                           degree of freedom, and per head axis the spread between windows beyond their\n"
+    "                           sigmas, tau, with its 95 % interval - and the sigma with that spread, which\n"
+    "                           is the one written: --write-model, --write-qsa1b take the joint). The report\n"
+    "                           plots each head's windows against time\n"
     "  --raw-noise MODE         fit (default): every head axis's noise model fitted to the second pass's\n"
     "                           data less the trajectory's prediction (white, + Gauss-Markov, + power\n"
     "                           law, by BIC) and used in the third, with the slow parts of the models in\n"
@@ -357,6 +369,226 @@ model::Overlay resultOverlay(const calib::SolveResult& r, const io::PlatformConf
   return o;
 }
 
+/// The engine's inputs window after window (--window): as SpanFeed, into calib::WindowedCalibration.
+class WindowFeed final : public stream::InputObserver {
+ public:
+  explicit WindowFeed(calib::WindowedCalibration& f) : f_(f) {}
+  void onHeads(const core::HeadEpoch& e, core::Status) override { f_.pushHeads(e); }
+  void onAcc(TimeUs t, const Vec3& a_A, core::Status st) override {
+    if (core::accepted(st)) f_.pushAcc(t, a_A);
+  }
+  bool wantsOrbit() const override { return f_.wantsOrbit(); }
+  void onOrbit(const model::OrbitSample& o) override { f_.pushOrbit(o); }
+  void onEnd() override { f_.finish(); }
+
+ private:
+  calib::WindowedCalibration& f_;
+};
+
+/// Where --window writes, and what it says about the model in use.
+struct WindowOutputs {
+  const io::PlatformConfig& pc;
+  std::string config, json_path, yaml_path, report_dir, write_model, write_qsa1b;
+  char satellite = 'C';
+  double window_s = 0, unobs_arcsec = 0;
+  nlohmann::ordered_json model_in_use;
+  std::vector<std::string> model_lines;
+};
+
+/// A value in arcsec, null when not finite.
+report::Json arcsecOrNull(double rad) { return std::isfinite(rad) ? report::Json(rad * kArcsecPerRad) : report::Json(nullptr); }
+
+/// --window: the windows' time series, their joint solution, the report and the written mountings.
+int writeWindows(const calib::WindowedCalibration& wc, const WindowOutputs& o, Stages& stages) {
+  const std::vector<calib::WindowSolution>& ws = wc.windows();
+  const auto& heads = o.pc.pipeline.heads;
+  const auto n = static_cast<std::size_t>(heads.n_heads);
+  const calib::JointMountings jm = calib::combineWindows(ws, n, o.unobs_arcsec * kRadPerArcsec);
+  stages.mark("joint");
+  if (jm.windows == 0) {
+    std::string why;
+    for (const auto& w : ws) why += "\n  " + io::formatTime(w.from) + ": " + w.note;
+    return fail("no window was estimated:" + (why.empty() ? std::string(" no data") : why));
+  }
+  // The written sigma: the joint's, with the spread between windows where the windows show one.
+  std::vector<Vec3> sigma_out(n, Vec3::Constant(std::numeric_limits<double>::quiet_NaN()));
+  for (std::size_t i = 0; i < n; ++i)
+    for (int a = 0; a < 3; ++a)
+      if (std::isfinite(jm.sigma_Si[i](a)))
+        sigma_out[i](a) = std::isfinite(jm.sigma_with_tau[i](a)) ? std::max(jm.sigma_Si[i](a), jm.sigma_with_tau[i](a)) : jm.sigma_Si[i](a);
+
+  report::Json j;
+  j["method"] = "attitude domain, window after window (calib/windows.h): each window its own estimate, the windows combined";
+  j["config"] = o.config;
+  j["window_s"] = o.window_s;
+  j["model_in_use"] = o.model_in_use;
+  j["peak_raw_samples_per_window"] = wc.peakRawSamples();
+  report::Json jw = report::Json::array();
+  for (const calib::WindowSolution& w : ws) {
+    report::Json x;
+    x["from"] = io::formatTime(w.from);
+    x["to"] = io::formatTime(w.to);
+    x["first_epoch"] = io::formatTime(w.first);
+    x["last_epoch"] = io::formatTime(w.last);
+    x["head_epochs"] = w.head_epochs;
+    x["accelerometer_samples"] = w.acc_samples;
+    x["estimated"] = w.estimated;
+    x["seconds"] = w.seconds;
+    if (!w.estimated) x["note"] = w.note;
+    if (w.estimated) {
+      x["chi2_per_observation"] = w.chi2_per_obs;
+      x["acc_bias_rad_s2"] = {w.bias_rad_s2.x(), w.bias_rad_s2.y(), w.bias_rad_s2.z()};
+      x["time_offset_s"] = w.time_offset_s ? report::Json(*w.time_offset_s) : report::Json(nullptr);
+      x["time_offset_sigma_s"] = w.time_offset_sigma_s ? report::Json(*w.time_offset_sigma_s) : report::Json(nullptr);
+      for (std::size_t i = 0; i < n; ++i) {
+        report::Json h;
+        h["id"] = heads.head[i].id;
+        for (int a = 0; a < 3; ++a) {
+          h["error_angles_arcsec"].push_back(w.mountings.r_Si[i](a) * kArcsecPerRad);
+          h["sigma_arcsec"].push_back(arcsecOrNull(w.mountings.sigma_Si[i](a)));
+        }
+        x["heads"].push_back(h);
+      }
+    }
+    jw.push_back(x);
+  }
+  j["windows"] = jw;
+  report::Json jj;
+  jj["windows_estimated"] = jm.windows;
+  jj["chi2"] = jm.chi2;
+  jj["dof"] = jm.dof;
+  jj["chi2_per_dof"] = jm.dof > 0 ? report::Json(jm.chi2 / jm.dof) : report::Json(nullptr);
+  std::string text = "\njoint of " + std::to_string(jm.windows) + " estimated windows (of " + std::to_string(ws.size()) +
+                     "): the windows' scatter about it chi2/dof " + (jm.dof > 0 ? fmt("%.2f", jm.chi2 / jm.dof) : std::string("-")) +
+                     " (" + fmt("%.0f", jm.dof) + " dof)\n" +
+                     "  head  axis   error [arcsec]   sigma [arcsec]   windows independent   chi2/dof   spread between windows tau [95 %]\n";
+  for (std::size_t i = 0; i < n; ++i) {
+    report::Json h;
+    h["id"] = heads.head[i].id;
+    for (int a = 0; a < 3; ++a) {
+      const bool det = std::isfinite(jm.sigma_Si[i](a));
+      h["error_angles_arcsec"].push_back(jm.r_Si[i](a) * kArcsecPerRad);
+      h["sigma_arcsec"].push_back(det ? arcsecOrNull(sigma_out[i](a)) : report::Json(nullptr));
+      h["sigma_windows_independent_arcsec"].push_back(arcsecOrNull(jm.sigma_Si[i](a)));
+      h["chi2_per_dof"].push_back(det && std::isfinite(jm.axis_chi2_per_dof[i](a)) ? report::Json(jm.axis_chi2_per_dof[i](a)) : report::Json(nullptr));
+      h["tau_arcsec"].push_back(det ? arcsecOrNull(jm.tau[i](a)) : report::Json(nullptr));
+      h["tau_95_arcsec"].push_back(det && std::isfinite(jm.tau[i](a)) ? report::Json({jm.tau_lo[i](a) * kArcsecPerRad, jm.tau_hi[i](a) * kArcsecPerRad})
+                                                                      : report::Json(nullptr));
+      h["windows"].push_back(jm.axis_windows[i](a));
+      text += "  " + fmt("%4.0f", heads.head[i].id) + "  " + std::string(1, "xyz"[a]) + "     " + fmt("%14.2f", jm.r_Si[i](a) * kArcsecPerRad) +
+              "   " +
+              (det ? fmt("%14.2f", sigma_out[i](a) * kArcsecPerRad) + "   " + fmt("%19.2f", jm.sigma_Si[i](a) * kArcsecPerRad) + "   " +
+                         (std::isfinite(jm.tau[i](a)) ? fmt("%8.2f", jm.axis_chi2_per_dof[i](a)) + "   " + fmt("%.2f", jm.tau[i](a) * kArcsecPerRad) +
+                                                            " [" + fmt("%.2f", jm.tau_lo[i](a) * kArcsecPerRad) + ", " +
+                                                            fmt("%.2f", jm.tau_hi[i](a) * kArcsecPerRad) + "]"
+                                                      : std::string("       -   (one window)"))
+                   : std::string("  not determined")) +
+              "\n";
+    }
+    jj["heads"].push_back(h);
+  }
+  {
+    report::Json cov = report::Json::array();
+    const Eigen::Index n3 = jm.covariance_Si.rows();
+    for (Eigen::Index a = 0; a < n3; ++a) {
+      report::Json row = report::Json::array();
+      for (Eigen::Index b = 0; b < n3; ++b) {
+        const bool d = std::isfinite(jm.sigma_Si[static_cast<std::size_t>(a / 3)](a % 3)) && std::isfinite(jm.sigma_Si[static_cast<std::size_t>(b / 3)](b % 3));
+        row.push_back(d ? report::Json(jm.covariance_Si(a, b) * kArcsecPerRad * kArcsecPerRad) : report::Json(nullptr));
+      }
+      cov.push_back(row);
+    }
+    jj["covariance_windows_independent_arcsec2"] = cov;
+  }
+  jj["sigma"] = "sigma_arcsec: the larger of the windows-independent sigma and the random-effects sigma with the spread tau "
+                "between windows (Paule-Mandel, 95 % Q-profile interval): the mounting over the record when it moves by tau "
+                "from window to window";
+  j["joint"] = jj;
+  const std::string source = "joint of the windows (information-weighted mean; sigma with the spread between windows)";
+  j["mountings_written_from"] = source;
+  std::string err;
+  if (!writeText(o.json_path, j.dump(2) + "\n", &err)) return fail(err);
+  if (!o.yaml_path.empty() && !writeText(o.yaml_path, report::toYaml(j), &err)) return fail(err);
+
+  TimeUs t0 = 0, t1 = 0;
+  bool any = false;
+  for (const auto& w : ws)
+    if (w.head_epochs > 0) {
+      if (!any) t0 = w.first;
+      t1 = w.last;
+      any = true;
+    }
+  if (!o.report_dir.empty()) {
+    std::error_code ec;
+    std::filesystem::create_directories(o.report_dir, ec);
+    std::string md = "# Method A, window after window\n\n" + std::to_string(ws.size()) + " windows of " + fmt("%g", o.window_s) +
+                     " s from " + io::formatTime(ws.front().from) + ", " + std::to_string(jm.windows) +
+                     " estimated. Each head's plot shows every estimated window's error angles less the joint (1-sigma bars) "
+                     "and the joint's sigma with the spread between windows (lines): a window outside the band, or a trend, "
+                     "is the mounting moving.\n\n```\n" + text + "```\n\n";
+    for (std::size_t i = 0; i < n; ++i) {
+      report::Plot p;
+      p.title = "head " + std::to_string(heads.head[i].id) + ": window estimates less the joint";
+      p.xlabel = "window middle, hours after " + io::formatTime(ws.front().from);
+      p.ylabel = "arcsec";
+      double xmin = 1e300, xmax = -1e300;
+      for (int a = 0; a < 3; ++a) {
+        report::Series sr;
+        sr.name = std::string(1, "xyz"[a]);
+        sr.style = report::Series::Style::kPoints;
+        sr.dx = (a - 1) * 0.02 * o.window_s / 3600.0;
+        for (const auto& w : ws) {
+          if (!w.estimated || !std::isfinite(w.mountings.sigma_Si[i](a))) continue;
+          const double x = toSeconds(w.from + (w.to - w.from) / 2 - ws.front().from) / 3600.0;
+          sr.x.push_back(x);
+          sr.y.push_back((w.mountings.r_Si[i](a) - jm.r_Si[i](a)) * kArcsecPerRad);
+          sr.yerr.push_back(w.mountings.sigma_Si[i](a) * kArcsecPerRad);
+          xmin = std::min(xmin, x);
+          xmax = std::max(xmax, x);
+        }
+        p.series.push_back(sr);
+      }
+      for (int a = 0; a < 3; ++a) {
+        if (!(xmax >= xmin) || !std::isfinite(sigma_out[i](a))) continue;
+        const double sg = sigma_out[i](a) * kArcsecPerRad;
+        report::Series band;
+        band.name = std::string("joint sigma ") + "xyz"[a];
+        band.x = {xmin, xmax, std::nan(""), xmin, xmax};
+        band.y = {sg, sg, std::nan(""), -sg, -sg};
+        p.series.push_back(band);
+      }
+      const std::string f = "head" + std::to_string(heads.head[i].id) + "_windows.svg";
+      if (!report::writeSvgPlot(o.report_dir + "/" + f, p, &err)) return fail(err);
+      md += "![head " + std::to_string(heads.head[i].id) + "](" + f + ")\n\n";
+    }
+    md += "## Windows\n\n| from | head epochs | estimate |\n|---|---|---|\n";
+    for (const auto& w : ws)
+      md += "| " + io::formatTime(w.from) + " | " + std::to_string(w.head_epochs) + " | " +
+            (w.estimated ? "chi2 per observation " + fmt("%.3f", w.chi2_per_obs) : "not estimated: " + w.note) + " |\n";
+    md += "\n## Model in use\n\n```\n";
+    for (const auto& l : o.model_lines) md += l + "\n";
+    md += "```\n";
+    if (!io::writeFileAtomic(o.report_dir + "/report.md", md, &err)) return fail(err);
+  }
+  MountingResult mr;
+  mr.attitude = true;  // the windows' own accelerometer terms and time offsets are not written: they change by window
+  mr.source = source;
+  mr.r_Si = jm.r_Si;
+  mr.sigma_Si = sigma_out;
+  if (!o.write_model.empty()) {
+    const model::Overlay m = resultOverlay(calib::SolveResult{}, o.pc, nullptr, t0, t1, o.config, mr);
+    if (!io::writeOverlay(o.write_model, m, &err)) return fail(err);
+  }
+  if (!o.write_qsa1b.empty() && !writeMountingsQsa1b(o.write_qsa1b, o.pc, mr, t0, o.satellite, &err)) return fail(err);
+  stages.mark("output");
+  std::printf("%s", text.c_str());
+  std::printf("stages: %s\n", stages.text.c_str());
+  std::printf("-> %s%s%s%s%s\n", o.json_path.c_str(), o.yaml_path.empty() ? "" : ", ", o.yaml_path.c_str(),
+              o.report_dir.empty() ? "" : ", ", o.report_dir.empty() ? "" : (o.report_dir + "/report.md").c_str());
+  if (!o.write_model.empty() || !o.write_qsa1b.empty()) std::printf("   mountings written from the %s\n", source.c_str());
+  return 0;
+}
+
 }  // namespace
 
 int runCalibrate(int argc, char** argv) {
@@ -371,6 +603,7 @@ int runCalibrate(int argc, char** argv) {
   std::size_t max_obs = 0;
   double crn_bw = 0.0, crn_len = 0.0;
   int raw_harmonics = 2;
+  double window_s = 0.0;
   app.add_option("--config", config)->required();
   app.add_option("--json", json_path)->required();
   app.add_option("--yaml", yaml_path);
@@ -402,6 +635,7 @@ int runCalibrate(int argc, char** argv) {
   app.add_flag("--raw", raw);
   app.add_option("--raw-noise", raw_noise)->check(CLI::IsMember({"fit", "in-use"}));
   app.add_option("--raw-harmonics", raw_harmonics)->check(CLI::Range(0, 8));
+  app.add_option("--window", window_s)->check(finiteRange(60.0, 1e9));
   app.add_option("inputs", files)->required();
   if (int st = parseCommandLine(app, argc, argv, "calibrate", kUsage); st >= 0) return st;
   for (const auto& [yes, no, what] : {std::make_tuple(time_offset, no_time_offset, "--time-offset and --no-time-offset"),
@@ -492,18 +726,48 @@ int runCalibrate(int argc, char** argv) {
   spo.crn_bandwidth_hz = crn_bw;
   spo.crn_length_s = crn_len;
   spo.keep_observations = !moments;
+  // The run's options (calib::runCalibration, as the node's worker): the solve, the thermal fit and, for a
+  // refused span, what would be needed.
+  calib::RunOptions ro_run;
+  ro_run.solve = so;
+  ro_run.plan_excitation_radps2 = plan_exc;
+  ro_run.plan_sigma_arcsec = plan_sigma;
+  ro_run.plan_excitation_name = "--plan-excitation";
+  ro_run.raw = raw_cfg;  // --raw: the attitude-domain estimate from the raw samples after the CRN solve
+  ro_run.raw_harmonics = raw_harmonics;
+  // --window: window after window (calib/windows.h), the feed emptied at every window's end.
+  calib::WindowedCalibration windowed;
+  if (window_s > 0) {
+    if (!raw) {
+      std::fprintf(stderr, "boresight calibrate: --window needs --method attitude (each window's estimate is the attitude-domain "
+                           "one)\n(boresight calibrate --help lists the options)\n");
+      return 2;
+    }
+    if (!windowed.configure(pc.pipeline, spo, window_s, ro_run, raw_unobs * kRadPerArcsec, &err)) return fail(err);
+    windowed.onWindow([&](const calib::WindowSolution& w) {
+      std::printf("window %s .. %s: %llu head epochs, %llu accelerometer samples: %s (%.1f s)\n", io::formatTime(w.from).c_str(),
+                  io::formatTime(w.to).c_str(), static_cast<unsigned long long>(w.head_epochs),
+                  static_cast<unsigned long long>(w.acc_samples),
+                  w.estimated ? ("estimated, chi2 per observation " + fmt("%.3f", w.chi2_per_obs)).c_str() : w.note.c_str(), w.seconds);
+      std::fflush(stdout);
+    });
+  }
   // The thermal harmonic fit of the heads' relative deformation needs the argument of latitude: only
   // with an orbit among the inputs (GNI1B / GNV1B files, or an LCM log's ORBIT messages), read in the
   // same stream as the heads.
-  bool with_thermal = (!in.orbit.empty() || !in.lcm.empty()) && pc.pipeline.heads.n_heads >= 2;
+  bool with_thermal = window_s <= 0 && (!in.orbit.empty() || !in.lcm.empty()) && pc.pipeline.heads.n_heads >= 2;
   calib::CalibrationFeed cal;
-  if (!cal.configure(pc.pipeline, spo, with_thermal, &err, raw)) return fail(err);
-  for (const auto& f : in.orbit) std::printf("%s: orbit for the thermal harmonic fit\n", f.c_str());
+  if (window_s <= 0 && !cal.configure(pc.pipeline, spo, with_thermal, &err, raw)) return fail(err);
+  for (const auto& f : in.orbit)
+    std::printf("%s: orbit for the %s\n", f.c_str(), window_s > 0 ? "stars' aberration and the orbit harmonics" : "thermal harmonic fit");
   SpanFeed feed(cal);
-  engine.addObserver(&feed);  // before the sources: the orbit files are opened for an observer that wants them
+  WindowFeed wfeed(windowed);
+  // Before the sources: the orbit files are opened for an observer that wants them.
+  if (window_s > 0) engine.addObserver(&wfeed);
+  else engine.addObserver(&feed);
   if (!stream::startReplay(rp, &err)) return fail(err);
   if (engine.run() != stream::Engine::Result::kDone) return fail(engine.error());
-  stages.mark("replay and span");
+  stages.mark(window_s > 0 ? "replay and windows" : "replay and span");
   printSourceCounters(engine);
   const core::Health h = engine.health();
   printCoreHealth(h);
@@ -522,6 +786,11 @@ int runCalibrate(int argc, char** argv) {
                 " head samples carry an id that is not in the configuration (" + config + ": heads " + ids +
                 "); fix the configuration or the inputs");
   }
+  if (window_s > 0) {
+    const WindowOutputs wo{pc,           config,    json_path, yaml_path, report_dir, write_model, write_qsa1b, satellite[0],
+                           window_s,     raw_unobs, modelInUseJson(pc, ovu), io::modelInUseLines(pc, ovu)};
+    return writeWindows(windowed, wo, stages);
+  }
   const calib::CalibrationSpan& span = cal.span();
   const double span_s = toSeconds(engine.lastEpoch() - engine.firstEpoch());
   std::printf("span: %.1f s of head data, %llu head epochs, %llu accelerometer samples -> %zu observations\n",
@@ -530,13 +799,6 @@ int runCalibrate(int argc, char** argv) {
 
   // The solve, the thermal fit and, for a refused span, what would be needed (calib::runCalibration,
   // as the node's worker).
-  calib::RunOptions ro_run;
-  ro_run.solve = so;
-  ro_run.plan_excitation_radps2 = plan_exc;
-  ro_run.plan_sigma_arcsec = plan_sigma;
-  ro_run.plan_excitation_name = "--plan-excitation";
-  ro_run.raw = raw_cfg;  // --raw: the attitude-domain estimate from the raw samples after the CRN solve
-  ro_run.raw_harmonics = raw_harmonics;
   calib::CalibrationRun run = calib::runCalibration(cal, ro_run);
   stages.mark(raw && run.raw_estimated ? "solve and attitude-domain estimate" : "solve");
   // A span the CRN solver refuses still has the attitude-domain estimate with --method attitude: the

@@ -83,6 +83,11 @@ class CalibrationFeed {
   std::uint64_t orbitSamples() const { return orbit_samples_; }
   /// End of data (runCalibration calls it when the caller has not).
   void finish();
+  /// The next window of a record (WindowedCalibration): the configuration kept, the data dropped - the
+  /// raw samples' buffer keeps its capacity, so a record of many windows holds no more than its longest
+  /// one - and the orbit samples from `keep_orbit_from` on kept (the segment across the new window's
+  /// start, which its first head samples' observer velocity needs).
+  void restart(TimeUs keep_orbit_from);
   bool finished() const { return finished_; }
 
   const CalibrationSpan& span() const { return builder_.span(); }

@@ -1,0 +1,208 @@
+// Method A over many windows (calib/windows.h): the windows' combination against closed forms, the
+// spread between windows against simulated windows with a known spread, and the windows' calendar.
+// (The windows' estimates themselves, and their memory, are tested end to end in
+// test/tools/calibrate_windows_test.cc.)
+#include <boresight/calib/windows.h>
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+
+#include <cmath>
+#include <cstdio>
+#include <random>
+
+namespace boresight::calib {
+namespace {
+
+/// A window with one head: error angles r, covariance C (rad), every axis determined unless its sigma
+/// is set NaN by `undetermined`.
+WindowSolution window1(const Vec3& r, const Mat3& C, int undetermined = -1) {
+  WindowSolution w;
+  w.estimated = true;
+  w.mountings.r_Si = {r};
+  w.mountings.covariance_Si = C;
+  Vec3 s = C.diagonal().cwiseSqrt();
+  if (undetermined >= 0) s(undetermined) = std::nan("");
+  w.mountings.sigma_Si = {s};
+  return w;
+}
+
+TEST(CombineWindows, TheInformationWeightedMeanOfCorrelatedWindows) {
+  // Two windows with full covariances: r = (I1 + I2)^-1 (I1 r1 + I2 r2), C = (I1 + I2)^-1, and the
+  // scatter chi2 = sum (r_w - r)^T I_w (r_w - r) on 3 + 3 - 3 = 3 degrees of freedom.
+  Mat3 A;
+  A << 4, 1, 0.5, 1, 9, -2, 0.5, -2, 16;
+  Mat3 B;
+  B << 25, -3, 1, -3, 4, 0.5, 1, 0.5, 9;
+  const Vec3 r1(1, -2, 3), r2(4, 0, -1);
+  const JointMountings j = combineWindows({window1(r1, A), window1(r2, B)}, 1, 1e9);
+  const Mat3 I1 = A.inverse(), I2 = B.inverse();
+  const Mat3 C = (I1 + I2).inverse();
+  const Vec3 r = C * (I1 * r1 + I2 * r2);
+  EXPECT_EQ(j.windows, 2u);
+  EXPECT_LT((j.r_Si[0] - r).norm(), 1e-12);
+  EXPECT_LT((j.covariance_Si - C).norm(), 1e-12);
+  for (int a = 0; a < 3; ++a) EXPECT_NEAR(j.sigma_Si[0](a), std::sqrt(C(a, a)), 1e-12);
+  EXPECT_NEAR(j.chi2, (r1 - r).dot(I1 * (r1 - r)) + (r2 - r).dot(I2 * (r2 - r)), 1e-10);
+  EXPECT_NEAR(j.dof, 3.0, 1e-12);
+  // Per axis, Cochran's Q: each window about the axis's own weighted mean over its variance; two
+  // windows, one degree of freedom: (r1 - r2)^2 / (s1^2 + s2^2).
+  for (int a = 0; a < 3; ++a) {
+    EXPECT_NEAR(j.axis_chi2_per_dof[0](a), std::pow(r1(a) - r2(a), 2) / (A(a, a) + B(a, a)), 1e-10) << a;
+    EXPECT_EQ(j.axis_windows[0](a), 2.0);
+  }
+}
+
+TEST(CombineWindows, AnAxisAWindowDoesNotDetermineTakesNothingFromIt) {
+  // Window 1 does not determine z (sigma NaN): the joint z is window 2's, with window 2's sigma; x and y
+  // are the weighted means; a window that was not estimated is skipped.
+  const Mat3 A = Vec3(1, 4, 9).asDiagonal();
+  const Mat3 B = Vec3(4, 4, 16).asDiagonal();
+  WindowSolution refused;
+  refused.note = "no body direction";
+  const JointMountings j = combineWindows({window1(Vec3(1, 1, 100), A, 2), refused, window1(Vec3(3, 5, 7), B)}, 1, 1e9);
+  EXPECT_EQ(j.windows, 2u);
+  EXPECT_NEAR(j.r_Si[0](0), (1.0 / 1 + 3.0 / 4) / (1.0 / 1 + 1.0 / 4), 1e-12);
+  EXPECT_NEAR(j.r_Si[0](1), 3.0, 1e-12);
+  EXPECT_NEAR(j.r_Si[0](2), 7.0, 1e-12);
+  EXPECT_NEAR(j.sigma_Si[0](2), 4.0, 1e-12);
+  EXPECT_EQ(j.axis_windows[0](2), 1.0);
+  EXPECT_TRUE(std::isnan(j.tau[0](2)));  // one window: no spread to measure
+  // Nothing determines an axis: not determined in the joint either.
+  const JointMountings k = combineWindows({window1(Vec3(1, 1, 1), A, 2), window1(Vec3(1, 1, 1), B, 2)}, 1, 1e9);
+  EXPECT_TRUE(std::isnan(k.sigma_Si[0](2)));
+  EXPECT_TRUE(std::isfinite(k.sigma_Si[0](0)));
+  // A sigma above the threshold is not determined.
+  const JointMountings t = combineWindows({window1(Vec3(1, 1, 1), A)}, 1, 2.5);
+  EXPECT_TRUE(std::isfinite(t.sigma_Si[0](1)));  // 2 < 2.5
+  EXPECT_TRUE(std::isnan(t.sigma_Si[0](2)));     // 3 > 2.5
+}
+
+TEST(CombineWindows, AHeldCommonDirectionCarriesNoInformation) {
+  // Two heads whose window covariance is singular along a common rotation (both heads' x together, as a
+  // held body direction leaves it): that direction comes from the other window alone.
+  Eigen::MatrixXd C1 = Eigen::MatrixXd::Identity(6, 6);
+  Eigen::VectorXd u = Eigen::VectorXd::Zero(6);
+  u(0) = u(3) = std::sqrt(0.5);
+  C1 -= u * u.transpose();  // no variance along u: the pseudo-inverse gives no information there
+  WindowSolution w1, w2;
+  w1.estimated = w2.estimated = true;
+  w1.mountings.covariance_Si = C1;
+  w2.mountings.covariance_Si = 4.0 * Eigen::MatrixXd::Identity(6, 6);
+  w1.mountings.r_Si = {Vec3(10, 0, 0), Vec3(10, 0, 0)};  // 10 along u (held: any value)
+  w2.mountings.r_Si = {Vec3(2, 0, 0), Vec3(2, 0, 0)};
+  for (auto* w : {&w1, &w2}) w->mountings.sigma_Si = {w->mountings.covariance_Si.diagonal().head<3>().cwiseSqrt(),
+                                                       w->mountings.covariance_Si.diagonal().tail<3>().cwiseSqrt()};
+  const JointMountings j = combineWindows({w1, w2}, 2, 1e9);
+  EXPECT_NEAR(j.r_Si[0](0), 2.0, 1e-9);
+  EXPECT_NEAR(j.r_Si[1](0), 2.0, 1e-9);
+  EXPECT_NEAR(j.dof, 5.0 + 6.0 - 6.0, 1e-12);
+}
+
+TEST(CombineWindows, TheMountingsInformationHasTheOtherParametersMarginalisedOut) {
+  // One head whose head axes are turned against Si, and one other parameter correlated with the angles:
+  // the information about the angles is the Schur complement, in Si.
+  RawEstimate est;
+  Eigen::MatrixXd I(4, 4);
+  I << 10, 1, 0, 2,  //
+      1, 20, 0, 3,   //
+      0, 0, 30, 0,   //
+      2, 3, 0, 5;
+  est.bound.information = I;
+  RawBoundConfig cfg;
+  cfg.heads.resize(1);
+  cfg.heads[0].axes_Si = Eigen::AngleAxisd(0.7, Vec3(1, 2, 3).normalized()).toRotationMatrix();  // rows: the head axes in Si
+  const Eigen::MatrixXd M = I.topLeftCorner(3, 3) - I.topRightCorner(3, 1) * (1.0 / 5.0) * I.bottomLeftCorner(1, 3);
+  // Angles: head axes = axes_Si Si, so the information in Si is axes_Si^T M axes_Si.
+  const Eigen::MatrixXd want = cfg.heads[0].axes_Si.transpose() * M * cfg.heads[0].axes_Si;
+  EXPECT_LT((mountingInformation(est, cfg) - want).norm(), 1e-12);
+  // The marginal information's inverse is the covariance's block, as it must be.
+  const Eigen::MatrixXd C = I.inverse();
+  EXPECT_LT((M.inverse() - C.topLeftCorner(3, 3)).norm(), 1e-12);
+}
+
+TEST(RandomEffects, TauInClosedFormAndZeroWhenTheSigmasExplainTheScatter) {
+  // Two values 0 and d with equal sigma s: the scatter about the mean is d^2 / (2 (s^2 + tau^2)), so
+  // tau^2 = d^2 / (2 q) - s^2 for the target q.
+  const double d = 10, s = 2;
+  for (double q : {1.0, 0.2, 3.0}) {
+    const double want = d * d / (2 * q) - s * s;
+    EXPECT_NEAR(randomEffectsTau({0, d}, {s, s}, q), want > 0 ? std::sqrt(want) : 0.0, 1e-9) << q;
+  }
+  EXPECT_EQ(randomEffectsTau({0, 1}, {2, 2}, 1.0), 0.0);  // 1/8 below 1
+  EXPECT_TRUE(std::isnan(randomEffectsTau({1}, {1}, 1.0)));
+}
+
+TEST(RandomEffects, TheSpreadBetweenWindowsIsFoundAndItsIntervalCoversIt) {
+  // 400 records of 10 windows each, the windows' sigmas from 1 to 3, the mounting moving between windows
+  // by tau (normal, independent): the 95 % interval covers the true tau in 95 % of the records (within the
+  // binomial spread of 400: 90-99 %), the random-effects sigma is the honest one for the joint (its
+  // normalised error is Student-t with 9 degrees of freedom, RMS sqrt(9 / 7) = 1.13, where tau is
+  // estimated; 1 where it is 0) and the windows-independent sigma is not (too small by far at tau = 2).
+  // Without a spread, the scatter's chi-square per degree of freedom averages 1 and the two agree.
+  std::mt19937_64 rng(42);
+  std::normal_distribution<double> N(0, 1);
+  std::uniform_real_distribution<double> U(1, 3);
+  for (const double tau : {0.0, 2.0}) {
+    int covered = 0;
+    double z2_re = 0, z2_ind = 0, chi2 = 0, tau_sum = 0;
+    const int records = 400, windows = 10;
+    for (int k = 0; k < records; ++k) {
+      std::vector<WindowSolution> ws;
+      for (int w = 0; w < windows; ++w) {
+        const double s = U(rng);
+        const Vec3 r(tau * N(rng) + s * N(rng), s * N(rng), s * N(rng));  // x moves, y and z do not
+        ws.push_back(window1(r, Mat3(Vec3(s * s, s * s, s * s).asDiagonal())));
+      }
+      const JointMountings j = combineWindows(ws, 1, 1e9);
+      if (j.tau_lo[0](0) <= tau && tau <= j.tau_hi[0](0)) ++covered;
+      EXPECT_LE(j.tau_lo[0](0), j.tau[0](0));
+      EXPECT_LE(j.tau[0](0), j.tau_hi[0](0));
+      tau_sum += j.tau[0](0);
+      z2_re += std::pow(j.r_with_tau[0](0) / j.sigma_with_tau[0](0), 2);
+      z2_ind += std::pow(j.r_Si[0](0) / j.sigma_Si[0](0), 2);
+      chi2 += j.axis_chi2_per_dof[0](0);
+    }
+    const double rate = static_cast<double>(covered) / records;
+    EXPECT_GE(rate, 0.90) << "tau " << tau;
+    EXPECT_LE(rate, 0.995) << "tau " << tau;
+    const double rms_re = std::sqrt(z2_re / records), rms_ind = std::sqrt(z2_ind / records);
+    std::printf("tau %.1f: interval covers %.1f %%, mean tau %.2f, joint error RMS over the random-effects sigma %.3f, over the "
+                "windows-independent sigma %.3f, mean chi2/dof %.3f (%d records of %d windows)\n",
+                tau, 100 * rate, tau_sum / records, rms_re, rms_ind, chi2 / records, records, windows);
+    if (tau == 0.0) {
+      EXPECT_NEAR(rms_re, 1.0, 0.12);
+      EXPECT_NEAR(chi2 / records, 1.0, 0.08);
+      EXPECT_NEAR(rms_ind, 1.0, 0.12);
+    } else {
+      EXPECT_NEAR(rms_re, std::sqrt(9.0 / 7.0), 0.12);
+      EXPECT_GT(rms_ind, 1.3);
+      EXPECT_NEAR(tau_sum / records, tau, 0.3);
+    }
+  }
+}
+
+TEST(WindowedCalibration, WindowsAreWholeMultiplesAfterGpsMidnight) {
+  // The GRACE epoch is noon: a day's window starts at 00:00 GPS, -43200 s on the axis.
+  const TimeUs day = 86400 * kUsPerSecond, h = 3600 * kUsPerSecond;
+  const TimeUs midnight = -12 * h;
+  EXPECT_EQ(WindowedCalibration::windowOf(0, 86400), std::make_pair(midnight, midnight + day));
+  EXPECT_EQ(WindowedCalibration::windowOf(midnight, 86400), std::make_pair(midnight, midnight + day));
+  EXPECT_EQ(WindowedCalibration::windowOf(midnight - 1, 86400), std::make_pair(midnight - day, midnight));
+  // 2023-06-01 00:00 GPS (738849600 s past the epoch, which is noon): a whole day's start.
+  const TimeUs june = 738849600LL * kUsPerSecond;
+  EXPECT_EQ(WindowedCalibration::windowOf(june + 5 * h, 86400).first, june);
+  EXPECT_EQ(WindowedCalibration::windowOf(june + 5 * h, 21600), std::make_pair(june, june + 6 * h));
+  EXPECT_EQ(WindowedCalibration::windowOf(june + 6 * h, 21600).first, june + 6 * h);
+  std::string err;
+  WindowedCalibration w;
+  RunOptions ro;
+  EXPECT_FALSE(w.configure(core::PipelineConfig{}, SpanOptions{}, 3600, ro, 1.0, &err));  // no attitude-domain configuration
+  EXPECT_NE(err.find("attitude-domain"), std::string::npos) << err;
+  ro.raw = RawBoundConfig{};
+  EXPECT_FALSE(w.configure(core::PipelineConfig{}, SpanOptions{}, 0.5, ro, 1.0, &err));
+}
+
+}  // namespace
+}  // namespace boresight::calib
