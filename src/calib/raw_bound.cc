@@ -94,6 +94,7 @@ std::string RawBoundConfig::validate() const {
   if (options.harmonics > 0 && !(options.orbit_rate_rad_s > 0)) return "harmonics need the orbit rate";
   if (!(options.gap_sigma_rad_s2 > 0)) return "gap_sigma_rad_s2 is not positive";
   if (!(options.unobservable_sigma_rad > 0)) return "unobservable_sigma_rad is not positive";
+  if (!(options.scale_hold_sigma > 0)) return "scale_hold_sigma is not positive";
   return "";
 }
 
@@ -690,6 +691,7 @@ RawEstimate estimateRaw(const RawBoundConfig& cfg0, const RawData& data, const V
   std::vector<Vec3> eps(nh, Vec3::Zero());
   std::vector<Mat3> applied(nh);
   Vec3 bias = bias0, scale = Vec3::Zero();
+  std::array<bool, 3> scale_held{false, false, false};  // options.scale_hold_sigma, sticky over the passes
   Eigen::VectorXd harm;  // the orbit harmonics' parameters (options.harmonics), applied from the second pass
   RawEstimate out;
   std::vector<std::array<double, 2>> factor(nh, {1.0, 1.0});
@@ -760,6 +762,16 @@ RawEstimate estimateRaw(const RawBoundConfig& cfg0, const RawData& data, const V
     }
     b.finishData();
     out.bound = b.result();
+    if (cfg.options.scale) {
+      // A scale factor the span does not determine is held from here on (options.scale_hold_sigma).
+      const ScaledInverse free_inv = scaledInverse(out.bound.information);
+      for (std::size_t a = 0; a < 3; ++a)
+        if (sigmaOf(free_inv, static_cast<Eigen::Index>(b.col_scale_ + a)) > cfg.options.scale_hold_sigma) scale_held[a] = true;
+      b.held_cols_.clear();
+      for (std::size_t a = 0; a < 3; ++a)
+        if (scale_held[a]) b.held_cols_.push_back(b.col_scale_ + a);
+      if (!b.held_cols_.empty()) out.bound = b.result();
+    }
     const Eigen::VectorXd th = b.solveParameters(out.bound);
     for (std::size_t i = 0; i < nh; ++i) eps[i] -= cfg.heads[i].axes_Si.transpose() * Vec3(th.segment<3>(static_cast<Eigen::Index>(3 * i)));
     if (cfg.options.bias) bias += th.segment<3>(static_cast<Eigen::Index>(b.col_bias_));
@@ -940,10 +952,20 @@ RawBoundResult RawBound::result() const {
         Vo.col(ko++) = out.common_axes_B.col(k);
       }
     }
-    if (!out.unobservable_B.empty()) {
-      Eigen::MatrixXd Jp = Eigen::MatrixXd::Zero(p, p - 3 + ko);
+    // Held parameters (estimateRaw's undetermined scale factors): their columns left out as well.
+    std::vector<char> keep(static_cast<std::size_t>(p), 1);
+    for (const std::size_t c : held_cols_)
+      if (c >= 3 && static_cast<Eigen::Index>(c) < p) {
+        keep[c] = 0;
+        out.held.push_back(out.names[c]);
+      }
+    if (!out.unobservable_B.empty() || !out.held.empty()) {
+      Eigen::Index nk = 0;
+      for (Eigen::Index c = 3; c < p; ++c) nk += keep[static_cast<std::size_t>(c)];
+      Eigen::MatrixXd Jp = Eigen::MatrixXd::Zero(p, ko + nk);
       Jp.leftCols(ko) = J.leftCols(3) * Vo.leftCols(ko);
-      Jp.rightCols(p - 3) = J.rightCols(p - 3);
+      for (Eigen::Index c = 3, q = ko; c < p; ++c)
+        if (keep[static_cast<std::size_t>(c)]) Jp.col(q++) = J.col(c);
       const ScaledInverse ci = scaledInverse(Jp.transpose() * out.information * Jp);
       out.covariance = Jp * ci.cov * Jp.transpose();
       for (std::size_t i = 0; i < nh; ++i)

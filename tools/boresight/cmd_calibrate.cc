@@ -101,6 +101,9 @@ const char* kUsage =
     "  --acc-scale              estimate the accelerometer scale factors (the default with --method\n"
     "                           attitude: a scale error left out reads as mounting error)\n"
     "  --no-acc-scale           hold the scale factors at one (also with --method attitude)\n"
+    "                           (--method attitude holds a scale factor the span does not determine - sigma\n"
+    "                           above 1 %: no angular acceleration about that axis - and says so: JSON\n"
+    "                           attitude_domain.acc_scale_held)\n"
     "  --acc-nonorthogonality   estimate the accelerometer axes' non-orthogonality\n"
     "  --time-offset            estimate the time offset (positive: the accelerometer's tags are late);\n"
     "                           the default with --method attitude, where the raw samples determine it\n"
@@ -945,7 +948,16 @@ int runCalibrate(int argc, char** argv) {
                   ") - the common rotation about it is held at its nominal value (sigma above " + fmt("%.0f", raw_unobs) + "\")\n";
     }
     if (ro.bias) jr["acc_bias_rad_s2"] = {est.bias_rad_s2.x(), est.bias_rad_s2.y(), est.bias_rad_s2.z()};
-    if (ro.scale) jr["acc_scale"] = {est.scale.x(), est.scale.y(), est.scale.z()};
+    if (ro.scale) {
+      jr["acc_scale"] = {est.scale.x(), est.scale.y(), est.scale.z()};
+      // Axes the span does not determine (no angular acceleration about them) are held at nominal.
+      jr["acc_scale_held"] = report::Json::array();
+      for (const auto& name : est.bound.held) {
+        jr["acc_scale_held"].push_back(name);
+        raw_text += "  " + name + " held at its nominal value: the span does not determine it (sigma above " +
+                    fmt("%g", ro.scale_hold_sigma) + ")\n";
+      }
+    }
     // Sigma of a named parameter of the estimate (NaN when absent).
     const auto sigmaOfName = [&](const std::string& name) {
       for (std::size_t k = 0; k < est.bound.names.size(); ++k)
@@ -959,8 +971,10 @@ int runCalibrate(int argc, char** argv) {
     const auto terms = [&](const Vec3& v, const char* stem) {
       model::Uncertain3 u;
       for (int a = 0; a < 3; ++a) {
+        const std::string name = std::string(stem) + "xyz"[a];
         u.value[a] = v(a);
-        u.sigma[a] = sigmaOfName(std::string(stem) + "xyz"[a]);
+        const bool held = std::find(est.bound.held.begin(), est.bound.held.end(), name) != est.bound.held.end();
+        u.sigma[a] = held ? std::numeric_limits<double>::quiet_NaN() : sigmaOfName(name);  // NaN: not determined
       }
       return u;
     };

@@ -86,6 +86,13 @@ struct RawBoundOptions {
   /// RawBoundResult::unobservable_B, so that the other directions and every head axis keep the sigmas
   /// they have given it. Infinite (the default): only directions without any information.
   double unobservable_sigma_rad = std::numeric_limits<double>::infinity();
+  /// estimateRaw: an accelerometer scale factor whose sigma (the span's information, every other
+  /// parameter free) exceeds this is held at its value from then on (nominal unless a pass before
+  /// determined it) and named in RawBoundResult::held. An axis without angular acceleration determines
+  /// nothing about its scale; left free, the Gauss-Newton step takes it to whatever the noise says (14 %
+  /// on a 3 h span excited about z alone), and the linearisation there biases the mountings by several
+  /// sigma. A scale error that large is not in any accelerometer; 1 % is far beyond a calibrated one.
+  double scale_hold_sigma = 1e-2;
   /// estimateRaw: from its second pass on, a variance factor per head and group (cross-boresight axes
   /// e1 and e2 together, the boresight axis b) estimated from the data (model::estimateVarianceComponents
   /// on the groups' parameter information and residuals) and applied to that group's whole noise model
@@ -147,6 +154,10 @@ struct RawBoundResult {
   /// Body directions of the common rotation held at their nominal value (options.unobservable_sigma_rad;
   /// the covariance and the sigmas above are those given it).
   std::vector<Vec3> unobservable_B;
+  /// Parameters estimateRaw held at their value because the span does not determine them (a scale
+  /// factor beyond options.scale_hold_sigma): their names; the covariance is given them held (their
+  /// rows and columns zero).
+  std::vector<std::string> held;
   double span_s = 0;
   std::vector<std::uint64_t> head_samples;
   std::uint64_t acc_samples = 0, acc_gaps = 0, head_samples_before_acc = 0;
@@ -323,6 +334,7 @@ class RawBound {
   std::vector<Mat3> C_Si_B_applied_;
   Vec3 bias_applied_ = Vec3::Zero(), scale_applied_ = Vec3::Zero();
   Eigen::VectorXd harm_applied_;  ///< the harmonics' parameters of the passes before (empty: none)
+  std::vector<std::size_t> held_cols_;  ///< parameter columns held (estimateRaw: undetermined scale factors)
   /// cos(k u), sin(k u), k = 1..options.harmonics, at the head sample in hand (setHarmonics).
   std::vector<double> harm_cos_, harm_sin_;
   void setHarmonics(double t_s);
