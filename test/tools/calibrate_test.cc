@@ -940,3 +940,35 @@ TEST(Calibrate, DayInSixHourWindowsTheJointFindsTheTruthAndTheWindowsAgree) {
   }
   EXPECT_EQ(YAML::LoadFile(d + "/w.yaml")["joint"]["windows_estimated"].as<int>(), 4);
 }
+
+TEST(Calibrate, AnOutageAcrossTheWindowsBoundaryLeavesTwoWindowsWithTheirOwnSamples) {
+  // 6 h 15 min of the calibration day with every sensor out from 5:50 to 6:10 and 6 h windows: the first
+  // window ends with its last sample at 5:50, the second holds the 5 minutes after the outage - inside
+  // the x manoeuvre that starts at 6 h, so it is estimated too, with its own (larger) sigmas; every head
+  // epoch is in one window, and the joint is at least as certain as the better window on every axis.
+  const std::string d = testutil::makeTempDir("calibrate_windows_gap");
+  {
+    std::ofstream o(d + "/gap.yaml");
+    o << "base: " << kSrc << "/config/sim_gracefo_calibration.yaml\n"
+      << "add_effects:\n  - {name: gaps, sensor: all, at_s: 21000, duration_s: 1200}\n";
+  }
+  ASSERT_EQ(run("simulate --scenario " + d + "/gap.yaml --seed 2 --duration 22500 --out " + d + " --quiet --no-lcm").status, 0);
+  const CliRun r = run("calibrate --config " + kConfig + " " + glob1(d, "SCA1A") + " " + glob1(d, "ACC1A") + " " + glob1(d, "QSA1B") + " " +
+                       glob1(d, "GNV1B") + " --method attitude --window 21600 --json " + d + "/w.json");
+  ASSERT_EQ(r.status, 0) << r.out;
+  const auto j = readJson(d + "/w.json");
+  ASSERT_EQ(j["windows"].size(), 2u) << r.out;
+  const auto& w1 = j["windows"][0];
+  const auto& w2 = j["windows"][1];
+  EXPECT_EQ(w1["last_epoch"].get<std::string>().substr(0, 16), "2023-06-01 05:49");
+  EXPECT_EQ(w2["first_epoch"].get<std::string>().substr(0, 16), "2023-06-01 06:10");
+  EXPECT_EQ(w1["head_epochs"].get<std::uint64_t>() + w2["head_epochs"].get<std::uint64_t>(), (22500u - 1200u) * 2u);
+  ASSERT_TRUE(w1["estimated"].get<bool>());
+  ASSERT_TRUE(w2["estimated"].get<bool>());
+  EXPECT_EQ(j["joint"]["windows_estimated"], 2);
+  for (std::size_t k = 0; k < 3; ++k)
+    for (std::size_t ax = 0; ax < 3; ++ax) {
+      const double s1 = w1["heads"][k]["sigma_arcsec"][ax].get<double>(), s2 = w2["heads"][k]["sigma_arcsec"][ax].get<double>();
+      EXPECT_LT(j["joint"]["heads"][k]["sigma_windows_independent_arcsec"][ax].get<double>(), std::min(s1, s2) + 1e-9);
+    }
+}
