@@ -12,6 +12,7 @@
 #include <Eigen/Eigenvalues>
 
 #include <algorithm>
+#include <map>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -1016,6 +1017,46 @@ RawMountings rawMountings(const RawEstimate& est, const RawBoundConfig& cfg, dou
     out.sigma_Si.push_back(sg);
   }
   out.common_determined = have && est.bound.unobservable_B.empty();
+  return out;
+}
+
+std::vector<OrbitHarmonicTerm> orbitHarmonicTerms(const RawEstimate& est, const RawBoundConfig& cfg) {
+  std::vector<OrbitHarmonicTerm> out;
+  const int K = cfg.options.harmonics;
+  if (K <= 0 || est.harmonics.size() == 0 || cfg.heads.size() < 2) return out;
+  std::map<std::string, Eigen::Index> col;
+  for (std::size_t q = 0; q < est.bound.names.size(); ++q) col[est.bound.names[q]] = static_cast<Eigen::Index>(q);
+  static const char* kAxName[3] = {"e1", "e2", "b"};
+  const auto colOf = [&](std::size_t i, int ax, int k, const char* cs) -> Eigen::Index {
+    const auto it = col.find("head" + std::to_string(cfg.heads[i].id) + "." + kAxName[ax] + ".h" + std::to_string(k) + cs);
+    return it == col.end() ? -1 : it->second;
+  };
+  const Eigen::Index hb = colOf(1, 0, 1, "cos");  // est.harmonics holds the terms from the first one on
+  if (hb < 0) return out;
+  for (std::size_t i = 1; i < cfg.heads.size(); ++i) {
+    const Mat3& A = cfg.heads[i].axes_Si;
+    for (int k = 1; k <= K; ++k) {
+      OrbitHarmonicTerm t;
+      t.head = i;
+      t.harmonic = k;
+      for (int c = 0; c < 2; ++c) {
+        const char* cs = c == 0 ? "cos" : "sin";
+        Vec3 hv;
+        Mat3 C;
+        Eigen::Index idx[3];
+        for (int ax = 0; ax < 3; ++ax) {
+          idx[ax] = colOf(i, ax, k, cs);
+          if (idx[ax] < 0 || idx[ax] - hb >= est.harmonics.size()) return {};
+          hv(ax) = est.harmonics(idx[ax] - hb);
+        }
+        for (int a = 0; a < 3; ++a)
+          for (int b = 0; b < 3; ++b) C(a, b) = est.bound.covariance(idx[a], idx[b]);
+        (c == 0 ? t.cos_Si : t.sin_Si) = -A.transpose() * hv;
+        (c == 0 ? t.cov_cos_Si : t.cov_sin_Si) = A.transpose() * C * A;
+      }
+      out.push_back(t);
+    }
+  }
   return out;
 }
 

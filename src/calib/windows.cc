@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 
 namespace boresight::calib {
@@ -228,6 +229,77 @@ JointMountings combineWindows(const std::vector<WindowSolution>& windows, std::s
   return j;
 }
 
+BetaModulation fitBetaModulation(const std::vector<WindowSolution>& windows, double min_range_rad) {
+  BetaModulation m;
+  // The windows with harmonics and a beta, and the terms the first of them has.
+  std::vector<const WindowSolution*> ws;
+  for (const WindowSolution& w : windows)
+    if (w.estimated && w.beta_rad && !w.harmonics.empty()) ws.push_back(&w);
+  m.windows = ws.size();
+  if (ws.size() < 3) {
+    m.note = "fewer than 3 windows with orbit harmonics and a beta angle (" + std::to_string(ws.size()) + ")";
+    return m;
+  }
+  m.beta_min_rad = m.beta_max_rad = *ws.front()->beta_rad;
+  for (const auto* w : ws) {
+    m.beta_min_rad = std::min(m.beta_min_rad, *w->beta_rad);
+    m.beta_max_rad = std::max(m.beta_max_rad, *w->beta_rad);
+  }
+  if (m.beta_max_rad - m.beta_min_rad < min_range_rad) {
+    char b[160];
+    std::snprintf(b, sizeof b, "beta moved %.2f deg over the windows (%.0f deg needed, about 1 deg a day: weeks of data)",
+                  (m.beta_max_rad - m.beta_min_rad) / kRadPerDeg, min_range_rad / kRadPerDeg);
+    m.note = b;
+    return m;
+  }
+  m.determined = true;
+  for (const auto* w : ws) m.cos_ref += std::cos(*w->beta_rad) / static_cast<double>(ws.size());
+  for (const OrbitHarmonicTerm& t0 : ws.front()->harmonics)
+    for (int c = 0; c < 2; ++c) {
+      BetaModulation::Component comp;
+      comp.head = t0.head;
+      comp.harmonic = t0.harmonic;
+      comp.sine = c == 1;
+      for (int a = 0; a < 3; ++a) {
+        std::vector<double> x, y, s;
+        for (const auto* w : ws)
+          for (const OrbitHarmonicTerm& t : w->harmonics)
+            if (t.head == t0.head && t.harmonic == t0.harmonic) {
+              const double sg = std::sqrt(std::max(0.0, (c == 0 ? t.cov_cos_Si : t.cov_sin_Si)(a, a)));
+              if (!(sg > 0)) continue;
+              x.push_back(std::cos(*w->beta_rad));
+              y.push_back((c == 0 ? t.cos_Si : t.sin_Si)(a));
+              s.push_back(sg);
+            }
+        if (x.size() < 3) continue;
+        // Weighted line y = a + b (x - cos_ref), by its 2x2 normal equations.
+        double n00 = 0, n01 = 0, n11 = 0, r0 = 0, r1 = 0;
+        for (std::size_t i = 0; i < x.size(); ++i) {
+          const double w = 1 / (s[i] * s[i]), dx = x[i] - m.cos_ref;
+          n00 += w;
+          n01 += w * dx;
+          n11 += w * dx * dx;
+          r0 += w * y[i];
+          r1 += w * dx * y[i];
+        }
+        const double det = n00 * n11 - n01 * n01;
+        if (!(det > 0)) continue;
+        const double av = (n11 * r0 - n01 * r1) / det, bv = (n00 * r1 - n01 * r0) / det;
+        double chi2 = 0;
+        for (std::size_t i = 0; i < x.size(); ++i) chi2 += std::pow((y[i] - av - bv * (x[i] - m.cos_ref)) / s[i], 2);
+        const double cpd = chi2 / static_cast<double>(x.size() - 2);
+        const double f = std::sqrt(std::max(1.0, cpd));
+        comp.a(a) = av;
+        comp.b(a) = bv;
+        comp.sigma_a(a) = f * std::sqrt(n11 / det);
+        comp.sigma_b(a) = f * std::sqrt(n00 / det);
+        comp.chi2_per_dof(a) = cpd;
+      }
+      m.terms.push_back(comp);
+    }
+  return m;
+}
+
 // ------------------------------------------------------------------------------------------------
 std::pair<TimeUs, TimeUs> WindowedCalibration::windowOf(TimeUs t, double window_s) {
   const auto w = static_cast<TimeUs>(std::llround(window_s * 1e6));
@@ -239,6 +311,7 @@ std::pair<TimeUs, TimeUs> WindowedCalibration::windowOf(TimeUs t, double window_
 bool WindowedCalibration::configure(const core::PipelineConfig& cfg, const SpanOptions& so, double window_s, const RunOptions& run,
                                     double not_determined_rad, std::string* error) {
   windows_.clear();
+  beta_.clear();
   open_ = finished_ = false;
   peak_raw_ = 0;
   if (!(window_s >= 1.0) || !std::isfinite(window_s)) {
@@ -284,7 +357,13 @@ void WindowedCalibration::pushAcc(TimeUs t, const Vec3& a_A) {
 }
 
 void WindowedCalibration::pushOrbit(const model::OrbitSample& o) {
-  if (!finished_) feed_.pushOrbit(o);  // the orbit does not open a window; it may run ahead of the heads
+  if (finished_) return;
+  feed_.pushOrbit(o);  // the orbit does not open a window; it may run ahead of the heads
+  const TimeUs start = windowOf(o.t, window_s_).first;
+  auto it = std::find_if(beta_.begin(), beta_.end(), [start](const auto& e) { return e.first == start; });
+  if (it == beta_.end()) it = beta_.insert(beta_.end(), {start, {0.0, 0}});
+  it->second.first += o.beta_rad;
+  ++it->second.second;
 }
 
 void WindowedCalibration::close() {
@@ -313,9 +392,13 @@ void WindowedCalibration::close() {
           w.time_offset_sigma_s = sg;
         }
       }
+    w.harmonics = orbitHarmonicTerms(run.raw, run.raw_config);
   } else {
     w.note = run.raw_note.empty() ? std::string("not estimated") : run.raw_note;
   }
+  for (const auto& e : beta_)
+    if (e.first == from_ && e.second.second > 0) w.beta_rad = e.second.first / static_cast<double>(e.second.second);
+  beta_.erase(std::remove_if(beta_.begin(), beta_.end(), [this](const auto& e) { return e.first <= from_; }), beta_.end());
   w.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   windows_.push_back(std::move(w));
   if (on_window_) on_window_(windows_.back());

@@ -183,6 +183,52 @@ TEST(RandomEffects, TheSpreadBetweenWindowsIsFoundAndItsIntervalCoversIt) {
   }
 }
 
+/// A window with one orbit-harmonic term (head 1, 1/rev) of value cos_Si, sigma s per axis, at beta.
+WindowSolution harmonicWindow(double beta_deg, const Vec3& cos_Si, double s) {
+  WindowSolution w = window1(Vec3::Zero(), Mat3::Identity());
+  OrbitHarmonicTerm t;
+  t.head = 1;
+  t.harmonic = 1;
+  t.cos_Si = cos_Si;
+  t.cov_cos_Si = t.cov_sin_Si = Mat3(Vec3::Constant(s * s).asDiagonal());
+  w.harmonics = {t};
+  w.beta_rad = beta_deg * kRadPerDeg;
+  return w;
+}
+
+TEST(BetaModulation, TheLineThroughTheWindowsHarmonicsAgainstCosBeta) {
+  // 30 windows, beta from 46 to 16 deg, a term (4, -3, 10) x (1 + 0.3 (cos beta - 1)) with noise of
+  // 0.3 per axis: a at the mean cos beta and b = 0.3 x (4, -3, 10) within 3 sigma, the sin term (zero)
+  // with b within 3 sigma of 0; the same windows over 5 deg of beta: not determined, and said why.
+  std::mt19937_64 rng(7);
+  std::normal_distribution<double> N(0, 1);
+  const Vec3 amp(4, -3, 10);
+  std::vector<WindowSolution> ws, narrow;
+  double cos_mean = 0;
+  for (int d = 0; d < 30; ++d) {
+    const double beta = 46.0 - d * 1.0, cb = std::cos(beta * kRadPerDeg);
+    cos_mean += cb / 30;
+    ws.push_back(harmonicWindow(beta, amp * (1 + 0.3 * (cb - 1)) + 0.3 * Vec3(N(rng), N(rng), N(rng)), 0.3));
+    narrow.push_back(harmonicWindow(46.0 - d * 5.0 / 30, amp, 0.3));
+  }
+  const BetaModulation m = fitBetaModulation(ws);
+  ASSERT_TRUE(m.determined) << m.note;
+  EXPECT_NEAR(m.cos_ref, cos_mean, 1e-12);
+  EXPECT_EQ(m.windows, 30u);
+  ASSERT_EQ(m.terms.size(), 2u);  // cos and sin
+  const auto& c = m.terms[0];
+  EXPECT_FALSE(c.sine);
+  for (int a = 0; a < 3; ++a) {
+    EXPECT_NEAR(c.a(a), amp(a) * (1 + 0.3 * (cos_mean - 1)), 3 * c.sigma_a(a)) << a;
+    EXPECT_NEAR(c.b(a), 0.3 * amp(a), 3 * c.sigma_b(a)) << a;
+    EXPECT_LT(c.sigma_b(a), 1.0);
+    EXPECT_NEAR(m.terms[1].b(a), 0.0, 3 * m.terms[1].sigma_b(a));
+  }
+  const BetaModulation n = fitBetaModulation(narrow);
+  EXPECT_FALSE(n.determined);
+  EXPECT_NE(n.note.find("beta moved 4.8"), std::string::npos) << n.note;
+}
+
 TEST(WindowedCalibration, WindowsAreWholeMultiplesAfterGpsMidnight) {
   // The GRACE epoch is noon: a day's window starts at 00:00 GPS, -43200 s on the axis.
   const TimeUs day = 86400 * kUsPerSecond, h = 3600 * kUsPerSecond;

@@ -939,6 +939,14 @@ TEST(Calibrate, DayInSixHourWindowsTheJointFindsTheTruthAndTheWindowsAgree) {
     EXPECT_NE(testutil::slurp(d + "/rep/" + f).find("<svg"), std::string::npos) << f;
   }
   EXPECT_EQ(YAML::LoadFile(d + "/w.yaml")["joint"]["windows_estimated"].as<int>(), 4);
+  // Each window has its beta angle (from GNV1B) and its orbit harmonics; a day moves beta by 1 deg, so
+  // the beta modulation is not determined, and the JSON says why.
+  for (const auto& w : j["windows"]) {
+    EXPECT_NEAR(w["beta_deg"].get<double>(), 46.0, 1.0);
+    EXPECT_EQ(w["orbit_harmonics"].size(), 4u);  // heads 2 and 3, harmonics 1 and 2
+  }
+  EXPECT_EQ(j["joint"]["beta_modulation"]["status"].get<std::string>().rfind("not determined: beta moved", 0), 0u)
+      << j["joint"]["beta_modulation"].dump();
 }
 
 TEST(Calibrate, AnOutageAcrossTheWindowsBoundaryLeavesTwoWindowsWithTheirOwnSamples) {

@@ -453,6 +453,19 @@ int writeWindows(const calib::WindowedCalibration& wc, const WindowOutputs& o, S
         x["heads"].push_back(h);
       }
     }
+    x["beta_deg"] = w.beta_rad ? report::Json(*w.beta_rad / kRadPerDeg) : report::Json(nullptr);
+    for (const calib::OrbitHarmonicTerm& t : w.harmonics) {
+      report::Json ht;
+      ht["id"] = heads.head[t.head].id;
+      ht["harmonic"] = t.harmonic;
+      for (int a = 0; a < 3; ++a) {
+        ht["cos_arcsec"].push_back(t.cos_Si(a) * kArcsecPerRad);
+        ht["cos_sigma_arcsec"].push_back(std::sqrt(std::max(0.0, t.cov_cos_Si(a, a))) * kArcsecPerRad);
+        ht["sin_arcsec"].push_back(t.sin_Si(a) * kArcsecPerRad);
+        ht["sin_sigma_arcsec"].push_back(std::sqrt(std::max(0.0, t.cov_sin_Si(a, a))) * kArcsecPerRad);
+      }
+      x["orbit_harmonics"].push_back(ht);
+    }
     jw.push_back(x);
   }
   j["windows"] = jw;
@@ -502,6 +515,44 @@ int writeWindows(const calib::WindowedCalibration& wc, const WindowOutputs& o, S
       cov.push_back(row);
     }
     jj["covariance_windows_independent_arcsec2"] = cov;
+  }
+  // The thermal beta-angle modulation of the orbit harmonics, from the windows' series.
+  {
+    const calib::BetaModulation bm = calib::fitBetaModulation(ws);
+    report::Json jb;
+    jb["model"] = "term = a + b (cos beta - cos_beta_ref), per head, harmonic, cos/sin and axis of the head's frame";
+    jb["windows"] = bm.windows;
+    if (bm.windows > 0) jb["beta_range_deg"] = {bm.beta_min_rad / kRadPerDeg, bm.beta_max_rad / kRadPerDeg};
+    if (!bm.determined) {
+      jb["status"] = "not determined: " + bm.note;
+      text += "beta modulation of the orbit harmonics: not determined: " + bm.note + "\n";
+    } else {
+      jb["status"] = "determined";
+      jb["cos_beta_ref"] = bm.cos_ref;
+      text += "beta modulation of the orbit harmonics (beta " + fmt("%.1f", bm.beta_min_rad / kRadPerDeg) + ".." +
+              fmt("%.1f", bm.beta_max_rad / kRadPerDeg) + " deg over " + std::to_string(bm.windows) +
+              " windows; term = a + b (cos beta - " + fmt("%.3f", bm.cos_ref) + "), arcsec, head frame x y z):\n";
+      for (const auto& c : bm.terms) {
+        report::Json t;
+        t["id"] = heads.head[c.head].id;
+        t["harmonic"] = c.harmonic;
+        t["term"] = c.sine ? "sin" : "cos";
+        std::string line = "  head " + std::to_string(heads.head[c.head].id) + " " + std::to_string(c.harmonic) + "/rev " +
+                           (c.sine ? "sin" : "cos") + ":";
+        for (int a = 0; a < 3; ++a) {
+          t["a_arcsec"].push_back(c.a(a) * kArcsecPerRad);
+          t["a_sigma_arcsec"].push_back(c.sigma_a(a) * kArcsecPerRad);
+          t["b_arcsec"].push_back(c.b(a) * kArcsecPerRad);
+          t["b_sigma_arcsec"].push_back(c.sigma_b(a) * kArcsecPerRad);
+          t["chi2_per_dof"].push_back(c.chi2_per_dof(a));
+          line += " " + std::string(1, "xyz"[a]) + " a " + fmt("%.2f", c.a(a) * kArcsecPerRad) + " b " + fmt("%.2f", c.b(a) * kArcsecPerRad) +
+                  " +- " + fmt("%.2f", c.sigma_b(a) * kArcsecPerRad);
+        }
+        jb["terms"].push_back(t);
+        text += line + "\n";
+      }
+    }
+    jj["beta_modulation"] = jb;
   }
   jj["sigma"] = "sigma_arcsec: the larger of the windows-independent sigma and the random-effects sigma with the spread tau "
                 "between windows (Paule-Mandel, 95 % Q-profile interval): the mounting over the record when it moves by tau "
@@ -1007,37 +1058,20 @@ int runCalibrate(int argc, char** argv) {
       jh["relative_to_head"] = rc.heads[0].id;
       jh["frame"] = "each head's own frame Si (x, y, z), as error_angles_arcsec";
       raw_text += "  relative alignment's orbit harmonics (rotation of the mounting in its own frame x, y, z; arcsec +- sigma):\n";
-      // The terms' columns by the names the estimate gives them (raw_bound.cc result()), not by a copy of
-      // its column layout; est.harmonics holds the same terms in the same order from the first one.
-      std::map<std::string, Eigen::Index> col;
-      for (std::size_t q = 0; q < est.bound.names.size(); ++q) col[est.bound.names[q]] = static_cast<Eigen::Index>(q);
-      static const char* kAxName[3] = {"e1", "e2", "b"};
-      const auto colOf = [&](std::size_t i, int ax, int k, const char* cs) {
-        return col.at("head" + std::to_string(rc.heads[i].id) + "." + kAxName[ax] + ".h" + std::to_string(k) + cs);
-      };
-      const Eigen::Index hb = colOf(1, 0, 1, "cos");
+      // The terms (calib::orbitHarmonicTerms: columns by the estimate's parameter names), per head.
+      const std::vector<calib::OrbitHarmonicTerm> terms_h = calib::orbitHarmonicTerms(est, rc);
       for (std::size_t i = 1; i < rc.heads.size(); ++i) {
-        const Mat3& A = rc.heads[i].axes_Si;
         report::Json hh;
         hh["id"] = rc.heads[i].id;
-        for (int k = 1; k <= K; ++k) {
+        for (const calib::OrbitHarmonicTerm& t : terms_h) {
+          if (t.head != i) continue;
           report::Json tk;
-          tk["harmonic"] = k;
-          std::string line = "    head " + std::to_string(rc.heads[i].id) + " " + std::to_string(k) + "/rev:";
+          tk["harmonic"] = t.harmonic;
+          std::string line = "    head " + std::to_string(rc.heads[i].id) + " " + std::to_string(t.harmonic) + "/rev:";
           for (int c = 0; c < 2; ++c) {
             const char* cs = c == 0 ? "cos" : "sin";
-            // The three head axes' parameters of this term: index in est.harmonics, and in the covariance.
-            Vec3 hv;
-            Mat3 C;
-            Eigen::Index idx[3];
-            for (int ax = 0; ax < 3; ++ax) {
-              idx[ax] = colOf(i, ax, k, cs);
-              hv(ax) = est.harmonics(idx[ax] - hb);
-            }
-            for (int a = 0; a < 3; ++a)
-              for (int b2 = 0; b2 < 3; ++b2) C(a, b2) = est.bound.covariance(idx[a], idx[b2]);
-            const Vec3 v = -A.transpose() * hv * kArcsecPerRad;
-            const Mat3 Cs = A.transpose() * C * A;
+            const Vec3 v = (c == 0 ? t.cos_Si : t.sin_Si) * kArcsecPerRad;
+            const Mat3& Cs = c == 0 ? t.cov_cos_Si : t.cov_sin_Si;
             line += " " + std::string(cs) + " (";
             for (int a = 0; a < 3; ++a) {
               const double sg = std::sqrt(std::max(0.0, Cs(a, a))) * kArcsecPerRad;

@@ -213,6 +213,19 @@ struct RawMountings {
 };
 RawMountings rawMountings(const RawEstimate& est, const RawBoundConfig& cfg, double not_determined_rad);
 
+/// One orbit-harmonic term of a head's alignment against the others (options.harmonics): head i's
+/// mounting rotates in its own frame Si by sum_k cos_k cos(k u) + sin_k sin(k u) (rad; the estimate's
+/// head-axis parameters H enter as -axes_Si^T H), with the 3x3 covariance of each.
+struct OrbitHarmonicTerm {
+  std::size_t head = 0;  ///< index in cfg.heads (1..n-1)
+  int harmonic = 1;
+  Vec3 cos_Si = Vec3::Zero(), sin_Si = Vec3::Zero();
+  Mat3 cov_cos_Si = Mat3::Zero(), cov_sin_Si = Mat3::Zero();
+};
+/// The estimate's orbit harmonics, head after head, harmonic after harmonic (empty without them). The
+/// columns are found by the parameters' names (RawBoundResult::names), not by a copy of their layout.
+std::vector<OrbitHarmonicTerm> orbitHarmonicTerms(const RawEstimate& est, const RawBoundConfig& cfg);
+
 /// The measured data of a span, in time order (the estimator needs them once per pass).
 struct RawData {
   /// One sample, 72 bytes (a day of GRACE-FO data is 1.4 million of them): an accelerometer sample

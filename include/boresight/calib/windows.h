@@ -51,6 +51,10 @@ struct WindowSolution {
   Vec3 bias_rad_s2 = Vec3::Zero();
   std::optional<double> time_offset_s, time_offset_sigma_s;  ///< when estimated and determined
   double seconds = 0;               ///< wall time of the window's estimate
+  /// The window's orbit harmonics of heads 2..n's alignment (when estimated), and the mean beta angle of
+  /// the orbit samples inside the window (none without an orbit).
+  std::vector<OrbitHarmonicTerm> harmonics;
+  std::optional<double> beta_rad;
 };
 
 /// The windows' solutions combined (per configured head slot, Si axes, rad).
@@ -82,6 +86,29 @@ JointMountings combineWindows(const std::vector<WindowSolution>& windows, std::s
 /// The information about every head's error angles (Si frames) in an attitude-domain estimate, its other
 /// parameters marginalised out (WindowSolution::information_Si).
 Eigen::MatrixXd mountingInformation(const RawEstimate& est, const RawBoundConfig& cfg);
+/// The thermal beta-angle modulation from the windows' orbit harmonics: per head (2..n), harmonic, cos
+/// or sin term and axis of the head's frame Si, the weighted line value = a + b (cos beta - cos_ref)
+/// through the windows that have the term and a beta (cos_ref: the mean cos beta of those windows, so a
+/// is the term there and b its change per unit of cos beta). Determined only when beta moves `min_range_rad`
+/// or more across those windows (10 deg by default; a day moves it about 1 deg); the sigmas are scaled
+/// by sqrt(chi-square per dof) when the windows scatter about the line more than their sigmas say
+/// (day-to-day wander), never shrunk.
+struct BetaModulation {
+  bool determined = false;
+  std::string note;                 ///< why not determined
+  double beta_min_rad = 0, beta_max_rad = 0, cos_ref = 0;
+  std::size_t windows = 0;
+  struct Component {
+    std::size_t head = 0;  ///< index in the heads (1..n-1)
+    int harmonic = 1;
+    bool sine = false;
+    Vec3 a = Vec3::Zero(), b = Vec3::Zero(), sigma_a = Vec3::Zero(), sigma_b = Vec3::Zero();  ///< rad, rad per unit cos beta
+    Vec3 chi2_per_dof = Vec3::Zero();  ///< of the line (windows - 2 dof)
+  };
+  std::vector<Component> terms;
+};
+BetaModulation fitBetaModulation(const std::vector<WindowSolution>& windows, double min_range_rad = 10.0 * kRadPerDeg);
+
 /// Paule-Mandel random-effects level for values x with sigmas s: tau >= 0 with
 /// sum (x - m(tau))^2 / (s^2 + tau^2) = q, m(tau) the weighted mean with weights 1 / (s^2 + tau^2);
 /// 0 when the sum at tau = 0 is already at or below q. q = n - 1 gives the estimate; chi-square
@@ -122,6 +149,8 @@ class WindowedCalibration {
   TimeUs from_ = 0, to_ = 0, first_ = 0, last_ = 0;
   std::uint64_t head_epochs_ = 0, acc_samples_ = 0;
   std::size_t peak_raw_ = 0;
+  /// The beta angle's sum and count per window start (orbit samples may run ahead of the heads).
+  std::vector<std::pair<TimeUs, std::pair<double, std::size_t>>> beta_;
   std::vector<WindowSolution> windows_;
   std::function<void(const WindowSolution&)> on_window_;
 };
