@@ -312,6 +312,7 @@ bool WindowedCalibration::configure(const core::PipelineConfig& cfg, const SpanO
                                     double not_determined_rad, std::string* error) {
   windows_.clear();
   beta_.clear();
+  late_ = 0;
   open_ = finished_ = false;
   peak_raw_ = 0;
   if (!(window_s >= 1.0) || !std::isfinite(window_s)) {
@@ -342,6 +343,10 @@ void WindowedCalibration::advance(TimeUs t) {
 
 void WindowedCalibration::pushHeads(const core::HeadEpoch& e) {
   if (finished_) return;
+  if (open_ && e.t < from_) {  // a window already estimated: not taken, counted
+    ++late_;
+    return;
+  }
   advance(e.t);
   if (head_epochs_ == 0) first_ = e.t;
   last_ = e.t;
@@ -351,6 +356,10 @@ void WindowedCalibration::pushHeads(const core::HeadEpoch& e) {
 
 void WindowedCalibration::pushAcc(TimeUs t, const Vec3& a_A) {
   if (finished_) return;
+  if (open_ && t < from_) {
+    ++late_;
+    return;
+  }
   advance(t);
   ++acc_samples_;
   feed_.pushAcc(t, a_A);

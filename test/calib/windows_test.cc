@@ -2,6 +2,8 @@
 // spread between windows against simulated windows with a known spread, and the windows' calendar.
 // (The windows' estimates themselves, and their memory, are tested end to end in
 // test/tools/calibrate_windows_test.cc.)
+#include "synthetic.h"
+
 #include <boresight/calib/windows.h>
 
 #include <gtest/gtest.h>
@@ -229,6 +231,36 @@ TEST(BetaModulation, TheLineThroughTheWindowsHarmonicsAgainstCosBeta) {
   EXPECT_NE(n.note.find("beta moved 4.8"), std::string::npos) << n.note;
 }
 
+TEST(WindowedCalibration, ASampleOlderThanTheOpenWindowIsCountedNotTaken) {
+  // Heads in one window, then a sample of the next (the first window is closed and estimated - refused
+  // here: one head epoch, no accelerometer - and said), then a sample older than the open window's
+  // start: not taken into the closed window or the open one, counted.
+  const synth::Config c = synth::manoeuvreCase(1);
+  SpanOptions so;
+  so.decimation_s = c.decimation_s;
+  RunOptions ro;
+  ro.raw = RawBoundConfig{};
+  WindowedCalibration w;
+  std::string err;
+  ASSERT_TRUE(w.configure(synth::pipelineConfig(c), so, 3600, ro, 1.0, &err)) << err;
+  const TimeUs june = 738849600LL * kUsPerSecond;
+  core::HeadEpoch e;
+  e.t = june + 10 * kUsPerSecond;
+  w.pushHeads(e);
+  w.pushAcc(june + 3600 * kUsPerSecond + 5, Vec3::Zero());  // the next window: the first is closed
+  ASSERT_EQ(w.windows().size(), 1u);
+  EXPECT_FALSE(w.windows()[0].estimated);
+  EXPECT_FALSE(w.windows()[0].note.empty());
+  w.pushAcc(june + 20 * kUsPerSecond, Vec3::Zero());  // older than the open window
+  e.t = june + 30 * kUsPerSecond;
+  w.pushHeads(e);
+  EXPECT_EQ(w.lateSamples(), 2u);
+  w.finish();
+  ASSERT_EQ(w.windows().size(), 2u);
+  EXPECT_EQ(w.windows()[1].acc_samples, 1u);
+  EXPECT_EQ(w.windows()[1].head_epochs, 0u);
+}
+
 TEST(WindowedCalibration, WindowsAreWholeMultiplesAfterGpsMidnight) {
   // The GRACE epoch is noon: a day's window starts at 00:00 GPS, -43200 s on the axis.
   const TimeUs day = 86400 * kUsPerSecond, h = 3600 * kUsPerSecond;
@@ -243,6 +275,7 @@ TEST(WindowedCalibration, WindowsAreWholeMultiplesAfterGpsMidnight) {
   EXPECT_EQ(WindowedCalibration::windowOf(june + 6 * h, 21600).first, june + 6 * h);
   std::string err;
   WindowedCalibration w;
+  EXPECT_EQ(w.lateSamples(), 0u);
   RunOptions ro;
   EXPECT_FALSE(w.configure(core::PipelineConfig{}, SpanOptions{}, 3600, ro, 1.0, &err));  // no attitude-domain configuration
   EXPECT_NE(err.find("attitude-domain"), std::string::npos) << err;

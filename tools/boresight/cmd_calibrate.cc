@@ -173,12 +173,14 @@ const char* kUsage =
     "Exit status: 0 calibrated; 1 refused (span too short or too quiet for the CRN solver without\n"
     "--method attitude: the reason and what would be needed) or bad input (the reason); 2 usage error.\n";
 
-/// The engine's inputs into method A's feed (calib/calibration.h): head epochs as the core's validator
-/// leaves them, the accelerometer samples the core accepted, the orbit from the same stream when the
-/// feed collects the thermal fit (GNI1B / GNV1B files, ORBIT messages).
-class SpanFeed final : public stream::InputObserver {
+/// The engine's inputs into method A (a calib::CalibrationFeed, or window after window a
+/// calib::WindowedCalibration): head epochs as the core's validator leaves them, the accelerometer samples
+/// the core accepted, the orbit from the same stream when the feed wants it (GNI1B / GNV1B files, ORBIT
+/// messages).
+template <class Feed>
+class FeedObserver final : public stream::InputObserver {
  public:
-  explicit SpanFeed(calib::CalibrationFeed& f) : f_(f) {}
+  explicit FeedObserver(Feed& f) : f_(f) {}
   void onHeads(const core::HeadEpoch& e, core::Status) override { f_.pushHeads(e); }
   void onAcc(TimeUs t, const Vec3& a_A, core::Status st) override {
     if (core::accepted(st)) f_.pushAcc(t, a_A);
@@ -188,7 +190,7 @@ class SpanFeed final : public stream::InputObserver {
   void onEnd() override { f_.finish(); }
 
  private:
-  calib::CalibrationFeed& f_;
+  Feed& f_;
 };
 
 int fail(const std::string& msg) {
@@ -372,22 +374,6 @@ model::Overlay resultOverlay(const calib::SolveResult& r, const io::PlatformConf
   return o;
 }
 
-/// The engine's inputs window after window (--window): as SpanFeed, into calib::WindowedCalibration.
-class WindowFeed final : public stream::InputObserver {
- public:
-  explicit WindowFeed(calib::WindowedCalibration& f) : f_(f) {}
-  void onHeads(const core::HeadEpoch& e, core::Status) override { f_.pushHeads(e); }
-  void onAcc(TimeUs t, const Vec3& a_A, core::Status st) override {
-    if (core::accepted(st)) f_.pushAcc(t, a_A);
-  }
-  bool wantsOrbit() const override { return f_.wantsOrbit(); }
-  void onOrbit(const model::OrbitSample& o) override { f_.pushOrbit(o); }
-  void onEnd() override { f_.finish(); }
-
- private:
-  calib::WindowedCalibration& f_;
-};
-
 /// Where --window writes, and what it says about the model in use.
 struct WindowOutputs {
   const io::PlatformConfig& pc;
@@ -426,6 +412,7 @@ int writeWindows(const calib::WindowedCalibration& wc, const WindowOutputs& o, S
   j["window_s"] = o.window_s;
   j["model_in_use"] = o.model_in_use;
   j["peak_raw_samples_per_window"] = wc.peakRawSamples();
+  j["late_samples"] = wc.lateSamples();
   report::Json jw = report::Json::array();
   for (const calib::WindowSolution& w : ws) {
     report::Json x;
@@ -814,8 +801,8 @@ int runCalibrate(int argc, char** argv) {
   if (window_s <= 0 && !cal.configure(pc.pipeline, spo, with_thermal, &err, raw)) return fail(err);
   for (const auto& f : in.orbit)
     std::printf("%s: orbit for the %s\n", f.c_str(), window_s > 0 ? "stars' aberration and the orbit harmonics" : "thermal harmonic fit");
-  SpanFeed feed(cal);
-  WindowFeed wfeed(windowed);
+  FeedObserver<calib::CalibrationFeed> feed(cal);
+  FeedObserver<calib::WindowedCalibration> wfeed(windowed);
   // Before the sources: the orbit files are opened for an observer that wants them.
   if (window_s > 0) engine.addObserver(&wfeed);
   else engine.addObserver(&feed);

@@ -136,6 +136,9 @@ class WindowedCalibration {
   /// of many windows needs no more than its longest window).
   std::size_t peakRawSamples() const { return peak_raw_; }
   std::size_t rawCapacity() const { return feed_.raw().events.capacity(); }
+  /// Samples older than the open window's start (its predecessor is already estimated): not taken, counted.
+  /// The replay engine hands samples out in time order, so calibrate has none.
+  std::uint64_t lateSamples() const { return late_; }
   /// The window [from, to) that holds t.
   static std::pair<TimeUs, TimeUs> windowOf(TimeUs t, double window_s);
 
@@ -149,6 +152,7 @@ class WindowedCalibration {
   TimeUs from_ = 0, to_ = 0, first_ = 0, last_ = 0;
   std::uint64_t head_epochs_ = 0, acc_samples_ = 0;
   std::size_t peak_raw_ = 0;
+  std::uint64_t late_ = 0;
   /// The beta angle's sum and count per window start (orbit samples may run ahead of the heads).
   std::vector<std::pair<TimeUs, std::pair<double, std::size_t>>> beta_;
   std::vector<WindowSolution> windows_;
