@@ -94,7 +94,7 @@ TEST(Calibrate, HelpNamesInputsKeysAndVariants) {
   const CliRun r = run("calibrate --help");
   EXPECT_EQ(r.status, 0);
   for (const char* s : {"--config", "--json", "--yaml", "--report", "--relative", "--acc-scale", "--time-offset",
-                        "sigma_arcsec", "Datum: the accelerometer frame"})
+                        "sigma_arcsec", "Datum: the accelerometer frame", "--window S", "acc_scale_held"})
     EXPECT_NE(r.out.find(s), std::string::npos) << s;
   EXPECT_EQ(run("calibrate --config " + kConfig + " " + level1()).status, 2);  // --json missing
   EXPECT_EQ(run("calibrate --config " + kConfig + " --json x.json --relative sideways " + level1()).status, 2);
