@@ -254,6 +254,25 @@ BetaModulation fitBetaModulation(const std::vector<WindowSolution>& windows, dou
   }
   m.determined = true;
   for (const auto* w : ws) m.cos_ref += std::cos(*w->beta_rad) / static_cast<double>(ws.size());
+  {
+    double tm = 0, stt = 0, scc = 0, stc = 0;
+    for (const auto* w : ws) tm += toSeconds(w->from) / static_cast<double>(ws.size());
+    for (const auto* w : ws) {
+      const double dt = toSeconds(w->from) - tm, dc = std::cos(*w->beta_rad) - m.cos_ref;
+      stt += dt * dt;
+      scc += dc * dc;
+      stc += dt * dc;
+    }
+    m.time_correlation = stt > 0 && scc > 0 ? stc / std::sqrt(stt * scc) : 0.0;
+    if (std::abs(m.time_correlation) > 0.9) {
+      char b[200];
+      std::snprintf(b, sizeof b,
+                    "cos beta follows time over these windows (correlation %.2f): a drift of the harmonics over the record "
+                    "cannot be told from a beta modulation",
+                    m.time_correlation);
+      m.caution = b;
+    }
+  }
   for (const OrbitHarmonicTerm& t0 : ws.front()->harmonics)
     for (int c = 0; c < 2; ++c) {
       BetaModulation::Component comp;

@@ -211,6 +211,7 @@ TEST(BetaModulation, TheLineThroughTheWindowsHarmonicsAgainstCosBeta) {
     const double beta = 46.0 - d * 1.0, cb = std::cos(beta * kRadPerDeg);
     cos_mean += cb / 30;
     ws.push_back(harmonicWindow(beta, amp * (1 + 0.3 * (cb - 1)) + 0.3 * Vec3(N(rng), N(rng), N(rng)), 0.3));
+    ws.back().from = ws.back().to = d * 86400 * kUsPerSecond;
     narrow.push_back(harmonicWindow(46.0 - d * 5.0 / 30, amp, 0.3));
   }
   const BetaModulation m = fitBetaModulation(ws);
@@ -226,6 +227,20 @@ TEST(BetaModulation, TheLineThroughTheWindowsHarmonicsAgainstCosBeta) {
     EXPECT_LT(c.sigma_b(a), 1.0);
     EXPECT_NEAR(m.terms[1].b(a), 0.0, 3 * m.terms[1].sigma_b(a));
   }
+  // Beta moving one way over the record: the fit says a drift would look the same. Beta going down and
+  // back up (its cos not following time): no caution.
+  EXPECT_GT(m.time_correlation, 0.9);  // beta falls, its cosine rises
+  EXPECT_NE(m.caution.find("drift"), std::string::npos) << m.caution;
+  std::vector<WindowSolution> vee;
+  for (int d = 0; d < 30; ++d) {
+    WindowSolution w = harmonicWindow(16.0 + std::abs(d - 15) * 2.0, amp, 0.3);
+    w.from = w.to = d * 86400 * kUsPerSecond;
+    vee.push_back(w);
+  }
+  const BetaModulation v = fitBetaModulation(vee);
+  ASSERT_TRUE(v.determined) << v.note;
+  EXPECT_LT(std::abs(v.time_correlation), 0.5);
+  EXPECT_TRUE(v.caution.empty()) << v.caution;
   const BetaModulation n = fitBetaModulation(narrow);
   EXPECT_FALSE(n.determined);
   EXPECT_NE(n.note.find("beta moved 4.8"), std::string::npos) << n.note;

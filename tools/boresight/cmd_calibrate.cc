@@ -516,9 +516,12 @@ int writeWindows(const calib::WindowedCalibration& wc, const WindowOutputs& o, S
     } else {
       jb["status"] = "determined";
       jb["cos_beta_ref"] = bm.cos_ref;
+      jb["time_correlation"] = bm.time_correlation;
+      if (!bm.caution.empty()) jb["caution"] = bm.caution;
       text += "beta modulation of the orbit harmonics (beta " + fmt("%.1f", bm.beta_min_rad / kRadPerDeg) + ".." +
               fmt("%.1f", bm.beta_max_rad / kRadPerDeg) + " deg over " + std::to_string(bm.windows) +
               " windows; term = a + b (cos beta - " + fmt("%.3f", bm.cos_ref) + "), arcsec, head frame x y z):\n";
+      if (!bm.caution.empty()) text += "  caution: " + bm.caution + "\n";
       for (const auto& c : bm.terms) {
         report::Json t;
         t["id"] = heads.head[c.head].id;

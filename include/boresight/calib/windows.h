@@ -96,6 +96,11 @@ Eigen::MatrixXd mountingInformation(const RawEstimate& est, const RawBoundConfig
 struct BetaModulation {
   bool determined = false;
   std::string note;                 ///< why not determined
+  /// The correlation over the windows between cos beta and the windows' time. Near +-1 (beta moving
+  /// one way over the record: |r| > 0.9 sets `caution`), a modulation with beta and a drift of the
+  /// harmonics with time are the same regressor, and the fit gives whatever drifts to beta.
+  double time_correlation = 0;
+  std::string caution;
   double beta_min_rad = 0, beta_max_rad = 0, cos_ref = 0;
   std::size_t windows = 0;
   struct Component {
