@@ -1020,6 +1020,15 @@ RawMountings rawMountings(const RawEstimate& est, const RawBoundConfig& cfg, dou
   return out;
 }
 
+double parameterSigma(const RawBoundResult& r, const std::string& name) {
+  for (std::size_t k = 0; k < r.names.size(); ++k)
+    if (r.names[k] == name && static_cast<Eigen::Index>(k) < r.covariance.rows()) {
+      const auto kk = static_cast<Eigen::Index>(k);
+      return std::sqrt(std::max(0.0, r.covariance(kk, kk)));
+    }
+  return std::numeric_limits<double>::quiet_NaN();
+}
+
 std::vector<OrbitHarmonicTerm> orbitHarmonicTerms(const RawEstimate& est, const RawBoundConfig& cfg) {
   std::vector<OrbitHarmonicTerm> out;
   const int K = cfg.options.harmonics;

@@ -169,6 +169,7 @@ JointMountings combineWindows(const std::vector<WindowSolution>& windows, std::s
   for (auto* v : {&j.axis_chi2_per_dof, &j.tau, &j.tau_lo, &j.tau_hi, &j.sigma_with_tau, &j.r_with_tau})
     v->assign(n_heads, Vec3::Constant(kNaN));
   j.axis_windows.assign(n_heads, Vec3::Zero());
+  j.sigma_written.assign(n_heads, Vec3::Constant(kNaN));
   j.covariance_Si = Eigen::MatrixXd::Zero(n3, n3);
   if (used.empty()) return j;
   int rank_j = 0;
@@ -226,6 +227,10 @@ JointMountings combineWindows(const std::vector<WindowSolution>& windows, std::s
     j.r_with_tau[h](a) = swx / sw;
     j.sigma_with_tau[h](a) = 1.0 / std::sqrt(sw);
   }
+  for (std::size_t h = 0; h < n_heads; ++h)
+    for (int a = 0; a < 3; ++a)
+      if (std::isfinite(j.sigma_Si[h](a)))
+        j.sigma_written[h](a) = std::isfinite(j.sigma_with_tau[h](a)) ? std::max(j.sigma_Si[h](a), j.sigma_with_tau[h](a)) : j.sigma_Si[h](a);
   return j;
 }
 
@@ -411,15 +416,11 @@ void WindowedCalibration::close() {
     w.information_Si = mountingInformation(run.raw, run.raw_config);
     w.chi2_per_obs = run.raw.chi2_per_obs;
     w.bias_rad_s2 = run.raw.bias_rad_s2;
-    for (std::size_t k = 0; k < run.raw.bound.names.size(); ++k)
-      if (run.raw.bound.names[k] == "acc_time_offset") {
-        const auto kk = static_cast<Eigen::Index>(k);
-        const double sg = std::sqrt(std::max(0.0, run.raw.bound.covariance(kk, kk)));
-        if (sg > 0) {  // zero: the pseudo-inverse's null space, not determined
-          w.time_offset_s = run.raw.time_offset_s;
-          w.time_offset_sigma_s = sg;
-        }
-      }
+    const double sg = parameterSigma(run.raw.bound, "acc_time_offset");
+    if (sg > 0) {  // 0: not determined; NaN: not estimated
+      w.time_offset_s = run.raw.time_offset_s;
+      w.time_offset_sigma_s = sg;
+    }
     w.harmonics = orbitHarmonicTerms(run.raw, run.raw_config);
   } else {
     w.note = run.raw_note.empty() ? std::string("not estimated") : run.raw_note;

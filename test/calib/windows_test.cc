@@ -148,7 +148,7 @@ TEST(RandomEffects, TheSpreadBetweenWindowsIsFoundAndItsIntervalCoversIt) {
   std::uniform_real_distribution<double> U(1, 3);
   for (const double tau : {0.0, 2.0}) {
     int covered = 0;
-    double z2_re = 0, z2_ind = 0, chi2 = 0, tau_sum = 0;
+    double z2_re = 0, z2_ind = 0, z2_written = 0, chi2 = 0, tau_sum = 0;
     const int records = 400, windows = 10;
     for (int k = 0; k < records; ++k) {
       std::vector<WindowSolution> ws;
@@ -164,15 +164,23 @@ TEST(RandomEffects, TheSpreadBetweenWindowsIsFoundAndItsIntervalCoversIt) {
       tau_sum += j.tau[0](0);
       z2_re += std::pow(j.r_with_tau[0](0) / j.sigma_with_tau[0](0), 2);
       z2_ind += std::pow(j.r_Si[0](0) / j.sigma_Si[0](0), 2);
+      z2_written += std::pow(j.r_Si[0](0) / j.sigma_written[0](0), 2);  // what calibrate writes
+      EXPECT_GE(j.sigma_written[0](0), j.sigma_Si[0](0));
       chi2 += j.axis_chi2_per_dof[0](0);
     }
     const double rate = static_cast<double>(covered) / records;
     EXPECT_GE(rate, 0.90) << "tau " << tau;
     EXPECT_LE(rate, 0.995) << "tau " << tau;
-    const double rms_re = std::sqrt(z2_re / records), rms_ind = std::sqrt(z2_ind / records);
+    const double rms_re = std::sqrt(z2_re / records), rms_ind = std::sqrt(z2_ind / records),
+                 rms_written = std::sqrt(z2_written / records);
     std::printf("tau %.1f: interval covers %.1f %%, mean tau %.2f, joint error RMS over the random-effects sigma %.3f, over the "
-                "windows-independent sigma %.3f, mean chi2/dof %.3f (%d records of %d windows)\n",
-                tau, 100 * rate, tau_sum / records, rms_re, rms_ind, chi2 / records, records, windows);
+                "windows-independent sigma %.3f, the written value over the written sigma %.3f, mean chi2/dof %.3f (%d records of "
+                "%d windows)\n",
+                tau, 100 * rate, tau_sum / records, rms_re, rms_ind, rms_written, chi2 / records, records, windows);
+    // What calibrate writes (the information-weighted value with the larger sigma): never optimistic
+    // beyond Student-t's spread, and about as honest as the random-effects pair.
+    EXPECT_LT(rms_written, std::sqrt(9.0 / 7.0) + 0.12) << "tau " << tau;
+    EXPECT_GT(rms_written, 0.8) << "tau " << tau;
     if (tau == 0.0) {
       EXPECT_NEAR(rms_re, 1.0, 0.12);
       EXPECT_NEAR(chi2 / records, 1.0, 0.08);

@@ -12,6 +12,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <sstream>
 
@@ -876,6 +877,8 @@ TEST(Calibrate, WindowAfterWindowWithOneWindowsSamplesInMemoryAndWhatEachWindowD
   // scale_hold_sigma).
   const double dof = j["joint"]["dof"].get<double>();
   EXPECT_LT(j["joint"]["chi2_per_dof"].get<double>(), boresight::model::stats::chi2Quantile(0.001, dof) / dof) << j["joint"].dump();
+  std::printf("12 h in 3 h windows (ideal preset, seed 4): the windows' chi2/dof %.3f on %.0f dof\n",
+              j["joint"]["chi2_per_dof"].get<double>(), dof);
   // Memory: the raw samples of one window at most (a quarter of the record's: 3 heads and the
   // accelerometer).
   EXPECT_LE(j["peak_raw_samples_per_window"].get<std::uint64_t>(), samples / 4 + 8);
@@ -912,6 +915,8 @@ TEST(Calibrate, DayInSixHourWindowsTheJointFindsTheTruthAndTheWindowsAgree) {
   for (const auto& w : j["windows"]) ASSERT_TRUE(w["estimated"].get<bool>()) << w.dump();
   const double dof = j["joint"]["dof"].get<double>();
   EXPECT_EQ(dof, 27.0);  // 4 x 9 - 9
+  std::printf("a day in 6 h windows (ideal preset, seed 4): the windows' chi2/dof %.3f on %.0f dof\n",
+              j["joint"]["chi2_per_dof"].get<double>(), dof);
   EXPECT_LT(j["joint"]["chi2_per_dof"].get<double>(), boresight::model::stats::chi2Quantile(0.001, dof) / dof) << j["joint"].dump();
   const auto truth = expectedAngles(d + "/truth.yaml");
   for (std::size_t k = 0; k < 3; ++k) {

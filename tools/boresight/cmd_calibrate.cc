@@ -400,11 +400,7 @@ int writeWindows(const calib::WindowedCalibration& wc, const WindowOutputs& o, S
     return fail("no window was estimated:" + (why.empty() ? std::string(" no data") : why));
   }
   // The written sigma: the joint's, with the spread between windows where the windows show one.
-  std::vector<Vec3> sigma_out(n, Vec3::Constant(std::numeric_limits<double>::quiet_NaN()));
-  for (std::size_t i = 0; i < n; ++i)
-    for (int a = 0; a < 3; ++a)
-      if (std::isfinite(jm.sigma_Si[i](a)))
-        sigma_out[i](a) = std::isfinite(jm.sigma_with_tau[i](a)) ? std::max(jm.sigma_Si[i](a), jm.sigma_with_tau[i](a)) : jm.sigma_Si[i](a);
+  const std::vector<Vec3>& sigma_out = jm.sigma_written;
 
   report::Json j;
   j["method"] = "attitude domain, window after window (calib/windows.h): each window its own estimate, the windows combined";
@@ -1000,14 +996,7 @@ int runCalibrate(int argc, char** argv) {
       }
     }
     // Sigma of a named parameter of the estimate (NaN when absent).
-    const auto sigmaOfName = [&](const std::string& name) {
-      for (std::size_t k = 0; k < est.bound.names.size(); ++k)
-        if (est.bound.names[k] == name) {
-          const auto kk = static_cast<Eigen::Index>(k);
-          return std::sqrt(std::max(0.0, est.bound.covariance(kk, kk)));
-        }
-      return std::numeric_limits<double>::quiet_NaN();
-    };
+    const auto sigmaOfName = [&](const std::string& name) { return calib::parameterSigma(est.bound, name); };
     mounting.attitude = true;
     const auto terms = [&](const Vec3& v, const char* stem) {
       model::Uncertain3 u;

@@ -213,6 +213,11 @@ struct RawMountings {
 };
 RawMountings rawMountings(const RawEstimate& est, const RawBoundConfig& cfg, double not_determined_rad);
 
+/// The 1-sigma of a named parameter of a result (RawBoundResult::names, e.g. "acc_time_offset",
+/// "acc_scale.x"): NaN when the result has no such parameter, 0 when it lies in the covariance's null
+/// space - the span does not determine it (or it is held) - which callers report as not determined.
+double parameterSigma(const RawBoundResult& r, const std::string& name);
+
 /// One orbit-harmonic term of a head's alignment against the others (options.harmonics): head i's
 /// mounting rotates in its own frame Si by sum_k cos_k cos(k u) + sin_k sin(k u) (rad; the estimate's
 /// head-axis parameters H enter as -axes_Si^T H), with the 3x3 covariance of each.

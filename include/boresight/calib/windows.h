@@ -75,6 +75,9 @@ struct JointMountings {
   /// degrees of freedom rather than a normal law (its RMS sqrt((m - 1) / (m - 3)): 1.13 for 10 windows).
   std::vector<Vec3> axis_chi2_per_dof, tau, tau_lo, tau_hi, sigma_with_tau, r_with_tau;
   std::vector<Vec3> axis_windows;   ///< windows with the axis determined (as doubles)
+  /// The sigma to write with r_Si: the larger of sigma_Si and sigma_with_tau (sigma_Si where there is
+  /// no tau: one window); NaN where not determined.
+  std::vector<Vec3> sigma_written;
 };
 
 /// Combines the estimated windows (the others are skipped) by their information (WindowSolution::
