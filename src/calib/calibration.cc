@@ -57,6 +57,7 @@ CalibrationFeed::CalibrationFeed(const CalibrationFeed& o)
       configured_(o.configured_),
       finished_(o.finished_),
       with_raw_(o.with_raw_),
+      with_crn_(o.with_crn_),
       raw_(o.raw_),
       sum_A_(o.sum_A_),
       n_acc_(o.n_acc_),
@@ -77,11 +78,12 @@ CalibrationFeed& CalibrationFeed::operator=(const CalibrationFeed& o) {
 CalibrationFeed::~CalibrationFeed() = default;
 
 bool CalibrationFeed::configure(const core::PipelineConfig& cfg, const SpanOptions& so, bool with_thermal,
-                                std::string* error, bool with_raw) {
+                                std::string* error, bool with_raw, bool with_crn) {
   configured_ = finished_ = false;
   orbit_samples_ = 0;
   thermal_.reset();
   with_raw_ = with_raw;
+  with_crn_ = with_crn || !with_raw;
   raw_ = RawData{};
   sum_A_ = Vec3::Zero();
   n_acc_ = aberrated_ = 0;
@@ -113,7 +115,8 @@ void CalibrationFeed::restart(TimeUs keep_orbit_from) {
     thermal_->configure(cfg_.heads, ThermalFitConfig{}, &error);
   }
   finished_ = false;
-  raw_.events.clear();  // the capacity stays
+  raw_.heads.clear();  // the capacity stays
+  raw_.acc.clear();
   sum_A_ = Vec3::Zero();
   n_acc_ = aberrated_ = 0;
   orbit_line_ = OrbitLine{};
@@ -121,6 +124,21 @@ void CalibrationFeed::restart(TimeUs keep_orbit_from) {
   orbit_v_.erase(orbit_v_.begin(), std::find_if(orbit_v_.begin(), orbit_v_.end(),
                                                 [keep_orbit_from](const OrbitPoint& x) { return x.t >= keep_orbit_from; }));
   orbit_samples_ = orbit_v_.size();
+}
+
+CalibrationFeed CalibrationFeed::handOver(TimeUs keep_orbit_from) {
+  CalibrationFeed out(std::move(*this));
+  // This feed again: the configuration, no data, the orbit segment from keep_orbit_from on (restart).
+  cfg_ = out.cfg_;
+  so_ = out.so_;
+  configured_ = out.configured_;
+  with_raw_ = out.with_raw_;
+  with_crn_ = out.with_crn_;
+  if (out.thermal_) thermal_ = std::make_unique<ThermalCollector>();  // configured by restart()
+  raw_ = RawData{};
+  orbit_v_ = out.orbit_v_;
+  restart(keep_orbit_from);
+  return out;
 }
 
 double CalibrationFeed::rawTime(TimeUs t) {
@@ -133,14 +151,14 @@ double CalibrationFeed::rawTime(TimeUs t) {
 
 void CalibrationFeed::pushHeads(const core::HeadEpoch& e) {
   if (!configured_ || finished_) return;
-  builder_.pushHeads(e);
+  if (with_crn_) builder_.pushHeads(e);
   if (thermal_) thermal_->pushHeads(e);
   if (!with_raw_) return;
   for (int k = 0; k < e.n; ++k) {
     const auto& h = e.sample[static_cast<std::size_t>(k)];
     const int slot = core::slotOf(cfg_.heads, h.head_id);
     if (slot < 0) continue;
-    raw_.events.push_back(RawData::Event::headSample(rawTime(e.t), slot, h.q_I_Si));
+    raw_.heads.push_back(RawData::Head::sample(rawTime(e.t), slot, h.q_I_Si));
   }
   trimRaw(e.t);
 }
@@ -148,13 +166,14 @@ void CalibrationFeed::pushHeads(const core::HeadEpoch& e) {
 void CalibrationFeed::trimRaw(TimeUs newest) {
   // The raw samples' window: as much data time as the span builder's window of observations (the
   // oldest dropped in blocks of 1/16 of it, as the builder drops its observations).
-  if (!with_raw_ || so_.max_observations == 0 || raw_.events.empty()) return;
+  if (!with_raw_ || so_.max_observations == 0 || raw_.empty()) return;
   const double window_s = static_cast<double>(so_.max_observations) * so_.decimation_s;
   const double now_s = static_cast<double>(newest - t0_) * 1e-6;
-  if (raw_.events.front().t_s >= now_s - window_s * (1.0 + 1.0 / 16.0)) return;
+  const double oldest = std::min(raw_.heads.empty() ? now_s : raw_.heads.front().t_s, raw_.acc.empty() ? now_s : raw_.acc.front().t_s);
+  if (oldest >= now_s - window_s * (1.0 + 1.0 / 16.0)) return;
   const double cut = now_s - window_s;
-  const auto first = std::find_if(raw_.events.begin(), raw_.events.end(), [cut](const RawData::Event& x) { return x.t_s >= cut; });
-  raw_.events.erase(raw_.events.begin(), first);
+  raw_.heads.erase(raw_.heads.begin(), std::find_if(raw_.heads.begin(), raw_.heads.end(), [cut](const RawData::Head& x) { return x.t_s >= cut; }));
+  raw_.acc.erase(raw_.acc.begin(), std::find_if(raw_.acc.begin(), raw_.acc.end(), [cut](const RawData::Acc& x) { return x.t_s >= cut; }));
   const TimeUs cut_us = t0_ + static_cast<TimeUs>(std::llround(cut * 1e6)) - 60 * kUsPerSecond;  // orbit: one segment more
   const auto o = std::find_if(orbit_v_.begin(), orbit_v_.end(), [cut_us](const OrbitPoint& x) { return x.t >= cut_us; });
   orbit_v_.erase(orbit_v_.begin(), o);
@@ -162,9 +181,9 @@ void CalibrationFeed::trimRaw(TimeUs newest) {
 
 void CalibrationFeed::pushAcc(TimeUs t, const Vec3& a_A) {
   if (!configured_ || finished_) return;
-  builder_.pushAcc(t, a_A);
+  if (with_crn_) builder_.pushAcc(t, a_A);
   if (!with_raw_) return;
-  raw_.events.push_back(RawData::Event::accel(rawTime(t), a_A));
+  raw_.acc.push_back(RawData::Acc::sample(rawTime(t), a_A));
   sum_A_ += a_A;
   ++n_acc_;
   trimRaw(t);
@@ -192,8 +211,7 @@ void CalibrationFeed::finish() {
     return t >= ta && t <= tb && tb > ta && tb - ta <= 60 * kUsPerSecond;
   };
   std::size_t k = 0;
-  for (auto& ev : raw_.events) {  // in time order, as the orbit
-    if (ev.head < 0) continue;
+  for (auto& ev : raw_.heads) {  // in time order, as the orbit
     const TimeUs t = t0_ + static_cast<TimeUs>(std::llround(ev.t_s * 1e6));
     while (k + 2 < orbit_v_.size() && orbit_v_[k + 1].t < t) ++k;
     // A sample at an orbit sample's time belongs to either segment: the next one when this one is a gap.
@@ -279,8 +297,7 @@ CalibrationRun runCalibration(CalibrationFeed& feed, const RunOptions& o) {
   // estimate, with sigmas that say what the data determine).
   const auto runRaw = [&]() {
     if (!o.raw || !feed.collectsRaw()) return;
-    std::size_t n_head = 0, n_acc = 0;
-    for (const auto& e : feed.raw().events) (e.head < 0 ? n_acc : n_head) += 1;
+    const std::size_t n_head = feed.raw().heads.size(), n_acc = feed.raw().acc.size();
     if (n_head < 2 || n_acc < 2) {
       run.raw_note = "the attitude-domain estimate needs head and accelerometer samples (" + std::to_string(n_head) + " and " +
                      std::to_string(n_acc) + " in the window)";
@@ -314,6 +331,13 @@ CalibrationRun runCalibration(CalibrationFeed& feed, const RunOptions& o) {
     }
   };
 
+  if (!feed.collectsCrn()) {  // the attitude-domain estimate alone
+    run.result.ok = false;
+    run.result.refusal = Refusal::kTooFewEpochs;
+    run.result.message = "no CRN rows collected (the attitude-domain estimate alone)";
+    runRaw();
+    return run;
+  }
   if (span.epochs_total == 0) {
     const double span_s = span.head_epochs ? static_cast<double>(span.t_last - span.t_first) * 1e-6 : 0.0;
     run.result.ok = false;

@@ -444,8 +444,9 @@ void RawBound::observe(std::size_t i, int j, double t_s, double y) {
     pending_[g].col(pending_n_[g]++) = u.head(p).transpose() / std::sqrt(F);
     if (pending_n_[g] == pending_[g].cols()) flushPending();
     if (record_innovations_) {
-      auto& sr = innovations_[3 * i + jj];
-      if (sr.t_s.empty() || t_s > sr.t_s.back()) {
+      const std::size_t k = 3 * i + jj;
+      auto& sr = innovations_[k];
+      if ((sr.t_s.empty() || t_s > sr.t_s.back()) && innovation_seen_[k]++ % innovation_stride_[i] == 0) {
         sr.t_s.push_back(t_s);
         sr.y.push_back(seen);
       }
@@ -477,6 +478,8 @@ void RawBound::enableData(const std::vector<Mat3>& C_Si_B_applied, const Vec3& b
   pending_n_.assign(groups_.size(), 0);
   pending_block_ = 0;
   innovations_.assign(3 * cfg_.heads.size(), model::NoiseSeries{});
+  innovation_seen_.assign(3 * cfg_.heads.size(), 0);
+  innovation_stride_.assign(cfg_.heads.size(), 1);
   C_Si_B_applied_ = C_Si_B_applied;
   bias_applied_ = bias;
   scale_applied_ = scale;
@@ -617,36 +620,32 @@ Eigen::VectorXd RawBound::solveParameters(const RawBoundResult& r) const {
 
 namespace {
 
-/// The accelerometer's angular jerk at each of its samples (A, rad/s^3), in the order of `acc` (the
-/// accelerometer events in time order): the least-squares slope over the samples within +-1 s (the time
-/// offset's column).
-std::vector<Vec3> smoothedJerk(const RawData& data, const std::vector<std::uint32_t>& acc) {
-  std::vector<Vec3> out(acc.size(), Vec3::Zero());
-  std::size_t lo = 0, hi = 0;
-  for (std::size_t m = 0; m < acc.size(); ++m) {
-    const double t = data.events[acc[m]].t_s;
-    while (lo < m && data.events[acc[lo]].t_s < t - 1.0) ++lo;
-    while (hi + 1 < acc.size() && data.events[acc[hi + 1]].t_s <= t + 1.0) ++hi;
-    if (hi < m) hi = m;
-    double st = 0;
-    Vec3 sz = Vec3::Zero();
-    const double n = static_cast<double>(hi - lo + 1);
-    for (std::size_t q = lo; q <= hi; ++q) {
-      st += data.events[acc[q]].t_s;
-      sz += data.events[acc[q]].z_A();
-    }
-    const double tm = st / n;
-    const Vec3 zm = sz / n;
-    double stt = 0;
-    Vec3 stz = Vec3::Zero();
-    for (std::size_t q = lo; q <= hi; ++q) {
-      const double dt = data.events[acc[q]].t_s - tm;
-      stt += dt * dt;
-      stz += dt * (data.events[acc[q]].z_A() - zm);
-    }
-    if (stt > 0) out[m] = stz / stt;
+/// The accelerometer's angular jerk at sample m of `acc` (in time order; A, rad/s^3): the least-squares
+/// slope over the samples within +-1 s (the time offset's column). lo and hi are the window's ends,
+/// carried from one sample to the next (start both at 0, m increasing): computed as the pass goes, so
+/// no array of a day's jerks is held.
+Vec3 smoothedJerk(const std::vector<RawData::Acc>& acc, std::size_t m, std::size_t& lo, std::size_t& hi) {
+  const double t = acc[m].t_s;
+  while (lo < m && acc[lo].t_s < t - 1.0) ++lo;
+  if (hi < m) hi = m;
+  while (hi + 1 < acc.size() && acc[hi + 1].t_s <= t + 1.0) ++hi;
+  double st = 0;
+  Vec3 sz = Vec3::Zero();
+  const double n = static_cast<double>(hi - lo + 1);
+  for (std::size_t q = lo; q <= hi; ++q) {
+    st += acc[q].t_s;
+    sz += acc[q].z_A();
   }
-  return out;
+  const double tm = st / n;
+  const Vec3 zm = sz / n;
+  double stt = 0;
+  Vec3 stz = Vec3::Zero();
+  for (std::size_t q = lo; q <= hi; ++q) {
+    const double dt = acc[q].t_s - tm;
+    stt += dt * dt;
+    stz += dt * (acc[q].z_A() - zm);
+  }
+  return stt > 0 ? Vec3(stz / stt) : Vec3::Zero();
 }
 
 /// Each term's level times sqrt(f): the whole model's variance times f.
@@ -704,31 +703,27 @@ RawEstimate estimateRaw(const RawBoundConfig& cfg0, const RawData& data, const V
   // With a time offset tau the sample tagged t is the mean about t + tau.
   const double half = 0.5 * cfg.acc_interval_s;
   double tau = 0;
-  // The head events and the accelerometer's, each in time order once (4-byte indices: a day holds 1.4
-  // million events); a pass merges the two with the accelerometer shifted by its offset (ties in the
-  // events' order): linear, where a sort of the whole was 5 % of a day's estimate. In `order` an
-  // accelerometer entry is kAcc | its position in acc_ev (the jerk's index).
-  constexpr std::uint32_t kAcc = 0x80000000u;
-  std::vector<std::uint32_t> head_ev, acc_ev;
-  for (std::size_t k = 0; k < data.events.size(); ++k) (data.events[k].head < 0 ? acc_ev : head_ev).push_back(static_cast<std::uint32_t>(k));
-  const auto by_time = [&](std::uint32_t a, std::uint32_t b) { return data.events[a].t_s < data.events[b].t_s; };
-  std::stable_sort(head_ev.begin(), head_ev.end(), by_time);
-  std::stable_sort(acc_ev.begin(), acc_ev.end(), by_time);
-  const std::vector<Vec3> jerk = cfg.options.time_offset ? smoothedJerk(data, acc_ev) : std::vector<Vec3>(acc_ev.size(), Vec3::Zero());
-  std::vector<std::uint32_t> order(data.events.size());
+  // The head samples and the accelerometer's, each in time order (a sorted copy when the data are not);
+  // a pass merges the two with the accelerometer shifted by its offset (a head sample first at a tie).
+  const auto by_time = [](const auto& a, const auto& b) { return a.t_s < b.t_s; };
+  RawData sorted;
+  const RawData* d = &data;
+  if (!std::is_sorted(data.heads.begin(), data.heads.end(), by_time) || !std::is_sorted(data.acc.begin(), data.acc.end(), by_time)) {
+    sorted = data;
+    std::stable_sort(sorted.heads.begin(), sorted.heads.end(), by_time);
+    std::stable_sort(sorted.acc.begin(), sorted.acc.end(), by_time);
+    d = &sorted;
+  }
+  const std::vector<RawData::Head>& heads = d->heads;
+  const std::vector<RawData::Acc>& accs = d->acc;
+  // The noise fit takes at most 16384 innovations per head axis (every k-th head sample's): the exact
+  // likelihood's cost is linear in them, and what the fit determines (times from 20 intervals up) does
+  // not need every 0.5 s sample.
+  std::vector<std::size_t> head_count(nh, 0);
+  for (const auto& h : heads)
+    if (h.head >= 0 && static_cast<std::size_t>(h.head) < nh) ++head_count[static_cast<std::size_t>(h.head)];
   const int npass = std::max(passes, 1);
   for (int pass = 0; pass < npass; ++pass) {
-    {
-      std::size_t i = 0, m = 0, o = 0;
-      while (i < head_ev.size() || m < acc_ev.size()) {
-        bool take_acc = i == head_ev.size();
-        if (!take_acc && m < acc_ev.size()) {
-          const double ka = data.events[acc_ev[m]].t_s + tau - half, kh = data.events[head_ev[i]].t_s;
-          take_acc = ka < kh || (!(kh < ka) && acc_ev[m] < head_ev[i]);
-        }
-        order[o++] = take_acc ? (kAcc | static_cast<std::uint32_t>(m++)) : head_ev[i++];
-      }
-    }
     for (std::size_t i = 0; i < nh; ++i) {
       applied[i] = core::quatExp(eps[i]).toRotationMatrix() * cfg.heads[i].C_Si_B;
       for (std::size_t j = 0; j < 3; ++j) cfg.heads[i].noise[j] = scaledNoise(base[i][j], factor[i][j == 2 ? 1 : 0]);
@@ -741,15 +736,19 @@ RawEstimate estimateRaw(const RawBoundConfig& cfg0, const RawData& data, const V
     b.gate_sigma_ = pass == 0 ? 0.0 : 6.0;
     const bool fit_now = cfg.options.fit_noise && pass == 1 && npass > 2;
     b.record_innovations_ = fit_now;
+    if (fit_now)
+      for (std::size_t i = 0; i < nh; ++i) b.innovation_stride_[i] = head_count[i] / 16384 + 1;
     b.collect_blocks_ = pass + 1 == npass;  // the score blocks serve the last pass's covariance only
-    for (const std::uint32_t o : order) {
-      if (o & kAcc) {
-        const std::uint32_t m = o & ~kAcc;
-        const auto& ev = data.events[acc_ev[m]];
-        b.accelData(ev.t_s + tau - half, ev.z_A(), jerk[m]);
+    std::size_t ih = 0, ia = 0, jlo = 0, jhi = 0;
+    while (ih < heads.size() || ia < accs.size()) {
+      if (ia < accs.size() && (ih == heads.size() || accs[ia].t_s + tau - half < heads[ih].t_s)) {
+        const auto& ev = accs[ia];
+        b.accelData(ev.t_s + tau - half, ev.z_A(), cfg.options.time_offset ? smoothedJerk(accs, ia, jlo, jhi) : Vec3::Zero());
+        ++ia;
         continue;
       }
-      const auto& ev = data.events[o];
+      const auto& ev = heads[ih++];
+      if (ev.head < 0 || static_cast<std::size_t>(ev.head) >= nh) continue;
       if (ev.v_obs_I().isZero()) {
         b.headData(ev.t_s, static_cast<std::size_t>(ev.head), ev.q_I_Si());
       } else {
@@ -824,15 +823,7 @@ RawEstimate estimateRaw(const RawBoundConfig& cfg0, const RawData& data, const V
       model::parallelFor(3 * nh, cfg.options.threads, [&](std::size_t ij) {
         const std::size_t i = ij / 3, j = ij % 3;
         {
-          // At most 16384 samples (every k-th): the exact likelihood's cost is linear in them, and what
-          // the fit determines (times from 20 intervals up) does not need every 0.5 s sample.
-          const model::NoiseSeries& full = b.innovations_[3 * i + j];
-          const std::size_t stride = full.size() / 16384 + 1;
-          model::NoiseSeries sr;
-          for (std::size_t k = 0; k < full.size(); k += stride) {
-            sr.t_s.push_back(full.t_s[k]);
-            sr.y.push_back(full.y[k]);
-          }
+          const model::NoiseSeries& sr = b.innovations_[3 * i + j];  // every k-th head sample's (above)
           if (sr.size() < 200) {
             out.fitted_noise[i][j] = cfg0.heads[i].noise[j];
             return;

@@ -333,8 +333,11 @@ std::pair<TimeUs, TimeUs> WindowedCalibration::windowOf(TimeUs t, double window_
 }
 
 bool WindowedCalibration::configure(const core::PipelineConfig& cfg, const SpanOptions& so, double window_s, const RunOptions& run,
-                                    double not_determined_rad, std::string* error) {
+                                    double not_determined_rad, std::string* error, unsigned concurrent) {
+  while (collect(true)) {
+  }
   windows_.clear();
+  concurrent_ = std::max(1u, concurrent);
   beta_.clear();
   late_ = 0;
   open_ = finished_ = false;
@@ -351,14 +354,13 @@ bool WindowedCalibration::configure(const core::PipelineConfig& cfg, const SpanO
   not_determined_rad_ = not_determined_rad;
   run_ = run;
   run_.thermal_fit = false;  // the thermal harmonic fit belongs to a whole record, not to its windows
-  return feed_.configure(cfg, so, false, error, true);
+  return feed_.configure(cfg, so, false, error, true, false);  // the raw samples alone: no CRN rows
 }
 
 void WindowedCalibration::advance(TimeUs t) {
   if (open_ && t < to_) return;
-  if (open_) close();
   const auto [from, to] = windowOf(t, window_s_);
-  if (open_) feed_.restart(from - 120 * kUsPerSecond);  // the orbit segment across the window's start
+  if (open_) close(from - 120 * kUsPerSecond);  // the orbit segment across the new window's start kept
   from_ = from;
   to_ = to;
   open_ = true;
@@ -399,20 +401,15 @@ void WindowedCalibration::pushOrbit(const model::OrbitSample& o) {
   ++it->second.second;
 }
 
-void WindowedCalibration::close() {
+namespace {
+
+/// One window's estimate (w holds the window's times and counts; the feed its data).
+WindowSolution estimateWindow(CalibrationFeed& feed, WindowSolution w, const RunOptions& ro, double not_determined_rad) {
   const auto t0 = std::chrono::steady_clock::now();
-  WindowSolution w;
-  w.from = from_;
-  w.to = to_;
-  w.first = first_;
-  w.last = last_;
-  w.head_epochs = head_epochs_;
-  w.acc_samples = acc_samples_;
-  peak_raw_ = std::max(peak_raw_, feed_.raw().events.size());
-  const CalibrationRun run = runCalibration(feed_, run_);
+  const CalibrationRun run = runCalibration(feed, ro);
   if (run.raw_estimated) {
     w.estimated = true;
-    w.mountings = rawMountings(run.raw, run.raw_config, not_determined_rad_);
+    w.mountings = rawMountings(run.raw, run.raw_config, not_determined_rad);
     w.information_Si = mountingInformation(run.raw, run.raw_config);
     w.chi2_per_obs = run.raw.chi2_per_obs;
     w.bias_rad_s2 = run.raw.bias_rad_s2;
@@ -425,19 +422,62 @@ void WindowedCalibration::close() {
   } else {
     w.note = run.raw_note.empty() ? std::string("not estimated") : run.raw_note;
   }
+  w.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return w;
+}
+
+}  // namespace
+
+void WindowedCalibration::close(TimeUs keep_orbit_from) {
+  WindowSolution w;
+  w.from = from_;
+  w.to = to_;
+  w.first = first_;
+  w.last = last_;
+  w.head_epochs = head_epochs_;
+  w.acc_samples = acc_samples_;
+  peak_raw_ = std::max(peak_raw_, feed_.raw().size());
   for (const auto& e : beta_)
     if (e.first == from_ && e.second.second > 0) w.beta_rad = e.second.first / static_cast<double>(e.second.second);
   beta_.erase(std::remove_if(beta_.begin(), beta_.end(), [this](const auto& e) { return e.first <= from_; }), beta_.end());
-  w.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  windows_.push_back(std::move(w));
+  if (concurrent_ <= 1) {
+    windows_.push_back(estimateWindow(feed_, std::move(w), run_, not_determined_rad_));
+    feed_.restart(keep_orbit_from);
+    report();
+    return;
+  }
+  auto job = std::make_unique<CalibrationFeed>(feed_.handOver(keep_orbit_from));
+  if (!finished_) feed_.reserveRaw(job->raw().heads.size(), job->raw().acc.size());
+  pending_.push_back(std::async(std::launch::async, [job = std::move(job), w = std::move(w), ro = run_, nd = not_determined_rad_]() mutable {
+    return estimateWindow(*job, std::move(w), ro, nd);
+  }));
+  while (collect(false)) {
+  }
+  // At most concurrent_ windows' samples held: the next window is fed only when a place is free.
+  while (pending_.size() >= concurrent_) collect(true);
+}
+
+bool WindowedCalibration::collect(bool wait) {
+  if (pending_.empty()) return false;
+  if (!wait && pending_.front().wait_for(std::chrono::seconds(0)) != std::future_status::ready) return false;
+  std::future<WindowSolution> f = std::move(pending_.front());
+  pending_.pop_front();
+  windows_.push_back(f.get());  // an estimate's exception comes out here, on the caller's thread
+  report();
+  return true;
+}
+
+void WindowedCalibration::report() {
   if (on_window_) on_window_(windows_.back());
 }
 
 void WindowedCalibration::finish() {
   if (finished_) return;
   finished_ = true;
-  if (open_) close();
+  if (open_) close(to_);
   open_ = false;
+  while (collect(true)) {
+  }
 }
 
 }  // namespace boresight::calib

@@ -350,16 +350,18 @@ void shortSpanWithinTheBound(bool aberration_in_data, bool holes = false) {
     // accelerometer out for 4 s at a peak of the second, head 1 out for 2 minutes, the accelerometer's
     // first 5 s missing (the span starts with heads only), and a minute with no data at all (a
     // telemetry outage: heads and accelerometer, 500-560 s).
-    const auto out = [](const RawData::Event& e) {
-      if (e.t_s >= 500.0 && e.t_s < 560.0) return true;
-      if (e.head < 0) return e.t_s < 5.0 || (e.t_s >= 448.0 && e.t_s < 452.0);
+    const auto outage = [](double t) { return t >= 500.0 && t < 560.0; };
+    const auto acc_out = [&](const RawData::Acc& e) { return outage(e.t_s) || e.t_s < 5.0 || (e.t_s >= 448.0 && e.t_s < 452.0); };
+    const auto head_out = [&](const RawData::Head& e) {
+      if (outage(e.t_s)) return true;
       for (int k = 0; k < 12; ++k) {
         const double c = 70.0 + 20.0 * k;
         if (e.t_s >= c - 3.0 && e.t_s < c + 3.0) return true;
       }
       return e.head == 0 && e.t_s >= 600.0 && e.t_s < 720.0;
     };
-    data.events.erase(std::remove_if(data.events.begin(), data.events.end(), out), data.events.end());
+    data.acc.erase(std::remove_if(data.acc.begin(), data.acc.end(), acc_out), data.acc.end());
+    data.heads.erase(std::remove_if(data.heads.begin(), data.heads.end(), head_out), data.heads.end());
   }
   const RawEstimate est = estimateRaw(cfg, data, simu.accel().config().bias_rad_s2, 2);
   if (holes) {

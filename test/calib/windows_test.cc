@@ -5,6 +5,7 @@
 #include "synthetic.h"
 
 #include <boresight/calib/windows.h>
+#include <boresight/model/overlay.h>
 
 #include <gtest/gtest.h>
 
@@ -282,6 +283,65 @@ TEST(WindowedCalibration, ASampleOlderThanTheOpenWindowIsCountedNotTaken) {
   ASSERT_EQ(w.windows().size(), 2u);
   EXPECT_EQ(w.windows()[1].acc_samples, 1u);
   EXPECT_EQ(w.windows()[1].head_epochs, 0u);
+}
+
+// Two windows in estimation at once (calibrate's default on two cores) against one at a time: the same
+// windows in the same order with the same numbers, bit for bit (each window's estimate depends on its
+// own data alone, and the feed handed to a thread holds exactly what the sequential feed held).
+TEST(WindowedCalibration, WindowsEstimatedTwoAtATimeAreTheSequentialWindowsExactly) {
+  // The calibration span (three one-axis manoeuvres, 3900 s) in 1200 s windows: one manoeuvre in each of
+  // the first three, none in the last 300 s.
+  const synth::Config c = synth::manoeuvreCase(3);
+  SpanOptions so;
+  so.decimation_s = c.decimation_s;
+  model::NoiseInUse noise;
+  for (std::size_t s = 0; s < static_cast<std::size_t>(c.n_heads); ++s) {
+    noise.head[s][0].noise.model = noise.head[s][1].noise.model = model::NoiseModel::white(c.sigma_cross_arcsec * kRadPerArcsec);
+    noise.head[s][2].noise.model = model::NoiseModel::white(c.sigma_roll_arcsec * kRadPerArcsec);
+  }
+  for (std::size_t a = 0; a < 3; ++a) noise.acc[a].noise.model = model::NoiseModel::white(c.acc_white[static_cast<Eigen::Index>(a)]);
+  RunOptions ro;
+  ro.raw = rawBoundConfig(synth::pipelineConfig(c), noise, RawBoundOptions{});
+  std::vector<std::vector<TimeUs>> reported(2);
+  std::vector<std::vector<WindowSolution>> got(2);
+  for (unsigned k = 0; k < 2; ++k) {
+    WindowedCalibration w;
+    std::string err;
+    ASSERT_TRUE(w.configure(synth::pipelineConfig(c), so, 1200, ro, 1.0, &err, k + 1)) << err;
+    w.onWindow([&, k](const WindowSolution& x) { reported[k].push_back(x.from); });
+    synth::stream(c, w);
+    w.finish();
+    got[k] = w.windows();
+    EXPECT_EQ(w.peakRawSamples(), 1200u * 16u);  // 2 Hz x 3 heads and 10 Hz, 1200 s
+  }
+  ASSERT_EQ(got[0].size(), 4u);
+  ASSERT_EQ(got[1].size(), got[0].size());
+  EXPECT_EQ(reported[0], reported[1]);
+  for (std::size_t i = 0; i < got[0].size(); ++i) {
+    const WindowSolution& a = got[0][i];
+    const WindowSolution& b = got[1][i];
+    SCOPED_TRACE("window " + std::to_string(i));
+    EXPECT_EQ(reported[1][i], b.from);  // reported in time order
+    EXPECT_EQ(a.from, b.from);
+    EXPECT_EQ(a.head_epochs, b.head_epochs);
+    EXPECT_EQ(a.acc_samples, b.acc_samples);
+    EXPECT_EQ(a.note, b.note);
+    ASSERT_EQ(a.estimated, b.estimated);
+    if (i < 3) {
+      ASSERT_TRUE(a.estimated) << a.note;
+    }
+    if (!a.estimated) continue;
+    EXPECT_EQ(a.chi2_per_obs, b.chi2_per_obs);
+    EXPECT_EQ(a.bias_rad_s2, b.bias_rad_s2);
+    ASSERT_EQ(a.mountings.r_Si.size(), 3u);
+    for (std::size_t h = 0; h < 3; ++h) {
+      EXPECT_EQ(a.mountings.r_Si[h], b.mountings.r_Si[h]);
+      for (int j = 0; j < 3; ++j)  // NaN where not determined: the same axes
+        EXPECT_TRUE(a.mountings.sigma_Si[h](j) == b.mountings.sigma_Si[h](j) ||
+                    (std::isnan(a.mountings.sigma_Si[h](j)) && std::isnan(b.mountings.sigma_Si[h](j))));
+    }
+    EXPECT_EQ(a.information_Si, b.information_Si);
+  }
 }
 
 TEST(WindowedCalibration, WindowsAreWholeMultiplesAfterGpsMidnight) {

@@ -783,7 +783,9 @@ int runCalibrate(int argc, char** argv) {
                            "one)\n(boresight calibrate --help lists the options)\n");
       return 2;
     }
-    if (!windowed.configure(pc.pipeline, spo, window_s, ro_run, raw_unobs * kRadPerArcsec, &err)) return fail(err);
+    // Two windows estimated at once on a 2-core machine (each window's estimate is independent of the others).
+    if (!windowed.configure(pc.pipeline, spo, window_s, ro_run, raw_unobs * kRadPerArcsec, &err, model::defaultThreads()))
+      return fail(err);
     windowed.onWindow([&](const calib::WindowSolution& w) {
       std::printf("window %s .. %s: %llu head epochs, %llu accelerometer samples: %s (%.1f s)\n", io::formatTime(w.from).c_str(),
                   io::formatTime(w.to).c_str(), static_cast<unsigned long long>(w.head_epochs),

@@ -67,11 +67,14 @@ class CalibrationFeed {
   /// heads or more; the orbit must come in the same stream). False with *error: the configuration
   /// cannot be run (said at start-up, never found later).
   /// with_raw: also keep every head and accelerometer sample (and the orbit's velocity, for the stars'
-  /// aberration) for the attitude-domain estimate - the whole span in memory (72 bytes a sample, about
-  /// 100 MB per day of GRACE-FO data), so only when asked; with SpanOptions::max_observations the same window of data time
+  /// aberration) for the attitude-domain estimate - the whole span in memory (56 bytes a head sample,
+  /// 32 an accelerometer sample: 57 MB per day of GRACE-FO data), so only when asked; with SpanOptions::max_observations the same window of data time
   /// as the observations (max_observations x decimation_s).
+  /// with_crn false (with_raw only): the span builder is configured (its configuration checked) but fed
+  /// nothing, so the feed holds no CRN rows and runCalibration runs the attitude-domain estimate alone
+  /// (what calibrate's windows use: a day's CRN rows and their solve are some 20 MB and 3 % of the time).
   bool configure(const core::PipelineConfig& cfg, const SpanOptions& so, bool with_thermal, std::string* error,
-                 bool with_raw = false);
+                 bool with_raw = false, bool with_crn = true);
   bool configured() const { return configured_; }
   /// Head epochs as the core's validator leaves them.
   void pushHeads(const core::HeadEpoch& e);
@@ -88,6 +91,15 @@ class CalibrationFeed {
   /// one - and the orbit samples from `keep_orbit_from` on kept (the segment across the new window's
   /// start, which its first head samples' observer velocity needs).
   void restart(TimeUs keep_orbit_from);
+  /// The same, the data handed over instead of dropped: the returned feed holds this window's data (to be
+  /// run on another thread), this one is restarted as by restart(keep_orbit_from).
+  CalibrationFeed handOver(TimeUs keep_orbit_from);
+  /// Room for this many raw samples (a window as long as the last: filled without a copy at every
+  /// doubling of the arrays).
+  void reserveRaw(std::size_t heads, std::size_t acc) {
+    raw_.heads.reserve(heads);
+    raw_.acc.reserve(acc);
+  }
   bool finished() const { return finished_; }
 
   const CalibrationSpan& span() const { return builder_.span(); }
@@ -96,6 +108,7 @@ class CalibrationFeed {
   const SpanOptions& spanOptions() const { return so_; }
   ThermalCollector* thermal() { return thermal_.get(); }
   bool collectsRaw() const { return with_raw_; }
+  bool collectsCrn() const { return with_crn_; }
   /// The raw samples (with_raw), times in seconds since the first; finish() gives every head sample
   /// inside the orbit's span the observer velocity (the satellite's, linear between orbit samples no
   /// more than 60 s apart, plus the Earth's).
@@ -121,7 +134,7 @@ class CalibrationFeed {
   SpanBuilder builder_;
   std::unique_ptr<ThermalCollector> thermal_;
   std::uint64_t orbit_samples_ = 0;
-  bool configured_ = false, finished_ = false, with_raw_ = false;
+  bool configured_ = false, finished_ = false, with_raw_ = false, with_crn_ = true;
   // The raw samples (with_raw).
   double rawTime(TimeUs t);
   /// With SpanOptions::max_observations: drops the raw samples (and orbit velocities) older than the

@@ -231,45 +231,50 @@ struct OrbitHarmonicTerm {
 /// columns are found by the parameters' names (RawBoundResult::names), not by a copy of their layout.
 std::vector<OrbitHarmonicTerm> orbitHarmonicTerms(const RawEstimate& est, const RawBoundConfig& cfg);
 
-/// The measured data of a span, in time order (the estimator needs them once per pass).
+/// The measured data of a span (the estimator reads them once per pass): the head samples and the
+/// accelerometer's, each in its own array (a day of GRACE-FO data is 0.5 million head samples at 56
+/// bytes and 0.9 million accelerometer samples at 32: 57 MB). estimateRaw takes each array in time
+/// order (sorting a copy when it is not), so they may be filled in any order.
 struct RawData {
-  /// One sample, 72 bytes (a day of GRACE-FO data is 1.4 million of them): an accelerometer sample
-  /// keeps its angular acceleration and a head sample its attitude and observer velocity in the same
-  /// three numbers.
-  struct Event {
+  struct Head {
     double t_s = 0;
-    int head = -1;  ///< -1: accelerometer sample (z_A), else head index (q_I_Si, v_obs_I)
+    std::array<double, 4> q{1.0, 0, 0, 0};  ///< q_I_Si (w, x, y, z)
+    /// The observer's inertial velocity (m/s; the Earth's and the satellite's) when the attitude carries
+    /// the stars' aberration, which estimateRaw then removes (model/effects.h's aberration: the apparent
+    /// boresight turned by b x v / c); zero: none to remove. Single precision: 6e-8 of the velocity (2 mm/s
+    /// at the Earth's 30 km/s), an aberration error below 1e-11 rad.
+    std::array<float, 3> v{0.0f, 0.0f, 0.0f};
+    std::int32_t head = 0;  ///< head index (position in the configuration)
 
-    static Event accel(double t_s, const Vec3& z_A) {
-      Event e;
-      e.t_s = t_s;
-      e.vec_ = {z_A.x(), z_A.y(), z_A.z()};
-      return e;
+    static Head sample(double t_s, int head, const Quat& q_I_Si) {
+      Head h;
+      h.t_s = t_s;
+      h.head = head;
+      h.q = {q_I_Si.w(), q_I_Si.x(), q_I_Si.y(), q_I_Si.z()};
+      return h;
     }
-    static Event headSample(double t_s, int head, const Quat& q_I_Si) {
-      Event e;
-      e.t_s = t_s;
-      e.head = head;
-      e.q_ = {q_I_Si.w(), q_I_Si.x(), q_I_Si.y(), q_I_Si.z()};
-      return e;
+    Quat q_I_Si() const { return Quat(q[0], q[1], q[2], q[3]); }
+    Vec3 v_obs_I() const { return Vec3(v[0], v[1], v[2]); }
+    void setObserverVelocity(const Vec3& x) {
+      v = {static_cast<float>(x.x()), static_cast<float>(x.y()), static_cast<float>(x.z())};
     }
-    /// Accelerometer samples: rad/s^2, A (zero for a head sample).
-    Vec3 z_A() const { return head < 0 ? Vec3(vec_[0], vec_[1], vec_[2]) : Vec3::Zero(); }
-    /// Head samples: the attitude (identity for an accelerometer sample).
-    Quat q_I_Si() const { return Quat(q_[0], q_[1], q_[2], q_[3]); }
-    /// Head samples: the observer's inertial velocity (m/s; the Earth's and the satellite's) when the
-    /// attitude carries the stars' aberration, which estimateRaw then removes (model/effects.h's
-    /// aberration: the apparent boresight turned by b x v / c); zero: none to remove.
-    Vec3 v_obs_I() const { return head >= 0 ? Vec3(vec_[0], vec_[1], vec_[2]) : Vec3::Zero(); }
-    void setObserverVelocity(const Vec3& v) {
-      if (head >= 0) vec_ = {v.x(), v.y(), v.z()};
-    }
-
-   private:
-    std::array<double, 3> vec_{};            ///< z_A or v_obs_I
-    std::array<double, 4> q_{1.0, 0, 0, 0};  ///< q_I_Si (w, x, y, z)
   };
-  std::vector<Event> events;
+  struct Acc {
+    double t_s = 0;
+    std::array<double, 3> z{0, 0, 0};  ///< the measured angular acceleration, rad/s^2, A
+
+    static Acc sample(double t_s, const Vec3& z_A) {
+      Acc a;
+      a.t_s = t_s;
+      a.z = {z_A.x(), z_A.y(), z_A.z()};
+      return a;
+    }
+    Vec3 z_A() const { return Vec3(z[0], z[1], z[2]); }
+  };
+  std::vector<Head> heads;
+  std::vector<Acc> acc;
+  std::size_t size() const { return heads.size() + acc.size(); }
+  bool empty() const { return heads.empty() && acc.empty(); }
 };
 
 /// Runs `passes` passes of the estimator over the data (cfg's heads need C_Si_B and axes_Si; the
@@ -384,6 +389,8 @@ class RawBound {
   double block_t0_ = 0;
   bool record_innovations_ = false, collect_blocks_ = false;
   std::vector<model::NoiseSeries> innovations_;  ///< per head axis 3 i + j: t, data less the trajectory prediction (the noise fit)
+  /// Every innovation_stride_[i]-th of head i's innovations is recorded (counted per head axis).
+  std::vector<std::size_t> innovation_stride_, innovation_seen_;
   double gate_sigma_ = 6;  ///< head samples with an innovation beyond this many sigma are rejected (0: none)
 };
 

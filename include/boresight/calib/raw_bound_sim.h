@@ -45,7 +45,7 @@ class RawDataSimSink : public sim::SimSink {
   void head(const sim::HeadSampleOut& h) override {
     const auto it = index_.find(h.head);
     if (h.blind != sim::kBlindNone || it == index_.end()) return;
-    RawData::Event e = RawData::Event::headSample(seconds(h.tag), it->second, h.q_I_Si);
+    RawData::Head e = RawData::Head::sample(seconds(h.tag), it->second, h.q_I_Si);
     if (aberration_) {
       const auto& eff = sim_.heads()[static_cast<std::size_t>(it->second)].effects();
       const model::OrbitContext c = sim_.context(h.t_true_s);
@@ -54,10 +54,10 @@ class RawDataSimSink : public sim::SimSink {
       if (eff.aberration_orbital) v += c.v_sat_I;
       e.setObserverVelocity(v);
     }
-    data.events.push_back(e);
+    data.heads.push_back(e);
   }
   void accel(const sim::AccSampleOut& a) override {
-    data.events.push_back(RawData::Event::accel(seconds(a.tag), a.ang_A));
+    data.acc.push_back(RawData::Acc::sample(seconds(a.tag), a.ang_A));
   }
   RawData data;
 

@@ -24,7 +24,9 @@
 #include "boresight/calib/raw_bound.h"
 
 #include <cstdint>
+#include <deque>
 #include <functional>
+#include <future>
 #include <optional>
 #include <string>
 #include <vector>
@@ -128,8 +130,15 @@ class WindowedCalibration {
  public:
   /// run.raw must be set (the attitude-domain estimate is what each window runs); window_s > 0. False
   /// with *error when the span builder refuses the configuration.
+  /// concurrent: windows in estimation at once. 1 (the default): a window is estimated when it closes, on
+  /// the caller's thread, and is in windows() on return. n > 1: a closed window's data is handed to a
+  /// thread of its own and the caller goes on feeding the next window; when n windows are in estimation
+  /// the caller waits for the oldest before it takes the next window's first sample, so at most n
+  /// windows' samples are held (the one being fed among them). The windows and their order are those of
+  /// the sequential run (each window's estimate depends on its own data alone); windows() holds those
+  /// finished so far, in time order, and all of them after finish().
   bool configure(const core::PipelineConfig& cfg, const SpanOptions& so, double window_s, const RunOptions& run,
-                 double not_determined_rad, std::string* error);
+                 double not_determined_rad, std::string* error, unsigned concurrent = 1);
   void pushHeads(const core::HeadEpoch& e);
   void pushAcc(TimeUs t, const Vec3& a_A);
   void pushOrbit(const model::OrbitSample& o);
@@ -140,10 +149,8 @@ class WindowedCalibration {
   const std::vector<WindowSolution>& windows() const { return windows_; }
   /// Called after each window's estimate (progress for the user).
   void onWindow(std::function<void(const WindowSolution&)> f) { on_window_ = std::move(f); }
-  /// The most raw samples one window held, and the capacity of the buffer that held them (a record
-  /// of many windows needs no more than its longest window).
+  /// The most raw samples one window held.
   std::size_t peakRawSamples() const { return peak_raw_; }
-  std::size_t rawCapacity() const { return feed_.raw().events.capacity(); }
   /// Samples older than the open window's start (its predecessor is already estimated): not taken, counted.
   /// The replay engine hands samples out in time order, so calibrate has none.
   std::uint64_t lateSamples() const { return late_; }
@@ -152,7 +159,12 @@ class WindowedCalibration {
 
  private:
   void advance(TimeUs t);  ///< closes the open window when t is past its end
-  void close();
+  /// Estimates the open window (or hands it to a thread) and restarts the feed, keeping the orbit from
+  /// keep_orbit_from on.
+  void close(TimeUs keep_orbit_from);
+  /// Moves the oldest window in estimation into windows_ (waits for it when `wait`, else only if done).
+  bool collect(bool wait);
+  void report();  ///< on_window_ for the last of windows_
   CalibrationFeed feed_;
   RunOptions run_;
   double window_s_ = 0, not_determined_rad_ = 0;
@@ -164,6 +176,8 @@ class WindowedCalibration {
   /// The beta angle's sum and count per window start (orbit samples may run ahead of the heads).
   std::vector<std::pair<TimeUs, std::pair<double, std::size_t>>> beta_;
   std::vector<WindowSolution> windows_;
+  unsigned concurrent_ = 1;
+  std::deque<std::future<WindowSolution>> pending_;  ///< in estimation, oldest first (concurrent_ > 1)
   std::function<void(const WindowSolution&)> on_window_;
 };
 

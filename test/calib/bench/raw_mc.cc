@@ -135,8 +135,7 @@ int main(int argc, char** argv) {
     Eigen::VectorXd e(static_cast<Eigen::Index>(3 * nh));
     double max_z = 0, z2 = 0;
     std::vector<double> delivered(nh, 0.0);
-    for (const auto& ev : rec.data.events)
-      if (ev.head >= 0) delivered[static_cast<std::size_t>(ev.head)] += 1;
+    for (const auto& ev : rec.data.heads) delivered[static_cast<std::size_t>(ev.head)] += 1;
     for (std::size_t i = 0; i < nh; ++i) {
       Vec3 truth = calib::trueErrorInDatum(simu.heads()[i], simu.accel());
       // The delivered attitude is q Exp(f), f the field-of-view error (Si): a mounting shifted by -f.
