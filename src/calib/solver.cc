@@ -4,6 +4,7 @@
 #include "whitening.h"
 #include "boresight/core/rotation.h"
 #include "boresight/core/rotation_t.h"
+#include "boresight/model/jacobian_check.h"
 
 #include <ceres/ceres.h>
 
@@ -458,6 +459,8 @@ struct Built {
   std::vector<double*> free_blocks;        // in the order of the information matrix
   std::vector<int> free_sizes;
   std::vector<ceres::ResidualBlockId> epoch_blocks;
+  const char* epoch_functor = "";          // the functor of the epoch blocks (checkJacobians)
+  ceres::ResidualBlockId relative_block = nullptr;  // RelativeCost (prior mode)
 };
 
 Built buildProblem(const CalibrationSpan& span, const SolveOptions& opt, Model& m, bool robust) {
@@ -474,6 +477,7 @@ Built buildProblem(const CalibrationSpan& span, const SolveOptions& opt, Model& 
   P.AddParameterBlock(m.nonorth.data(), 3);
   P.AddParameterBlock(&m.tau, 1);
   const bool reduced = !opt.estimate_acc_scale && !opt.estimate_acc_nonorthogonality && !opt.estimate_time_offset;
+  b.epoch_functor = m.moments ? "MomentCost" : reduced ? "EpochCostReduced" : "EpochCost";
   for (int h = 0; h < m.n; ++h) {
     const auto hs = static_cast<std::size_t>(h);
     m.G[hs] = m.hard ? relativeMounting(m, h) : m.M[hs];
@@ -503,8 +507,8 @@ Built buildProblem(const CalibrationSpan& span, const SolveOptions& opt, Model& 
       P.AddParameterBlock(m.rot[static_cast<std::size_t>(h)].data(), 3);
       P.SetParameterBlockConstant(m.rot[static_cast<std::size_t>(h)].data());
     }
-    P.AddResidualBlock(RelativeCost::create(m.qM, m.qA, m.rel_heads, m.datum, m.dhat, m.L_delta), nullptr,
-                       m.rot[0].data(), m.rot[1].data(), m.rot[2].data(), m.rot[3].data());
+    b.relative_block = P.AddResidualBlock(RelativeCost::create(m.qM, m.qA, m.rel_heads, m.datum, m.dhat, m.L_delta), nullptr,
+                                          m.rot[0].data(), m.rot[1].data(), m.rot[2].data(), m.rot[3].data());
   }
   for (int h = 0; h < nrot; ++h) {
     b.free_blocks.push_back(m.rot[static_cast<std::size_t>(h)].data());
@@ -753,6 +757,28 @@ HeadCovariance cramerRao(const CalibrationSpan& span, const SolveOptions& opt, c
     m.data = prepare(span, opt);
   Built b = buildProblem(span, opt, m, false);
   return headCovariance(m, information(b, false), opt);
+}
+
+std::vector<model::JacobianCheck> checkJacobians(const CalibrationSpan& span, const SolveOptions& opt, const ModelParameters& at,
+                                          std::size_t max_blocks, double relative_precision, std::string* message) {
+  std::vector<model::JacobianCheck> out;
+  const std::string err = checkSpan(span, opt);
+  if (!err.empty()) {
+    if (message) *message = err;
+    return out;
+  }
+  Model m;
+  initModel(span, opt, m);
+  if (!fitRelative(span, m, message)) return out;
+  setParameters(m, at);
+  if (m.moments)
+    prepareMoments(span, m);
+  else
+    m.data = prepare(span, opt);
+  Built b = buildProblem(span, opt, m, false);
+  model::probeJacobians(*b.problem, b.epoch_blocks, b.epoch_functor, max_blocks, relative_precision, &out);
+  if (b.relative_block != nullptr) model::probeJacobians(*b.problem, {b.relative_block}, "RelativeCost", 1, relative_precision, &out);
+  return out;
 }
 
 SolveResult solve(const CalibrationSpan& span, const SolveOptions& opt) {

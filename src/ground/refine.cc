@@ -2,6 +2,7 @@
 // (model and decision rule in solver.h).
 #include <boresight/core/rotation.h>
 #include <boresight/ground/solver.h>
+#include <boresight/model/jacobian_check.h>
 
 #include <ceres/ceres.h>
 #include <ceres/rotation.h>
@@ -12,7 +13,9 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <map>
 #include <memory>
+#include <string>
 
 namespace boresight::ground {
 namespace {
@@ -168,6 +171,11 @@ class Problem {
   void build(const double* w_bias) {
     problem_ = std::make_unique<ceres::Problem>();
     data_blocks_.clear();
+    by_functor_.clear();
+    const auto add = [this](const char* functor, ceres::ResidualBlockId id) {
+      data_blocks_.push_back(id);
+      by_functor_[functor].push_back(id);
+    };
     const CameraPrior& cam = m_.camera;
     const NoiseModel& nz = m_.noise;
     const double fth = cam.nominal.f * nz.theodolite_sigma_rad;
@@ -181,39 +189,39 @@ class Problem {
         const Vec3 w = C_ref * directionFromAzEl(t.az_rad, t.el_rad);
         auto* f = new TargetCost(w, C_design_, t.u_px, t.v_px, su, sv, cam.nominal.k1);
         if (cam.estimate_k1)
-          data_blocks_.push_back(problem_->AddResidualBlock(
+          add("TargetCost (k1 free)", problem_->AddResidualBlock(
               new ceres::AutoDiffCostFunction<TargetCost, 2, 3, 3, 4, 1>(f), nullptr, blocks_.e, rho, blocks_.intr,
               &blocks_.k1));
         else
-          data_blocks_.push_back(problem_->AddResidualBlock(
+          add("TargetCost", problem_->AddResidualBlock(
               new ceres::AutoDiffCostFunction<TargetCost, 2, 3, 3, 4>(f), nullptr, blocks_.e, rho, blocks_.intr));
       }
       for (const PrismReading& r : p.prisms)
-        data_blocks_.push_back(problem_->AddResidualBlock(
+        add("PrismCost", problem_->AddResidualBlock(
             new ceres::AutoDiffCostFunction<PrismCost, 2, 3>(
                 new PrismCost(r.axis_t, C_ref, r.az_rad, r.el_rad, nz.theodolite_sigma_rad)),
             nullptr, rho));
       Vec3 mean = Vec3::Zero();
       for (const Vec3& f : p.accel_mps2) mean += f;
       mean /= static_cast<double>(p.accel_mps2.size());
-      data_blocks_.push_back(problem_->AddResidualBlock(
+      add("AccelCost", problem_->AddResidualBlock(
           new ceres::AutoDiffCostFunction<AccelCost, 3, 3, 3>(
               new AccelCost(C_ref.col(2) * m_.gravity_mps2, mean, accelMeanSigma(p, nz))),
           nullptr, rho, blocks_.b));
     }
     const double x0[4] = {cam.nominal.f, cam.nominal.u0, cam.nominal.v0, cam.nominal.sx};
     const double wi[4] = {1.0 / cam.f_sigma_px, 1.0 / cam.pp_sigma_px, 1.0 / cam.pp_sigma_px, 1.0 / cam.sx_sigma};
-    data_blocks_.push_back(problem_->AddResidualBlock(
+    add("PriorCost<4>", problem_->AddResidualBlock(
         new ceres::AutoDiffCostFunction<PriorCost<4>, 4, 4>(new PriorCost<4>(x0, wi)), nullptr, blocks_.intr));
     if (cam.estimate_k1) {
       const double k0 = cam.nominal.k1, wk = 1.0 / cam.k1_sigma;
-      data_blocks_.push_back(problem_->AddResidualBlock(
+      add("PriorCost<1>", problem_->AddResidualBlock(
           new ceres::AutoDiffCostFunction<PriorCost<1>, 1, 1>(new PriorCost<1>(&k0, &wk)), nullptr, &blocks_.k1));
     }
     const double zero[3] = {0, 0, 0};
     if (w_bias[0] > 0 || w_bias[1] > 0 || w_bias[2] > 0)
-      problem_->AddResidualBlock(new ceres::AutoDiffCostFunction<PriorCost<3>, 3, 3>(new PriorCost<3>(zero, w_bias)),
-                                 nullptr, blocks_.b);
+      by_functor_["PriorCost<3>"].push_back(problem_->AddResidualBlock(
+          new ceres::AutoDiffCostFunction<PriorCost<3>, 3, 3>(new PriorCost<3>(zero, w_bias)), nullptr, blocks_.b));
     // parameter order of the covariance: e, intrinsics, [k1], rho_1..rho_K, b
     order_ = {blocks_.e, blocks_.intr};
     if (cam.estimate_k1) order_.push_back(&blocks_.k1);
@@ -255,6 +263,13 @@ class Problem {
     return J;
   }
 
+  /// Every functor's Jacobian at the current point (model/jacobian_check.h).
+  std::vector<model::JacobianCheck> checkJacobians(std::size_t max_blocks, double relative_precision) const {
+    std::vector<model::JacobianCheck> out;
+    for (const auto& [name, ids] : by_functor_) model::probeJacobians(*problem_, ids, name, max_blocks, relative_precision, &out);
+    return out;
+  }
+
   int biasIndex() const { return nParams() - 3; }
   int rhoIndex(std::size_t k) const { return 7 + (m_.camera.estimate_k1 ? 1 : 0) + 3 * static_cast<int>(k); }
   int nParams() const { return 7 + (m_.camera.estimate_k1 ? 1 : 0) + 3 * static_cast<int>(m_.positions.size()) + 3; }
@@ -267,12 +282,36 @@ class Problem {
   const SeedResult& seed_;
   std::unique_ptr<ceres::Problem> problem_;
   std::vector<ceres::ResidualBlockId> data_blocks_;
+  std::map<std::string, std::vector<ceres::ResidualBlockId>> by_functor_;  ///< every block, by functor
   std::vector<double*> order_;
 };
 
 Mat3 expRot(const double* r) { return core::so3Exp(Vec3(r[0], r[1], r[2])); }
 
 }  // namespace
+
+std::vector<model::JacobianCheck> checkJacobians(const Measurement& m, const RefineOptions& opt, double relative_precision,
+                                                 std::string* error) {
+  GroundResult g;
+  if (!validateMeasurement(m, opt.source_name, error)) return {};
+  if (!solveSeed(m, g.seed, error)) return {};
+  Problem pr(m, g.seed);
+  const double w_bias[3] = {1.0, 2.0, 3.0};
+  pr.build(w_bias);
+  // Away from zero and from the seed: small rotations of the positions, a bias, intrinsics off nominal.
+  for (std::size_t k = 0; k < pr.blocks_.rho.size(); ++k)
+    pr.blocks_.rho[k] = {1e-3 * static_cast<double>(k + 1), -2e-3, 1.5e-3};
+  for (int i = 0; i < 3; ++i) {
+    pr.blocks_.e[i] += 1e-3 * (i + 1);
+    pr.blocks_.b[i] = 1e-3 * (3 - i);
+  }
+  pr.blocks_.intr[0] *= 1.001;
+  pr.blocks_.intr[1] += 0.5;
+  pr.blocks_.intr[2] -= 0.3;
+  pr.blocks_.intr[3] *= 0.999;
+  pr.blocks_.k1 += 1e-3;
+  return pr.checkJacobians(20, relative_precision);
+}
 
 bool solveGround(const Measurement& m, const RefineOptions& opt, GroundResult& out, std::string* error) {
   out = GroundResult{};

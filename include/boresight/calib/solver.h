@@ -33,6 +33,10 @@
 #include <string>
 #include <vector>
 
+namespace boresight::model {
+struct JacobianCheck;
+}
+
 namespace boresight::calib {
 
 enum class RelativeMode { kHardConstraint, kPrior };
@@ -149,5 +153,14 @@ SolveResult solve(const CalibrationSpan& span, const SolveOptions& opt);
 /// refusal (the same checks as solve()), with *message.
 HeadCovariance cramerRao(const CalibrationSpan& span, const SolveOptions& opt, const ModelParameters& at,
                          std::string* message = nullptr);
+
+/// The solver's cost functors against numerical derivatives (ceres::GradientChecker: each residual
+/// block's automatic Jacobian against central differences of the same functor), on the problem the span
+/// and options build (the functors those options use: EpochCost with scale, non-orthogonality or time
+/// offset free, EpochCostReduced without them, MomentCost from the moments, RelativeCost in prior mode)
+/// at the parameters `at`. Up to `max_blocks` blocks of each functor, spread over the span. One entry per
+/// functor met (model/jacobian_check.h); empty with *message on refusal (the same checks as solve()).
+std::vector<model::JacobianCheck> checkJacobians(const CalibrationSpan& span, const SolveOptions& opt, const ModelParameters& at,
+                                          std::size_t max_blocks, double relative_precision, std::string* message = nullptr);
 
 }  // namespace boresight::calib

@@ -27,6 +27,10 @@
 #include <string>
 #include <vector>
 
+namespace boresight::model {
+struct JacobianCheck;
+}
+
 namespace boresight::ground {
 
 // ---- seed steps (each testable on its own) ----
@@ -102,5 +106,12 @@ struct GroundResult {
 
 /// Seed, then the joint refinement with covariance and the observability decision.
 bool solveGround(const Measurement& m, const RefineOptions& opt, GroundResult& out, std::string* error);
+
+/// The refinement's cost functors against numerical derivatives (model/jacobian_check.h: every functor
+/// the measurement's problem uses - targets with and without k1 free, prisms, the accelerometer, the
+/// priors - up to 20 blocks each), at a point away from the seed (rotations of 1-3 mrad, a bias,
+/// intrinsics off nominal). Empty with *error when the measurement or its seed is refused.
+std::vector<model::JacobianCheck> checkJacobians(const Measurement& m, const RefineOptions& opt, double relative_precision,
+                                                 std::string* error);
 
 }  // namespace boresight::ground
