@@ -1,7 +1,7 @@
 // Method A over many windows (calib/windows.h): the windows' combination against closed forms, the
-// spread between windows against simulated windows with a known spread, and the windows' calendar.
-// (The windows' estimates themselves, and their memory, are tested end to end in
-// test/tools/calibrate_windows_test.cc.)
+// spread between windows against simulated windows with a known spread, the windows' calendar, and
+// two windows estimated at once against one at a time. (The windows' estimates against the truth,
+// and their memory, are tested end to end in test/tools/calibrate_test.cc, `ctest -R Window`.)
 #include "synthetic.h"
 
 #include <boresight/calib/windows.h>

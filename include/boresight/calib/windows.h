@@ -1,7 +1,8 @@
 // boresight::calib - method A over many windows of data (days, or hours): each window calibrated on
-// its own by the attitude-domain estimate (runCalibration on a CalibrationFeed that is emptied at every
-// window's end, so the memory is one window's whatever the length of the record), the windows'
-// solutions kept as a time series, and combined into one joint solution.
+// its own by the attitude-domain estimate (runCalibration on a CalibrationFeed that is emptied - or
+// handed to a thread - at every window's end, so the memory is one window's, or `concurrent` windows',
+// whatever the length of the record), the windows' solutions kept as a time series, and combined into
+// one joint solution.
 //
 // Windows are whole multiples of `window_s` after 2000-01-01 00:00:00 GPS (the GRACE epoch is noon, so
 // a window of 86400 s is a GPS calendar day, as the Level-1 daily files); a window without data is not
