@@ -5,9 +5,8 @@
 #include <cstring>
 #include <exception>
 #include <new>
-#if defined(__GLIBC__)
-#include <malloc.h>
-#endif
+
+#include "../process_memory.h"
 
 namespace {
 
@@ -70,13 +69,7 @@ int main(int argc, char** argv) {
     std::printf("boresight %s\n", BORESIGHT_VERSION);
     return 0;
   }
-#if defined(__GLIBC__)
-  // Buffers of 1 MB and more straight from the system and back to it when freed. glibc's default raises
-  // this threshold to the size of every such buffer freed (up to 32 MB), after which the next ones come
-  // from the heaps of the threads that asked and stay resident there: with windows estimated on two
-  // threads (calibrate --window) that more than doubled the peak memory.
-  mallopt(M_MMAP_THRESHOLD, 1 << 20);
-#endif
+  boresight::tools::returnLargeBuffersToTheSystem();
   for (const auto& c : kCommands)
     if (!std::strcmp(argv[1], c.name)) {
       // Bad input never aborts: whatever a command lets escape ends it with exit status 1 and the reason.

@@ -9,6 +9,7 @@
 #include <lcm/lcm-cpp.hpp>
 #include <nlohmann/json.hpp>
 
+#include "../process_memory.h"
 #include "boresight_lcm/boresight_monitor_t.hpp"
 #include "boresight_lcm/calibration_t.hpp"
 #include "boresight_lcm/fused_attitude_t.hpp"
@@ -103,6 +104,7 @@ int run(int argc, char** argv);
 
 // Bad input never aborts: whatever escapes ends the program with exit status 1 and the reason.
 int main(int argc, char** argv) {
+  boresight::tools::returnLargeBuffersToTheSystem();
   try {
     return run(argc, argv);
   } catch (const std::bad_alloc&) {
