@@ -740,42 +740,45 @@ const char* refusalName(Refusal r) {
   return "?";
 }
 
-HeadCovariance cramerRao(const CalibrationSpan& span, const SolveOptions& opt, const ModelParameters& at,
-                         std::string* message) {
+namespace {
+
+/// The problem without robust loss at the parameters `at` (the relative alignment fitted first, as
+/// solve() does): what cramerRao and checkJacobians evaluate. False with *message on refusal. The
+/// model must outlive the problem (its functors point into it).
+bool problemAt(const CalibrationSpan& span, const SolveOptions& opt, const ModelParameters& at, Model& m, Built& b,
+               std::string* message) {
   const std::string err = checkSpan(span, opt);
   if (!err.empty()) {
     if (message) *message = err;
-    return {};
+    return false;
   }
-  Model m;
   initModel(span, opt, m);
-  if (!fitRelative(span, m, message)) return {};
+  if (!fitRelative(span, m, message)) return false;
   setParameters(m, at);
   if (m.moments)
     prepareMoments(span, m);
   else
     m.data = prepare(span, opt);
-  Built b = buildProblem(span, opt, m, false);
+  b = buildProblem(span, opt, m, false);
+  return true;
+}
+
+}  // namespace
+
+HeadCovariance cramerRao(const CalibrationSpan& span, const SolveOptions& opt, const ModelParameters& at,
+                         std::string* message) {
+  Model m;
+  Built b;
+  if (!problemAt(span, opt, at, m, b, message)) return {};
   return headCovariance(m, information(b, false), opt);
 }
 
 std::vector<model::JacobianCheck> checkJacobians(const CalibrationSpan& span, const SolveOptions& opt, const ModelParameters& at,
-                                          std::size_t max_blocks, double relative_precision, std::string* message) {
+                                                 std::size_t max_blocks, double relative_precision, std::string* message) {
   std::vector<model::JacobianCheck> out;
-  const std::string err = checkSpan(span, opt);
-  if (!err.empty()) {
-    if (message) *message = err;
-    return out;
-  }
   Model m;
-  initModel(span, opt, m);
-  if (!fitRelative(span, m, message)) return out;
-  setParameters(m, at);
-  if (m.moments)
-    prepareMoments(span, m);
-  else
-    m.data = prepare(span, opt);
-  Built b = buildProblem(span, opt, m, false);
+  Built b;
+  if (!problemAt(span, opt, at, m, b, message)) return out;
   model::probeJacobians(*b.problem, b.epoch_blocks, b.epoch_functor, max_blocks, relative_precision, &out);
   if (b.relative_block != nullptr) model::probeJacobians(*b.problem, {b.relative_block}, "RelativeCost", 1, relative_precision, &out);
   return out;
