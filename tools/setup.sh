@@ -10,7 +10,7 @@ pkgs=(
   liblcm-dev liblcm-bin libglib2.0-dev liblcm-java default-jdk-headless
   libgtest-dev libgmock-dev googletest libbenchmark-dev
   libcli11-dev nlohmann-json3-dev
-  python3 python3-yaml time
+  python3 python3-yaml time procps
 )
 if [[ "${1:-}" == "--fuzz" ]]; then
   pkgs+=(clang libclang-rt-14-dev)

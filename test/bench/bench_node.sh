@@ -23,6 +23,7 @@ echo "one simulated day: $(du -h "$work/day/sim.lcmlog" | cut -f1) log"
 for i in $(seq 1 "$runs"); do
   /usr/bin/time -f "%M" -o "$work/rss" "$node" --config "$work/node.yaml" --replay "$work/day/sim.lcmlog" \
     --summary-json "$work/s.json" > /dev/null
+  cat "$work/rss" >> "$work/rss_day"  # every day replay's peak, for the soak's comparison
   python3 - "$work/s.json" "$(cat "$work/rss")" <<'PY'
 import json, sys
 s = json.load(open(sys.argv[1])); l = s["step_latency_us"]; h = s["head_step_latency_us"]
@@ -45,12 +46,15 @@ if [[ $days -gt 1 ]]; then
   # (the replay's rate is steady, so the elapsed fraction of the wall time stands for the fraction of
   # the days); the two records must be byte-identical and every message accounted for.
   for run in 1 2; do
-    "$node" --config "$work/node.yaml" --replay "$work/long/sim.lcmlog" --record "$work/rec_$run.lcm" \
+    # GNU time gives the true peak of the whole replay (the 1 s samples below can miss a short one).
+    /usr/bin/time -f "%M" -o "$work/rss_long_$run" "$node" --config "$work/node.yaml" --replay "$work/long/sim.lcmlog" --record "$work/rec_$run.lcm" \
       --summary-json "$work/l_$run.json" > /dev/null 2> "$work/stderr_$run" &
     pid=$!
     : > "$work/rss_samples_$run"
     while kill -0 "$pid" 2> /dev/null; do
-      awk '/VmRSS/ {print $2}' "/proc/$pid/status" 2> /dev/null >> "$work/rss_samples_$run" || true
+      # the node is GNU time's child
+      cpid=$(pgrep -P "$pid" | head -1 || true)
+      [[ -n "$cpid" ]] && { awk '/VmRSS/ {print $2}' "/proc/$cpid/status" 2> /dev/null >> "$work/rss_samples_$run" || true; }
       sleep 1
     done
     wait "$pid"
@@ -67,6 +71,10 @@ print(f"worker over {days} days: {w['solves']} solves, CPU per solve {w['cpu_s_m
 print(f"{days}-day replay: {a['received']} messages in {a['wall_s']:.1f} s ({a['messages_per_s']:.0f} messages/s), "
       f"{a['calibrations_published']} calibrations, accounted {a['accounted']}, "
       f"received == used + rejected: {a['received'] == a['used'] + sum(a['rejected'].values())}")
+peak_long = max(int(open(f"{sys.argv[1]}/rss_long_{r}").read().split()[-1]) for r in (1, 2)) / 1024
+day = [int(x) / 1024 for x in open(f"{sys.argv[1]}/rss_day").read().split() if x.strip()]
+print(f"peak resident memory (GNU time) of the {days}-day replays {peak_long:.1f} MB (the larger of the two) against "
+      f"the day replays' {min(day):.1f}-{max(day):.1f} MB: {100 * (peak_long / max(day) - 1):+.1f} % over the larger")
 if rss:
     per = []
     for d in range(1, days + 1):
