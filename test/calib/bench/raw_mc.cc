@@ -62,6 +62,25 @@ int usage() {
   return 2;
 }
 
+/// NEES of the error e (the first e.size() parameters) under a covariance, on the subspace it determines
+/// (eigenvalues above 1e-12 of the largest); dof receives that subspace's dimension.
+double neesOn(const Eigen::MatrixXd& full, const Eigen::VectorXd& e, int& dof) {
+  const Eigen::MatrixXd C = full.topLeftCorner(e.size(), e.size());
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(0.5 * (C + C.transpose()));
+  const double top = es.eigenvalues().maxCoeff();
+  double v = 0;
+  dof = 0;
+  for (Eigen::Index k = 0; k < e.size(); ++k) {
+    const double lam = es.eigenvalues()(k);
+    if (std::isfinite(lam) && lam > 1e-12 * top && lam > 0) {
+      const double proj = es.eigenvectors().col(k).dot(e);
+      v += proj * proj / lam;
+      ++dof;
+    }
+  }
+  return v;
+}
+
 /// The engine's inputs into the CRN solver's feed, as calibrate hands them over (cmd_calibrate.cc).
 class CrnFeedObserver final : public stream::InputObserver {
  public:
@@ -221,28 +240,11 @@ int main(int argc, char** argv) {
         ++n_axes;
       }
     }
-    // NEES over the head parameters on the determined subspace of a covariance.
-    const auto neesOf = [&](const Eigen::MatrixXd& full, int& dof) {
-      const Eigen::MatrixXd C = full.topLeftCorner(e.size(), e.size());
-      Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(0.5 * (C + C.transpose()));
-      const double top = es.eigenvalues().maxCoeff();
-      double v = 0;
-      dof = 0;
-      for (Eigen::Index k = 0; k < e.size(); ++k) {
-        const double lam = es.eigenvalues()(k);
-        if (lam > 1e-12 * top && lam > 0) {
-          const double proj = es.eigenvectors().col(k).dot(e);
-          v += proj * proj / lam;
-          ++dof;
-        }
-      }
-      return v;
-    };
     int dof = 0, dof_r = 0;
-    const double nees = neesOf(est.bound.covariance, dof);
+    const double nees = neesOn(est.bound.covariance, e, dof);
     double nees_r = 0;
     if (est.robust_covariance.size() > 0) {
-      nees_r = neesOf(est.robust_covariance, dof_r);
+      nees_r = neesOn(est.robust_covariance, e, dof_r);
       sum_nees_r += nees_r;
       dof_total_r += dof_r;
     } else {
@@ -302,18 +304,8 @@ int main(int argc, char** argv) {
         double nees_c = 0;
         int dof_c = 0;
         if (cr.covariance_arcsec2.size() == static_cast<std::size_t>(n3 * n3)) {
-          Eigen::MatrixXd C = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(cr.covariance_arcsec2.data(), n3, n3);
-          const Eigen::VectorXd ea = ec / kRadPerArcsec;
-          Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(0.5 * (C + C.transpose()));
-          const double top = es.eigenvalues().maxCoeff();
-          for (Eigen::Index k = 0; k < n3; ++k) {
-            const double lam = es.eigenvalues()(k);
-            if (std::isfinite(lam) && lam > 1e-12 * top && lam > 0) {
-              const double proj = es.eigenvectors().col(k).dot(ea);
-              nees_c += proj * proj / lam;
-              ++dof_c;
-            }
-          }
+          const Eigen::MatrixXd C = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(cr.covariance_arcsec2.data(), n3, n3);
+          nees_c = neesOn(C, Eigen::VectorXd(ec / kRadPerArcsec), dof_c);
           crn_nees += nees_c;
           crn_dof += dof_c;
         }
