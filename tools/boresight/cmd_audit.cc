@@ -28,6 +28,9 @@
 #include <vector>
 
 namespace boresight::cli {
+// This file's own names, in a namespace of their own: the program builds as unity sources (several
+// cmd_*.cc in one translation unit, tools/CMakeLists.txt), where anonymous namespaces would merge.
+namespace cmd_audit {
 namespace {
 
 const char* kUsage =
@@ -437,5 +440,9 @@ int runAudit(int argc, char** argv) {
   std::printf("\n");
   return 0;
 }
+
+}  // namespace cmd_audit
+
+int runAudit(int argc, char** argv) { return cmd_audit::runAudit(argc, argv); }
 
 }  // namespace boresight::cli

@@ -26,6 +26,9 @@
 #include <vector>
 
 namespace boresight::cli {
+// This file's own names, in a namespace of their own: the program builds as unity sources (several
+// cmd_*.cc in one translation unit, tools/CMakeLists.txt), where anonymous namespaces would merge.
+namespace cmd_bound {
 namespace {
 
 const char* kUsage =
@@ -202,5 +205,9 @@ int runBound(int argc, char** argv) {
   }
   return 0;
 }
+
+}  // namespace cmd_bound
+
+int runBound(int argc, char** argv) { return cmd_bound::runBound(argc, argv); }
 
 }  // namespace boresight::cli

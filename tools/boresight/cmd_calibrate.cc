@@ -44,6 +44,9 @@
 #include <sys/resource.h>
 
 namespace boresight::cli {
+// This file's own names, in a namespace of their own: the program builds as unity sources (several
+// cmd_*.cc in one translation unit, tools/CMakeLists.txt), where anonymous namespaces would merge.
+namespace cmd_calibrate {
 namespace {
 
 const char* kUsage =
@@ -1134,5 +1137,9 @@ int runCalibrate(int argc, char** argv) {
   if (!write_model.empty() || !write_qsa1b.empty()) std::printf("   mountings written from the %s\n", mounting.source.c_str());
   return 0;
 }
+
+}  // namespace cmd_calibrate
+
+int runCalibrate(int argc, char** argv) { return cmd_calibrate::runCalibrate(argc, argv); }
 
 }  // namespace boresight::cli

@@ -24,6 +24,9 @@
 #include <vector>
 
 namespace boresight::cli {
+// This file's own names, in a namespace of their own: the program builds as unity sources (several
+// cmd_*.cc in one translation unit, tools/CMakeLists.txt), where anonymous namespaces would merge.
+namespace cmd_convert {
 namespace {
 
 const char* kUsage =
@@ -427,5 +430,9 @@ int runConvert(int argc, char** argv) {
   }
   return !o.out.empty() ? toLcm(o) : toLevel1(o);
 }
+
+}  // namespace cmd_convert
+
+int runConvert(int argc, char** argv) { return cmd_convert::runConvert(argc, argv); }
 
 }  // namespace boresight::cli

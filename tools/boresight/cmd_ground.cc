@@ -16,6 +16,9 @@
 #include <string>
 
 namespace boresight::cli {
+// This file's own names, in a namespace of their own: the program builds as unity sources (several
+// cmd_*.cc in one translation unit, tools/CMakeLists.txt), where anonymous namespaces would merge.
+namespace cmd_ground {
 namespace {
 
 const char* kFooter =
@@ -229,5 +232,9 @@ int runGround(int argc, char** argv) {
   }
   return 0;
 }
+
+}  // namespace cmd_ground
+
+int runGround(int argc, char** argv) { return cmd_ground::runGround(argc, argv); }
 
 }  // namespace boresight::cli

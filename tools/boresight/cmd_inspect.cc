@@ -22,6 +22,9 @@
 #include <vector>
 
 namespace boresight::cli {
+// This file's own names, in a namespace of their own: the program builds as unity sources (several
+// cmd_*.cc in one translation unit, tools/CMakeLists.txt), where anonymous namespaces would merge.
+namespace cmd_inspect {
 namespace {
 
 const char* kUsage =
@@ -289,5 +292,9 @@ int runInspect(int argc, char** argv) {
   }
   return status;
 }
+
+}  // namespace cmd_inspect
+
+int runInspect(int argc, char** argv) { return cmd_inspect::runInspect(argc, argv); }
 
 }  // namespace boresight::cli

@@ -16,6 +16,9 @@
 #include <vector>
 
 namespace boresight::cli {
+// This file's own names, in a namespace of their own: the program builds as unity sources (several
+// cmd_*.cc in one translation unit, tools/CMakeLists.txt), where anonymous namespaces would merge.
+namespace cmd_noise {
 namespace {
 
 const char* kUsage =
@@ -181,5 +184,9 @@ int runNoise(int argc, char** argv) {
   std::printf("-> %s/report.md, %s, %s, %s\n", out_dir.c_str(), json.c_str(), yaml.c_str(), ovl.c_str());
   return 0;
 }
+
+}  // namespace cmd_noise
+
+int runNoise(int argc, char** argv) { return cmd_noise::runNoise(argc, argv); }
 
 }  // namespace boresight::cli

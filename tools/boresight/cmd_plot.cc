@@ -15,6 +15,9 @@
 #include <vector>
 
 namespace boresight::cli {
+// This file's own names, in a namespace of their own: the program builds as unity sources (several
+// cmd_*.cc in one translation unit, tools/CMakeLists.txt), where anonymous namespaces would merge.
+namespace cmd_plot {
 namespace {
 
 const char* kDescription =
@@ -142,5 +145,9 @@ int runPlot(int argc, char** argv) {
               bad ? (", " + std::to_string(bad) + " rows without x skipped").c_str() : "");
   return 0;
 }
+
+}  // namespace cmd_plot
+
+int runPlot(int argc, char** argv) { return cmd_plot::runPlot(argc, argv); }
 
 }  // namespace boresight::cli

@@ -26,6 +26,9 @@
 #include <vector>
 
 namespace boresight::cli {
+// This file's own names, in a namespace of their own: the program builds as unity sources (several
+// cmd_*.cc in one translation unit, tools/CMakeLists.txt), where anonymous namespaces would merge.
+namespace cmd_process {
 namespace {
 
 const char* kUsage =
@@ -282,5 +285,9 @@ int runProcess(int argc, char** argv) {
   }
   return 0;
 }
+
+}  // namespace cmd_process
+
+int runProcess(int argc, char** argv) { return cmd_process::runProcess(argc, argv); }
 
 }  // namespace boresight::cli

@@ -20,6 +20,9 @@
 #include <unistd.h>
 
 namespace boresight::cli {
+// This file's own names, in a namespace of their own: the program builds as unity sources (several
+// cmd_*.cc in one translation unit, tools/CMakeLists.txt), where anonymous namespaces would merge.
+namespace cmd_simulate {
 namespace {
 
 const char* kFooter =
@@ -154,5 +157,9 @@ int runSimulate(int argc, char** argv) {
   }
   return 0;
 }
+
+}  // namespace cmd_simulate
+
+int runSimulate(int argc, char** argv) { return cmd_simulate::runSimulate(argc, argv); }
 
 }  // namespace boresight::cli

@@ -12,6 +12,9 @@
 #include <string>
 
 namespace boresight::cli {
+// This file's own names, in a namespace of their own: the program builds as unity sources (several
+// cmd_*.cc in one translation unit, tools/CMakeLists.txt), where anonymous namespaces would merge.
+namespace cmd_simulate_ground {
 namespace {
 
 const char* kFooter =
@@ -125,5 +128,9 @@ int runSimulateGround(int argc, char** argv) {
               out.c_str(), truth_path.c_str(), cfg.positions, cfg.prism_faces, cfg.targets, cfg.accel_samples);
   return 0;
 }
+
+}  // namespace cmd_simulate_ground
+
+int runSimulateGround(int argc, char** argv) { return cmd_simulate_ground::runSimulateGround(argc, argv); }
 
 }  // namespace boresight::cli
