@@ -1,6 +1,7 @@
 // The precompiled header every test program shares (test/CMakeLists.txt, BORESIGHT_TEST_PCH): what most
 // test sources include, parsed once per build instead of once per test source. It only saves time: a
-// test source still includes what it uses (the sanitizer build in .ci/run compiles without it).
+// test source still includes what it uses. .ci/run's sanitizer build compiles its six test folders
+// without it (checking them); the other folders are built only with it.
 #pragma once
 
 #include <gtest/gtest.h>
